@@ -1,0 +1,39 @@
+#pragma once
+// MuJoCo's default error handler prints and calls exit(). URLab replaces it so that an engine
+// error becomes a urlab::MujocoError exception and warnings go to the log (and to any active
+// WarningCapture). Call InstallMujocoHandlers() once at start-up, before other threads use
+// MuJoCo; it is idempotent. The handlers themselves may run on any thread.
+#include <string>
+#include <vector>
+
+namespace urlab {
+
+// Installs the throwing error handler and the logging warning handler. Thread: main, at start-up.
+void InstallMujocoHandlers();
+
+// Routes a MuJoCo warning through URLab's handler: logged and captured. Any thread.
+void ReportMujocoWarning(const std::string& text);
+
+// Collects every MuJoCo warning reported while it is alive (from any thread). Captures nest:
+// each live capture sees every warning. Used by the test fixture to fail on unexpected warnings.
+class WarningCapture {
+ public:
+  WarningCapture();
+  ~WarningCapture();
+  WarningCapture(const WarningCapture&) = delete;
+  WarningCapture& operator=(const WarningCapture&) = delete;
+
+  // Returns and clears the warnings captured so far. Any thread.
+  std::vector<std::string> Take();
+
+ private:
+  friend void ReportMujocoWarning(const std::string& text);
+  void Add(const std::string& text);
+  struct Impl;
+  Impl* impl_;
+};
+
+// Sets the global log level by name (trace, debug, info, warn, error, off). Thread: main.
+void SetLogLevel(const std::string& level);
+
+}  // namespace urlab

@@ -1,0 +1,125 @@
+#pragma once
+// The MJCF grammar of MuJoCo 2.2.2 as data: which element may contain which, which attributes
+// each accepts, their value types and keyword sets, and which attributes name other elements.
+//
+// The whole grammar lives in one table (src/document/grammar_table.cc), one row per element
+// context, written in a small attribute mini-language and parsed once at first use:
+//
+//   row:      { id, tag, name namespace, child ids, attribute specs }
+//   id:       unique per context, e.g. "body", "default.geom", "composite.geom"
+//   children: space separated ids; the reader picks the child whose tag matches
+//   attribute spec (space separated): NAME ':' TYPE [COUNT] ['@' REF] ['{' kw '|' kw ... '}']
+//     TYPE  s string | r real | i int | k keyword | f file (model dir) | m mesh-dir file |
+//           t texture-dir file
+//     COUNT absent = exactly 1; N = exactly N; N-M = N to M values; * = any number (0 or more)
+//     REF   namespace the value names: body joint geom site camera light mesh skin hfield
+//           texture material pair exclude equality tendon actuator sensor numeric text tuple key
+//           class, or "obj:<attr>" when the namespace is chosen by sibling attribute <attr>
+//           (objtype/reftype); see Namespace.
+//   e.g. "name:s class:s@class type:k{plane|sphere|box} size:r1-3 pos:r3 material:s@material"
+//
+// Thread: immutable after first use; any thread may read.
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace urlab::document {
+
+// A namespace of named elements (MuJoCo's mjtObj, plus default classes).
+enum class Namespace : std::uint8_t {
+  kNone,
+  kBody,
+  kJoint,
+  kGeom,
+  kSite,
+  kCamera,
+  kLight,
+  kMesh,
+  kSkin,
+  kHField,
+  kTexture,
+  kMaterial,
+  kPair,
+  kExclude,
+  kEquality,
+  kTendon,
+  kActuator,
+  kSensor,
+  kNumeric,
+  kText,
+  kTuple,
+  kKey,
+  kClass,
+  kCount
+};
+
+// Name used in the grammar table and in messages ("body", "class", ...).
+std::string_view NamespaceName(Namespace ns);
+// Inverse of NamespaceName; kNone when unknown.
+Namespace NamespaceFromName(std::string_view name);
+// The namespace MJCF's objtype/reftype keyword selects ("body", "xbody", "geom", "site",
+// "camera", "joint", "actuator", "tendon", ...); kNone when unknown.
+Namespace NamespaceFromObjType(std::string_view objtype);
+
+enum class ValueType : std::uint8_t { kString, kReal, kInt, kKeyword, kFile };
+
+// Which folder a relative file attribute is resolved against.
+enum class FileBase : std::uint8_t { kNone, kModelDir, kMeshDir, kTextureDir };
+
+struct AttributeSpec {
+  std::string name;
+  ValueType type = ValueType::kString;
+  int min_count = 1;  // number of values (for kReal / kInt); 1 for scalars
+  int max_count = 1;  // -1: unbounded
+  FileBase file_base = FileBase::kNone;
+  Namespace ref = Namespace::kNone;  // namespace named by the value, when fixed
+  std::string ref_selector;          // sibling attribute choosing the namespace (objtype, ...)
+  std::vector<std::string> keywords;
+
+  bool IsReference() const { return ref != Namespace::kNone || !ref_selector.empty(); }
+};
+
+struct ElementSpec {
+  std::string id;
+  std::string tag;
+  Namespace name_space = Namespace::kNone;  // the namespace its `name` attribute enters
+  std::vector<AttributeSpec> attributes;
+  std::vector<const ElementSpec*> children;
+
+  // nullptr when the element has no such attribute / child.
+  const AttributeSpec* FindAttribute(std::string_view name) const;
+  const ElementSpec* FindChild(std::string_view tag) const;
+};
+
+// Raw table row, see the file comment. Defined in grammar_table.cc.
+struct GrammarRow {
+  const char* id;
+  const char* tag;
+  const char* name_space;
+  const char* children;
+  const char* attributes;
+};
+
+// The parsed grammar. Get() parses the table on first use and throws urlab::Error if the table
+// is inconsistent (a child id with no row, a malformed attribute spec): a programming error.
+class Grammar {
+ public:
+  static const Grammar& Get();
+
+  const ElementSpec& Root() const;  // <mujoco>
+  const ElementSpec* Find(std::string_view id) const;
+  std::span<const ElementSpec> Elements() const { return elements_; }
+
+  // Parses `rows` (used by Get() and by tests of the mini-language).
+  explicit Grammar(std::span<const GrammarRow> rows);
+
+ private:
+  std::vector<ElementSpec> elements_;
+};
+
+// The table itself (src/document/grammar_table.cc).
+std::span<const GrammarRow> GrammarTable();
+
+}  // namespace urlab::document

@@ -1,0 +1,41 @@
+#pragma once
+// Test fixture for everything that touches MuJoCo: installs URLab's MuJoCo handlers and fails the
+// test on any MuJoCo warning it did not declare with ExpectWarning().
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "urlab/core/mujoco_handlers.h"
+
+namespace urlab::testing {
+
+class MujocoTest : public ::testing::Test {
+ protected:
+  MujocoTest();
+  void TearDown() override;
+
+  // Declares that a warning containing `substring` is expected (at least once) in this test.
+  void ExpectWarning(const std::string& substring);
+
+  // Warnings seen so far in this test (also consumed by TearDown's check).
+  std::vector<std::string> SeenWarnings();
+
+ private:
+  WarningCapture capture_;
+  std::vector<std::string> seen_;
+  std::vector<std::string> expected_;
+};
+
+// Absolute path of a file under tests/data.
+std::string TestData(const std::string& relative);
+// Absolute path of a file in the source tree.
+std::string SourcePath(const std::string& relative);
+// Path of the built `urlab` binary.
+std::string UrlabBinary();
+// Runs a shell command, returns its exit code; stdout+stderr go to *output when given.
+int RunCommand(const std::string& command, std::string* output = nullptr);
+// A fresh empty temporary directory, removed when the process exits normally.
+std::string MakeTempDir(const std::string& tag);
+
+}  // namespace urlab::testing
