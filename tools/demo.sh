@@ -1,8 +1,14 @@
 #!/usr/bin/env bash
-# The main job: installs dependencies, builds, and runs URLab on the bundled example scene.
+# The main job: installs dependencies, builds, and runs URLab on the bundled example.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/install-deps.sh
 tools/build.sh
 BUILD_DIR="${URLAB_BUILD_DIR:-build}"
-exec "$BUILD_DIR/urlab" compile /usr/share/mujoco/model/humanoid/humanoid.xml "$@"
+OUT="${URLAB_DEMO_OUT:-out/demo}"
+mkdir -p "$OUT"
+echo "== urlab compile examples/models/pendulum_arm.xml (debug XML and MJB into $OUT)"
+"$BUILD_DIR/urlab" compile examples/models/pendulum_arm.xml \
+  --save-xml "$OUT/scene_compiled.xml" --save-mjb "$OUT/scene_compiled.mjb"
+echo "== user-built articulation (C++ API)"
+"$BUILD_DIR/example_build_articulation"

@@ -129,29 +129,57 @@ const ElementSpec* ElementSpec::FindChild(std::string_view t) const {
   return nullptr;
 }
 
-Grammar::Grammar(std::span<const GrammarRow> rows) {
-  elements_.resize(rows.size());
+Grammar::Grammar(std::span<const GrammarRow> rows, std::span<const GrammarRow> dialect_rows) {
+  // Rows of the main table, then new dialect rows; '+id' dialect rows extend existing ones.
+  struct Source {
+    const GrammarRow* row;
+    bool dialect;
+  };
+  std::vector<Source> fresh;
+  std::vector<const GrammarRow*> extensions;
+  for (const GrammarRow& r : rows) fresh.push_back({&r, false});
+  for (const GrammarRow& r : dialect_rows) {
+    if (r.id[0] == '+') {
+      extensions.push_back(&r);
+    } else {
+      fresh.push_back({&r, true});
+    }
+  }
+  elements_.resize(fresh.size());  // never resized again: children point into it
   std::unordered_map<std::string_view, size_t> index;
-  for (size_t i = 0; i < rows.size(); ++i) {
-    const GrammarRow& r = rows[i];
+  for (size_t i = 0; i < fresh.size(); ++i) {
+    const GrammarRow& r = *fresh[i].row;
     ElementSpec& e = elements_[i];
     e.id = r.id;
     e.tag = r.tag;
+    e.dialect = fresh[i].dialect;
     if (r.name_space[0] != '\0') {
       e.name_space = NamespaceFromName(r.name_space);
       if (e.name_space == Namespace::kNone) Bad(r.id, r.name_space, "unknown name namespace");
     }
     for (std::string_view spec : SplitSpaces(r.attributes)) {
       e.attributes.push_back(ParseAttribute(r.id, spec));
+      e.attributes.back().dialect = e.dialect;
     }
     if (!index.emplace(r.id, i).second) Bad(r.id, "", "duplicate row id");
   }
-  for (size_t i = 0; i < rows.size(); ++i) {
-    for (std::string_view child : SplitSpaces(rows[i].children)) {
+  auto link_children = [&](const GrammarRow& r, ElementSpec& e) {
+    for (std::string_view child : SplitSpaces(r.children)) {
       auto it = index.find(child);
-      if (it == index.end()) Bad(rows[i].id, child, "unknown child id");
-      elements_[i].children.push_back(&elements_[it->second]);
+      if (it == index.end()) Bad(r.id, child, "unknown child id");
+      e.children.push_back(&elements_[it->second]);
     }
+  };
+  for (size_t i = 0; i < fresh.size(); ++i) link_children(*fresh[i].row, elements_[i]);
+  for (const GrammarRow* r : extensions) {
+    auto it = index.find(std::string_view(r->id + 1));
+    if (it == index.end()) Bad(r->id, "", "extends an unknown row");
+    ElementSpec& e = elements_[it->second];
+    for (std::string_view spec : SplitSpaces(r->attributes)) {
+      e.attributes.push_back(ParseAttribute(r->id, spec));
+      e.attributes.back().dialect = true;
+    }
+    link_children(*r, e);
   }
   if (elements_.empty() || elements_[0].tag != "mujoco") {
     throw Error("MJCF grammar table: the first row must be <mujoco>");
@@ -159,7 +187,7 @@ Grammar::Grammar(std::span<const GrammarRow> rows) {
 }
 
 const Grammar& Grammar::Get() {
-  static const Grammar grammar(GrammarTable());
+  static const Grammar grammar(GrammarTable(), DialectGrammarTable());
   return grammar;
 }
 

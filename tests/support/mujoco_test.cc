@@ -25,6 +25,12 @@ std::vector<std::string> MujocoTest::SeenWarnings() {
   return seen_;
 }
 
+std::vector<std::string> MujocoTest::TakeWarnings() {
+  std::vector<std::string> out = SeenWarnings();
+  seen_.clear();
+  return out;
+}
+
 void MujocoTest::TearDown() {
   const std::vector<std::string> seen = SeenWarnings();
   for (const std::string& w : seen) {

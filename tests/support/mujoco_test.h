@@ -21,6 +21,9 @@ class MujocoTest : public ::testing::Test {
   // Warnings seen so far in this test (also consumed by TearDown's check).
   std::vector<std::string> SeenWarnings();
 
+  // Returns the warnings seen so far and forgets them (for warnings the test checks itself).
+  std::vector<std::string> TakeWarnings();
+
  private:
   WarningCapture capture_;
   std::vector<std::string> seen_;

@@ -18,6 +18,12 @@
 //           (objtype/reftype); see Namespace.
 //   e.g. "name:s class:s@class type:k{plane|sphere|box} size:r1-3 pos:r3 material:s@material"
 //
+// A second table (grammar_dialect_table.cc) holds what MJCF written for MuJoCo 3.x adds and the
+// dialect bridge (mjcf/bridge.h) translates: its rows are marked `dialect`, and a row whose id
+// starts with '+' extends the 2.2.2 row of that id with more children and attributes (also
+// marked `dialect`). The writer never emits dialect elements or attributes that the bridge has
+// not translated: compiling such a document fails with a clear message instead.
+//
 // Thread: immutable after first use; any thread may read.
 #include <cstdint>
 #include <span>
@@ -77,6 +83,7 @@ struct AttributeSpec {
   Namespace ref = Namespace::kNone;  // namespace named by the value, when fixed
   std::string ref_selector;          // sibling attribute choosing the namespace (objtype, ...)
   std::vector<std::string> keywords;
+  bool dialect = false;  // MuJoCo 3.x only: the bridge must translate it
 
   bool IsReference() const { return ref != Namespace::kNone || !ref_selector.empty(); }
 };
@@ -87,6 +94,7 @@ struct ElementSpec {
   Namespace name_space = Namespace::kNone;  // the namespace its `name` attribute enters
   std::vector<AttributeSpec> attributes;
   std::vector<const ElementSpec*> children;
+  bool dialect = false;  // MuJoCo 3.x only element: the bridge must translate it
 
   // nullptr when the element has no such attribute / child.
   const AttributeSpec* FindAttribute(std::string_view name) const;
@@ -112,8 +120,9 @@ class Grammar {
   const ElementSpec* Find(std::string_view id) const;
   std::span<const ElementSpec> Elements() const { return elements_; }
 
-  // Parses `rows` (used by Get() and by tests of the mini-language).
-  explicit Grammar(std::span<const GrammarRow> rows);
+  // Parses `rows`, then `dialect_rows` (used by Get() and by tests of the mini-language).
+  explicit Grammar(std::span<const GrammarRow> rows,
+                   std::span<const GrammarRow> dialect_rows = {});
 
  private:
   std::vector<ElementSpec> elements_;
@@ -121,5 +130,7 @@ class Grammar {
 
 // The table itself (src/document/grammar_table.cc).
 std::span<const GrammarRow> GrammarTable();
+// MuJoCo 3.x additions the dialect bridge handles (src/document/grammar_dialect_table.cc).
+std::span<const GrammarRow> DialectGrammarTable();
 
 }  // namespace urlab::document

@@ -1,0 +1,77 @@
+#pragma once
+// The scene file (the "level"): YAML listing articulations with their MJCF, world transform,
+// options, control source, controller and initial keyframe, plus scene-wide option overrides,
+// network endpoints and the debug-XML switch. Unknown keys and wrong types are InputErrors with
+// file and line. Thread: any (pure parsing).
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "urlab/core/error.h"
+
+namespace urlab::world {
+
+enum class ControlSource { kNetwork, kUi };
+
+struct PdGains {
+  std::optional<double> kp, kv, torque_limit;
+};
+
+struct KeyframeStep {
+  std::string keyframe;  // keyframe name in the articulation's MJCF
+  double hold = 1.0;     // seconds at the pose
+  double blend = 0.5;    // seconds blending into it
+};
+
+struct ControllerConfig {
+  std::string type = "none";  // none | pd | passthrough | keyframe
+  PdGains defaults;           // pd: gains for every actuator
+  std::map<std::string, PdGains> gains;  // pd: per joint or actuator (short name)
+  std::vector<KeyframeStep> sequence;    // keyframe controller
+  bool loop = false;
+  bool autoplay = true;
+  double start_delay = 0.0;
+  SourceLocation where;
+};
+
+struct ArticulationConfig {
+  std::string name;
+  std::string mjcf;  // absolute path
+  std::array<double, 3> pos = {0, 0, 0};
+  std::array<double, 4> quat = {1, 0, 0, 0};  // from quat, euler (degrees, xyz) or axisangle
+  std::map<std::string, std::string> options;  // <option> attributes, "flag.X" for flags
+  std::optional<ControlSource> control_source;  // overrides the scene's
+  ControllerConfig controller;
+  std::string keyframe;  // initial keyframe ("" = none)
+  bool hold_keyframe = false;
+  SourceLocation where;
+};
+
+struct NetworkConfig {
+  bool enabled = true;
+  std::string state = "tcp://*:5555";
+  std::string control = "tcp://127.0.0.1:5556";
+  std::string info = "tcp://*:5557";
+  std::string camera_base_port = "5558";
+};
+
+struct SceneConfig {
+  std::string path;  // the scene file
+  std::vector<ArticulationConfig> articulations;
+  std::map<std::string, std::string> options;  // manager overrides: only the fields set
+  ControlSource control_source = ControlSource::kNetwork;
+  NetworkConfig network;
+  std::string save_debug_xml;  // folder for scene_compiled.xml/.mjb ("" = off)
+};
+
+// Parses a scene file. Relative MJCF paths resolve against the scene file's folder.
+SceneConfig LoadSceneFile(const std::string& path);
+// Parses scene YAML held in memory; `path` names it in messages and anchors relative paths.
+SceneConfig ParseScene(const std::string& yaml, const std::string& path);
+
+// True when `path` looks like a scene file (.yaml / .yml).
+bool IsSceneFile(const std::string& path);
+
+}  // namespace urlab::world

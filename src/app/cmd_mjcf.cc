@@ -1,0 +1,34 @@
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+
+#include "app/commands.h"
+#include "urlab/mjcf/reader.h"
+#include "urlab/mjcf/writer.h"
+
+namespace urlab::app {
+
+void RegisterMjcfCommands(CLI::App& app, int& exit_code) {
+  CLI::App* mjcf = app.add_subcommand("mjcf", "MJCF document tools");
+  mjcf->require_subcommand(1);
+
+  CLI::App* rt = mjcf->add_subcommand(
+      "roundtrip",
+      "Import an MJCF file into URLab's document model and export it again. Includes are "
+      "flattened; asset paths are written relative to the output file's folder, so the output "
+      "loads from any working directory.");
+  static std::string in, out;
+  static bool absolute = false;
+  rt->add_option("IN", in, "MJCF file to read")->required()->check(CLI::ExistingFile);
+  rt->add_option("-o,--output", out, "MJCF file to write")->required();
+  rt->add_flag("--absolute-paths", absolute, "write absolute asset paths");
+  rt->callback([&exit_code] {
+    document::Document doc = mjcf::ReadFile(in);
+    for (const auto& d : doc.diagnostics()) spdlog::warn("{}: {}", d.where.str(), d.message);
+    mjcf::WriteFile(doc, out, absolute);
+    spdlog::info("wrote {}", out);
+    exit_code = 0;
+  });
+}
+
+}  // namespace urlab::app

@@ -1,0 +1,276 @@
+#include "urlab/mjcf/reader.h"
+
+#include <tinyxml2.h>
+
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <unordered_set>
+
+namespace urlab::mjcf {
+
+namespace fs = std::filesystem;
+using document::AttributeSpec;
+using document::Diagnostic;
+using document::Document;
+using document::Element;
+using document::ElementSpec;
+using document::FileBases;
+using document::Namespace;
+
+namespace {
+
+std::string ReadWholeFile(const std::string& path, const SourceLocation& referenced_from,
+                          const std::string& what) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    throw InputError(referenced_from.file.empty() ? SourceLocation{path, 0} : referenced_from,
+                     what + " '" + path + "' not found");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError({path, 0}, "cannot open file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class Reader {
+ public:
+  Reader(const ReadOptions& options, std::string main_path)
+      : options_(options), main_path_(std::move(main_path)) {
+    model_dir_ = fs::absolute(fs::path(main_path_)).parent_path().lexically_normal().string();
+  }
+
+  Document Read(const std::string& text) {
+    tinyxml2::XMLDocument xml;
+    const tinyxml2::XMLElement* top = Parse(xml, text, main_path_);
+    if (std::string_view(top->Name()) != "mujoco") {
+      throw InputError({main_path_, top->GetLineNum()},
+                       "the top-level element must be <mujoco>, found <" +
+                           std::string(top->Name()) + ">");
+    }
+    Document doc;
+    doc.set_source_path(main_path_);
+    Element& root = doc.root();
+    while (!root.attributes().empty()) root.Unset(root.attributes().front().name);
+    root.set_edited(false);
+    root.set_location({main_path_, top->GetLineNum()});
+    doc_ = &doc;
+    include_stack_.push_back(fs::weakly_canonical(main_path_).string());
+    ConvertAttributes(*top, root, main_path_);
+    ConvertChildren(*top, root, main_path_);
+    AssignFileBases(doc);
+    if (options_.check_files) ThrowFirst(FindMissingFiles(doc));
+    if (options_.check_references) ThrowFirst(FindDanglingReferences(doc));
+    return doc;
+  }
+
+ private:
+  static void ThrowFirst(const std::vector<InputError>& errors) {
+    if (errors.empty()) return;
+    if (errors.size() == 1) throw errors.front();
+    throw InputError(errors.front().where(),
+                     errors.front().message() + " (and " + std::to_string(errors.size() - 1) +
+                         " more problem(s) of this kind)");
+  }
+
+  // Parses `text`; returns its single top-level element.
+  static const tinyxml2::XMLElement* Parse(tinyxml2::XMLDocument& xml, const std::string& text,
+                                           const std::string& file) {
+    if (xml.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS) {
+      std::string why = xml.ErrorStr() ? xml.ErrorStr() : "parse error";
+      throw InputError({file, xml.ErrorLineNum()}, "malformed XML: " + why);
+    }
+    const tinyxml2::XMLElement* top = xml.RootElement();
+    if (!top) throw InputError({file, 0}, "malformed XML: no top-level element (empty file?)");
+    if (const auto* second = top->NextSiblingElement()) {
+      throw InputError({file, second->GetLineNum()},
+                       "malformed XML: more than one top-level element");
+    }
+    return top;
+  }
+
+  void ConvertAttributes(const tinyxml2::XMLElement& from, Element& to, const std::string& file) {
+    for (const tinyxml2::XMLAttribute* a = from.FirstAttribute(); a; a = a->Next()) {
+      to.AddRawAttribute(a->Name(), a->Value());
+      const AttributeSpec* spec = to.spec()->FindAttribute(a->Name());
+      if (!spec) {
+        doc_->diagnostics().push_back(
+            Diagnostic{Diagnostic::Severity::kWarning, {file, a->GetLineNum()},
+                       "<" + to.tag() + "> attribute '" + a->Name() +
+                           "' is not in MuJoCo 2.2.2's grammar; kept verbatim"});
+        continue;
+      }
+      const std::string problem = document::CheckValue(*spec, a->Value());
+      if (!problem.empty()) {
+        throw InputError({file, a->GetLineNum()},
+                         "<" + to.tag() + "> attribute '" + a->Name() + "': " + problem);
+      }
+    }
+  }
+
+  void ConvertChildren(const tinyxml2::XMLElement& from, Element& to, const std::string& file) {
+    for (const tinyxml2::XMLElement* c = from.FirstChildElement(); c; c = c->NextSiblingElement()) {
+      const std::string_view tag = c->Name();
+      if (tag == "include") {
+        Include(*c, to, file);
+        continue;
+      }
+      const ElementSpec* spec = to.spec()->FindChild(tag);
+      if (!spec) {
+        throw InputError({file, c->GetLineNum()}, "unknown element <" + std::string(tag) +
+                                                      "> inside <" + to.tag() + ">");
+      }
+      auto child = std::make_unique<Element>(spec, std::string(tag));
+      child->set_location({file, c->GetLineNum()});
+      Element& added = to.InsertChild(to.children().size(), std::move(child));
+      ConvertAttributes(*c, added, file);
+      ConvertChildren(*c, added, file);
+    }
+  }
+
+  void Include(const tinyxml2::XMLElement& inc, Element& parent, const std::string& file) {
+    const SourceLocation where{file, inc.GetLineNum()};
+    const char* name = inc.Attribute("file");
+    if (!name || !*name) throw InputError(where, "<include> needs a 'file' attribute");
+    for (const tinyxml2::XMLAttribute* a = inc.FirstAttribute(); a; a = a->Next()) {
+      if (std::string_view(a->Name()) != "file") {
+        throw InputError(where, "<include> attribute '" + std::string(a->Name()) + "' is unknown");
+      }
+    }
+    fs::path path(name);
+    if (path.is_relative()) path = fs::path(model_dir_) / path;
+    const std::string shown = path.lexically_normal().string();
+    const std::string text = ReadWholeFile(shown, where, "include file");
+    const std::string key = fs::weakly_canonical(path).string();
+    for (const std::string& open : include_stack_) {
+      if (open == key) {
+        std::string chain;
+        for (const std::string& s : include_stack_) chain += fs::path(s).filename().string() + " -> ";
+        throw InputError(where, "include cycle: " + chain + fs::path(key).filename().string());
+      }
+    }
+    if (!included_.insert(key).second) {
+      throw InputError(where, "file '" + shown + "' is included more than once");
+    }
+    tinyxml2::XMLDocument xml;
+    const tinyxml2::XMLElement* top = Parse(xml, text, shown);
+    if (!top->FirstChildElement()) {
+      throw InputError({shown, top->GetLineNum()}, "included file has no elements to insert");
+    }
+    include_stack_.push_back(key);
+    ConvertChildren(*top, parent, shown);
+    include_stack_.pop_back();
+  }
+
+  void AssignFileBases(Document& doc) {
+    auto bases = std::make_shared<FileBases>();
+    bases->model_dir = model_dir_;
+    std::string meshdir, texturedir;
+    for (const auto& c : doc.root().children()) {
+      if (c->tag() != "compiler") continue;
+      if (const std::string* v = c->Get("meshdir")) meshdir = *v;
+      if (const std::string* v = c->Get("texturedir")) texturedir = *v;
+      if (const std::string* v = c->Get("strippath")) bases->strip_path = *v == "true";
+    }
+    auto join = [&](const std::string& dir) {
+      if (dir.empty()) return model_dir_;
+      fs::path p(dir);
+      return (p.is_absolute() ? p : fs::path(model_dir_) / p).lexically_normal().string();
+    };
+    bases->mesh_dir = join(meshdir);
+    bases->texture_dir = join(texturedir);
+    std::shared_ptr<const FileBases> shared = bases;
+    doc.root().Visit([&](Element& e) { e.set_file_bases(shared); });
+  }
+
+  const ReadOptions& options_;
+  std::string main_path_;
+  std::string model_dir_;
+  Document* doc_ = nullptr;
+  std::vector<std::string> include_stack_;
+  std::unordered_set<std::string> included_;
+};
+
+// Names defined per namespace.
+using NameTable = std::array<std::unordered_set<std::string>, static_cast<size_t>(Namespace::kCount)>;
+
+NameTable CollectNames(const Document& doc, std::vector<std::string>* composite_prefixes) {
+  NameTable names;
+  names[static_cast<size_t>(Namespace::kBody)].insert("world");
+  names[static_cast<size_t>(Namespace::kClass)].insert("main");
+  doc.root().Visit([&](const Element& e) {
+    if (e.tag() == "composite") composite_prefixes->push_back(e.GetOr("prefix", ""));
+    if (!e.spec() || e.spec()->name_space == Namespace::kNone) return;
+    const std::string n = document::DefinedName(e);
+    if (!n.empty()) names[static_cast<size_t>(e.spec()->name_space)].insert(n);
+  });
+  return names;
+}
+
+}  // namespace
+
+std::vector<InputError> FindDanglingReferences(const Document& doc) {
+  std::vector<std::string> composite_prefixes;
+  const NameTable names = CollectNames(doc, &composite_prefixes);
+  std::vector<InputError> errors;
+  doc.root().Visit([&](const Element& e) {
+    if (!e.spec()) return;
+    for (const document::Attribute& a : e.attributes()) {
+      if (!a.spec || !a.spec->IsReference() || a.value.empty()) continue;
+      // A default's own `class` defines its name rather than referencing one.
+      if (e.spec()->name_space == Namespace::kClass && a.name == "class") continue;
+      Namespace ns = a.spec->ref;
+      if (!a.spec->ref_selector.empty()) {
+        const std::string* sel = e.Get(a.spec->ref_selector);
+        ns = sel ? document::NamespaceFromObjType(*sel) : Namespace::kNone;
+        if (ns == Namespace::kNone) continue;
+      }
+      if (names[static_cast<size_t>(ns)].count(a.value)) continue;
+      // <composite> generates bodies, joints, geoms, sites, tendons and skins named after its
+      // prefix; names that may come from one cannot be checked without running the generator.
+      bool maybe_generated = false;
+      for (const std::string& p : composite_prefixes) {
+        maybe_generated = maybe_generated || a.value.compare(0, p.size(), p) == 0;
+      }
+      if (maybe_generated) continue;
+      errors.emplace_back(e.location(),
+                          "<" + e.tag() + "> attribute " + a.name + "=\"" + a.value +
+                              "\" names no " + std::string(document::NamespaceName(ns)) +
+                              " in this model");
+    }
+  });
+  return errors;
+}
+
+std::vector<InputError> FindMissingFiles(const Document& doc) {
+  std::vector<InputError> errors;
+  doc.root().Visit([&](const Element& e) {
+    for (const document::Attribute& a : e.attributes()) {
+      if (!a.spec || a.spec->type != document::ValueType::kFile) continue;
+      const std::optional<std::string> path = e.ResolvedFile(a.name);
+      std::error_code ec;
+      if (path && !fs::is_regular_file(*path, ec)) {
+        errors.emplace_back(e.location(), "<" + e.tag() + "> " + a.name + " '" + a.value +
+                                              "' not found (looked for " + *path + ")");
+      }
+    }
+  });
+  return errors;
+}
+
+Document ReadFile(const std::string& path, const ReadOptions& options) {
+  const std::string text = ReadWholeFile(path, {}, "model file");
+  Reader reader(options, path);
+  return reader.Read(text);
+}
+
+Document ReadString(const std::string& xml, const std::string& virtual_path,
+                    const ReadOptions& options) {
+  Reader reader(options, virtual_path);
+  return reader.Read(xml);
+}
+
+}  // namespace urlab::mjcf

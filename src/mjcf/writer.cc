@@ -1,0 +1,117 @@
+#include "urlab/mjcf/writer.h"
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+
+namespace urlab::mjcf {
+
+namespace fs = std::filesystem;
+using document::Document;
+using document::Element;
+
+namespace {
+
+void AppendEscaped(std::string& out, std::string_view v) {
+  for (char c : v) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\n': out += "&#10;"; break;
+      case '\r': out += "&#13;"; break;
+      case '\t': out += "&#9;"; break;
+      default: out += c;
+    }
+  }
+}
+
+// Compiler attributes consumed by path resolution (paths are written resolved).
+bool IsConsumedCompilerAttribute(const Element& e, std::string_view name) {
+  return e.tag() == "compiler" &&
+         (name == "meshdir" || name == "texturedir" || name == "strippath");
+}
+
+class Writer {
+ public:
+  Writer(const WriteOptions& options, LineMap* line_map)
+      : options_(options), line_map_(line_map) {}
+
+  void Write(const Element& e, int depth, std::string& out) const {
+    if (line_map_) line_map_->push_back(&e);
+    out.append(static_cast<size_t>(depth) * 2, ' ');
+    out += '<';
+    out += e.tag();
+    for (const document::Attribute& a : e.attributes()) {
+      if (IsConsumedCompilerAttribute(e, a.name)) continue;
+      out += ' ';
+      out += a.name;
+      out += "=\"";
+      if (a.spec && a.spec->type == document::ValueType::kFile) {
+        AppendEscaped(out, FilePath(e, a.name));
+      } else {
+        AppendEscaped(out, a.value);
+      }
+      out += '"';
+    }
+    if (e.children().empty()) {
+      out += "/>\n";
+      return;
+    }
+    out += ">\n";
+    for (const auto& c : e.children()) Write(*c, depth + 1, out);
+    if (line_map_) line_map_->push_back(nullptr);
+    out.append(static_cast<size_t>(depth) * 2, ' ');
+    out += "</";
+    out += e.tag();
+    out += ">\n";
+  }
+
+ private:
+  std::string FilePath(const Element& e, std::string_view name) const {
+    const std::string resolved = *e.ResolvedFile(name);
+    if (options_.relative_to.empty()) return resolved;
+    const fs::path rel = fs::path(resolved).lexically_relative(options_.relative_to);
+    return rel.empty() ? resolved : rel.string();
+  }
+
+  const WriteOptions& options_;
+  LineMap* line_map_;
+};
+
+}  // namespace
+
+std::string WriteString(const Document& doc, const WriteOptions& options, LineMap* line_map) {
+  std::string out;
+  out.reserve(1 << 16);
+  if (line_map) line_map->clear();
+  Writer(options, line_map).Write(doc.root(), 0, out);
+  return out;
+}
+
+std::string ExplainCompileMessage(const std::string& message, const LineMap& line_map) {
+  static const std::regex kLine(R"(line (\d+))");
+  std::smatch m;
+  if (!std::regex_search(message, m, kLine)) return message;
+  const size_t line = std::stoul(m[1].str());
+  if (line == 0 || line > line_map.size() || !line_map[line - 1]) return message;
+  const Element& e = *line_map[line - 1];
+  return message + "\n  in " + e.Describe();
+}
+
+void WriteFile(const Document& doc, const std::string& path, bool absolute_paths) {
+  WriteOptions options;
+  if (!absolute_paths) {
+    options.relative_to =
+        fs::absolute(fs::path(path)).parent_path().lexically_normal().string();
+  }
+  const std::string text = WriteString(doc, options);
+  std::ofstream f(path, std::ios::binary);
+  if (!f) throw Error(path + ": cannot open for writing");
+  f.write(text.data(), static_cast<std::streamsize>(text.size()));
+  f.close();
+  if (!f) throw Error(path + ": write failed");
+}
+
+}  // namespace urlab::mjcf
