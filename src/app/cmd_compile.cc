@@ -8,6 +8,7 @@
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
 #include "urlab/physics/model.h"
+#include "urlab/world/scene.h"
 
 namespace urlab::app {
 
@@ -29,37 +30,37 @@ std::vector<std::pair<const char*, int>> ModelSizes(const mjModel* m) {
 void RegisterCompileCommand(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "compile",
-      "Import a model, export it and compile it with MuJoCo from an in-memory virtual file "
-      "system; print the compiled model's sizes.");
+      "Import a model (MJCF) or compose a scene (YAML), export it and compile it with MuJoCo "
+      "from an in-memory virtual file system; print the compiled model's sizes.");
   static std::string file, save_xml, save_mjb;
   static bool json = false;
-  cmd->add_option("FILE", file, "MJCF model file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("FILE", file, "MJCF model file (.xml) or scene file (.yaml)")
+      ->required()
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--json", json, "print the sizes as one JSON object");
   cmd->add_option("--save-xml", save_xml,
                   "also save the exported MJCF (asset paths relative to its folder; loadable "
                   "on its own)");
   cmd->add_option("--save-mjb", save_mjb, "also save the compiled model as MuJoCo binary");
   cmd->callback([&exit_code] {
-    document::Document doc = mjcf::ReadFile(file);
-    for (const auto& d : doc.diagnostics()) spdlog::warn("{}: {}", d.where.str(), d.message);
-    mjcf::LineMap line_map;
-    const std::string xml = mjcf::WriteString(doc, {}, &line_map);
-    physics::ModelPtr model;
-    try {
-      model = physics::CompileXmlString(xml);
-    } catch (const physics::CompileError& e) {
-      throw Error(file + ": MuJoCo refused the model: " +
-                  mjcf::ExplainCompileMessage(e.what(), line_map));
+    world::CompiledScene compiled;
+    if (world::IsSceneFile(file)) {
+      compiled = world::BuildScene(world::LoadSceneFile(file));
+    } else {
+      compiled = world::BuildModel(file);
     }
+    for (const auto& d : compiled.diagnostics) spdlog::warn("{}: {}", d.where.str(), d.message);
     if (!save_xml.empty()) {
+      // Re-read the compiled text so its asset paths can be written relative to the output.
+      document::Document doc = mjcf::ReadString(compiled.xml, "/" + std::string("urlab_scene.xml"));
       mjcf::WriteFile(doc, save_xml);
       spdlog::info("saved {}", save_xml);
     }
     if (!save_mjb.empty()) {
-      physics::SaveMjb(model.get(), save_mjb);
+      physics::SaveMjb(compiled.model.get(), save_mjb);
       spdlog::info("saved {}", save_mjb);
     }
-    const auto sizes = ModelSizes(model.get());
+    const auto sizes = ModelSizes(compiled.model.get());
     if (json) {
       nlohmann::ordered_json j;
       for (const auto& [k, v] : sizes) j[k] = v;
@@ -68,6 +69,28 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
       for (const auto& [k, v] : sizes) std::cout << k << " " << v << "\n";
     }
     exit_code = 0;
+  });
+
+  CLI::App* val = app.add_subcommand(
+      "validate",
+      "Check a scene (YAML) or MJCF file without running it: read, compose and compile, and "
+      "report every problem found with its file and line.");
+  static std::string vfile;
+  val->add_option("FILE", vfile, "scene (.yaml) or MJCF (.xml) file")
+      ->required()
+      ->check(CLI::ExistingFile);
+  val->callback([&exit_code] {
+    const world::ValidationReport r = world::Validate(vfile);
+    for (const auto& w : r.warnings) std::cout << "warning: " << w << "\n";
+    for (const auto& e : r.errors) std::cout << "error: " << e << "\n";
+    if (r.errors.empty()) {
+      std::cout << vfile << ": OK";
+      for (const auto& s : r.sizes) std::cout << ", " << s;
+      std::cout << "\n";
+    } else {
+      std::cout << vfile << ": " << r.errors.size() << " problem(s)\n";
+    }
+    exit_code = r.errors.empty() ? 0 : 1;
   });
 }
 

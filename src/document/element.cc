@@ -246,6 +246,11 @@ std::string CheckValue(const AttributeSpec& spec, std::string_view value) {
     case ValueType::kInt: {
       auto v = ParseReals(value);
       if (!v) return "'" + std::string(value) + "' is not a list of numbers";
+      if (spec.type == ValueType::kInt) {
+        for (double x : *v) {
+          if (x != std::floor(x)) return "'" + std::string(value) + "' is not a list of integers";
+        }
+      }
       if (spec.max_count >= 0 && static_cast<int>(v->size()) > spec.max_count) {
         return "expected at most " + std::to_string(spec.max_count) + " number(s), got " +
                std::to_string(v->size());

@@ -2,6 +2,8 @@
 
 #include <tinyxml2.h>
 
+#include <unordered_map>
+
 #include <array>
 #include <filesystem>
 #include <fstream>
@@ -63,7 +65,10 @@ class Reader {
     ConvertChildren(*top, root, main_path_);
     AssignFileBases(doc);
     if (options_.check_files) ThrowFirst(FindMissingFiles(doc));
-    if (options_.check_references) ThrowFirst(FindDanglingReferences(doc));
+    if (options_.check_references) {
+      ThrowFirst(FindDuplicateNames(doc));
+      ThrowFirst(FindDanglingReferences(doc));
+    }
     return doc;
   }
 
@@ -79,15 +84,19 @@ class Reader {
   // Parses `text`; returns its single top-level element.
   static const tinyxml2::XMLElement* Parse(tinyxml2::XMLDocument& xml, const std::string& text,
                                            const std::string& file) {
+    if (text.find('<') == std::string::npos) {
+      throw InputError({file, 0}, "malformed XML: no root element (the file is empty or has no "
+                                  "elements)");
+    }
     if (xml.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS) {
       std::string why = xml.ErrorStr() ? xml.ErrorStr() : "parse error";
       throw InputError({file, xml.ErrorLineNum()}, "malformed XML: " + why);
     }
     const tinyxml2::XMLElement* top = xml.RootElement();
-    if (!top) throw InputError({file, 0}, "malformed XML: no top-level element (empty file?)");
+    if (!top) throw InputError({file, 0}, "malformed XML: no root element (only comments?)");
     if (const auto* second = top->NextSiblingElement()) {
       throw InputError({file, second->GetLineNum()},
-                       "malformed XML: more than one top-level element");
+                       "malformed XML: more than one root element");
     }
     return top;
   }
@@ -99,8 +108,8 @@ class Reader {
       if (!spec) {
         doc_->diagnostics().push_back(
             Diagnostic{Diagnostic::Severity::kWarning, {file, a->GetLineNum()},
-                       "<" + to.tag() + "> attribute '" + a->Name() +
-                           "' is not in MuJoCo 2.2.2's grammar; kept verbatim"});
+                       "<" + to.tag() + "> unknown attribute '" + a->Name() +
+                           "' (not in MuJoCo 2.2.2's grammar): kept verbatim"});
         continue;
       }
       const std::string problem = document::CheckValue(*spec, a->Value());
@@ -158,7 +167,8 @@ class Reader {
     tinyxml2::XMLDocument xml;
     const tinyxml2::XMLElement* top = Parse(xml, text, shown);
     if (!top->FirstChildElement()) {
-      throw InputError({shown, top->GetLineNum()}, "included file has no elements to insert");
+      throw InputError({shown, top->GetLineNum()},
+                       "the included file's root element is empty: nothing to insert");
     }
     include_stack_.push_back(key);
     ConvertChildren(*top, parent, shown);
@@ -238,8 +248,29 @@ std::vector<InputError> FindDanglingReferences(const Document& doc) {
       if (maybe_generated) continue;
       errors.emplace_back(e.location(),
                           "<" + e.tag() + "> attribute " + a.name + "=\"" + a.value +
-                              "\" names no " + std::string(document::NamespaceName(ns)) +
-                              " in this model");
+                              "\": dangling reference, no " +
+                              std::string(document::NamespaceName(ns)) + " named '" + a.value +
+                              "' in this model");
+    }
+  });
+  return errors;
+}
+
+std::vector<InputError> FindDuplicateNames(const Document& doc) {
+  std::array<std::unordered_map<std::string, const Element*>,
+             static_cast<size_t>(Namespace::kCount)>
+      seen;
+  std::vector<InputError> errors;
+  doc.root().Visit([&](const Element& e) {
+    if (!e.spec() || e.spec()->name_space == Namespace::kNone) return;
+    const std::string n = e.Name();
+    if (n.empty()) return;
+    auto [it, fresh] = seen[static_cast<size_t>(e.spec()->name_space)].emplace(n, &e);
+    if (!fresh) {
+      errors.emplace_back(e.location(), "duplicate " +
+                                            std::string(document::NamespaceName(e.spec()->name_space)) +
+                                            " name '" + n + "' (first defined at " +
+                                            it->second->location().str() + ")");
     }
   });
   return errors;

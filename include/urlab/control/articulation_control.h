@@ -1,0 +1,136 @@
+#pragma once
+// Per-articulation control: actuator targets from two sources (network, UI), a control-source
+// override, the articulation's controller, "hold keyframe", and per-articulation keyframe reset.
+// ControlSystem holds every articulation and the global control source and hooks them into a
+// PhysicsEngine as its apply-controls step.
+//
+// Threading:
+// - Main thread, before the engine runs: construction, SetController, ControlSystem::Add and
+//   Install.
+// - Any thread: SetTarget/GetTarget, the source setters/getters, HoldKeyframe/StopHold,
+//   ControlSystem::SetGlobalSource, ControlSystem::RequestKeyframeReset. All are atomics or go
+//   through the engine's command queue.
+// - Physics thread (step mutex held): ApplyControls, ResetToKeyframe.
+#include <atomic>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "urlab/control/controller.h"
+#include "urlab/core/error.h"
+#include "urlab/physics/engine.h"
+#include "urlab/physics/views.h"
+
+namespace urlab::control {
+
+class ArticulationControl {
+ public:
+  // Binds every actuator whose name starts with the bindings' prefix (sorted by id) and the
+  // joints/actuators/mocap bodies the articulation owns. Uses a PassthroughController until
+  // SetController is called.
+  explicit ArticulationControl(const physics::ArticulationBindings& bindings);
+
+  const std::string& prefix() const { return prefix_; }
+  int num_actuators() const { return static_cast<int>(actuator_ids_.size()); }
+  // MuJoCo ids of the actuators, ascending; targets are indexed the same way.
+  const std::vector<int>& actuator_ids() const { return actuator_ids_; }
+  // Index of an actuator by short name, -1 when absent.
+  int IndexOf(std::string_view short_name) const;
+
+  // Replaces the controller and binds it to this articulation's actuators (so poses can be added
+  // right after). Main thread, while the engine does not run this articulation's controls.
+  void SetController(std::unique_ptr<Controller> controller);
+  // Typed convenience: SetController and return the controller.
+  template <typename C>
+  C& Use(std::unique_ptr<C> controller) {
+    C& ref = *controller;
+    SetController(std::move(controller));
+    return ref;
+  }
+  Controller* controller() const { return controller_.get(); }
+
+  // Target values per source (any thread). Returns false for an unknown name/index.
+  bool SetTarget(ControlSource source, int index, double value);
+  bool SetTarget(ControlSource source, std::string_view short_name, double value);
+  double GetTarget(ControlSource source, int index) const;
+
+  // Per-articulation override of the global control source (std::nullopt: follow the global).
+  void SetSourceOverride(std::optional<ControlSource> source);
+  std::optional<ControlSource> source_override() const;
+  // The source in effect given the global one.
+  ControlSource EffectiveSource(ControlSource global) const;
+
+  // Keeps the pose of model keyframe `key` (joint positions for position-target controllers,
+  // the keyframe's ctrl otherwise) until StopHold. Any thread. Throws Error for a bad key.
+  void HoldKeyframe(int key);
+  void HoldKeyframe(std::string_view name);
+  void StopHold() { holding_.store(false, std::memory_order_release); }
+  bool holding() const { return holding_.load(std::memory_order_acquire); }
+
+  // Physics thread: feeds the active targets to the controller, which writes d->ctrl.
+  void ApplyControls(const mjModel* m, mjData* d, ControlSource global);
+
+  // Physics thread (use via ControlSystem::RequestKeyframeReset or PhysicsEngine::ResetWith):
+  // writes this articulation's qpos/qvel/act/ctrl/mocap from keyframe `key` and clears its
+  // warm start and applied forces; the rest of the scene is untouched. No mj_forward.
+  void ResetToKeyframe(const mjModel* m, mjData* d, int key) const;
+
+  // Finds keyframe `name` or prefix + `name`. Returns -1 when neither exists.
+  int FindKeyframe(const mjModel* m, std::string_view name) const;
+
+ private:
+  std::string prefix_;
+  const mjModel* model_;
+  std::vector<int> actuator_ids_;
+  std::vector<std::string> actuator_names_;  // short names
+  // Owned state addresses, for per-articulation keyframe reset.
+  std::vector<int> qpos_adrs_;
+  std::vector<int> dof_adrs_;
+  std::vector<int> act_adrs_;
+  std::vector<int> mocap_ids_;
+  std::vector<int> body_ids_;
+
+  std::unique_ptr<Controller> controller_;
+  AtomicValues network_;
+  AtomicValues ui_;
+  AtomicValues hold_;
+  std::atomic<int> override_{-1};  // -1: none, else ControlSource
+  std::atomic<bool> holding_{false};
+  std::vector<double> scratch_;  // physics thread
+};
+
+class ControlSystem {
+ public:
+  ControlSystem() = default;
+  ControlSystem(const ControlSystem&) = delete;
+  ControlSystem& operator=(const ControlSystem&) = delete;
+
+  // Global control source (any thread). Default kNetwork.
+  void SetGlobalSource(ControlSource s) { global_.store(static_cast<int>(s)); }
+  ControlSource global_source() const { return static_cast<ControlSource>(global_.load()); }
+
+  // Adds an articulation (main thread, before Install). Returns it.
+  ArticulationControl& Add(std::unique_ptr<ArticulationControl> articulation);
+  // By prefix; nullptr when absent. Any thread once set up.
+  ArticulationControl* Find(std::string_view prefix) const;
+  const std::vector<std::unique_ptr<ArticulationControl>>& articulations() const { return all_; }
+
+  // Registers ApplyControls of every articulation as the engine's apply-controls hook. Main
+  // thread. The ControlSystem must outlive the engine's use of the hook.
+  void Install(physics::PhysicsEngine& engine);
+  // Physics thread: what the hook does.
+  void ApplyControls(const mjModel* m, mjData* d);
+
+  // Queues a reset of one articulation to keyframe `key_name` (or prefix + name) on `engine`;
+  // other articulations keep their state. Any thread. Throws Error for unknown names.
+  void RequestKeyframeReset(physics::PhysicsEngine& engine, std::string_view prefix,
+                            std::string_view key_name) const;
+
+ private:
+  std::atomic<int> global_{static_cast<int>(ControlSource::kNetwork)};
+  std::vector<std::unique_ptr<ArticulationControl>> all_;
+};
+
+}  // namespace urlab::control

@@ -1,0 +1,286 @@
+#pragma once
+// PhysicsEngine: owns one compiled mjModel and its mjData and steps them on a dedicated physics
+// thread.
+//
+// Threading contract
+// - The physics thread (started by Start) owns mjModel/mjData while it runs. Each loop iteration
+//   takes the step mutex once and, in this order: applies a pending reset, applies a pending
+//   restore, runs the pre-step callbacks, runs the apply-controls hook, steps (unless paused:
+//   the custom step handler if set, else mj_step), checks for divergence, runs the post-step
+//   callbacks, fires the OnPostStep listeners (only when a step happened) and publishes a render
+//   snapshot. It then releases the mutex and waits for the next deadline (pacing).
+// - Callbacks, the controls hook and the custom step handler run on the physics thread (or on the
+//   StepSync caller's thread) with the step mutex held; they may read and write mjData freely.
+//   From inside a callback, Reset*/Restore/SetPaused are allowed (queued for the next
+//   iteration); registration, Snapshot, WithLockedData, StepSync, Start and Stop throw Error
+//   (they would deadlock).
+// - Any thread: SetPaused/TogglePause, Reset*, Restore, Snapshot, the pacing setters, the
+//   measurement getters (atomics) and WithLockedData. Reset and Restore are applied by the
+//   physics thread at its next iteration when it runs, immediately (under the mutex) when not.
+// - Main thread: Start, Stop, the destructor, callback registration, and event delivery
+//   (PollEvents/DrainEvents). Reset notifications, divergence and error reports are queued by the
+//   physics thread and only delivered there.
+// - Render thread (exactly one consumer): LatestRenderSnapshot, which never blocks the physics
+//   thread (triple buffer).
+// - A MuJoCo error (urlab::MujocoError from the installed handler) or any exception escaping a
+//   callback is caught, reported as an kError event and pauses the loop; the process continues.
+#include <mujoco/mujoco.h>
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include "urlab/physics/model.h"
+#include "urlab/physics/state.h"
+
+namespace urlab::physics {
+
+// What an EngineEvent reports.
+enum class EngineEventKind {
+  kReset,       // mjData was reset (full, keyframe, custom or after divergence)
+  kRestored,    // a state was restored
+  kDivergence,  // NaN/Inf or a MuJoCo instability warning after a step
+  kError,       // a MuJoCo error or a callback exception; the loop paused itself
+};
+
+// A notification from the physics thread, delivered on the main thread.
+struct EngineEvent {
+  EngineEventKind kind = EngineEventKind::kReset;
+  double sim_time = 0;       // simulation time when it happened (before any reset it caused)
+  std::string message;       // human-readable summary
+  int joint_id = -1;         // kDivergence: offending joint, -1 when unknown
+  std::string joint_name;    // kDivergence: its full (prefixed) name, "" when unnamed/unknown
+  std::string articulation;  // kDivergence: from the articulation resolver, "" when none
+  bool auto_reset = false;   // kDivergence: the engine reset the simulation in response
+};
+
+// Poses and contact count after a step, for the render thread.
+struct RenderSnapshot {
+  double time = 0;
+  std::uint64_t step = 0;     // steps taken since construction
+  int ncon = 0;               // contacts
+  std::vector<mjtNum> xpos;   // 3 * nbody
+  std::vector<mjtNum> xquat;  // 4 * nbody
+};
+
+// Lock-free triple buffer: one producer thread (physics) publishes, one consumer thread reads the
+// newest complete snapshot. Neither side ever waits for the other.
+class RenderBuffer {
+ public:
+  explicit RenderBuffer(int nbody);
+  // Producer: the buffer to fill, then Publish() it.
+  RenderSnapshot& Back() { return slots_[back_]; }
+  void Publish();
+  // Consumer: the newest published snapshot (stable until the next call), nullptr before the
+  // first publication.
+  const RenderSnapshot* Latest();
+
+ private:
+  static constexpr std::uint32_t kFresh = 4;
+  static constexpr std::uint32_t kIndex = 3;
+  std::array<RenderSnapshot, 3> slots_;
+  std::atomic<std::uint32_t> middle_{1};
+  std::uint32_t back_ = 0;   // producer-owned
+  std::uint32_t front_ = 2;  // consumer-owned
+  bool has_front_ = false;   // consumer-owned
+};
+
+class PhysicsEngine {
+ public:
+  // A hook run with the step mutex held. The model is const: change it via WithLockedData.
+  using StepCallback = std::function<void(const mjModel*, mjData*)>;
+  // Maps a full element name (e.g. "g1_left_knee") to the articulation owning it ("g1").
+  using ArticulationResolver = std::function<std::string(std::string_view name)>;
+  using EventListener = std::function<void(const EngineEvent&)>;
+  using CallbackId = std::uint64_t;
+
+  struct Options {
+    double target_interval = 0;  // wall seconds per step at 100 % speed; 0: model timestep
+    int speed_percent = 100;     // 5..100
+    bool as_fast_as_possible = false;
+    double resync_threshold = 0.05;  // seconds behind schedule before the schedule is reset
+    bool reset_on_divergence = false;
+    double measure_window = 0.25;  // wall seconds over which RTF and step rate are averaged
+  };
+
+  // Takes ownership of a compiled model and allocates its data (mj_forward applied). Main thread.
+  explicit PhysicsEngine(ModelPtr model);
+  PhysicsEngine(ModelPtr model, Options options);
+  ~PhysicsEngine();  // Stops the thread.
+  PhysicsEngine(const PhysicsEngine&) = delete;
+  PhysicsEngine& operator=(const PhysicsEngine&) = delete;
+
+  // The model. Sizes and names never change; other fields only under WithLockedData. Any thread.
+  const mjModel* model() const { return model_.get(); }
+
+  // Runs `fn` with the step mutex held (blocks for at most one iteration). Any thread except from
+  // inside a step callback.
+  void WithLockedData(const std::function<void(mjModel*, mjData*)>& fn);
+
+  // ---- Lifecycle (main thread) ----
+  // Starts the physics thread. Throws Error if already running.
+  void Start();
+  // Asks the thread to stop and joins it. No-op when not running.
+  void Stop();
+  bool running() const { return running_.load(std::memory_order_acquire); }
+
+  // ---- Hooks (main thread; not from inside a callback) ----
+  CallbackId AddPreStepCallback(StepCallback fn);
+  CallbackId AddPostStepCallback(StepCallback fn);
+  // Fired after the post-step callbacks, only on iterations that stepped (replay records here).
+  CallbackId AddOnPostStep(StepCallback fn);
+  // Removes a callback added by any of the three functions above; false if unknown.
+  bool RemoveCallback(CallbackId id);
+  // The control layer's hook writing d->ctrl; empty function clears it.
+  void SetApplyControlsHook(StepCallback fn);
+  // Replaces mj_step while set (replay playback); empty function clears it.
+  void SetCustomStepHandler(StepCallback fn);
+  // Names the articulation in divergence reports.
+  void SetArticulationResolver(ArticulationResolver fn);
+
+  // ---- Simulation control (any thread) ----
+  // Unpausing also clears the error latch (after an error the paused loop runs no callbacks,
+  // only pending resets/restores, until it is unpaused).
+  void SetPaused(bool paused);
+  void TogglePause();
+  bool paused() const { return paused_.load(std::memory_order_acquire); }
+  // mj_resetData + mj_forward.
+  void Reset();
+  // mj_resetDataKeyframe + mj_forward. Throws Error for a bad key id / unknown name.
+  void ResetToKeyframe(int key);
+  void ResetToKeyframe(const std::string& name);
+  // Runs `fn` (on the physics thread, mutex held) then mj_forward; used for per-articulation
+  // resets that must not touch the rest of the scene. `label` appears in the reset event.
+  void ResetWith(StepCallback fn, std::string label);
+  // Captures the full state (blocks for at most one iteration).
+  PhysicsState Snapshot();
+  // Restores `state` then mj_forward. Throws StateError at once when it does not fit the model.
+  void Restore(PhysicsState state);
+  // Runs `n` full iterations on the caller's thread, stepping even when paused. Only while the
+  // loop is paused or not started (throws Error otherwise). A MuJoCo error is reported as an
+  // event, pauses the loop and is rethrown.
+  void StepSync(int n = 1);
+
+  // ---- Pacing (any thread) ----
+  void SetSpeedPercent(int percent);  // clamped to 5..100
+  int speed_percent() const { return speed_percent_.load(std::memory_order_relaxed); }
+  void SetAsFastAsPossible(bool on) { as_fast_.store(on, std::memory_order_relaxed); }
+  bool as_fast_as_possible() const { return as_fast_.load(std::memory_order_relaxed); }
+  // Wall seconds per step at 100 %; <= 0 selects the model timestep.
+  void SetTargetInterval(double seconds);
+  double target_interval() const { return target_interval_.load(std::memory_order_relaxed); }
+  void SetResetOnDivergence(bool on) { reset_on_divergence_.store(on, std::memory_order_relaxed); }
+
+  // ---- Measurements (any thread) ----
+  // Simulated seconds per wall second over the last measurement window (0 while paused).
+  double real_time_factor() const { return rtf_.load(std::memory_order_relaxed); }
+  // Steps per wall second over the last measurement window.
+  double step_rate() const { return step_rate_.load(std::memory_order_relaxed); }
+  // Physics steps taken (loop and StepSync).
+  std::uint64_t step_count() const { return step_count_.load(std::memory_order_relaxed); }
+
+  // ---- Events (main thread) ----
+  // Returns and clears the queued events without dispatching them.
+  std::vector<EngineEvent> DrainEvents();
+  // Drains the queue and calls every listener for each event; returns the number of events.
+  int PollEvents();
+  CallbackId AddEventListener(EventListener fn);
+  // Events lost because the queue overflowed (it keeps the newest kMaxQueuedEvents).
+  std::uint64_t dropped_events() const { return dropped_events_.load(std::memory_order_relaxed); }
+  static constexpr std::size_t kMaxQueuedEvents = 1024;
+
+  // ---- Rendering (one render thread) ----
+  // Newest published snapshot; never blocks the physics thread. Non-null after construction.
+  const RenderSnapshot* LatestRenderSnapshot() { return render_.Latest(); }
+
+ private:
+  struct PendingReset {
+    enum class Kind { kFull, kKeyframe, kCustom } kind = Kind::kFull;
+    int key = -1;
+    StepCallback fn;
+    std::string label;
+  };
+  struct Hook {
+    CallbackId id;
+    StepCallback fn;
+  };
+
+  void Loop();
+  // One iteration, step mutex held by the caller. Throws what the step or callbacks throw.
+  void IterateLocked(bool force_step);
+  void ApplyPendingLocked();
+  void ApplyResetLocked(const PendingReset& reset);
+  void CheckDivergenceLocked(double time_before);
+  void PublishRenderLocked();
+  void HandleErrorLocked(const std::exception& e);
+  void QueueEvent(EngineEvent event);
+  void QueueReset(PendingReset reset);
+  void ThrowIfOnPhysicsThread(const char* what) const;
+  CallbackId AddHook(std::vector<Hook>* hooks, StepCallback fn);
+  // Resolves a qpos (is_qpos) or dof index to a joint id, -1 when out of range.
+  int JointOfIndex(int index, bool is_qpos) const;
+
+  ModelPtr model_;
+  DataPtr data_;
+
+  // Serialises every access to model_/data_ once the engine is constructed.
+  std::mutex step_mutex_;
+  std::vector<Hook> pre_step_;
+  std::vector<Hook> post_step_;
+  std::vector<Hook> on_post_step_;
+  StepCallback apply_controls_;
+  StepCallback custom_step_;
+  ArticulationResolver resolver_;
+  CallbackId next_id_ = 1;
+  // Physics-thread state (mutex held).
+  bool in_divergence_ = false;
+  std::chrono::steady_clock::time_point last_divergence_log_{};
+  std::vector<int> qpos_joint_;  // qpos index -> joint id
+
+  // Pending commands from other threads.
+  std::mutex pending_mutex_;
+  std::optional<PendingReset> pending_reset_;
+  std::optional<PhysicsState> pending_restore_;
+  std::atomic<bool> has_pending_{false};
+
+  // Events for the main thread.
+  std::mutex events_mutex_;
+  std::deque<EngineEvent> events_;
+  std::vector<std::pair<CallbackId, EventListener>> listeners_;
+  std::atomic<std::uint64_t> dropped_events_{0};
+  CallbackId next_listener_id_ = 1;
+
+  // Flags and pacing parameters.
+  std::atomic<bool> paused_{false};
+  std::atomic<bool> error_latched_{false};
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> running_{false};
+  std::atomic<int> speed_percent_{100};
+  std::atomic<bool> as_fast_{false};
+  std::atomic<double> target_interval_{0};
+  std::atomic<bool> reset_on_divergence_{false};
+  double resync_threshold_ = 0.05;
+  double measure_window_ = 0.25;
+
+  // Measurements.
+  std::atomic<double> rtf_{0};
+  std::atomic<double> step_rate_{0};
+  std::atomic<std::uint64_t> step_count_{0};
+  double sim_advanced_ = 0;  // mutex held: simulated seconds stepped in the current window
+  std::uint64_t window_steps_ = 0;
+
+  std::thread thread_;
+  RenderBuffer render_;
+};
+
+}  // namespace urlab::physics

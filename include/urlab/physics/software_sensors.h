@@ -1,0 +1,68 @@
+#pragma once
+// Sensors MuJoCo 2.2.2 cannot compute but the runtime can: MJCF written for MuJoCo 3.x uses
+// `jointactuatorfrc` and `tendonactuatorfrc`, which the dialect bridge (mjcf/bridge.h) turns into
+// 2.2.2 `<user>` sensors of the same name (objtype joint/tendon, dim 1, needstage acc). This
+// module fills those sensors in from MuJoCo's own actuator results, through mjcb_sensor:
+//
+//   joint actuator force  = qfrc_actuator[jnt_dofadr[joint]]             (3.x jointactuatorfrc)
+//   tendon actuator force = sum of actuator_force over actuators whose
+//                           transmission is that tendon (gear not applied) (3.x tendonactuatorfrc)
+//
+// mjcb_sensor is process-global, so registrations are kept per mjModel pointer in a registry; the
+// callback dispatches by model and chains to a callback installed before ours for models it does
+// not know. 3.x's `cutoff` is applied (as MuJoCo does for its own sensors).
+//
+// Thread: RegisterSoftwareSensors / the registration's destructor may run on any thread; the
+// callback runs on whichever thread steps the model (mj_step / mj_forward). The registry is
+// guarded by a reader-writer lock; the callback only takes the shared side.
+#include <mujoco/mujoco.h>
+
+#include <span>
+#include <string>
+#include <vector>
+
+namespace urlab::physics {
+
+enum class SoftwareSensorKind { kJointActuatorForce, kTendonActuatorForce };
+
+// A user sensor the runtime computes, named as in the model.
+struct SoftwareSensorSpec {
+  std::string sensor_name;
+  SoftwareSensorKind kind = SoftwareSensorKind::kJointActuatorForce;
+};
+
+// Keeps the sensors of one model registered; unregisters on destruction. Movable, not copyable.
+class SoftwareSensorRegistration {
+ public:
+  SoftwareSensorRegistration() = default;
+  explicit SoftwareSensorRegistration(const mjModel* m) : model_(m) {}
+  SoftwareSensorRegistration(SoftwareSensorRegistration&& o) noexcept : model_(o.model_) {
+    o.model_ = nullptr;
+  }
+  SoftwareSensorRegistration& operator=(SoftwareSensorRegistration&& o) noexcept;
+  SoftwareSensorRegistration(const SoftwareSensorRegistration&) = delete;
+  SoftwareSensorRegistration& operator=(const SoftwareSensorRegistration&) = delete;
+  ~SoftwareSensorRegistration();
+
+  const mjModel* model() const { return model_; }
+
+ private:
+  const mjModel* model_ = nullptr;
+};
+
+// Registers the sensors of `m` named in `specs` (replacing an earlier registration of `m`) and
+// installs the callback. Throws Error when a name is not a user sensor of dimension 1 attached
+// to a joint (hinge/slide) or tendon as its kind requires. With no specs, registers nothing and
+// returns an empty registration. The model must outlive the registration.
+SoftwareSensorRegistration RegisterSoftwareSensors(const mjModel* m,
+                                                   std::span<const SoftwareSensorSpec> specs);
+
+// Number of models currently registered (tests, diagnostics).
+int RegisteredSoftwareSensorModels();
+
+// Computes the registered sensors of `m` into d->sensordata directly (what the callback does at
+// the acceleration stage); for callers that run the pipeline piecewise. No-op when `m` is not
+// registered.
+void ComputeSoftwareSensors(const mjModel* m, mjData* d);
+
+}  // namespace urlab::physics

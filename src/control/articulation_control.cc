@@ -1,0 +1,177 @@
+#include "urlab/control/articulation_control.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "urlab/control/controllers.h"
+
+namespace urlab::control {
+
+using physics::ArticulationBindings;
+using physics::PhysicsEngine;
+
+ArticulationControl::ArticulationControl(const ArticulationBindings& bindings)
+    : prefix_(bindings.prefix()), model_(bindings.model()) {
+  for (std::size_t i = 0; i < bindings.actuators().size(); ++i) {
+    const physics::ActuatorView& a = bindings.actuators().all()[i];
+    actuator_ids_.push_back(a.id);  // ElementSet is in id order
+    actuator_names_.push_back(bindings.actuators().short_names()[i]);
+    if (a.act_adr >= 0) act_adrs_.push_back(a.act_adr);
+  }
+  for (const physics::JointView& j : bindings.joints().all()) {
+    for (int k = 0; k < j.qpos_size; ++k) qpos_adrs_.push_back(j.qpos_adr + k);
+    for (int k = 0; k < j.dof_size; ++k) dof_adrs_.push_back(j.dof_adr + k);
+  }
+  for (const physics::BodyView& b : bindings.bodies().all()) {
+    body_ids_.push_back(b.id);
+    if (b.mocap_id >= 0) mocap_ids_.push_back(b.mocap_id);
+  }
+  const std::size_t n = actuator_ids_.size();
+  network_ = AtomicValues(n);
+  ui_ = AtomicValues(n);
+  hold_ = AtomicValues(n);
+  scratch_.assign(n, 0);
+  SetController(std::make_unique<PassthroughController>());
+}
+
+int ArticulationControl::IndexOf(std::string_view short_name) const {
+  for (std::size_t i = 0; i < actuator_names_.size(); ++i) {
+    if (actuator_names_[i] == short_name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+void ArticulationControl::SetController(std::unique_ptr<Controller> controller) {
+  if (!controller) throw Error("ArticulationControl::SetController: null controller");
+  controller->Bind(model_, actuator_ids_);
+  controller_ = std::move(controller);
+}
+
+bool ArticulationControl::SetTarget(ControlSource source, int index, double value) {
+  if (index < 0 || index >= num_actuators()) return false;
+  (source == ControlSource::kNetwork ? network_ : ui_).Set(static_cast<std::size_t>(index), value);
+  return true;
+}
+
+bool ArticulationControl::SetTarget(ControlSource source, std::string_view short_name,
+                                    double value) {
+  return SetTarget(source, IndexOf(short_name), value);
+}
+
+double ArticulationControl::GetTarget(ControlSource source, int index) const {
+  if (index < 0 || index >= num_actuators()) return 0;
+  return (source == ControlSource::kNetwork ? network_ : ui_).Get(static_cast<std::size_t>(index));
+}
+
+void ArticulationControl::SetSourceOverride(std::optional<ControlSource> source) {
+  override_.store(source ? static_cast<int>(*source) : -1, std::memory_order_relaxed);
+}
+
+std::optional<ControlSource> ArticulationControl::source_override() const {
+  const int v = override_.load(std::memory_order_relaxed);
+  if (v < 0) return std::nullopt;
+  return static_cast<ControlSource>(v);
+}
+
+ControlSource ArticulationControl::EffectiveSource(ControlSource global) const {
+  return source_override().value_or(global);
+}
+
+int ArticulationControl::FindKeyframe(const mjModel* m, std::string_view name) const {
+  const std::string exact(name);
+  int key = mj_name2id(m, mjOBJ_KEY, exact.c_str());
+  if (key < 0) key = mj_name2id(m, mjOBJ_KEY, (prefix_ + exact).c_str());
+  return key;
+}
+
+void ArticulationControl::HoldKeyframe(std::string_view name) {
+  const int key = FindKeyframe(model_, name);
+  if (key < 0) throw Error("HoldKeyframe: no keyframe '" + std::string(name) + "'");
+  HoldKeyframe(key);
+}
+
+void ArticulationControl::HoldKeyframe(int key) {
+  const mjModel* m = model_;
+  if (key < 0 || key >= m->nkey) {
+    throw Error("HoldKeyframe: keyframe id " + std::to_string(key) + " out of range");
+  }
+  const bool positions = controller_->TargetsArePositions();
+  for (std::size_t i = 0; i < actuator_ids_.size(); ++i) {
+    const ActuatorBinding b = MakeActuatorBinding(m, actuator_ids_[i]);
+    double v = m->key_ctrl[key * m->nu + b.actuator_id];
+    if (positions && b.has_joint()) v = m->key_qpos[key * m->nq + b.qpos_adr];
+    hold_.Set(i, v);
+  }
+  holding_.store(true, std::memory_order_release);
+}
+
+void ArticulationControl::ApplyControls(const mjModel* m, mjData* d, ControlSource global) {
+  const AtomicValues& src = holding()                                            ? hold_
+                            : EffectiveSource(global) == ControlSource::kNetwork ? network_
+                                                                                 : ui_;
+  src.CopyTo(scratch_);
+  controller_->ComputeAndApply(m, d, scratch_);
+}
+
+void ArticulationControl::ResetToKeyframe(const mjModel* m, mjData* d, int key) const {
+  if (key < 0 || key >= m->nkey) return;
+  for (int a : qpos_adrs_) d->qpos[a] = m->key_qpos[key * m->nq + a];
+  for (int a : dof_adrs_) {
+    d->qvel[a] = m->key_qvel[key * m->nv + a];
+    d->qacc_warmstart[a] = 0;
+    d->qfrc_applied[a] = 0;
+  }
+  for (int a : act_adrs_) d->act[a] = m->key_act[key * m->na + a];
+  for (int u : actuator_ids_) d->ctrl[u] = m->key_ctrl[key * m->nu + u];
+  for (int k : mocap_ids_) {
+    std::memcpy(d->mocap_pos + 3 * k, m->key_mpos + key * 3 * m->nmocap + 3 * k,
+                3 * sizeof(mjtNum));
+    std::memcpy(d->mocap_quat + 4 * k, m->key_mquat + key * 4 * m->nmocap + 4 * k,
+                4 * sizeof(mjtNum));
+  }
+  for (int b : body_ids_) std::memset(d->xfrc_applied + 6 * b, 0, 6 * sizeof(mjtNum));
+}
+
+// ---------------------------------------------------------------------------------------------
+// ControlSystem
+
+ArticulationControl& ControlSystem::Add(std::unique_ptr<ArticulationControl> articulation) {
+  if (!articulation) throw Error("ControlSystem::Add: null articulation");
+  if (Find(articulation->prefix())) {
+    throw Error("ControlSystem::Add: articulation '" + articulation->prefix() + "' already added");
+  }
+  all_.push_back(std::move(articulation));
+  return *all_.back();
+}
+
+ArticulationControl* ControlSystem::Find(std::string_view prefix) const {
+  for (const auto& a : all_) {
+    if (a->prefix() == prefix) return a.get();
+  }
+  return nullptr;
+}
+
+void ControlSystem::Install(PhysicsEngine& engine) {
+  engine.SetApplyControlsHook([this](const mjModel* m, mjData* d) { ApplyControls(m, d); });
+}
+
+void ControlSystem::ApplyControls(const mjModel* m, mjData* d) {
+  const ControlSource global = global_source();
+  for (const auto& a : all_) a->ApplyControls(m, d, global);
+}
+
+void ControlSystem::RequestKeyframeReset(PhysicsEngine& engine, std::string_view prefix,
+                                         std::string_view key_name) const {
+  const ArticulationControl* a = Find(prefix);
+  if (!a) throw Error("RequestKeyframeReset: no articulation '" + std::string(prefix) + "'");
+  const int key = a->FindKeyframe(engine.model(), key_name);
+  if (key < 0) {
+    throw Error("RequestKeyframeReset: no keyframe '" + std::string(key_name) + "' or '" +
+                std::string(prefix) + std::string(key_name) + "'");
+  }
+  engine.ResetWith([a, key](const mjModel* m, mjData* d) { a->ResetToKeyframe(m, d, key); },
+                   "reset articulation '" + std::string(prefix) + "' to keyframe '" +
+                       std::string(key_name) + "'");
+}
+
+}  // namespace urlab::control

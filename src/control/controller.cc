@@ -1,0 +1,69 @@
+#include "urlab/control/controller.h"
+
+#include <algorithm>
+
+namespace urlab::control {
+
+const char* ToString(ControlSource source) {
+  return source == ControlSource::kNetwork ? "network" : "ui";
+}
+
+AtomicValues::AtomicValues(std::size_t n, double initial)
+    : n_(n), values_(new std::atomic<double>[n]) {
+  for (std::size_t i = 0; i < n; ++i) values_[i].store(initial, std::memory_order_relaxed);
+}
+
+void AtomicValues::CopyTo(std::span<double> out) const {
+  const std::size_t n = std::min(n_, out.size());
+  for (std::size_t i = 0; i < n; ++i) out[i] = values_[i].load(std::memory_order_relaxed);
+}
+
+double ActuatorBinding::ClampToJoint(double q) const {
+  return joint_limited ? std::clamp(q, joint_range[0], joint_range[1]) : q;
+}
+
+double ActuatorBinding::ClampCtrl(double u) const {
+  return ctrl_limited ? std::clamp(u, ctrl_range[0], ctrl_range[1]) : u;
+}
+
+ActuatorBinding MakeActuatorBinding(const mjModel* m, int id) {
+  ActuatorBinding b;
+  b.actuator_id = id;
+  const int trn = m->actuator_trntype[id];
+  const int j = m->actuator_trnid[2 * id];
+  if ((trn == mjTRN_JOINT || trn == mjTRN_JOINTINPARENT) && j >= 0 &&
+      (m->jnt_type[j] == mjJNT_HINGE || m->jnt_type[j] == mjJNT_SLIDE)) {
+    b.joint_id = j;
+    b.qpos_adr = m->jnt_qposadr[j];
+    b.dof_adr = m->jnt_dofadr[j];
+    b.joint_limited = m->jnt_limited[j] != 0;
+    b.joint_range[0] = m->jnt_range[2 * j];
+    b.joint_range[1] = m->jnt_range[2 * j + 1];
+  }
+  b.motor = m->actuator_gaintype[id] == mjGAIN_FIXED && m->actuator_biastype[id] == mjBIAS_NONE &&
+            m->actuator_dyntype[id] == mjDYN_NONE;
+  b.gain = m->actuator_gainprm[mjNGAIN * id];
+  b.gear = m->actuator_gear[6 * id];
+  b.ctrl_limited = m->actuator_ctrllimited[id] != 0;
+  b.ctrl_range[0] = m->actuator_ctrlrange[2 * id];
+  b.ctrl_range[1] = m->actuator_ctrlrange[2 * id + 1];
+  return b;
+}
+
+void Controller::Bind(const mjModel* m, std::span<const int> actuator_ids) {
+  std::vector<int> ids(actuator_ids.begin(), actuator_ids.end());
+  std::sort(ids.begin(), ids.end());
+  bindings_.clear();
+  for (int id : ids) {
+    if (id >= 0 && id < m->nu) bindings_.push_back(MakeActuatorBinding(m, id));
+  }
+}
+
+int Controller::IndexOfActuator(int id) const {
+  auto it = std::lower_bound(bindings_.begin(), bindings_.end(), id,
+                             [](const ActuatorBinding& b, int v) { return b.actuator_id < v; });
+  return it != bindings_.end() && it->actuator_id == id ? static_cast<int>(it - bindings_.begin())
+                                                        : -1;
+}
+
+}  // namespace urlab::control

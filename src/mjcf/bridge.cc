@@ -1,0 +1,1301 @@
+#include "urlab/mjcf/bridge.h"
+
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <set>
+
+#include "urlab/document/orientation.h"
+#include "urlab/mjcf/writer.h"
+
+namespace urlab::mjcf {
+
+namespace fs = std::filesystem;
+using document::Attribute;
+using document::CompilerSettings;
+using document::Document;
+using document::Element;
+using document::FormatReal;
+using document::FormatReals;
+using document::ParseReals;
+using document::Quat;
+using document::Vec3;
+using Kind = BridgeChange::Kind;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+bool IsActuatorTag(std::string_view t) {
+  return t == "general" || t == "motor" || t == "position" || t == "velocity" ||
+         t == "cylinder" || t == "muscle" || t == "adhesion" || t == "intvelocity" ||
+         t == "damper";
+}
+
+bool InDefault(const Element& e) {
+  for (const Element* p = e.parent(); p; p = p->parent()) {
+    if (p->tag() == "default") return true;
+  }
+  return false;
+}
+
+bool IsDialect(const Attribute& a) { return a.spec && a.spec->dialect; }
+
+std::string Join(const std::vector<std::string>& v, const char* sep) {
+  std::string s;
+  for (const std::string& x : v) s += (s.empty() ? "" : sep) + x;
+  return s;
+}
+
+bool AllZero(const std::vector<double>& v) {
+  return std::all_of(v.begin(), v.end(), [](double x) { return x == 0; });
+}
+
+// mj_loadXML of `xml` from a VFS (the trial compile for dampratio). nullptr + message on failure.
+mjModel* TrialCompile(const std::string& xml, std::string* error) {
+  mjVFS vfs;
+  mj_defaultVFS(&vfs);
+  const char* name = "urlab_bridge_trial.xml";
+  if (mj_makeEmptyFileVFS(&vfs, name, static_cast<int>(xml.size())) != 0) {
+    *error = "could not allocate the in-memory model";
+    return nullptr;
+  }
+  std::memcpy(vfs.filedata[mj_findFileVFS(&vfs, name)], xml.data(), xml.size());
+  char buf[1024] = "";
+  mjModel* m = mj_loadXML(name, &vfs, buf, sizeof(buf));
+  mj_deleteVFS(&vfs);
+  if (!m) *error = buf;
+  return m;
+}
+
+class Bridge {
+ public:
+  Bridge(Document& doc, BridgeReport& report) : doc_(doc), report_(report) {}
+
+  void Run() {
+    report_.dialect = DetectDialect();
+    if (!report_.dialect) return;
+    compiler_ = doc_.Compiler();
+    Compiler();
+    compiler_ = doc_.Compiler();
+    FlattenFrames();
+    ActuatorArmatureDamping();
+    ActuatorForceRanges();
+    PositionShortcuts();
+    Options();
+    MeshInertia();
+    GenericAttributes();
+    Sensors();
+    OrderActuators();
+    Leftovers();
+    if (!report_.HasRefusals()) DampRatio();
+  }
+
+ private:
+  // ---- reporting ----
+  void Note(Kind kind, const Element& e, std::string what) {
+    report_.changes.push_back(BridgeChange{kind, e.location(), std::move(what)});
+  }
+  static std::string Tag(const Element& e) {
+    std::string s = "<" + e.tag();
+    const std::string n = e.Name();
+    if (!n.empty()) s += " " + std::string(e.spec() && e.spec()->name_space ==
+                                                              document::Namespace::kClass
+                                                          ? "class"
+                                                          : "name") +
+                         "='" + n + "'";
+    return s + ">";
+  }
+
+  // ---- helpers ----
+  const std::string* Resolve(const Element& e, std::string_view name) const {
+    return document::ResolveAttribute(doc_, e, name);
+  }
+  std::optional<std::vector<double>> ResolveReals(const Element& e, std::string_view name) const {
+    const std::string* t = Resolve(e, name);
+    if (!t) return std::nullopt;
+    auto v = ParseReals(*t);
+    if (!v) {
+      throw InputError(e.location(), "<" + e.tag() + "> attribute '" + std::string(name) +
+                                         "': '" + *t + "' is not a list of numbers");
+    }
+    return v;
+  }
+  double ResolveReal(const Element& e, std::string_view name, double fallback) const {
+    auto v = ResolveReals(e, name);
+    return v && !v->empty() ? (*v)[0] : fallback;
+  }
+  // Every element (outside <default>) with tag in `tags`.
+  std::vector<Element*> Find(std::initializer_list<std::string_view> tags) {
+    std::vector<Element*> out;
+    doc_.root().Visit([&](Element& e) {
+      if (std::find(tags.begin(), tags.end(), e.tag()) != tags.end() && !InDefault(e)) {
+        out.push_back(&e);
+      }
+    });
+    return out;
+  }
+  // Default-class templates with tag in `tags`.
+  std::vector<Element*> FindDefaults(std::initializer_list<std::string_view> tags) {
+    std::vector<Element*> out;
+    doc_.root().Visit([&](Element& e) {
+      if (std::find(tags.begin(), tags.end(), e.tag()) != tags.end() && e.parent() &&
+          e.parent()->tag() == "default") {
+        out.push_back(&e);
+      }
+    });
+    return out;
+  }
+  Element* FindNamed(document::Namespace ns, const std::string& name) {
+    return doc_.FindNamed(ns, name);
+  }
+  // Whether a *limited attribute pair is active: explicit true, or auto with autolimits and a
+  // range. Refuses the 3.x error case (range without limited while autolimits is false).
+  bool LimitActive(const Element& e, const char* limited, const char* range) {
+    const std::string* l = Resolve(e, limited);
+    const bool has_range = Resolve(e, range) != nullptr;
+    if (l && *l == "true") return true;
+    if (l && *l == "false") return false;
+    return compiler_.autolimits && has_range;
+  }
+  // Replaces `e` by a new element with tag `tag` (same attributes, location, file bases).
+  Element& Retag(Element& e, const std::string& tag) {
+    Element* parent = e.parent();
+    const int index = parent->IndexOf(&e);
+    const document::ElementSpec* spec = parent->spec()->FindChild(tag);
+    if (!spec) throw Error("dialect bridge: <" + tag + "> not allowed in <" + parent->tag() + ">");
+    auto n = std::make_unique<Element>(spec, tag);
+    for (const Attribute& a : e.attributes()) n->AddRawAttribute(a.name, a.value);
+    n->set_location(e.location());
+    n->set_file_bases(e.file_bases());
+    n->set_edited(true);
+    parent->RemoveChild(&e);
+    return parent->InsertChild(static_cast<size_t>(index), std::move(n));
+  }
+
+  // ---- detection ----
+  bool DetectDialect() {
+    bool dialect = false;
+    const CompilerSettings c = doc_.Compiler();
+    doc_.root().Visit([&](const Element& e) {
+      if (dialect) return;
+      if (e.spec() && e.spec()->dialect) dialect = true;
+      for (const Attribute& a : e.attributes()) dialect = dialect || IsDialect(a);
+      if (dialect || c.autolimits || InDefault(e) || e.tag() == "default") return;
+      // A range without its limited attribute only loads with 3.x's autolimits default.
+      auto missing = [&](const char* range, const char* limited) {
+        return document::ResolveAttribute(doc_, e, range) &&
+               !document::ResolveAttribute(doc_, e, limited);
+      };
+      if (e.tag() == "joint" || e.tag() == "fixed" || e.tag() == "spatial") {
+        dialect = missing("range", "limited");
+      } else if (IsActuatorTag(e.tag()) && e.parent() && e.parent()->tag() == "actuator") {
+        dialect = missing("ctrlrange", "ctrllimited") || missing("forcerange", "forcelimited") ||
+                  missing("actrange", "actlimited");
+      }
+    });
+    return dialect;
+  }
+
+  // ---- compiler ----
+  Element& FirstCompiler() {
+    Element* found = doc_.root().FirstChild("compiler");
+    if (found) return *found;
+    auto c = std::make_unique<Element>(doc_.root().spec()->FindChild("compiler"), "compiler");
+    c->set_file_bases(doc_.root().file_bases());
+    c->set_location(doc_.root().location());
+    c->set_edited(true);
+    return doc_.root().InsertChild(0, std::move(c));
+  }
+
+  void Compiler() {
+    bool autolimits_set = false;
+    std::string meshdir, texturedir;
+    for (const auto& c : doc_.root().children()) {
+      if (c->tag() != "compiler") continue;
+      autolimits_set = autolimits_set || c->Has("autolimits");
+      if (const std::string* v = c->Get("meshdir")) meshdir = *v;
+      if (const std::string* v = c->Get("texturedir")) texturedir = *v;
+    }
+    if (!autolimits_set) {
+      Element& c = FirstCompiler();
+      c.Set("autolimits", "true");
+      Note(Kind::kTranslated, c,
+           "compiler autolimits=\"true\" written explicitly: the document uses MuJoCo 3.x MJCF, "
+           "whose default is true (2.2.2's is false)");
+    }
+    for (const auto& cp : doc_.root().children()) {
+      Element& c = *cp;
+      if (c.tag() != "compiler") continue;
+      if (const std::string* v = c.Get("assetdir")) {
+        // assetdir sets both folders unless meshdir/texturedir are given.
+        auto bases = std::make_shared<document::FileBases>(*c.file_bases());
+        auto join = [&](const std::string& dir) {
+          fs::path p(dir);
+          return (p.is_absolute() ? p : fs::path(bases->model_dir) / p).lexically_normal().string();
+        };
+        if (meshdir.empty()) bases->mesh_dir = join(*v);
+        if (texturedir.empty()) bases->texture_dir = join(*v);
+        std::shared_ptr<const document::FileBases> shared = bases;
+        doc_.root().Visit([&](Element& e) { e.set_file_bases(shared); });
+        Note(Kind::kTranslated, c,
+             "compiler assetdir=\"" + *v + "\" applied as meshdir/texturedir (asset paths are "
+             "written resolved)");
+        c.Unset("assetdir");
+      }
+      if (const std::string* v = c.Get("alignfree")) {
+        if (*v == "true") {
+          Note(Kind::kRefused, c,
+               "compiler alignfree=\"true\" re-expresses free bodies in their inertial frame, "
+               "which MuJoCo 2.2.2 cannot do; the body poses and qpos would differ");
+        } else {
+          Note(Kind::kDropped, c, "compiler alignfree=\"false\" is 2.2.2's behaviour");
+        }
+        c.Unset("alignfree");
+      }
+      if (c.Has("saveinertial")) {
+        Note(Kind::kDropped, c, "compiler saveinertial only affects saving XML; no effect here");
+        c.Unset("saveinertial");
+      }
+      if (c.Has("conflict")) {
+        Note(Kind::kDropped, c, "compiler conflict only concerns model attachment; no effect here");
+        c.Unset("conflict");
+      }
+      for (Element* lr = c.FirstChild("lengthrange"); lr; lr = nullptr) {
+        if (const std::string* v = lr->Get("interval")) {
+          const std::string value = *v;
+          lr->Unset("interval");
+          lr->Set("inteval", value);
+          Note(Kind::kTranslated, *lr, "lengthrange interval renamed to 2.2.2's inteval");
+        }
+      }
+    }
+  }
+
+  // ---- <frame> ----
+  Vec3 ResolvedVec(const Element& e, const char* name, Vec3 fallback) {
+    auto v = ResolveReals(e, name);
+    if (!v) return fallback;
+    if (v->size() != 3) throw InputError(e.location(), std::string(name) + " needs 3 numbers");
+    return {(*v)[0], (*v)[1], (*v)[2]};
+  }
+  std::optional<Quat> ResolvedQuat(const Element& e) {
+    if (auto q = document::OwnOrientation(e, compiler_)) return q;
+    if (e.tag() == "geom" || e.tag() == "site" || e.tag() == "camera") {
+      const document::InheritedPose p = document::InheritedDefaultPose(doc_, e);
+      if (p.any) return p.quat;
+    }
+    return std::nullopt;
+  }
+  static void SetQuat(Element& e, const Quat& q) {
+    for (const char* o : {"quat", "axisangle", "euler", "xyaxes", "zaxis"}) e.Unset(o);
+    e.SetReals("quat", document::QuatNormalize(q));
+  }
+
+  void TransformChild(Element& c, const Vec3& fp, const Quat& fq, bool rotated) {
+    auto apply = [&](const Vec3& p) {
+      const Vec3 r = document::QuatRotate(fq, p);
+      return Vec3{fp[0] + r[0], fp[1] + r[1], fp[2] + r[2]};
+    };
+    const std::string& t = c.tag();
+    if ((t == "geom" || t == "site") && Resolve(c, "fromto")) {
+      auto v = ResolveReals(c, "fromto");
+      if (v->size() != 6) throw InputError(c.location(), "fromto needs 6 numbers");
+      const Vec3 a = apply({(*v)[0], (*v)[1], (*v)[2]});
+      const Vec3 b = apply({(*v)[3], (*v)[4], (*v)[5]});
+      const std::vector<double> ft = {a[0], a[1], a[2], b[0], b[1], b[2]};
+      c.SetReals("fromto", ft);
+      return;
+    }
+    if (t == "body" || t == "geom" || t == "site" || t == "camera" || t == "frame") {
+      const Vec3 p = ResolvedVec(c, "pos", {0, 0, 0});
+      c.SetReals("pos", apply(p));
+      if (rotated) SetQuat(c, document::QuatMul(fq, ResolvedQuat(c).value_or(document::kIdentityQuat)));
+    } else if (t == "joint") {
+      c.SetReals("pos", apply(ResolvedVec(c, "pos", {0, 0, 0})));
+      if (rotated) c.SetReals("axis", document::QuatRotate(fq, ResolvedVec(c, "axis", {0, 0, 1})));
+    } else if (t == "light") {
+      c.SetReals("pos", apply(ResolvedVec(c, "pos", {0, 0, 0})));
+      if (rotated) c.SetReals("dir", document::QuatRotate(fq, ResolvedVec(c, "dir", {0, 0, -1})));
+    } else if (t == "freejoint" || t == "inertial") {
+      // a free joint has no pose; an inertial cannot be in a frame
+    } else {
+      Note(Kind::kRefused, c,
+           Tag(c) + " inside a <frame> with a pose: the bridge cannot move this element");
+    }
+  }
+
+  void FlattenFrames() {
+    for (;;) {
+      Element* frame = nullptr;
+      doc_.root().Visit([&](Element& e) {
+        if (!frame && e.tag() == "frame") frame = &e;
+      });
+      if (!frame) return;
+      FlattenFrame(*frame);
+    }
+  }
+
+  void FlattenFrame(Element& f) {
+    Element* parent = f.parent();
+    const Vec3 fp = ResolvedVec(f, "pos", {0, 0, 0});
+    const std::optional<Quat> own = document::OwnOrientation(f, compiler_);
+    const Quat fq = own.value_or(document::kIdentityQuat);
+    const bool rotated = own && std::abs(std::abs(document::QuatNormalize(fq)[0]) - 1) > 1e-15;
+    const bool moved = fp != Vec3{0, 0, 0} || rotated;
+    const std::string* cc = f.Get("childclass");
+    const std::string childclass = cc ? *cc : "";
+    // Transform first: default-class resolution still sees the frame's childclass.
+    std::vector<Element*> kids;
+    for (const auto& c : f.children()) kids.push_back(c.get());
+    if (moved) {
+      for (Element* c : kids) TransformChild(*c, fp, fq, rotated);
+    }
+    if (!childclass.empty()) {
+      for (Element* c : kids) {
+        const std::string& t = c->tag();
+        if (t == "body" || t == "frame") {
+          if (!c->Has("childclass")) c->Set("childclass", childclass);
+        } else if (c->spec() && c->spec()->FindAttribute("class") && !c->Has("class")) {
+          c->Set("class", childclass);
+        }
+      }
+    }
+    size_t index = static_cast<size_t>(parent->IndexOf(&f));
+    for (Element* c : kids) parent->InsertChild(index++, f.RemoveChild(c));
+    std::string what = "<frame";
+    if (const std::string* n = f.Get("name")) what += " name='" + *n + "'";
+    what += "> flattened: " + std::to_string(kids.size()) + " child element(s) moved into <" +
+            parent->tag() + ">";
+    if (moved) what += " with the frame's pose composed into theirs";
+    if (!childclass.empty()) what += ", childclass='" + childclass + "' given to them";
+    Note(Kind::kTranslated, f, what);
+    parent->RemoveChild(&f);
+  }
+
+  // ---- actuator armature / damping (3.x) move to the transmission target ----
+  void ActuatorArmatureDamping() {
+    for (Element* a : Find({"general", "motor", "position", "velocity", "cylinder", "muscle",
+                            "adhesion", "intvelocity", "damper"})) {
+      if (!a->parent() || a->parent()->tag() != "actuator") continue;
+      auto arm = ResolveReals(*a, "armature");
+      auto damp = ResolveReals(*a, "damping");
+      a->Unset("armature");
+      a->Unset("damping");
+      const double armature = arm && !arm->empty() ? (*arm)[0] : 0;
+      std::vector<double> damping = damp ? *damp : std::vector<double>{};
+      if (armature == 0 && AllZero(damping)) continue;
+      if (damping.size() > 1 && !AllZero({damping.begin() + 1, damping.end()})) {
+        Note(Kind::kRefused, *a,
+             Tag(*a) + " polynomial damping (quadratic/cubic terms) has no 2.2.2 equivalent");
+        continue;
+      }
+      const double d = damping.empty() ? 0 : damping[0];
+      const double g = ResolveReal(*a, "gear", 1);
+      const std::string* joint = a->Get("joint");
+      if (!joint) joint = a->Get("jointinparent");
+      const std::string* tendon = a->Get("tendon");
+      if (joint) {
+        Element* j = FindNamed(document::Namespace::kJoint, *joint);
+        if (!j) continue;  // dangling reference: reported by the reader
+        const std::string type = Resolve(*j, "type") ? *Resolve(*j, "type") : "hinge";
+        if (type != "hinge" && type != "slide") {
+          Note(Kind::kRefused, *a, Tag(*a) + " armature/damping on a " + type + " joint");
+          continue;
+        }
+        const double ja = ResolveReal(*j, "armature", 0) + armature * g * g;
+        const double jd = ResolveReal(*j, "damping", 0) + d * g * g;
+        if (armature != 0) j->SetReal("armature", ja);
+        if (d != 0) j->SetReal("damping", jd);
+        Note(Kind::kTranslated, *a,
+             Tag(*a) + " armature/damping moved to joint '" + *joint +
+                 "' scaled by gear^2 (armature " + FormatReal(ja) + ", damping " +
+                 FormatReal(jd) + "): MuJoCo 3.x adds them there the same way");
+      } else if (tendon && armature == 0) {
+        Element* t = FindNamed(document::Namespace::kTendon, *tendon);
+        if (!t) continue;
+        const double td = ResolveReal(*t, "damping", 0) + d * g * g;
+        t->SetReal("damping", td);
+        Note(Kind::kTranslated, *a,
+             Tag(*a) + " damping moved to tendon '" + *tendon + "' scaled by gear^2 (" +
+                 FormatReal(td) + ")");
+      } else {
+        Note(Kind::kRefused, *a,
+             Tag(*a) + " armature/damping: only joint transmissions (and tendon damping) can "
+                       "carry them in MuJoCo 2.2.2");
+      }
+    }
+    for (Element* d : FindDefaults({"general", "motor", "position", "velocity", "cylinder",
+                                    "muscle", "adhesion", "intvelocity", "damper"})) {
+      bool any = d->Unset("armature");
+      any = d->Unset("damping") || any;
+      if (any) {
+        Note(Kind::kTranslated, *d,
+             "default " + Tag(*d) + " armature/damping resolved into each actuator's target");
+      }
+    }
+  }
+
+  // ---- actuatorfrcrange on joints and tendons ----
+  struct Driver {
+    Element* actuator;
+    bool direct;  // joint/jointinparent/tendon transmission on exactly this target
+  };
+
+  // Joints on the path from the world to the body holding `e` (ancestors' joints).
+  static void AncestorJoints(const Element* e, std::set<const Element*>* out) {
+    for (const Element* b = e; b; b = b->parent()) {
+      if (b->tag() != "body") continue;
+      for (const auto& c : b->children()) {
+        if (c->tag() == "joint") out->insert(c.get());
+      }
+    }
+  }
+
+  std::vector<Driver> JointDrivers(const Element& joint) {
+    std::vector<Driver> out;
+    const std::string name = joint.Name();
+    for (Element* a : Find({"general", "motor", "position", "velocity", "cylinder", "muscle",
+                            "adhesion", "intvelocity", "damper"})) {
+      if (!a->parent() || a->parent()->tag() != "actuator") continue;
+      const std::string* j = a->Get("joint");
+      if (!j) j = a->Get("jointinparent");
+      if (j) {
+        if (*j == name) out.push_back({a, true});
+        continue;
+      }
+      std::set<const Element*> reach;
+      if (const std::string* t = a->Get("tendon")) {
+        const Element* ten = FindNamed(document::Namespace::kTendon, *t);
+        if (!ten) continue;
+        ten->Visit([&](const Element& x) {
+          if (x.tag() == "joint" && x.GetOr("joint", "") == name) reach.insert(&joint);
+          if (x.tag() == "site") {
+            if (const Element* s = FindNamed(document::Namespace::kSite, x.GetOr("site", ""))) {
+              AncestorJoints(s, &reach);
+            }
+          }
+        });
+      }
+      for (const char* attr : {"site", "cranksite"}) {
+        if (const std::string* s = a->Get(attr)) {
+          if (const Element* site = FindNamed(document::Namespace::kSite, *s)) {
+            AncestorJoints(site, &reach);
+          }
+        }
+      }
+      if (const std::string* b = a->Get("body")) {
+        if (const Element* body = FindNamed(document::Namespace::kBody, *b)) {
+          AncestorJoints(body, &reach);
+        }
+      }
+      if (reach.count(&joint)) out.push_back({a, false});
+    }
+    return out;
+  }
+
+  std::vector<Driver> TendonDrivers(const Element& tendon) {
+    std::vector<Driver> out;
+    for (Element* a : Find({"general", "motor", "position", "velocity", "cylinder", "muscle",
+                            "adhesion", "intvelocity", "damper"})) {
+      if (a->parent() && a->parent()->tag() == "actuator" &&
+          a->GetOr("tendon", "") == tendon.Name()) {
+        out.push_back({a, true});
+      }
+    }
+    return out;
+  }
+
+  // The actuator's own force clamp, when active.
+  std::optional<std::array<double, 2>> ForceRange(const Element& a) {
+    if (!LimitActive(a, "forcelimited", "forcerange")) return std::nullopt;
+    auto r = ResolveReals(a, "forcerange");
+    if (!r || r->size() != 2) return std::array<double, 2>{0, 0};
+    return std::array<double, 2>{(*r)[0], (*r)[1]};
+  }
+
+  // Clamps the total actuator force at `target` (a joint or tendon) to `range`. `scale_by_gear`:
+  // the clamped quantity is gear * actuator_force (joints) rather than actuator_force (tendons).
+  void ClampTarget(Element& target, const std::array<double, 2>& range,
+                   const std::vector<Driver>& drivers, bool scale_by_gear) {
+    const std::string what = Tag(target) + " actuatorfrcrange=\"" + FormatReal(range[0]) + " " +
+                             FormatReal(range[1]) + "\"";
+    if (drivers.empty()) {
+      Note(Kind::kDropped, target, what + ": no actuator acts on it, so it has no effect");
+      return;
+    }
+    if (drivers.size() == 1 && drivers[0].direct) {
+      Element& a = *drivers[0].actuator;
+      const double g = scale_by_gear ? ResolveReal(a, "gear", 1) : 1;
+      if (g == 0) {
+        Note(Kind::kDropped, target, what + ": its actuator has gear 0");
+        return;
+      }
+      std::array<double, 2> r = {range[0] / g, range[1] / g};
+      if (g < 0) r = {range[1] / g, range[0] / g};
+      std::string how = "exact";
+      if (auto own = ForceRange(a)) {
+        const std::array<double, 2> both = {std::max(r[0], (*own)[0]), std::min(r[1], (*own)[1])};
+        if (both[0] > both[1]) {
+          Note(Kind::kRefused, target,
+               what + " and the forcerange of " + Tag(a) +
+                   " do not overlap: the total force would be constant");
+          return;
+        }
+        r = both;
+        how = "intersected with its own forcerange";
+      }
+      a.Set("forcelimited", "true");
+      a.SetReals("forcerange", r);
+      Note(Kind::kTranslated, target,
+           what + " -> forcerange=\"" + FormatReals(r) + "\" forcelimited=\"true\" on " + Tag(a) +
+               (scale_by_gear ? " (scaled by 1/gear, " + how + ")" : " (" + how + ")") +
+               ". Exact for the force applied to the " +
+               (scale_by_gear ? "joint (qfrc_actuator)" : "tendon") +
+               "; the actuator's own actuator_force now also reads the clamped value");
+      return;
+    }
+    // Several actuators: exact only if the clamp can never be active.
+    double lo = 0, hi = 0;
+    for (const Driver& d : drivers) {
+      auto own = d.direct ? ForceRange(*d.actuator) : std::nullopt;
+      if (!own) {
+        Note(Kind::kRefused, target,
+             what + " is shared by " + std::to_string(drivers.size()) +
+                 " actuators; MuJoCo 2.2.2 cannot clamp their sum and " + Tag(*d.actuator) +
+                 " has no force range that keeps the sum inside it");
+        return;
+      }
+      const double g = scale_by_gear ? ResolveReal(*d.actuator, "gear", 1) : 1;
+      lo += std::min(g * (*own)[0], g * (*own)[1]);
+      hi += std::max(g * (*own)[0], g * (*own)[1]);
+    }
+    if (lo >= range[0] && hi <= range[1]) {
+      Note(Kind::kDropped, target,
+           what + ": the force ranges of its " + std::to_string(drivers.size()) +
+               " actuators already keep the total inside it, so it is never active");
+      return;
+    }
+    Note(Kind::kRefused, target,
+         what + " clamps the sum of " + std::to_string(drivers.size()) +
+             " actuators, which MuJoCo 2.2.2 cannot express (per-actuator force ranges would "
+             "change the physics)");
+  }
+
+  void ActuatorForceRanges() {
+    for (Element* t : Find({"joint", "fixed", "spatial"})) {
+      const bool joint = t->tag() == "joint";
+      auto copy = [](const std::string* v) {
+        return v ? std::optional<std::string>(*v) : std::nullopt;
+      };
+      const std::optional<std::string> range_text = copy(Resolve(*t, "actuatorfrcrange"));
+      const std::optional<std::string> limited = copy(Resolve(*t, "actuatorfrclimited"));
+      if (!range_text && !limited) continue;
+      const bool active = limited ? *limited == "true" || (*limited == "auto" &&
+                                                            compiler_.autolimits && range_text)
+                                  : compiler_.autolimits && range_text;
+      t->Unset("actuatorfrcrange");
+      t->Unset("actuatorfrclimited");
+      if (!limited && range_text && !compiler_.autolimits) {
+        Note(Kind::kRefused, *t,
+             Tag(*t) + " actuatorfrcrange without actuatorfrclimited while autolimits is false "
+                       "(MuJoCo 3.x rejects this too)");
+        continue;
+      }
+      if (!active) {
+        Note(Kind::kDropped, *t, Tag(*t) + " actuator force clamp disabled: no effect");
+        continue;
+      }
+      auto r = range_text ? ParseReals(*range_text) : std::optional<std::vector<double>>();
+      if (!r || r->size() != 2 || (*r)[0] > (*r)[1]) {
+        Note(Kind::kRefused, *t, Tag(*t) + " actuatorfrclimited without a valid actuatorfrcrange");
+        continue;
+      }
+      if (joint) {
+        const std::string* type = Resolve(*t, "type");
+        if (type && *type != "hinge" && *type != "slide") {
+          Note(Kind::kDropped, *t,
+               Tag(*t) + " actuatorfrcrange on a " + *type + " joint is ignored by MuJoCo 3.x");
+          continue;
+        }
+      }
+      ClampTarget(*t, {(*r)[0], (*r)[1]}, joint ? JointDrivers(*t) : TendonDrivers(*t), joint);
+    }
+    for (Element* d : FindDefaults({"joint", "tendon"})) {
+      bool any = d->Unset("actuatorfrcrange");
+      any = d->Unset("actuatorfrclimited") || any;
+      if (any) {
+        Note(Kind::kTranslated, *d,
+             "default " + Tag(*d) + " actuatorfrcrange resolved into each " + d->tag() +
+                 " of the class (see their entries)");
+      }
+    }
+  }
+
+  // ---- position / intvelocity: kv, dampratio, timeconst, inheritrange ----
+  struct PendingDampRatio {
+    Element* actuator;
+    double kp;
+    double ratio;
+  };
+
+  std::optional<std::array<double, 2>> TargetRange(Element& a, std::string* why) {
+    const std::string* j = a.Get("joint");
+    if (!j) j = a.Get("jointinparent");
+    const std::string* t = a.Get("tendon");
+    const Element* target = j   ? FindNamed(document::Namespace::kJoint, *j)
+                            : t ? FindNamed(document::Namespace::kTendon, *t)
+                                : nullptr;
+    if (!target) {
+      *why = "inheritrange needs a joint or tendon transmission";
+      return std::nullopt;
+    }
+    auto r = ResolveReals(*target, "range");
+    if (!r || r->size() != 2) {
+      *why = "inheritrange: " + Tag(*target) + " has no range";
+      return std::nullopt;
+    }
+    double scale = 1;
+    if (j) {
+      const std::string* type = Resolve(*target, "type");
+      const std::string ty = type ? *type : "hinge";
+      if (ty == "hinge" && compiler_.degree) scale = kPi / 180;
+      if (ty != "hinge" && ty != "slide") {
+        *why = "inheritrange on a " + ty + " joint";
+        return std::nullopt;
+      }
+    }
+    return std::array<double, 2>{(*r)[0] * scale, (*r)[1] * scale};
+  }
+
+  void PositionShortcuts() {
+    const double dt = doc_.FindSection("option") && doc_.FindSection("option")->Get("timestep")
+                          ? *doc_.FindSection("option")->GetReal("timestep")
+                          : 0.002;
+    const std::string integrator = doc_.FindSection("option")
+                                       ? doc_.FindSection("option")->GetOr("integrator", "Euler")
+                                       : "Euler";
+    for (Element* a : Find({"position", "intvelocity"})) {
+      if (!a->parent() || a->parent()->tag() != "actuator") continue;
+      const bool position = a->tag() == "position";
+      const double kv = ResolveReal(*a, "kv", 0);
+      const double ratio = ResolveReal(*a, "dampratio", 0);
+      const double tau = position ? ResolveReal(*a, "timeconst", 0) : 0;
+      const double inherit = ResolveReal(*a, "inheritrange", 0);
+      for (const char* n : {"kv", "dampratio", "timeconst", "inheritrange"}) a->Unset(n);
+      if (kv == 0 && ratio == 0 && tau == 0 && inherit == 0) continue;
+      if (kv < 0 || ratio < 0 || tau < 0 || inherit < 0) {
+        Note(Kind::kRefused, *a, Tag(*a) + " kv/dampratio/timeconst/inheritrange must be >= 0");
+        continue;
+      }
+      if (kv != 0 && ratio != 0) {
+        Note(Kind::kRefused, *a, Tag(*a) + " kv and dampratio are exclusive (MuJoCo 3.x too)");
+        continue;
+      }
+      if (inherit > 0) {
+        const char* range_attr = position ? "ctrlrange" : "actrange";
+        const char* limited_attr = position ? "ctrllimited" : "actlimited";
+        if (a->Has(range_attr)) {
+          Note(Kind::kRefused, *a,
+               Tag(*a) + " inheritrange and " + range_attr + " are exclusive (MuJoCo 3.x too)");
+          continue;
+        }
+        std::string why;
+        auto r = TargetRange(*a, &why);
+        if (!r) {
+          Note(Kind::kRefused, *a, Tag(*a) + " " + why);
+          continue;
+        }
+        const double mid = ((*r)[0] + (*r)[1]) / 2, half = ((*r)[1] - (*r)[0]) / 2 * inherit;
+        const std::array<double, 2> cr = {mid - half, mid + half};
+        a->Set(limited_attr, "true");
+        a->SetReals(range_attr, cr);
+        Note(Kind::kTranslated, *a,
+             Tag(*a) + " inheritrange=" + FormatReal(inherit) + " -> " + range_attr + "=\"" +
+                 FormatReals(cr) + "\" (the target's range scaled about its midpoint)");
+      }
+      if (kv == 0 && ratio == 0 && tau == 0) continue;
+      // Expand into <general> with the 3.x parameters.
+      const double kp = ResolveReal(*a, "kp", 1);
+      a->Unset("kp");
+      Element& g = Retag(*a, "general");
+      g.Set("gaintype", "fixed");
+      g.Set("biastype", "affine");
+      g.SetReals("gainprm", std::array<double, 3>{kp, 0, 0});
+      g.SetReals("biasprm", std::array<double, 3>{0, -kp, -kv});
+      std::string what = Tag(g) + " (" + (position ? "position" : "intvelocity") +
+                         ") written as <general> gainprm=\"" + FormatReal(kp) + "\" biasprm=\"0 " +
+                         FormatReal(-kp) + " " + FormatReal(-kv) + "\"";
+      Kind kind = Kind::kTranslated;
+      if (position) {
+        if (tau > 0) {
+          // 3.x filterexact: act += (ctrl - act) (1 - exp(-dt/tau)); 2.2.2's Euler-integrated
+          // filter gives act += (ctrl - act) dt/tau', equal for tau' = dt / (1 - exp(-dt/tau)).
+          const double tau2 = dt / (1 - std::exp(-dt / tau));
+          g.Set("dyntype", "filter");
+          g.SetReals("dynprm", std::array<double, 3>{tau2, 0, 0});
+          what += " dyntype=\"filter\" dynprm=\"" + FormatReal(tau2) +
+                  "\": timeconst=" + FormatReal(tau) +
+                  " (filterexact) re-expressed for the model's timestep " + FormatReal(dt);
+          if (integrator == "RK4") {
+            kind = Kind::kApproximated;
+            what += "; with the RK4 integrator the filter state differs at O(dt^2)";
+          } else {
+            what += ", exact while the timestep is unchanged";
+          }
+        } else {
+          g.Set("dyntype", "none");
+        }
+      } else {
+        g.Set("dyntype", "integrator");
+        g.SetReals("dynprm", std::array<double, 3>{1, 0, 0});
+        if (!Resolve(g, "actlimited")) g.Set("actlimited", "true");
+      }
+      if (ratio > 0) {
+        pending_.push_back({&g, kp, ratio});
+        what += "; kv from dampratio=" + FormatReal(ratio) + " is computed below";
+      }
+      Note(kind, g, what);
+    }
+    for (Element* d : FindDefaults({"position", "intvelocity", "general", "motor", "velocity",
+                                    "cylinder", "muscle", "adhesion", "damper"})) {
+      std::vector<std::string> gone;
+      for (const char* n : {"kv", "dampratio", "timeconst", "inheritrange"}) {
+        if (d->Unset(n)) gone.push_back(n);
+      }
+      if (!gone.empty()) {
+        Note(Kind::kTranslated, *d,
+             "default " + Tag(*d) + " " + Join(gone, "/") +
+                 " resolved into each actuator of the class (see their entries)");
+      }
+    }
+  }
+
+  void DampRatio() {
+    if (pending_.empty()) return;
+    for (PendingDampRatio& p : pending_) p.actuator->SetReals("biasprm",
+                                                               std::array<double, 3>{0, -p.kp, 0});
+    std::string error;
+    mjModel* m = TrialCompile(WriteString(doc_), &error);
+    if (!m) {
+      for (PendingDampRatio& p : pending_) {
+        Note(Kind::kRefused, *p.actuator,
+             Tag(*p.actuator) + " dampratio needs the compiled model, which failed: " + error);
+      }
+      return;
+    }
+    mjData* d = mj_makeData(m);
+    mj_forward(m, d);  // qpos = qpos0
+    std::vector<const Element*> order;  // actuators in compiled order
+    doc_.root().Visit([&](const Element& e) {
+      if (e.parent() && e.parent()->tag() == "actuator" && IsActuatorTag(e.tag())) {
+        order.push_back(&e);
+      }
+    });
+    for (int index = 0; index < static_cast<int>(order.size()) && index < m->nu; ++index) {
+      for (PendingDampRatio& p : pending_) {
+        if (p.actuator != order[static_cast<size_t>(index)]) continue;
+        double mass = 0;
+        for (int j = 0; j < m->nv; ++j) {
+          const double moment = d->actuator_moment[index * m->nv + j];
+          if (moment != 0) mass += m->dof_M0[j] / (moment * moment);
+        }
+        const double kv = p.ratio * 2 * std::sqrt(p.kp * mass);
+        p.actuator->SetReals("biasprm", std::array<double, 3>{0, -p.kp, -kv});
+        Note(Kind::kTranslated, *p.actuator,
+             Tag(*p.actuator) + " dampratio=" + FormatReal(p.ratio) + " -> kv=" + FormatReal(kv) +
+                 " = dampratio * 2 sqrt(kp * m), m = " + FormatReal(mass) +
+                 " the transmission's inertia at qpos0 (dof_M0 / moment^2), as MuJoCo 3.x "
+                 "computes it");
+      }
+    }
+    mj_deleteData(d);
+    mj_deleteModel(m);
+  }
+
+  // ---- option, flags, size ----
+  void Options() {
+    for (Element* o : Find({"option"})) {
+      struct Rule {
+        const char* attr;
+        Kind kind;
+        const char* why;
+      };
+      static const Rule kRules[] = {
+          {"ls_iterations", Kind::kApproximated,
+           "line-search iterations of the 3.x CG/Newton solvers; 2.2.2's line search is fixed"},
+          {"ls_tolerance", Kind::kApproximated,
+           "line-search tolerance of the 3.x CG/Newton solvers; 2.2.2's line search is fixed"},
+          {"sdf_initpoints", Kind::kDropped, "SDF collision (plugins) does not exist in 2.2.2"},
+          {"sdf_iterations", Kind::kDropped, "SDF collision (plugins) does not exist in 2.2.2"},
+          {"sleep_tolerance", Kind::kDropped, "island sleeping does not exist in 2.2.2"},
+      };
+      for (const Rule& r : kRules) {
+        if (const std::string* v = o->Get(r.attr)) {
+          Note(r.kind, *o, std::string("option ") + r.attr + "=\"" + *v + "\" dropped: " + r.why);
+          o->Unset(r.attr);
+        }
+      }
+      for (const char* n : {"ccd_iterations", "ccd_tolerance"}) {
+        if (const std::string* v = o->Get(n)) {
+          const std::string mpr = std::string("mpr_") + (n + 4);
+          if (!o->Has(mpr)) o->Set(mpr, *v);
+          Note(Kind::kApproximated, *o,
+               std::string("option ") + n + " -> " + mpr +
+                   " (2.2.2 uses libccd's MPR; 3.x's native convex collider differs slightly)");
+          o->Unset(n);
+        }
+      }
+      if (const std::string* v = o->Get("actuatorgroupdisable")) {
+        if (AllZero(ParseReals(*v).value_or(std::vector<double>{1}))) {
+          Note(Kind::kDropped, *o, "option actuatorgroupdisable=\"0\": no group disabled");
+        } else {
+          Note(Kind::kRefused, *o,
+               "option actuatorgroupdisable disables actuator groups, which 2.2.2 cannot do");
+        }
+        o->Unset("actuatorgroupdisable");
+      }
+      if (const std::string* v = o->Get("o_friction")) {
+        const bool override_on = o->FirstChild("flag") &&
+                                  o->FirstChild("flag")->GetOr("override", "") == "enable";
+        if (override_on) {
+          Note(Kind::kRefused, *o,
+               "option o_friction with the override flag: 2.2.2's override has no 5-number "
+               "friction");
+        } else {
+          Note(Kind::kDropped, *o,
+               "option o_friction=\"" + *v + "\" only applies with the override flag: no effect");
+        }
+        o->Unset("o_friction");
+      }
+      if (Element* f = o->FirstChild("flag")) Flags(*f);
+    }
+    for (Element* s : Find({"size"})) {
+      if (const std::string* v = s->Get("memory")) {
+        const std::string text = *v;
+        double bytes = std::atof(text.c_str());
+        const char unit = text.empty() ? ' ' : text.back();
+        if (unit == 'K' || unit == 'k') bytes *= 1024;
+        if (unit == 'M' || unit == 'm') bytes *= 1024 * 1024;
+        if (unit == 'G' || unit == 'g') bytes *= 1024.0 * 1024 * 1024;
+        s->Unset("memory");
+        if (!s->Has("nstack") && bytes > 0) {
+          s->SetInt("nstack", static_cast<int>(std::min(bytes / 8, 2e9)));
+        }
+        Note(Kind::kApproximated, *s,
+             "size memory=\"" + text + "\" -> nstack (2.2.2 sizes its arena in mjtNums; "
+             "njmax/nconmax keep their 2.2.2 defaults)");
+      }
+    }
+  }
+
+  void Flags(Element& f) {
+    const std::string* spring = f.Get("spring");
+    const std::string* damper = f.Get("damper");
+    if (spring || damper) {
+      const std::string s = spring ? *spring : "enable", d = damper ? *damper : "enable";
+      if (s == d) {
+        f.Set("passive", s);
+        Note(Kind::kTranslated, f,
+             "flag spring/damper=\"" + s + "\" -> 2.2.2's single passive=\"" + s + "\"");
+      } else {
+        Note(Kind::kRefused, f,
+             "flag spring=\"" + s + "\" damper=\"" + d +
+                 "\": 2.2.2 can only enable or disable both (flag passive)");
+      }
+      f.Unset("spring");
+      f.Unset("damper");
+    }
+    struct Rule {
+      const char* attr;
+      const char* dflt;  // 3.x default; other values are noted as approximated
+      const char* why;
+    };
+    static const Rule kRules[] = {
+        {"autoreset", "enable", "the runtime handles divergence itself"},
+        {"diagexact", "enable", "3.x diagonal approximation setting; 2.2.2 uses its own"},
+        {"eulerdamp", "enable", "2.2.2's Euler integrator always integrates damping implicitly"},
+        {"invdiscrete", "disable", "discrete-time inverse dynamics is not used by the runtime"},
+        {"island", "disable", "constraint islands are a 3.x solver optimisation"},
+        {"midphase", "enable", "the BVH midphase is a 3.x collision optimisation"},
+        {"nativeccd", "enable", "2.2.2 always uses libccd's MPR for convex collisions"},
+        {"sleep", "disable", "island sleeping does not exist in 2.2.2"},
+    };
+    for (const Rule& r : kRules) {
+      if (const std::string* v = f.Get(r.attr)) {
+        const bool is_default = *v == r.dflt;
+        Note(is_default ? Kind::kDropped : Kind::kApproximated, f,
+             std::string("flag ") + r.attr + "=\"" + *v + "\" dropped: " + r.why);
+        f.Unset(r.attr);
+      }
+    }
+  }
+
+  // ---- mesh inertia ----
+  void MeshInertia() {
+    std::map<std::string, std::vector<Element*>> modes;
+    for (Element* m : Find({"mesh"})) {
+      if (const std::string* v = m->Get("inertia")) modes[*v].push_back(m);
+    }
+    for (Element* d : FindDefaults({"mesh"})) {
+      if (const std::string* v = d->Get("inertia")) modes[*v].push_back(d);
+    }
+    if (modes.empty()) return;
+    bool exact_global = false;
+    if (modes.count("exact") && modes.size() == 1) {
+      bool set = false;
+      for (const auto& c : doc_.root().children()) {
+        set = set || (c->tag() == "compiler" && c->Has("exactmeshinertia"));
+      }
+      if (!set) {
+        FirstCompiler().Set("exactmeshinertia", "true");
+        exact_global = true;
+      }
+    }
+    for (auto& [mode, elems] : modes) {
+      for (Element* m : elems) {
+        if (mode == "legacy") {
+          Note(Kind::kTranslated, *m,
+               Tag(*m) + " inertia=\"legacy\" is 2.2.2's default mesh inertia");
+        } else if (mode == "exact" && exact_global) {
+          Note(Kind::kTranslated, *m,
+               Tag(*m) + " inertia=\"exact\" -> compiler exactmeshinertia=\"true\"");
+        } else if (mode == "shell") {
+          Note(Kind::kRefused, *m,
+               Tag(*m) + " inertia=\"shell\": set shellinertia on the geoms that use this mesh "
+                         "instead (the bridge does not know which bodies infer inertia)");
+        } else {
+          Note(Kind::kApproximated, *m,
+               Tag(*m) + " inertia=\"" + mode +
+                   "\": computed with 2.2.2's legacy algorithm (identical for convex meshes)");
+        }
+        m->Unset("inertia");
+      }
+    }
+  }
+
+  // ---- remaining 3.x attributes: drop what has no effect, approximate, refuse ----
+  void GenericAttributes() {
+    doc_.root().Visit([&](Element& e) {
+      std::vector<std::string> names;
+      for (const Attribute& a : e.attributes()) {
+        if (IsDialect(a)) names.push_back(a.name);
+      }
+      for (const std::string& n : names) GenericAttribute(e, n);
+    });
+  }
+
+  void GenericAttribute(Element& e, const std::string& n) {
+    const std::string value = *e.Get(n);
+    const std::string& t = e.tag();
+    const std::string desc = (InDefault(e) ? "default " : "") + Tag(e) + " " + n + "=\"" +
+                             value + "\"";
+    auto drop = [&](const std::string& why) {
+      Note(Kind::kDropped, e, desc + " dropped: " + why);
+      e.Unset(n);
+    };
+    auto approx = [&](const std::string& why) {
+      Note(Kind::kApproximated, e, desc + " dropped: " + why);
+      e.Unset(n);
+    };
+    auto refuse = [&](const std::string& why) {
+      Note(Kind::kRefused, e, desc + ": " + why);
+      e.Unset(n);
+    };
+    auto zero = [&] { return AllZero(ParseReals(value).value_or(std::vector<double>{1})); };
+    const bool sensor = e.parent() && (e.parent()->tag() == "sensor");
+    const bool actuator = IsActuatorTag(t);
+    if (sensor) {
+      if (n == "nsample" || n == "interp") return drop("only used with delay");
+      if (n == "delay" || n == "interval") {
+        if (zero()) return drop("zero");
+        return approx("the sensor reads the current value every step (no delay or interval "
+                      "in 2.2.2)");
+      }
+    }
+    if (actuator) {
+      if (n == "nsample" || n == "interp") return drop("only used with delay");
+      if (n == "delay") return zero() ? drop("zero") : refuse("actuator delay changes the physics");
+      if (n == "actearly") {
+        if (value == "false") return drop("2.2.2's behaviour");
+        return approx("forces use the current activation (one step later than actearly)");
+      }
+      if (n == "actdim") return value == "1" || value == "0" ? drop("implied by dyntype")
+                                                             : refuse("vector activations");
+      if (n == "actlimited" && t == "intvelocity") {
+        return value == "true" ? drop("intvelocity is always activation-limited in 2.2.2")
+                               : refuse("an unlimited intvelocity");
+      }
+      if (n == "tausmooth") return zero() ? drop("zero") : refuse("muscle tausmooth");
+      return refuse("no 2.2.2 equivalent for this actuator attribute");
+    }
+    if (t == "material" && (n == "metallic" || n == "roughness")) {
+      return drop("physically based rendering parameter; render-only");
+    }
+    if (t == "texture" && (n == "colorspace" || n == "nchannel" || n == "content_type")) {
+      return drop("texture decoding hint; render-only");
+    }
+    if ((t == "mesh" || t == "hfield") && n == "content_type") {
+      return drop("the file extension gives the format");
+    }
+    if (t == "mesh" && n == "maxhullvert") {
+      return approx("2.2.2 uses the full convex hull for collisions");
+    }
+    if (t == "mesh" && n == "material") return drop("default material for geoms; render-only");
+    if (t == "light") {
+      if (n == "type") {
+        if (value == "directional") {
+          e.Set("directional", "true");
+          Note(Kind::kTranslated, e, desc + " -> directional=\"true\"");
+          e.Unset(n);
+          return;
+        }
+        if (value == "spot") return drop("2.2.2 lights are spot lights unless directional");
+        return approx("2.2.2 has no " + value + " light; rendered as a spot light (render-only)");
+      }
+      return drop("physically based lighting parameter; render-only");
+    }
+    if (t == "camera") {
+      if (n == "sensorsize" || n == "focal" || n == "focalpixel" || n == "resolution" ||
+          n == "principal" || n == "principalpixel") {
+        return CameraIntrinsics(e);
+      }
+      if (n == "output") return drop("camera output channels; render-only");
+      if (n == "projection") {
+        return value == "perspective" ? drop("2.2.2 cameras are perspective")
+                                      : approx("orthographic cameras render in perspective");
+      }
+    }
+    if (t == "global" || t == "rgba" || t == "scale") return drop("visualisation only");
+    if (t == "body") {
+      if (n == "gravcomp") return zero() ? drop("zero") : refuse("gravity compensation");
+      if (n == "sleep" || n == "simple") return drop("a 3.x simulation optimisation hint");
+    }
+    if (t == "joint" && n == "actuatorgravcomp") {
+      return value == "false" ? drop("2.2.2's behaviour") : drop("no gravity compensation here");
+    }
+    if ((t == "fixed" || t == "spatial" || (t == "tendon" && InDefault(e))) && n == "armature") {
+      return zero() ? drop("zero") : refuse("tendon armature does not exist in 2.2.2");
+    }
+    if (t == "geom") {
+      if (n == "adhesion" || n == "surfacevel") {
+        return zero() ? drop("zero") : refuse("contact " + n + " does not exist in 2.2.2");
+      }
+    }
+    if (t == "pair" && (n == "solreffriction" || n == "adhesion")) {
+      return zero() ? drop("zero means the 2.2.2 behaviour") : refuse("no 2.2.2 equivalent");
+    }
+    if (t == "freejoint" && n == "align") {
+      return value == "false" ? drop("2.2.2's behaviour")
+                              : refuse("aligning the free body with its inertia frame");
+    }
+    if (t == "rangefinder" && n == "data") {
+      return value == "dist" ? drop("the 2.2.2 output") : refuse("rangefinder outputs");
+    }
+    if (t == "rangefinder" && n == "camera") {
+      return refuse("rangefinders mounted on cameras do not exist in 2.2.2");
+    }
+    // Everything else is left for Leftovers() to refuse.
+  }
+
+  void CameraIntrinsics(Element& c) {
+    auto reals = [&](const char* n) { return ResolveReals(c, n); };
+    auto ss = reals("sensorsize");
+    auto focal = reals("focal");
+    auto focalpixel = reals("focalpixel");
+    auto res = reals("resolution");
+    std::string what = Tag(c) + " sensorsize/focal/resolution/principal";
+    if (ss && ss->size() == 2 && (*ss)[1] > 0) {
+      double fy = 0;
+      if (focal && focal->size() == 2) fy = (*focal)[1];
+      if (focalpixel && focalpixel->size() == 2 && res && res->size() == 2 && (*res)[1] > 0) {
+        fy = (*focalpixel)[1] * (*ss)[1] / (*res)[1];
+      }
+      if (fy > 0) {
+        const double fovy = 2 * std::atan((*ss)[1] / (2 * fy)) * 180 / kPi;
+        c.SetReal("fovy", fovy);
+        what += " -> fovy=" + FormatReal(fovy) + " (vertical field of view, as 3.x computes it)";
+      }
+    }
+    const bool principal = c.Has("principal") || c.Has("principalpixel");
+    for (const char* n :
+         {"sensorsize", "focal", "focalpixel", "resolution", "principal", "principalpixel"}) {
+      c.Unset(n);
+    }
+    Note(principal ? Kind::kApproximated : Kind::kTranslated, c,
+         what + (principal ? "; the principal point offset is dropped (render-only)" : ""));
+  }
+
+  // ---- sensors ----
+  void Sensors() {
+    for (Element* s : Find({"jointactuatorfrc", "tendonactuatorfrc"})) {
+      const bool joint = s->tag() == "jointactuatorfrc";
+      const std::string* target = s->Get(joint ? "joint" : "tendon");
+      if (!target) {
+        Note(Kind::kRefused, *s, Tag(*s) + " needs a " + (joint ? "joint" : "tendon"));
+        continue;
+      }
+      const std::string tname = *target;
+      std::string name = s->Name();
+      if (name.empty()) {
+        name = s->tag() + "_" + tname;
+        Note(Kind::kTranslated, *s, Tag(*s) + " is unnamed; named '" + name + "'");
+      }
+      Element& u = Retag(*s, "user");
+      u.Unset(joint ? "joint" : "tendon");
+      u.Set("name", name);
+      u.Set("objtype", joint ? "joint" : "tendon");
+      u.Set("objname", tname);
+      u.Set("datatype", "real");
+      u.Set("needstage", "acc");
+      u.Set("dim", "1");
+      report_.software_sensors.push_back(
+          {name,
+           joint ? BridgedSensor::Kind::kJointActuatorForce
+                 : BridgedSensor::Kind::kTendonActuatorForce,
+           tname});
+      Note(Kind::kTranslated, u,
+           "<" + std::string(joint ? "jointactuatorfrc" : "tendonactuatorfrc") + " name='" +
+               name + "'> -> <user> sensor of the same name, computed by the runtime from " +
+               (joint ? "qfrc_actuator at the joint's dof"
+                      : "the actuator forces of the tendon's actuators"));
+    }
+  }
+
+  // ---- actuator order: 2.2.2 wants stateless actuators before stateful ones ----
+  bool Stateful(const Element& a) {
+    const std::string& t = a.tag();
+    if (t == "intvelocity" || t == "muscle") return true;
+    if (t == "general") {
+      const std::string* d = Resolve(a, "dyntype");
+      return d && *d != "none";
+    }
+    if (t == "cylinder") return ResolveReal(a, "timeconst", 1) > 0;
+    return false;
+  }
+
+  void OrderActuators() {
+    for (Element* section : Find({"actuator"})) {
+      std::vector<Element*> stateless, stateful;
+      bool out_of_order = false;
+      for (const auto& c : section->children()) {
+        if (!IsActuatorTag(c->tag())) continue;
+        if (Stateful(*c)) {
+          stateful.push_back(c.get());
+        } else {
+          out_of_order = out_of_order || !stateful.empty();
+          stateless.push_back(c.get());
+        }
+      }
+      if (!out_of_order) continue;
+      std::vector<std::unique_ptr<Element>> moved;
+      for (Element* a : stateful) moved.push_back(section->RemoveChild(a));
+      for (auto& a : moved) section->InsertChild(section->children().size(), std::move(a));
+      std::vector<std::string> names;
+      for (Element* a : stateful) names.push_back(a->Name().empty() ? Tag(*a) : a->Name());
+      Note(Kind::kTranslated, *section,
+           "stateful actuators moved after the stateless ones, as MuJoCo 2.2.2 requires (" +
+               Join(names, ", ") +
+               "): same physics, but ctrl/act indices follow the new order; address actuators "
+               "by name");
+    }
+  }
+
+  // ---- anything 3.x that is still there cannot be expressed ----
+  void Leftovers() {
+    std::vector<Element*> elements;
+    doc_.root().Visit([&](Element& e) {
+      if (e.spec() && e.spec()->dialect) {
+        elements.push_back(&e);
+        return;
+      }
+      std::vector<std::string> names;
+      for (const Attribute& a : e.attributes()) {
+        if (IsDialect(a)) names.push_back(a.name);
+      }
+      for (const std::string& n : names) {
+        Note(Kind::kRefused, e,
+             (InDefault(e) ? "default " : "") + Tag(e) + " attribute " + n + "=\"" + *e.Get(n) +
+                 "\" (MuJoCo 3.x) has no MuJoCo 2.2.2 translation");
+        e.Unset(n);
+      }
+    });
+    for (Element* e : elements) {
+      bool inside = false;  // a refused ancestor already covers it
+      for (const Element* p = e->parent(); p; p = p->parent()) {
+        inside = inside || std::find(elements.begin(), elements.end(), p) != elements.end();
+      }
+      if (inside) continue;
+      Note(Kind::kRefused, *e, Tag(*e) + " (MuJoCo 3.x) has no MuJoCo 2.2.2 translation");
+    }
+    for (auto it = elements.rbegin(); it != elements.rend(); ++it) {
+      if ((*it)->parent()) (*it)->parent()->RemoveChild(*it);
+    }
+  }
+
+  Document& doc_;
+  BridgeReport& report_;
+  CompilerSettings compiler_;
+  std::vector<PendingDampRatio> pending_;
+};
+
+}  // namespace
+
+const char* BridgeKindName(BridgeChange::Kind kind) {
+  switch (kind) {
+    case Kind::kTranslated: return "translated";
+    case Kind::kApproximated: return "approximated";
+    case Kind::kDropped: return "dropped";
+    case Kind::kRefused: return "refused";
+  }
+  return "?";
+}
+
+bool BridgeReport::HasRefusals() const {
+  return std::any_of(changes.begin(), changes.end(),
+                     [](const BridgeChange& c) { return c.kind == Kind::kRefused; });
+}
+
+std::vector<InputError> BridgeReport::Refusals() const {
+  std::vector<InputError> out;
+  for (const BridgeChange& c : changes) {
+    if (c.kind == Kind::kRefused) {
+      out.emplace_back(c.where, "MuJoCo 3.x construct refused by the dialect bridge: " + c.what);
+    }
+  }
+  return out;
+}
+
+std::string BridgeReport::Format() const {
+  std::string s;
+  for (const BridgeChange& c : changes) {
+    const std::string where = c.where.str();
+    s += (where.empty() ? std::string("<model>") : where) + ": " + BridgeKindName(c.kind) + ": " +
+         c.what + "\n";
+  }
+  return s;
+}
+
+BridgeReport ApplyBridge(Document& doc, const BridgeOptions& options) {
+  BridgeReport report;
+  Bridge(doc, report).Run();
+  if (options.throw_on_refusal) {
+    const std::vector<InputError> refusals = report.Refusals();
+    if (refusals.size() == 1) throw refusals.front();
+    if (refusals.size() > 1) {
+      throw InputError(refusals.front().where(),
+                       refusals.front().message() + " (and " +
+                           std::to_string(refusals.size() - 1) + " more refusal(s); run `urlab "
+                                                                  "validate --bridge-report` to "
+                                                                  "list them)");
+    }
+  }
+  return report;
+}
+
+}  // namespace urlab::mjcf

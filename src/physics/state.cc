@@ -1,0 +1,250 @@
+#include "urlab/physics/state.h"
+
+#include <array>
+#include <bit>
+#include <cstring>
+#include <limits>
+#include <type_traits>
+
+namespace urlab::physics {
+
+static_assert(std::is_same_v<mjtNum, double>, "URLab expects MuJoCo built with double mjtNum");
+static_assert(std::endian::native == std::endian::little, "state format assumes little-endian");
+
+namespace {
+
+constexpr char kMagic[4] = {'U', 'R', 'L', 'S'};
+// magic + version + header size + 7 layout ints + time + payload size.
+constexpr std::size_t kHeaderSize = 4 + 4 + 4 + 7 * 4 + 8 + 8;
+constexpr std::size_t kChecksumSize = 8;
+// Guards against absurd layouts in corrupt headers before any allocation happens.
+constexpr std::int64_t kMaxArrayLength = std::int64_t{1} << 28;
+
+std::uint64_t Fnv1a(const std::uint8_t* p, std::size_t n) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// The arrays of a state in serialisation order with their expected lengths.
+template <typename State>
+auto Arrays(State& s) {
+  const StateLayout& l = s.layout;
+  using Vec =
+      std::conditional_t<std::is_const_v<State>, const std::vector<mjtNum>, std::vector<mjtNum>>;
+  struct Entry {
+    const char* name;
+    Vec* vec;
+    std::int64_t length;
+  };
+  return std::array<Entry, 10>{{
+      {"qpos", &s.qpos, l.nq},
+      {"qvel", &s.qvel, l.nv},
+      {"act", &s.act, l.na},
+      {"qacc_warmstart", &s.qacc_warmstart, l.nv},
+      {"ctrl", &s.ctrl, l.nu},
+      {"qfrc_applied", &s.qfrc_applied, l.nv},
+      {"xfrc_applied", &s.xfrc_applied, std::int64_t{6} * l.nbody},
+      {"mocap_pos", &s.mocap_pos, std::int64_t{3} * l.nmocap},
+      {"mocap_quat", &s.mocap_quat, std::int64_t{4} * l.nmocap},
+      {"userdata", &s.userdata, l.nuserdata},
+  }};
+}
+
+void Copy(const mjtNum* src, std::int64_t n, std::vector<mjtNum>* dst) {
+  dst->assign(src, src + n);
+}
+
+void Put(std::vector<std::uint8_t>* out, const void* p, std::size_t n) {
+  const auto* b = static_cast<const std::uint8_t*>(p);
+  out->insert(out->end(), b, b + n);
+}
+
+class Reader {
+ public:
+  explicit Reader(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
+  template <typename T>
+  T Get(const char* what) {
+    T v;
+    Need(sizeof(T), what);
+    std::memcpy(&v, bytes_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return v;
+  }
+  void GetArray(std::vector<mjtNum>* v, std::int64_t n, const char* what) {
+    Need(static_cast<std::size_t>(n) * sizeof(mjtNum), what);
+    v->resize(static_cast<std::size_t>(n));
+    if (n) std::memcpy(v->data(), bytes_.data() + pos_, v->size() * sizeof(mjtNum));
+    pos_ += v->size() * sizeof(mjtNum);
+  }
+  std::size_t pos() const { return pos_; }
+
+ private:
+  void Need(std::size_t n, const char* what) {
+    if (bytes_.size() - pos_ < n) {
+      throw StateError(std::string("state data truncated while reading ") + what + " (" +
+                       std::to_string(bytes_.size()) + " bytes in total)");
+    }
+  }
+  std::span<const std::uint8_t> bytes_;
+  std::size_t pos_ = 0;
+};
+
+}  // namespace
+
+StateLayout StateLayout::Of(const mjModel* m) {
+  return StateLayout{m->nq, m->nv, m->na, m->nu, m->nbody, m->nmocap, m->nuserdata};
+}
+
+std::string StateLayout::str() const {
+  return "nq=" + std::to_string(nq) + " nv=" + std::to_string(nv) + " na=" + std::to_string(na) +
+         " nu=" + std::to_string(nu) + " nbody=" + std::to_string(nbody) +
+         " nmocap=" + std::to_string(nmocap) + " nuserdata=" + std::to_string(nuserdata);
+}
+
+bool PhysicsState::BitwiseEquals(const PhysicsState& other) const {
+  if (!(layout == other.layout)) return false;
+  if (std::memcmp(&time, &other.time, sizeof(time)) != 0) return false;
+  const auto a = Arrays(*this);
+  const auto b = Arrays(other);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].vec->size() != b[i].vec->size()) return false;
+    if (!a[i].vec->empty() &&
+        std::memcmp(a[i].vec->data(), b[i].vec->data(), a[i].vec->size() * sizeof(mjtNum)) != 0) {
+      return false;
+    }
+  }
+  return true;
+}
+
+bool PhysicsState::IsConsistent() const {
+  for (const auto& e : Arrays(*this)) {
+    if (static_cast<std::int64_t>(e.vec->size()) != e.length) return false;
+  }
+  return true;
+}
+
+PhysicsState CaptureState(const mjModel* m, const mjData* d) {
+  PhysicsState s;
+  s.layout = StateLayout::Of(m);
+  s.time = d->time;
+  Copy(d->qpos, m->nq, &s.qpos);
+  Copy(d->qvel, m->nv, &s.qvel);
+  Copy(d->act, m->na, &s.act);
+  Copy(d->qacc_warmstart, m->nv, &s.qacc_warmstart);
+  Copy(d->ctrl, m->nu, &s.ctrl);
+  Copy(d->qfrc_applied, m->nv, &s.qfrc_applied);
+  Copy(d->xfrc_applied, std::int64_t{6} * m->nbody, &s.xfrc_applied);
+  Copy(d->mocap_pos, std::int64_t{3} * m->nmocap, &s.mocap_pos);
+  Copy(d->mocap_quat, std::int64_t{4} * m->nmocap, &s.mocap_quat);
+  Copy(d->userdata, m->nuserdata, &s.userdata);
+  return s;
+}
+
+void ApplyState(const mjModel* m, mjData* d, const PhysicsState& state) {
+  const StateLayout expected = StateLayout::Of(m);
+  if (!(state.layout == expected)) {
+    throw StateError("state does not match the model: state has " + state.layout.str() +
+                     ", model has " + expected.str());
+  }
+  if (!state.IsConsistent()) throw StateError("state arrays do not match their layout");
+  auto put = [](const std::vector<mjtNum>& v, mjtNum* dst) {
+    if (!v.empty()) std::memcpy(dst, v.data(), v.size() * sizeof(mjtNum));
+  };
+  d->time = state.time;
+  put(state.qpos, d->qpos);
+  put(state.qvel, d->qvel);
+  put(state.act, d->act);
+  put(state.qacc_warmstart, d->qacc_warmstart);
+  put(state.ctrl, d->ctrl);
+  put(state.qfrc_applied, d->qfrc_applied);
+  put(state.xfrc_applied, d->xfrc_applied);
+  put(state.mocap_pos, d->mocap_pos);
+  put(state.mocap_quat, d->mocap_quat);
+  put(state.userdata, d->userdata);
+}
+
+void RestoreState(const mjModel* m, mjData* d, const PhysicsState& state) {
+  ApplyState(m, d, state);
+  mj_forward(m, d);
+  if (!state.qacc_warmstart.empty()) {
+    std::memcpy(d->qacc_warmstart, state.qacc_warmstart.data(),
+                state.qacc_warmstart.size() * sizeof(mjtNum));
+  }
+}
+
+std::vector<std::uint8_t> SerializeState(const PhysicsState& state) {
+  if (!state.IsConsistent()) throw StateError("cannot serialise: state arrays do not match layout");
+  std::uint64_t payload = 0;
+  for (const auto& e : Arrays(state)) payload += e.vec->size() * sizeof(mjtNum);
+  std::vector<std::uint8_t> out;
+  out.reserve(kHeaderSize + payload + kChecksumSize);
+  Put(&out, kMagic, 4);
+  const std::uint32_t version = kStateFormatVersion;
+  const std::uint32_t header = kHeaderSize;
+  Put(&out, &version, 4);
+  Put(&out, &header, 4);
+  const StateLayout& l = state.layout;
+  for (std::int32_t v : {l.nq, l.nv, l.na, l.nu, l.nbody, l.nmocap, l.nuserdata}) Put(&out, &v, 4);
+  Put(&out, &state.time, 8);
+  Put(&out, &payload, 8);
+  for (const auto& e : Arrays(state)) {
+    if (!e.vec->empty()) Put(&out, e.vec->data(), e.vec->size() * sizeof(mjtNum));
+  }
+  const std::uint64_t sum = Fnv1a(out.data(), out.size());
+  Put(&out, &sum, 8);
+  return out;
+}
+
+PhysicsState DeserializeState(std::span<const std::uint8_t> bytes) {
+  if (bytes.size() < 4 || std::memcmp(bytes.data(), kMagic, 4) != 0) {
+    throw StateError("not URLab state data (bad magic number)");
+  }
+  Reader r(bytes);
+  r.Get<std::uint32_t>("magic");
+  const auto version = r.Get<std::uint32_t>("version");
+  if (version != kStateFormatVersion) {
+    throw StateError("unsupported state format version " + std::to_string(version) +
+                     " (this build reads version " + std::to_string(kStateFormatVersion) + ")");
+  }
+  const auto header = r.Get<std::uint32_t>("header size");
+  if (header != kHeaderSize) {
+    throw StateError("corrupt state header: header size " + std::to_string(header) + ", expected " +
+                     std::to_string(kHeaderSize));
+  }
+  PhysicsState s;
+  StateLayout& l = s.layout;
+  for (int* f : {&l.nq, &l.nv, &l.na, &l.nu, &l.nbody, &l.nmocap, &l.nuserdata}) {
+    *f = r.Get<std::int32_t>("layout");
+  }
+  s.time = r.Get<double>("time");
+  const auto payload = r.Get<std::uint64_t>("payload size");
+  std::uint64_t expected = 0;
+  for (const auto& e : Arrays(s)) {
+    if (e.length < 0 || e.length > kMaxArrayLength) {
+      throw StateError(std::string("corrupt state header: bad length for ") + e.name + " (" +
+                       l.str() + ")");
+    }
+    expected += static_cast<std::uint64_t>(e.length) * sizeof(mjtNum);
+  }
+  if (payload != expected) {
+    throw StateError("corrupt state header: payload of " + std::to_string(payload) +
+                     " bytes but the layout (" + l.str() + ") needs " + std::to_string(expected));
+  }
+  const std::uint64_t total = kHeaderSize + payload + kChecksumSize;
+  if (bytes.size() != total) {
+    throw StateError("state data has " + std::to_string(bytes.size()) + " bytes, expected " +
+                     std::to_string(total) + (bytes.size() < total ? " (truncated)" : ""));
+  }
+  for (auto& e : Arrays(s)) r.GetArray(e.vec, e.length, e.name);
+  const std::size_t summed = r.pos();
+  const auto sum = r.Get<std::uint64_t>("checksum");
+  if (sum != Fnv1a(bytes.data(), summed))
+    throw StateError("state data checksum mismatch (corrupt)");
+  return s;
+}
+
+}  // namespace urlab::physics

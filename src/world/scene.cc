@@ -1,0 +1,155 @@
+#include "urlab/world/scene.h"
+
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+
+#include "urlab/mjcf/reader.h"
+#include "urlab/mjcf/writer.h"
+
+namespace urlab::world {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Compiles `doc`; a MuJoCo error is rethrown naming the source element (and its articulation).
+physics::ModelPtr CompileDocument(const document::Document& doc, std::string* xml_out,
+                                  const std::vector<mjcf::ArticulationLayout>* layouts) {
+  mjcf::LineMap map;
+  std::string xml = mjcf::WriteString(doc, {}, &map);
+  physics::ModelPtr model;
+  try {
+    model = physics::CompileXmlString(xml);
+  } catch (const physics::CompileError& e) {
+    std::string msg = mjcf::ExplainCompileMessage(e.what(), map);
+    if (layouts) {
+      // Name the articulation whose prefix the offending element carries.
+      for (const auto& art : *layouts) {
+        if (msg.find("'" + art.prefix) != std::string::npos) {
+          msg = art.name + ": " + msg;
+          break;
+        }
+      }
+    }
+    throw physics::CompileError(msg);
+  }
+  if (xml_out) *xml_out = std::move(xml);
+  return model;
+}
+
+void SaveDebug(const document::Document& doc, const mjModel* m, const std::string& folder) {
+  fs::create_directories(folder);
+  const std::string xml = (fs::path(folder) / "scene_compiled.xml").string();
+  const std::string mjb = (fs::path(folder) / "scene_compiled.mjb").string();
+  mjcf::WriteFile(doc, xml);
+  physics::SaveMjb(m, mjb);
+  spdlog::info("saved {} and {}", xml, mjb);
+}
+
+}  // namespace
+
+CompiledScene BuildScene(const SceneConfig& scene) {
+  std::vector<mjcf::ArticulationInput> inputs;
+  for (const ArticulationConfig& a : scene.articulations) {
+    mjcf::ArticulationInput in;
+    in.name = a.name;
+    try {
+      in.doc = mjcf::ReadFile(a.mjcf);
+    } catch (const InputError& e) {
+      throw InputError(e.where(), a.name + ": " + e.message());
+    }
+    in.placement.pos = a.pos;
+    in.placement.quat = a.quat;
+    in.options = a.options;
+    inputs.push_back(std::move(in));
+  }
+  mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs));
+  // Scene overrides: only the fields set, over whatever the articulations gave.
+  if (!scene.options.empty()) {
+    document::Element& option = composed.doc.Section("option");
+    for (const auto& [k, v] : scene.options) {
+      if (k.rfind("flag.", 0) == 0) {
+        document::Element* flag = option.FirstChild("flag");
+        if (!flag) flag = &option.AddChild("flag");
+        flag->Set(k.substr(5), v);
+      } else {
+        option.Set(k, v);
+      }
+    }
+  }
+  CompiledScene out;
+  out.model = CompileDocument(composed.doc, &out.xml, &composed.articulations);
+  mjcf::ApplyArticulationKeyframes(composed.articulations, out.model.get());
+  for (const ArticulationConfig& a : scene.articulations) {
+    if (a.keyframe.empty()) continue;
+    const std::string key = a.name + "_" + a.keyframe;
+    if (mj_name2id(out.model.get(), mjOBJ_KEY, key.c_str()) < 0) {
+      throw InputError(a.where, a.name + ": keyframe '" + a.keyframe + "' is not in " + a.mjcf);
+    }
+  }
+  if (!scene.save_debug_xml.empty()) SaveDebug(composed.doc, out.model.get(), scene.save_debug_xml);
+  out.articulations = std::move(composed.articulations);
+  out.diagnostics = std::move(composed.diagnostics);
+  return out;
+}
+
+CompiledScene BuildModel(const std::string& mjcf_path) {
+  document::Document doc = mjcf::ReadFile(mjcf_path);
+  CompiledScene out;
+  out.diagnostics = doc.diagnostics();
+  out.model = CompileDocument(doc, &out.xml, nullptr);
+  return out;
+}
+
+ValidationReport Validate(const std::string& path) {
+  ValidationReport report;
+  std::vector<std::string> mjcf_files;
+  SceneConfig scene;
+  const bool is_scene = IsSceneFile(path);
+  try {
+    if (is_scene) {
+      scene = LoadSceneFile(path);
+      for (const auto& a : scene.articulations) mjcf_files.push_back(a.mjcf);
+    } else {
+      mjcf_files.push_back(path);
+    }
+  } catch (const Error& e) {
+    report.errors.push_back(e.what());
+    return report;
+  }
+  for (size_t i = 0; i < mjcf_files.size(); ++i) {
+    const std::string label = is_scene ? scene.articulations[i].name + ": " : "";
+    mjcf::ReadOptions lenient;
+    lenient.check_files = false;
+    lenient.check_references = false;
+    try {
+      document::Document doc = mjcf::ReadFile(mjcf_files[i], lenient);
+      for (const auto& d : doc.diagnostics()) {
+        report.warnings.push_back(label + d.where.str() + ": " + d.message);
+      }
+      for (auto* finder : {&mjcf::FindDuplicateNames, &mjcf::FindDanglingReferences,
+                           &mjcf::FindMissingFiles}) {
+        for (const InputError& e : finder(doc)) report.errors.push_back(label + e.what());
+      }
+    } catch (const Error& e) {
+      report.errors.push_back(label + e.what());
+    }
+  }
+  if (!report.errors.empty()) return report;
+  try {
+    CompiledScene compiled = is_scene ? BuildScene(scene) : BuildModel(path);
+    for (const auto& d : compiled.diagnostics) {
+      if (!is_scene) continue;  // already reported per file above
+      report.warnings.push_back(d.where.str() + ": " + d.message);
+    }
+    const mjModel* m = compiled.model.get();
+    report.sizes = {"nq " + std::to_string(m->nq), "nv " + std::to_string(m->nv),
+                    "nu " + std::to_string(m->nu), "nbody " + std::to_string(m->nbody)};
+  } catch (const Error& e) {
+    report.errors.push_back(e.what());
+  }
+  return report;
+}
+
+}  // namespace urlab::world

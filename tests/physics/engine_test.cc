@@ -1,0 +1,427 @@
+#include "urlab/physics/engine.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <thread>
+
+#include "physics/test_models.h"
+#include "support/mujoco_test.h"
+
+namespace urlab::physics {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::kArmXml;
+using testing::kHumanoidPath;
+using testing::kPendulumXml;
+
+class EngineTest : public urlab::testing::MujocoTest {};
+
+// Waits (polling) until `pred` holds or `timeout` passes; returns pred().
+template <typename Pred>
+bool WaitFor(Pred pred, std::chrono::milliseconds timeout = 5000ms) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (!pred() && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(1ms);
+  return pred();
+}
+
+double SimTime(PhysicsEngine& e) {
+  double t = 0;
+  e.WithLockedData([&](mjModel*, mjData* d) { t = d->time; });
+  return t;
+}
+
+TEST_F(EngineTest, StepSyncRunsTheIterationInOrder) {
+  PhysicsEngine engine(CompileXmlString(kArmXml));
+  std::vector<std::string> order;
+  engine.AddPreStepCallback([&](const mjModel*, mjData*) { order.push_back("pre"); });
+  engine.SetApplyControlsHook([&](const mjModel*, mjData* d) {
+    order.push_back("controls");
+    d->ctrl[0] = 1.0;
+  });
+  engine.AddPostStepCallback([&](const mjModel*, mjData*) { order.push_back("post"); });
+  engine.AddOnPostStep([&](const mjModel*, mjData*) { order.push_back("event"); });
+  engine.StepSync(3);
+  ASSERT_EQ(order.size(), 12u);
+  EXPECT_EQ(order[0], "pre");
+  EXPECT_EQ(order[1], "controls");
+  EXPECT_EQ(order[2], "post");
+  EXPECT_EQ(order[3], "event");
+  EXPECT_EQ(engine.step_count(), 3u);
+  EXPECT_NEAR(SimTime(engine), 3 * 0.002, 1e-12);
+  const RenderSnapshot* r = engine.LatestRenderSnapshot();
+  ASSERT_NE(r, nullptr);
+  EXPECT_EQ(r->step, 3u);
+  EXPECT_NEAR(r->time, 0.006, 1e-12);
+  EXPECT_EQ(r->xpos.size(), 3u * static_cast<std::size_t>(engine.model()->nbody));
+}
+
+TEST_F(EngineTest, StepSyncRefusedWhileRunningUnpaused) {
+  PhysicsEngine engine(CompileXmlString(kPendulumXml));
+  engine.Start();
+  EXPECT_THROW(engine.StepSync(1), Error);
+  engine.SetPaused(true);
+  const std::uint64_t before = engine.step_count();
+  WaitFor([&] { return engine.step_count() == before; }, 20ms);  // let a running step finish
+  const double t0 = SimTime(engine);
+  engine.StepSync(5);
+  EXPECT_NEAR(SimTime(engine) - t0, 5 * 0.002, 1e-9);
+  engine.Stop();
+}
+
+TEST_F(EngineTest, PauseStopsSteppingButNotCallbacks) {
+  PhysicsEngine engine(CompileXmlString(kPendulumXml));
+  std::atomic<int> pre{0};
+  engine.AddPreStepCallback([&](const mjModel*, mjData*) { pre++; });
+  engine.SetPaused(true);
+  engine.Start();
+  ASSERT_TRUE(WaitFor([&] { return pre.load() > 20; }));
+  EXPECT_EQ(engine.step_count(), 0u);
+  EXPECT_EQ(SimTime(engine), 0.0);
+  engine.TogglePause();
+  EXPECT_FALSE(engine.paused());
+  ASSERT_TRUE(WaitFor([&] { return engine.step_count() > 20; }));
+  engine.SetPaused(true);
+  std::this_thread::sleep_for(10ms);
+  const std::uint64_t n = engine.step_count();
+  std::this_thread::sleep_for(30ms);
+  EXPECT_EQ(engine.step_count(), n);
+  engine.Stop();
+  EXPECT_FALSE(engine.running());
+}
+
+TEST_F(EngineTest, CustomStepHandlerReplacesMjStep) {
+  PhysicsEngine engine(CompileXmlString(kPendulumXml));
+  int calls = 0;
+  engine.SetCustomStepHandler([&](const mjModel* m, mjData* d) {
+    ++calls;
+    d->qpos[0] = 0.1 * calls;  // a "replayed" trajectory
+    d->time += m->opt.timestep;
+    mj_forward(m, d);
+  });
+  engine.StepSync(10);
+  EXPECT_EQ(calls, 10);
+  engine.WithLockedData([](mjModel*, mjData* d) {
+    EXPECT_DOUBLE_EQ(d->qpos[0], 1.0);
+    EXPECT_EQ(d->qvel[0], 0.0);  // mj_step would have integrated gravity
+  });
+  engine.SetCustomStepHandler(nullptr);
+  engine.StepSync(10);
+  EXPECT_EQ(calls, 10);
+  engine.WithLockedData([](mjModel*, mjData* d) { EXPECT_NE(d->qvel[0], 0.0); });
+}
+
+TEST_F(EngineTest, ResetEventIsDeliveredOnTheMainThread) {
+  PhysicsEngine engine(CompileXmlString(kArmXml));
+  const auto main_id = std::this_thread::get_id();
+  std::vector<EngineEvent> seen;
+  engine.AddEventListener([&](const EngineEvent& e) {
+    EXPECT_EQ(std::this_thread::get_id(), main_id);
+    seen.push_back(e);
+  });
+  engine.SetAsFastAsPossible(true);
+  engine.Start();
+  ASSERT_TRUE(WaitFor([&] { return engine.step_count() > 200; }));
+  std::thread other([&] { engine.Reset(); });  // requested from a third thread
+  other.join();
+  ASSERT_TRUE(WaitFor([&] {
+    engine.PollEvents();
+    return !seen.empty();
+  }));
+  EXPECT_EQ(seen[0].kind, EngineEventKind::kReset);
+  EXPECT_GT(seen[0].sim_time, 0.0);
+  engine.Stop();
+  // Keyframe reset while stopped is applied immediately.
+  engine.ResetToKeyframe("arm_bent");
+  engine.WithLockedData([](mjModel*, mjData* d) {
+    EXPECT_DOUBLE_EQ(d->qpos[0], 0.8);
+    EXPECT_DOUBLE_EQ(d->qpos[1], -1.2);
+    EXPECT_EQ(d->time, 0.0);
+  });
+  engine.PollEvents();
+  ASSERT_EQ(seen.size(), 2u);
+  EXPECT_NE(seen[1].message.find("'arm_bent'"), std::string::npos);
+  EXPECT_THROW(engine.ResetToKeyframe("nope"), Error);
+  EXPECT_THROW(engine.ResetToKeyframe(7), Error);
+}
+
+TEST_F(EngineTest, SnapshotRestoreDeterminismWithResetAndCallbacks) {
+  PhysicsEngine engine(LoadXmlFile(kHumanoidPath));
+  // Deterministic inputs that depend only on the simulated state, as a controller would.
+  engine.SetApplyControlsHook([](const mjModel* m, mjData* d) {
+    for (int u = 0; u < m->nu; ++u) d->ctrl[u] = 0.4 * std::sin(3 * d->time + u);
+  });
+  engine.AddPreStepCallback(
+      [](const mjModel*, mjData* d) { d->xfrc_applied[6 + 2] = std::cos(d->time); });
+  engine.StepSync(1000);
+  const PhysicsState snap = engine.Snapshot();
+  auto run = [&] {
+    engine.StepSync(500);
+    engine.Reset();
+    engine.StepSync(500);
+    return engine.Snapshot();
+  };
+  const PhysicsState a = run();
+  engine.Restore(snap);
+  const PhysicsState b = run();
+  EXPECT_TRUE(a.BitwiseEquals(b));
+
+  // The same through the running thread: restore is queued and applied by the physics thread.
+  engine.SetAsFastAsPossible(true);
+  engine.Start();
+  ASSERT_TRUE(WaitFor([&] { return engine.step_count() > 3000; }));
+  engine.SetPaused(true);
+  engine.Restore(snap);
+  const PhysicsState c = run();
+  engine.Stop();
+  // The paused loop keeps running the hooks, which rewrite ctrl/xfrc_applied for the current time
+  // after the last step; the integrated state must match bit for bit.
+  PhysicsState c_inputs_as_a = c;
+  c_inputs_as_a.ctrl = a.ctrl;
+  c_inputs_as_a.xfrc_applied = a.xfrc_applied;
+  EXPECT_TRUE(a.BitwiseEquals(c_inputs_as_a));
+  EXPECT_THROW(engine.Restore(PhysicsState{}), StateError);
+}
+
+TEST_F(EngineTest, DivergenceFromNaNNamesJointAndArticulation) {
+  ExpectWarning("QVEL");
+  PhysicsEngine engine(CompileXmlString(kArmXml));
+  engine.SetArticulationResolver([](std::string_view name) {
+    return name.starts_with("arm_") ? std::string("arm") : std::string();
+  });
+  const int elbow = mj_name2id(engine.model(), mjOBJ_JOINT, "arm_elbow");
+  const int dof = engine.model()->jnt_dofadr[elbow];
+  engine.AddPreStepCallback([dof](const mjModel*, mjData* d) {
+    if (d->time > 0.1 && d->time < 0.103) d->qvel[dof] = std::numeric_limits<double>::quiet_NaN();
+  });
+  engine.StepSync(100);
+  auto events = engine.DrainEvents();
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].kind, EngineEventKind::kDivergence);
+  EXPECT_EQ(events[0].joint_id, elbow);
+  EXPECT_EQ(events[0].joint_name, "arm_elbow");
+  EXPECT_EQ(events[0].articulation, "arm");
+  EXPECT_FALSE(events[0].auto_reset);
+  EXPECT_NE(events[0].message.find("qvel"), std::string::npos);
+}
+
+TEST_F(EngineTest, DivergenceFromHugeTimestepWithAutoReset) {
+  ExpectWarning("unstable");
+  PhysicsEngine::Options options;
+  options.reset_on_divergence = true;
+  ModelPtr m = CompileXmlString(kArmXml);
+  m->opt.timestep = 5.0;  // explodes within a few steps
+  PhysicsEngine engine(std::move(m), options);
+  engine.SetApplyControlsHook([](const mjModel*, mjData* d) { d->ctrl[0] = 50; });
+  engine.StepSync(200);
+  auto events = engine.DrainEvents();
+  ASSERT_GE(events.size(), 2u);
+  EXPECT_EQ(events[0].kind, EngineEventKind::kDivergence);
+  EXPECT_TRUE(events[0].auto_reset);
+  EXPECT_GE(events[0].joint_id, 0);
+  EXPECT_EQ(events[1].kind, EngineEventKind::kReset);
+}
+
+TEST_F(EngineTest, NonFiniteStateFromCustomHandlerIsDetected) {
+  PhysicsEngine engine(CompileXmlString(kArmXml));
+  engine.SetCustomStepHandler([](const mjModel*, mjData* d) {
+    d->qpos[1] = std::numeric_limits<double>::infinity();
+    d->time += 0.002;
+  });
+  engine.StepSync(5);  // reported once per episode, not per step
+  auto events = engine.DrainEvents();
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].joint_name, "arm_elbow");
+}
+
+TEST_F(EngineTest, MujocoErrorInLoopPausesAndIsReported) {
+  PhysicsEngine engine(CompileXmlString(kPendulumXml));
+  std::atomic<bool> fail{false};
+  const auto id = engine.AddPreStepCallback([&](const mjModel*, mjData*) {
+    if (fail.load()) mju_error("injected failure");
+  });
+  engine.SetAsFastAsPossible(true);
+  engine.Start();
+  ASSERT_TRUE(WaitFor([&] { return engine.step_count() > 50; }));
+  fail = true;
+  ASSERT_TRUE(WaitFor([&] { return engine.paused(); }));
+  std::this_thread::sleep_for(20ms);  // the latched loop must not re-run the failing callback
+  auto events = engine.DrainEvents();
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events.back().kind, EngineEventKind::kError);
+  EXPECT_NE(events.back().message.find("injected failure"), std::string::npos);
+  EXPECT_TRUE(engine.running());  // the thread is alive, only paused
+  // Recovers: remove the culprit, unpause, keep stepping.
+  engine.SetPaused(true);
+  engine.Stop();
+  EXPECT_TRUE(engine.RemoveCallback(id));
+  const std::uint64_t n = engine.step_count();
+  engine.SetPaused(false);
+  engine.Start();
+  ASSERT_TRUE(WaitFor([&] { return engine.step_count() > n + 50; }));
+  engine.Stop();
+}
+
+TEST_F(EngineTest, MujocoErrorFromEngineInternalsInStepSync) {
+  // A stack far too small for the model: mj_step calls mju_error("... stack overflow ...").
+  ModelPtr m = LoadXmlFile(kHumanoidPath);
+  PhysicsEngine engine(std::move(m));
+  engine.WithLockedData([](mjModel*, mjData* d) { d->nstack = d->pstack + 8; });
+  EXPECT_THROW(engine.StepSync(1), MujocoError);
+  EXPECT_TRUE(engine.paused());
+  auto events = engine.DrainEvents();
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].kind, EngineEventKind::kError);
+}
+
+TEST_F(EngineTest, CallbacksCannotReenter) {
+  PhysicsEngine engine(CompileXmlString(kPendulumXml));
+  bool threw = false;
+  engine.AddPreStepCallback([&](const mjModel*, mjData*) {
+    if (threw) return;
+    threw = true;
+    engine.AddPreStepCallback([](const mjModel*, mjData*) {});
+  });
+  engine.Start();
+  ASSERT_TRUE(WaitFor([&] { return engine.paused(); }));
+  engine.Stop();
+  auto events = engine.DrainEvents();
+  ASSERT_FALSE(events.empty());
+  EXPECT_NE(events[0].message.find("deadlock"), std::string::npos);
+}
+
+TEST_F(EngineTest, ResetFromInsideACallbackIsQueued) {
+  PhysicsEngine engine(CompileXmlString(kPendulumXml));
+  engine.AddPostStepCallback([&](const mjModel*, mjData* d) {
+    if (d->time > 0.0099 && d->time < 0.0101) engine.Reset();
+  });
+  engine.StepSync(5);  // t = 0.010: reset queued
+  engine.WithLockedData([](mjModel*, mjData* d) { EXPECT_NEAR(d->time, 0.010, 1e-12); });
+  engine.StepSync(1);  // applied first, then one step
+  engine.WithLockedData([](mjModel*, mjData* d) { EXPECT_NEAR(d->time, 0.002, 1e-12); });
+  EXPECT_EQ(engine.DrainEvents().size(), 1u);
+}
+
+// Measures RTF as simulated time over wall time across `wall` seconds.
+double MeasureRtf(PhysicsEngine& engine, std::chrono::milliseconds wall) {
+  const double t0 = SimTime(engine);
+  const auto w0 = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(wall);
+  const double t1 = SimTime(engine);
+  const double w = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  return (t1 - t0) / w;
+}
+
+TEST_F(EngineTest, PacingFollowsSpeed) {
+  PhysicsEngine engine(CompileXmlString(kPendulumXml));  // 500 Hz
+  engine.Start();
+  std::this_thread::sleep_for(300ms);
+  const double full = MeasureRtf(engine, 1000ms);
+  EXPECT_NEAR(full, 1.0, 0.1);
+  EXPECT_NEAR(engine.real_time_factor(), 1.0, 0.15);
+  EXPECT_NEAR(engine.step_rate(), 500, 75);
+  engine.SetSpeedPercent(50);
+  std::this_thread::sleep_for(300ms);
+  const double half = MeasureRtf(engine, 1000ms);
+  EXPECT_NEAR(half, 0.5, 0.05);
+  engine.SetSpeedPercent(1);
+  EXPECT_EQ(engine.speed_percent(), 5);
+  engine.Stop();
+}
+
+TEST_F(EngineTest, RenderSnapshotReadableWhileRunning) {
+  PhysicsEngine engine(LoadXmlFile(kHumanoidPath));
+  engine.SetAsFastAsPossible(true);
+  std::atomic<bool> done{false};
+  std::atomic<int> reads{0};
+  std::atomic<bool> ok{true};
+  std::thread render([&] {
+    double last = -1;
+    std::uint64_t last_step = 0;
+    while (!done.load()) {
+      const RenderSnapshot* s = engine.LatestRenderSnapshot();
+      if (!s) continue;
+      if (s->step < last_step) ok = false;
+      if (s->step > last_step && s->time <= last && s->time != 0) ok = false;
+      for (double v : s->xquat) ok = ok && std::isfinite(v);
+      last = s->time;
+      last_step = s->step;
+      reads++;
+    }
+  });
+  engine.Start();
+  ASSERT_TRUE(WaitFor([&] { return engine.step_count() > 2000 && reads.load() > 100; }));
+  done = true;
+  render.join();
+  engine.Stop();
+  EXPECT_TRUE(ok.load());
+}
+
+// Another thread storms the running loop with every cross-thread command (run under TSan).
+TEST_F(EngineTest, StressCommandsFromOtherThreads) {
+  PhysicsEngine engine(CompileXmlString(kArmXml));
+  std::atomic<double> control{0};
+  engine.SetApplyControlsHook([&](const mjModel*, mjData* d) { d->ctrl[0] = control.load(); });
+  engine.AddPostStepCallback([](const mjModel*, mjData* d) { d->userdata[0] += 1; });
+  engine.SetAsFastAsPossible(true);
+  engine.Start();
+  const PhysicsState snap = engine.Snapshot();
+  std::atomic<bool> done{false};
+  std::thread storm([&] {
+    int i = 0;
+    while (!done.load()) {
+      switch (i++ % 7) {
+        case 0:
+          engine.Reset();
+          break;
+        case 1:
+          engine.Restore(snap);
+          break;
+        case 2:
+          engine.TogglePause();
+          break;
+        case 3:
+          control.store(std::sin(i));
+          break;
+        case 4:
+          (void)engine.Snapshot();
+          break;
+        case 5:
+          engine.ResetToKeyframe(i % 2);
+          break;
+        case 6:
+          engine.SetSpeedPercent(5 + i % 96);
+          try {
+            engine.StepSync(1);
+          } catch (const Error&) {
+          }
+          break;
+      }
+      (void)engine.real_time_factor();
+    }
+  });
+  std::thread render([&] {
+    while (!done.load()) (void)engine.LatestRenderSnapshot();
+  });
+  const auto end = std::chrono::steady_clock::now() + 1500ms;
+  int events = 0;
+  while (std::chrono::steady_clock::now() < end) {
+    events += engine.PollEvents();
+    std::this_thread::sleep_for(1ms);
+  }
+  done = true;
+  storm.join();
+  render.join();
+  engine.Stop();
+  events += engine.PollEvents();
+  EXPECT_GT(events, 0);
+  engine.SetPaused(false);
+  engine.StepSync(10);  // still healthy
+}
+
+}  // namespace
+}  // namespace urlab::physics
