@@ -27,6 +27,9 @@ document::Document ReadString(const std::string& xml, const std::string& virtual
 // Every attribute that names an element which does not exist, as errors with locations.
 std::vector<InputError> FindDanglingReferences(const document::Document& doc);
 
+// Every second definition of a name within one namespace, as errors with locations.
+std::vector<InputError> FindDuplicateNames(const document::Document& doc);
+
 // Every file attribute whose file does not exist, as errors with locations.
 std::vector<InputError> FindMissingFiles(const document::Document& doc);
 

@@ -1,0 +1,66 @@
+#pragma once
+// The dialect bridge: MJCF written for MuJoCo 3.x, read with the 3.x additions of the grammar
+// (grammar_dialect_table.cc), rewritten in place into MJCF that MuJoCo 2.2.2 compiles to the same
+// physics. Every change is reported with the source file and line of the element it concerns:
+//
+//   translated    exact: the 2.2.2 model behaves as 3.x would (or the difference is stated)
+//   approximated  close but not identical; the message says how
+//   dropped       no effect on this engine (render-only, removed features, metadata)
+//   refused       would silently change the physics; the document is left unusable
+//
+// Documents that use nothing from the 3.x dialect are not touched (ApplyBridge is a no-op, the
+// report is empty and the document stays bit-exact). docs/dialect-bridge.md lists every
+// construct, what happens to it and why.
+//
+// Thread: plain function over a document the caller owns. Translating `dampratio` compiles a
+// trial copy of the model with MuJoCo (no global state other than MuJoCo's handlers).
+#include <string>
+#include <vector>
+
+#include "urlab/core/error.h"
+#include "urlab/document/document.h"
+
+namespace urlab::mjcf {
+
+struct BridgeChange {
+  enum class Kind { kTranslated, kApproximated, kDropped, kRefused };
+  Kind kind = Kind::kTranslated;
+  SourceLocation where;
+  std::string what;
+};
+
+// "translated", "approximated", "dropped", "refused".
+const char* BridgeKindName(BridgeChange::Kind kind);
+
+// A 3.x sensor the bridge turned into a 2.2.2 <user> sensor of the same name; the runtime must
+// compute it (physics/software_sensors.h).
+struct BridgedSensor {
+  enum class Kind { kJointActuatorForce, kTendonActuatorForce };
+  std::string name;
+  Kind kind = Kind::kJointActuatorForce;
+  std::string target;  // joint or tendon name
+};
+
+struct BridgeReport {
+  bool dialect = false;  // the document used 3.x constructs (so 3.x defaults were applied)
+  std::vector<BridgeChange> changes;
+  std::vector<BridgedSensor> software_sensors;
+
+  bool HasRefusals() const;
+  // Every refusal as an error (file:line: message).
+  std::vector<InputError> Refusals() const;
+  // One line per change: "file:line: <kind>: <what>".
+  std::string Format() const;
+};
+
+struct BridgeOptions {
+  // Throw after the whole document was examined when something was refused: the InputError
+  // names the first refusal and counts the others. When false, refusals are only reported.
+  bool throw_on_refusal = true;
+};
+
+// Rewrites `doc` into MuJoCo 2.2.2 MJCF (see the file comment). Throws InputError for malformed
+// values, and for refusals unless options say otherwise.
+BridgeReport ApplyBridge(document::Document& doc, const BridgeOptions& options = {});
+
+}  // namespace urlab::mjcf
