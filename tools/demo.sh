@@ -12,3 +12,5 @@ echo "== urlab compile examples/models/pendulum_arm.xml (debug XML and MJB into 
   --save-xml "$OUT/scene_compiled.xml" --save-mjb "$OUT/scene_compiled.mjb"
 echo "== user-built articulation (C++ API)"
 "$BUILD_DIR/example_build_articulation"
+echo "== urlab run examples/scenes/two_arms.yaml --duration 5 (two arms held raised under PD)"
+"$BUILD_DIR/urlab" run examples/scenes/two_arms.yaml --duration 5

@@ -76,11 +76,16 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
       "Check a scene (YAML) or MJCF file without running it: read, compose and compile, and "
       "report every problem found with its file and line.");
   static std::string vfile;
+  static bool bridge_report = false;
   val->add_option("FILE", vfile, "scene (.yaml) or MJCF (.xml) file")
       ->required()
       ->check(CLI::ExistingFile);
+  val->add_flag("--bridge-report", bridge_report,
+                "list every change the MuJoCo 3.x dialect bridge makes, with file and line");
   val->callback([&exit_code] {
-    const world::ValidationReport r = world::Validate(vfile);
+    const world::ValidationReport r = world::Validate(vfile, bridge_report);
+    for (const auto& b : r.bridge) std::cout << "bridge: " << b << "\n";
+    if (bridge_report && r.bridge.empty()) std::cout << "bridge: no changes (MuJoCo 2.2.2 MJCF)\n";
     for (const auto& w : r.warnings) std::cout << "warning: " << w << "\n";
     for (const auto& e : r.errors) std::cout << "error: " << e << "\n";
     if (r.errors.empty()) {

@@ -9,5 +9,7 @@ namespace urlab::app {
 
 void RegisterMjcfCommands(CLI::App& app, int& exit_code);
 void RegisterCompileCommand(CLI::App& app, int& exit_code);
+void RegisterRunCommand(CLI::App& app, int& exit_code);
+void RegisterBenchCommand(CLI::App& app, int& exit_code);
 
 }  // namespace urlab::app

@@ -27,6 +27,8 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   urlab::app::RegisterMjcfCommands(app, exit_code);
   urlab::app::RegisterCompileCommand(app, exit_code);
+  urlab::app::RegisterRunCommand(app, exit_code);
+  urlab::app::RegisterBenchCommand(app, exit_code);
 
   try {
     app.parse(argc, argv);

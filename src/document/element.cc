@@ -11,8 +11,13 @@ namespace urlab::document {
 namespace fs = std::filesystem;
 
 std::string FileBases::Resolve(std::string_view value, FileBase base) const {
-  fs::path file(value);
-  if (strip_path) file = file.filename();
+  std::string text(value);
+  if (strip_path) {
+    // MuJoCo strips both separators, so Windows-style paths work on any host.
+    const size_t cut = text.find_last_of("/\\");
+    if (cut != std::string::npos) text = text.substr(cut + 1);
+  }
+  fs::path file(text);
   if (file.is_absolute()) return file.lexically_normal().string();
   const std::string* dir = &model_dir;
   if (base == FileBase::kMeshDir) dir = &mesh_dir;

@@ -1,5 +1,6 @@
 #include "urlab/document/grammar.h"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <unordered_map>
@@ -99,6 +100,13 @@ AttributeSpec ParseAttribute(std::string_view row, std::string_view spec) {
   return a;
 }
 
+AttributeSpec* FindMutable(ElementSpec& e, std::string_view name) {
+  for (AttributeSpec& a : e.attributes) {
+    if (a.name == name) return &a;
+  }
+  return nullptr;
+}
+
 }  // namespace
 
 std::string_view NamespaceName(Namespace ns) { return kNamespaceNames[static_cast<size_t>(ns)]; }
@@ -176,8 +184,20 @@ Grammar::Grammar(std::span<const GrammarRow> rows, std::span<const GrammarRow> d
     if (it == index.end()) Bad(r->id, "", "extends an unknown row");
     ElementSpec& e = elements_[it->second];
     for (std::string_view spec : SplitSpaces(r->attributes)) {
-      e.attributes.push_back(ParseAttribute(r->id, spec));
-      e.attributes.back().dialect = true;
+      AttributeSpec added = ParseAttribute(r->id, spec);
+      // An attribute 2.2.2 already has gains the dialect's extra keywords (e.g. implicitfast).
+      if (AttributeSpec* existing = FindMutable(e, added.name)) {
+        for (const std::string& k : added.keywords) {
+          if (std::find(existing->keywords.begin(), existing->keywords.end(), k) ==
+              existing->keywords.end()) {
+            existing->keywords.push_back(k);
+            existing->dialect_keywords.push_back(k);
+          }
+        }
+        continue;
+      }
+      added.dialect = true;
+      e.attributes.push_back(std::move(added));
     }
     link_children(*r, e);
   }

@@ -32,9 +32,8 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 bool IsActuatorTag(std::string_view t) {
-  return t == "general" || t == "motor" || t == "position" || t == "velocity" ||
-         t == "cylinder" || t == "muscle" || t == "adhesion" || t == "intvelocity" ||
-         t == "damper";
+  return t == "general" || t == "motor" || t == "position" || t == "velocity" || t == "cylinder" ||
+         t == "muscle" || t == "adhesion" || t == "intvelocity" || t == "damper";
 }
 
 bool InDefault(const Element& e) {
@@ -104,25 +103,49 @@ class Bridge {
   static std::string Tag(const Element& e) {
     std::string s = "<" + e.tag();
     const std::string n = e.Name();
-    if (!n.empty()) s += " " + std::string(e.spec() && e.spec()->name_space ==
-                                                              document::Namespace::kClass
-                                                          ? "class"
-                                                          : "name") +
-                         "='" + n + "'";
+    if (!n.empty())
+      s += " " +
+           std::string(e.spec() && e.spec()->name_space == document::Namespace::kClass ? "class"
+                                                                                       : "name") +
+           "='" + n + "'";
     return s + ">";
   }
 
   // ---- helpers ----
   const std::string* Resolve(const Element& e, std::string_view name) const {
-    return document::ResolveAttribute(doc_, e, name);
+    const std::string* v = document::ResolveAttribute(doc_, e, name);
+    if (v || (e.tag() != "fixed" && e.tag() != "spatial")) return v;
+    // Tendons take their defaults from the class's <tendon> template.
+    const std::string cls = document::EffectiveClass(e);
+    const Element* d = nullptr;
+    doc_.root().Visit([&](const Element& x) {
+      if (d || x.tag() != "default") return;
+      const std::string* c = x.Get("class");
+      const bool top = !x.parent() || x.parent()->tag() != "default";
+      if ((c && *c == cls) || (!c && top && cls == "main")) d = &x;
+    });
+    for (; d && d->tag() == "default"; d = d->parent()) {
+      for (const auto& c : d->children()) {
+        if (c->tag() == "tendon" && c->Get(name)) v = c->Get(name);
+      }
+      if (v) return v;
+    }
+    return nullptr;
+  }
+  // Removes `name` from `e` only when it is a 3.x attribute; returns whether it did.
+  static bool UnsetDialect(Element& e, std::string_view name) {
+    for (const Attribute& a : e.attributes()) {
+      if (a.name == name) return IsDialect(a) && e.Unset(name);
+    }
+    return false;
   }
   std::optional<std::vector<double>> ResolveReals(const Element& e, std::string_view name) const {
     const std::string* t = Resolve(e, name);
     if (!t) return std::nullopt;
     auto v = ParseReals(*t);
     if (!v) {
-      throw InputError(e.location(), "<" + e.tag() + "> attribute '" + std::string(name) +
-                                         "': '" + *t + "' is not a list of numbers");
+      throw InputError(e.location(), "<" + e.tag() + "> attribute '" + std::string(name) + "': '" +
+                                         *t + "' is not a list of numbers");
     }
     return v;
   }
@@ -189,14 +212,16 @@ class Bridge {
       if (dialect || c.autolimits || InDefault(e) || e.tag() == "default") return;
       // A range without its limited attribute only loads with 3.x's autolimits default.
       auto missing = [&](const char* range, const char* limited) {
-        return document::ResolveAttribute(doc_, e, range) &&
-               !document::ResolveAttribute(doc_, e, limited);
+        return Resolve(e, range) && !Resolve(e, limited);
       };
       if (e.tag() == "joint" || e.tag() == "fixed" || e.tag() == "spatial") {
         dialect = missing("range", "limited");
       } else if (IsActuatorTag(e.tag()) && e.parent() && e.parent()->tag() == "actuator") {
-        dialect = missing("ctrlrange", "ctrllimited") || missing("forcerange", "forcelimited") ||
-                  missing("actrange", "actlimited");
+        // damper/adhesion imply ctrllimited and intvelocity implies actlimited in 2.2.2.
+        const bool implied_ctrl = e.tag() == "damper" || e.tag() == "adhesion";
+        dialect = (!implied_ctrl && missing("ctrlrange", "ctrllimited")) ||
+                  missing("forcerange", "forcelimited") ||
+                  (e.tag() == "general" && missing("actrange", "actlimited"));
       }
     });
     return dialect;
@@ -244,8 +269,9 @@ class Bridge {
         std::shared_ptr<const document::FileBases> shared = bases;
         doc_.root().Visit([&](Element& e) { e.set_file_bases(shared); });
         Note(Kind::kTranslated, c,
-             "compiler assetdir=\"" + *v + "\" applied as meshdir/texturedir (asset paths are "
-             "written resolved)");
+             "compiler assetdir=\"" + *v +
+                 "\" applied as meshdir/texturedir (asset paths are "
+                 "written resolved)");
         c.Unset("assetdir");
       }
       if (const std::string* v = c.Get("alignfree")) {
@@ -315,7 +341,8 @@ class Bridge {
     if (t == "body" || t == "geom" || t == "site" || t == "camera" || t == "frame") {
       const Vec3 p = ResolvedVec(c, "pos", {0, 0, 0});
       c.SetReals("pos", apply(p));
-      if (rotated) SetQuat(c, document::QuatMul(fq, ResolvedQuat(c).value_or(document::kIdentityQuat)));
+      if (rotated)
+        SetQuat(c, document::QuatMul(fq, ResolvedQuat(c).value_or(document::kIdentityQuat)));
     } else if (t == "joint") {
       c.SetReals("pos", apply(ResolvedVec(c, "pos", {0, 0, 0})));
       if (rotated) c.SetReals("axis", document::QuatRotate(fq, ResolvedVec(c, "axis", {0, 0, 1})));
@@ -385,8 +412,8 @@ class Bridge {
       if (!a->parent() || a->parent()->tag() != "actuator") continue;
       auto arm = ResolveReals(*a, "armature");
       auto damp = ResolveReals(*a, "damping");
-      a->Unset("armature");
-      a->Unset("damping");
+      UnsetDialect(*a, "armature");
+      UnsetDialect(*a, "damping");
       const double armature = arm && !arm->empty() ? (*arm)[0] : 0;
       std::vector<double> damping = damp ? *damp : std::vector<double>{};
       if (armature == 0 && AllZero(damping)) continue;
@@ -414,8 +441,8 @@ class Bridge {
         if (d != 0) j->SetReal("damping", jd);
         Note(Kind::kTranslated, *a,
              Tag(*a) + " armature/damping moved to joint '" + *joint +
-                 "' scaled by gear^2 (armature " + FormatReal(ja) + ", damping " +
-                 FormatReal(jd) + "): MuJoCo 3.x adds them there the same way");
+                 "' scaled by gear^2 (armature " + FormatReal(ja) + ", damping " + FormatReal(jd) +
+                 "): MuJoCo 3.x adds them there the same way");
       } else if (tendon && armature == 0) {
         Element* t = FindNamed(document::Namespace::kTendon, *tendon);
         if (!t) continue;
@@ -426,14 +453,15 @@ class Bridge {
                  FormatReal(td) + ")");
       } else {
         Note(Kind::kRefused, *a,
-             Tag(*a) + " armature/damping: only joint transmissions (and tendon damping) can "
-                       "carry them in MuJoCo 2.2.2");
+             Tag(*a) +
+                 " armature/damping: only joint transmissions (and tendon damping) can "
+                 "carry them in MuJoCo 2.2.2");
       }
     }
     for (Element* d : FindDefaults({"general", "motor", "position", "velocity", "cylinder",
                                     "muscle", "adhesion", "intvelocity", "damper"})) {
-      bool any = d->Unset("armature");
-      any = d->Unset("damping") || any;
+      bool any = UnsetDialect(*d, "armature");
+      any = UnsetDialect(*d, "damping") || any;
       if (any) {
         Note(Kind::kTranslated, *d,
              "default " + Tag(*d) + " armature/damping resolved into each actuator's target");
@@ -596,15 +624,16 @@ class Bridge {
       const std::optional<std::string> range_text = copy(Resolve(*t, "actuatorfrcrange"));
       const std::optional<std::string> limited = copy(Resolve(*t, "actuatorfrclimited"));
       if (!range_text && !limited) continue;
-      const bool active = limited ? *limited == "true" || (*limited == "auto" &&
-                                                            compiler_.autolimits && range_text)
-                                  : compiler_.autolimits && range_text;
+      const bool active =
+          limited ? *limited == "true" || (*limited == "auto" && compiler_.autolimits && range_text)
+                  : compiler_.autolimits && range_text;
       t->Unset("actuatorfrcrange");
       t->Unset("actuatorfrclimited");
       if (!limited && range_text && !compiler_.autolimits) {
         Note(Kind::kRefused, *t,
-             Tag(*t) + " actuatorfrcrange without actuatorfrclimited while autolimits is false "
-                       "(MuJoCo 3.x rejects this too)");
+             Tag(*t) +
+                 " actuatorfrcrange without actuatorfrclimited while autolimits is false "
+                 "(MuJoCo 3.x rejects this too)");
         continue;
       }
       if (!active) {
@@ -673,6 +702,43 @@ class Bridge {
     return std::array<double, 2>{(*r)[0] * scale, (*r)[1] * scale};
   }
 
+  // How specific the element holding `value` (a pointer ResolveAttribute returned for `e`) is:
+  // e itself is the most specific, then default classes by nesting depth.
+  int SetterDepth(const Element& e, const std::string* value) {
+    int depth = -1;
+    doc_.root().Visit([&](const Element& x) {
+      for (const Attribute& at : x.attributes()) {
+        if (&at.value != value) continue;
+        if (&x == &e) {
+          depth = 1 << 20;
+        } else {
+          depth = 0;
+          for (const Element* p = x.parent(); p; p = p->parent()) ++depth;
+        }
+      }
+    });
+    return depth;
+  }
+
+  // A 3.x attribute of a position/intvelocity actuator resolved through its classes; a value
+  // inherited from another shortcut's template (velocity kv, cylinder timeconst) does not count.
+  double DialectReal(const Element& e, std::string_view name) {
+    const std::string* v = Resolve(e, name);
+    if (!v) return 0;
+    bool dialect = false;
+    doc_.root().Visit([&](const Element& x) {
+      for (const Attribute& at : x.attributes()) {
+        if (&at.value == v) dialect = IsDialect(at);
+      }
+    });
+    if (!dialect) return 0;
+    auto r = ParseReals(*v);
+    if (!r || r->size() != 1) {
+      throw InputError(e.location(), "<" + e.tag() + "> " + std::string(name) + " needs a number");
+    }
+    return (*r)[0];
+  }
+
   void PositionShortcuts() {
     const double dt = doc_.FindSection("option") && doc_.FindSection("option")->Get("timestep")
                           ? *doc_.FindSection("option")->GetReal("timestep")
@@ -683,11 +749,18 @@ class Bridge {
     for (Element* a : Find({"position", "intvelocity"})) {
       if (!a->parent() || a->parent()->tag() != "actuator") continue;
       const bool position = a->tag() == "position";
-      const double kv = ResolveReal(*a, "kv", 0);
-      const double ratio = ResolveReal(*a, "dampratio", 0);
-      const double tau = position ? ResolveReal(*a, "timeconst", 0) : 0;
-      const double inherit = ResolveReal(*a, "inheritrange", 0);
-      for (const char* n : {"kv", "dampratio", "timeconst", "inheritrange"}) a->Unset(n);
+      // kv and dampratio fill the same slot (biasprm[2]): the most specific setter wins.
+      double kv = DialectReal(*a, "kv");
+      double ratio = DialectReal(*a, "dampratio");
+      if (kv != 0 && ratio != 0) {
+        const int dk = SetterDepth(*a, Resolve(*a, "kv"));
+        const int dr = SetterDepth(*a, Resolve(*a, "dampratio"));
+        if (dk > dr) ratio = 0;
+        if (dr > dk) kv = 0;
+      }
+      const double tau = position ? DialectReal(*a, "timeconst") : 0;
+      const double inherit = DialectReal(*a, "inheritrange");
+      for (const char* n : {"kv", "dampratio", "timeconst", "inheritrange"}) UnsetDialect(*a, n);
       if (kv == 0 && ratio == 0 && tau == 0 && inherit == 0) continue;
       if (kv < 0 || ratio < 0 || tau < 0 || inherit < 0) {
         Note(Kind::kRefused, *a, Tag(*a) + " kv/dampratio/timeconst/inheritrange must be >= 0");
@@ -727,10 +800,10 @@ class Bridge {
       g.Set("gaintype", "fixed");
       g.Set("biastype", "affine");
       g.SetReals("gainprm", std::array<double, 3>{kp, 0, 0});
-      g.SetReals("biasprm", std::array<double, 3>{0, -kp, -kv});
+      g.SetReals("biasprm", std::array<double, 3>{0, -kp, kv == 0 ? 0 : -kv});
       std::string what = Tag(g) + " (" + (position ? "position" : "intvelocity") +
                          ") written as <general> gainprm=\"" + FormatReal(kp) + "\" biasprm=\"0 " +
-                         FormatReal(-kp) + " " + FormatReal(-kv) + "\"";
+                         FormatReal(-kp) + " " + FormatReal(kv == 0 ? 0 : -kv) + "\"";
       Kind kind = Kind::kTranslated;
       if (position) {
         if (tau > 0) {
@@ -766,7 +839,7 @@ class Bridge {
                                     "cylinder", "muscle", "adhesion", "damper"})) {
       std::vector<std::string> gone;
       for (const char* n : {"kv", "dampratio", "timeconst", "inheritrange"}) {
-        if (d->Unset(n)) gone.push_back(n);
+        if (UnsetDialect(*d, n)) gone.push_back(n);
       }
       if (!gone.empty()) {
         Note(Kind::kTranslated, *d,
@@ -778,8 +851,8 @@ class Bridge {
 
   void DampRatio() {
     if (pending_.empty()) return;
-    for (PendingDampRatio& p : pending_) p.actuator->SetReals("biasprm",
-                                                               std::array<double, 3>{0, -p.kp, 0});
+    for (PendingDampRatio& p : pending_)
+      p.actuator->SetReals("biasprm", std::array<double, 3>{0, -p.kp, 0});
     std::string error;
     mjModel* m = TrialCompile(WriteString(doc_), &error);
     if (!m) {
@@ -790,7 +863,7 @@ class Bridge {
       return;
     }
     mjData* d = mj_makeData(m);
-    mj_forward(m, d);  // qpos = qpos0
+    mj_forward(m, d);                   // qpos = qpos0
     std::vector<const Element*> order;  // actuators in compiled order
     doc_.root().Visit([&](const Element& e) {
       if (e.parent() && e.parent()->tag() == "actuator" && IsActuatorTag(e.tag())) {
@@ -861,8 +934,8 @@ class Bridge {
         o->Unset("actuatorgroupdisable");
       }
       if (const std::string* v = o->Get("o_friction")) {
-        const bool override_on = o->FirstChild("flag") &&
-                                  o->FirstChild("flag")->GetOr("override", "") == "enable";
+        const bool override_on =
+            o->FirstChild("flag") && o->FirstChild("flag")->GetOr("override", "") == "enable";
         if (override_on) {
           Note(Kind::kRefused, *o,
                "option o_friction with the override flag: 2.2.2's override has no 5-number "
@@ -872,6 +945,13 @@ class Bridge {
                "option o_friction=\"" + *v + "\" only applies with the override flag: no effect");
         }
         o->Unset("o_friction");
+      }
+      if (o->GetOr("integrator", "") == "implicitfast") {
+        o->Set("integrator", "implicit");
+        Note(Kind::kApproximated, *o,
+             "option integrator=\"implicitfast\" -> \"implicit\" (2.2.2's implicit integrator "
+             "also treats damping and actuator velocity terms implicitly; implicitfast skips the "
+             "Coriolis and centripetal derivatives that 3.x's implicit includes)");
       }
       if (Element* f = o->FirstChild("flag")) Flags(*f);
     }
@@ -888,8 +968,9 @@ class Bridge {
           s->SetInt("nstack", static_cast<int>(std::min(bytes / 8, 2e9)));
         }
         Note(Kind::kApproximated, *s,
-             "size memory=\"" + text + "\" -> nstack (2.2.2 sizes its arena in mjtNums; "
-             "njmax/nconmax keep their 2.2.2 defaults)");
+             "size memory=\"" + text +
+                 "\" -> nstack (2.2.2 sizes its arena in mjtNums; "
+                 "njmax/nconmax keep their 2.2.2 defaults)");
       }
     }
   }
@@ -967,8 +1048,9 @@ class Bridge {
                Tag(*m) + " inertia=\"exact\" -> compiler exactmeshinertia=\"true\"");
         } else if (mode == "shell") {
           Note(Kind::kRefused, *m,
-               Tag(*m) + " inertia=\"shell\": set shellinertia on the geoms that use this mesh "
-                         "instead (the bridge does not know which bodies infer inertia)");
+               Tag(*m) +
+                   " inertia=\"shell\": set shellinertia on the geoms that use this mesh "
+                   "instead (the bridge does not know which bodies infer inertia)");
         } else {
           Note(Kind::kApproximated, *m,
                Tag(*m) + " inertia=\"" + mode +
@@ -991,10 +1073,11 @@ class Bridge {
   }
 
   void GenericAttribute(Element& e, const std::string& n) {
+    if (!e.Has(n)) return;  // handled together with an earlier attribute
     const std::string value = *e.Get(n);
     const std::string& t = e.tag();
-    const std::string desc = (InDefault(e) ? "default " : "") + Tag(e) + " " + n + "=\"" +
-                             value + "\"";
+    const std::string desc =
+        (InDefault(e) ? "default " : "") + Tag(e) + " " + n + "=\"" + value + "\"";
     auto drop = [&](const std::string& why) {
       Note(Kind::kDropped, e, desc + " dropped: " + why);
       e.Unset(n);
@@ -1014,8 +1097,9 @@ class Bridge {
       if (n == "nsample" || n == "interp") return drop("only used with delay");
       if (n == "delay" || n == "interval") {
         if (zero()) return drop("zero");
-        return approx("the sensor reads the current value every step (no delay or interval "
-                      "in 2.2.2)");
+        return approx(
+            "the sensor reads the current value every step (no delay or interval "
+            "in 2.2.2)");
       }
     }
     if (actuator) {
@@ -1025,8 +1109,9 @@ class Bridge {
         if (value == "false") return drop("2.2.2's behaviour");
         return approx("forces use the current activation (one step later than actearly)");
       }
-      if (n == "actdim") return value == "1" || value == "0" ? drop("implied by dyntype")
-                                                             : refuse("vector activations");
+      if (n == "actdim")
+        return value == "1" || value == "0" ? drop("implied by dyntype")
+                                            : refuse("vector activations");
       if (n == "actlimited" && t == "intvelocity") {
         return value == "true" ? drop("intvelocity is always activation-limited in 2.2.2")
                                : refuse("an unlimited intvelocity");
@@ -1154,14 +1239,13 @@ class Bridge {
       u.Set("datatype", "real");
       u.Set("needstage", "acc");
       u.Set("dim", "1");
-      report_.software_sensors.push_back(
-          {name,
-           joint ? BridgedSensor::Kind::kJointActuatorForce
-                 : BridgedSensor::Kind::kTendonActuatorForce,
-           tname});
+      report_.software_sensors.push_back({name,
+                                          joint ? BridgedSensor::Kind::kJointActuatorForce
+                                                : BridgedSensor::Kind::kTendonActuatorForce,
+                                          tname});
       Note(Kind::kTranslated, u,
-           "<" + std::string(joint ? "jointactuatorfrc" : "tendonactuatorfrc") + " name='" +
-               name + "'> -> <user> sensor of the same name, computed by the runtime from " +
+           "<" + std::string(joint ? "jointactuatorfrc" : "tendonactuatorfrc") + " name='" + name +
+               "'> -> <user> sensor of the same name, computed by the runtime from " +
                (joint ? "qfrc_actuator at the joint's dof"
                       : "the actuator forces of the tendon's actuators"));
     }
@@ -1248,10 +1332,14 @@ class Bridge {
 
 const char* BridgeKindName(BridgeChange::Kind kind) {
   switch (kind) {
-    case Kind::kTranslated: return "translated";
-    case Kind::kApproximated: return "approximated";
-    case Kind::kDropped: return "dropped";
-    case Kind::kRefused: return "refused";
+    case Kind::kTranslated:
+      return "translated";
+    case Kind::kApproximated:
+      return "approximated";
+    case Kind::kDropped:
+      return "dropped";
+    case Kind::kRefused:
+      return "refused";
   }
   return "?";
 }
@@ -1288,11 +1376,11 @@ BridgeReport ApplyBridge(Document& doc, const BridgeOptions& options) {
     const std::vector<InputError> refusals = report.Refusals();
     if (refusals.size() == 1) throw refusals.front();
     if (refusals.size() > 1) {
-      throw InputError(refusals.front().where(),
-                       refusals.front().message() + " (and " +
-                           std::to_string(refusals.size() - 1) + " more refusal(s); run `urlab "
-                                                                  "validate --bridge-report` to "
-                                                                  "list them)");
+      throw InputError(refusals.front().where(), refusals.front().message() + " (and " +
+                                                     std::to_string(refusals.size() - 1) +
+                                                     " more refusal(s); run `urlab "
+                                                     "validate --bridge-report` to "
+                                                     "list them)");
     }
   }
   return report;

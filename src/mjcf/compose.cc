@@ -131,6 +131,17 @@ void ApplyPrefix(Document& doc, const std::string& prefix) {
 // Turns the articulation's top-level <default> into class "{prefix}main" and makes every element
 // that used the implicit main class use it explicitly. Returns the class element (detached), or
 // nullptr when the articulation has no defaults.
+// True when default class `d` (not its children classes) has a template for elements `tag`.
+bool HasTemplate(const Element& d, const std::string& tag) {
+  static const std::unordered_set<std::string> kActuators = {
+      "general", "motor", "position", "velocity", "cylinder", "muscle", "adhesion", "intvelocity",
+      "damper"};
+  for (const auto& c : d.children()) {
+    if (c->tag() == tag || (kActuators.count(tag) && kActuators.count(c->tag()))) return true;
+  }
+  return false;
+}
+
 std::unique_ptr<Element> WrapDefaults(Document& doc, const std::string& prefix) {
   Element* top = doc.root().FirstChild("default");
   if (!top) return nullptr;
@@ -145,21 +156,79 @@ std::unique_ptr<Element> WrapDefaults(Document& doc, const std::string& prefix) 
   const std::string main = prefix + "main";
   wrapped->Unset("class");
   wrapped->Set("class", main);
+  // Elements that used the implicit main class now name it, but only where main has a template
+  // for them (elsewhere the class changes nothing, and leaving it out keeps identical assets of
+  // several articulations identical, so they can be shared).
   doc.root().Visit([&](Element& e) {
     if (!e.spec() || !e.spec()->FindAttribute("class") || e.Has("class")) return;
     if (e.parent() && e.parent()->tag() == "default") return;
     if (e.tag() == "default") return;
     // Inside the world body, elements of bodies inherit through childclass (set below).
     if (InWorldbody(e) && e.parent()->tag() != "worldbody") return;
-    e.Set("class", main);
+    if (HasTemplate(*wrapped, e.tag())) e.Set("class", main);
   });
+  bool body_templates = false;
+  for (const char* t : {"geom", "joint", "site", "camera", "light"}) {
+    body_templates = body_templates || HasTemplate(*wrapped, t);
+  }
   for (auto& s : doc.root().children()) {
-    if (s->tag() != "worldbody") continue;
+    if (s->tag() != "worldbody" || !body_templates) continue;
     for (auto& c : s->children()) {
       if (c->tag() == "body" && !c->Has("childclass")) c->Set("childclass", main);
     }
   }
   return wrapped;
+}
+
+// Shares assets that several articulations define identically (same kind, same attributes but
+// the name, same files): the later copy is dropped and its references renamed to the first. A
+// scene of many copies of one robot then holds one set of textures, as a hand-written scene
+// would, which keeps compilation as fast as MuJoCo's own multi-robot files.
+void ShareIdenticalAssets(Document& doc, Element* defaults,
+                          std::unordered_map<std::string, std::string>& seen) {
+  Element* assets = doc.root().FirstChild("asset");
+  if (!assets) return;
+  // In dependency order: materials name textures, skins name materials.
+  for (Namespace ns : {Namespace::kTexture, Namespace::kHField, Namespace::kMesh,
+                       Namespace::kMaterial, Namespace::kSkin}) {
+    std::unordered_map<std::string, std::string> renames;
+    for (size_t i = 0; i < assets->children().size();) {
+      const Element& a = *assets->children()[i];
+      if (!a.spec() || a.spec()->name_space != ns) {
+        ++i;
+        continue;
+      }
+      std::vector<std::string> parts;
+      for (const document::Attribute& at : a.attributes()) {
+        if (at.name == "name") continue;
+        const bool file = at.spec && at.spec->type == document::ValueType::kFile;
+        parts.push_back(at.name + "=" + (file ? *a.ResolvedFile(at.name) : at.value));
+      }
+      std::sort(parts.begin(), parts.end());
+      std::string key = a.tag();
+      for (const std::string& p : parts) key += '\n' + p;
+      const std::string name = a.Name();
+      auto [it, fresh] = seen.emplace(key, name);
+      if (fresh || !a.children().empty()) {
+        ++i;
+        continue;
+      }
+      if (!name.empty()) renames[name] = it->second;
+      assets->RemoveChild(&a);
+    }
+    if (renames.empty()) continue;
+    auto rename = [&](Element& e) {
+      std::vector<std::pair<std::string, std::string>> updates;
+      for (const document::Attribute& at : e.attributes()) {
+        if (!at.spec || at.spec->ref != ns) continue;
+        auto r = renames.find(at.value);
+        if (r != renames.end()) updates.emplace_back(at.name, r->second);
+      }
+      for (auto& [n, v] : updates) e.Set(n, v);
+    };
+    doc.root().Visit(rename);
+    if (defaults) defaults->Visit(rename);
+  }
 }
 
 // ---- compiler unit normalization ----
@@ -327,6 +396,7 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs) {
   const document::CompilerSettings scene_compiler = inputs[0].doc.Compiler();
   Element* scene_default = nullptr;
   std::map<std::string, std::string> scene_options;
+  std::unordered_map<std::string, std::string> shared_assets;
 
   for (size_t i = 0; i < inputs.size(); ++i) {
     ArticulationInput& in = inputs[i];
@@ -342,10 +412,18 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs) {
         Fail(in.name, *s, "compiler coordinate=\"global\" cannot be composed; use local");
       }
     }
+    if (!in.include_world) {
+      if (Element* wb = doc.root().FirstChild("worldbody")) {
+        for (size_t c = wb->children().size(); c-- > 0;) {
+          if (wb->children()[c]->tag() != "body") wb->RemoveChild(wb->children()[c].get());
+        }
+      }
+    }
     ConvertAngles(doc, doc.Compiler(), scene_compiler);
     NameUnnamed(doc);
     ApplyPrefix(doc, prefix);
     std::unique_ptr<Element> defaults = WrapDefaults(doc, prefix);
+    ShareIdenticalAssets(doc, defaults.get(), shared_assets);
     if (!in.placement.IsIdentity()) {
       if (Element* wb = doc.root().FirstChild("worldbody")) {
         for (auto& c : wb->children()) {

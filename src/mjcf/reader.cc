@@ -178,11 +178,12 @@ class Reader {
   void AssignFileBases(Document& doc) {
     auto bases = std::make_shared<FileBases>();
     bases->model_dir = model_dir_;
-    std::string meshdir, texturedir;
+    std::string meshdir, texturedir, assetdir;
     for (const auto& c : doc.root().children()) {
       if (c->tag() != "compiler") continue;
       if (const std::string* v = c->Get("meshdir")) meshdir = *v;
       if (const std::string* v = c->Get("texturedir")) texturedir = *v;
+      if (const std::string* v = c->Get("assetdir")) assetdir = *v;  // MuJoCo 3.x
       if (const std::string* v = c->Get("strippath")) bases->strip_path = *v == "true";
     }
     auto join = [&](const std::string& dir) {
@@ -190,8 +191,9 @@ class Reader {
       fs::path p(dir);
       return (p.is_absolute() ? p : fs::path(model_dir_) / p).lexically_normal().string();
     };
-    bases->mesh_dir = join(meshdir);
-    bases->texture_dir = join(texturedir);
+    // 3.x's assetdir stands for both folders where they are not set themselves.
+    bases->mesh_dir = join(meshdir.empty() ? assetdir : meshdir);
+    bases->texture_dir = join(texturedir.empty() ? assetdir : texturedir);
     std::shared_ptr<const FileBases> shared = bases;
     doc.root().Visit([&](Element& e) { e.set_file_bases(shared); });
   }

@@ -107,6 +107,9 @@ void WriteFile(const Document& doc, const std::string& path, bool absolute_paths
         fs::absolute(fs::path(path)).parent_path().lexically_normal().string();
   }
   const std::string text = WriteString(doc, options);
+  const fs::path parent = fs::absolute(fs::path(path)).parent_path();
+  std::error_code ec;
+  fs::create_directories(parent, ec);
   std::ofstream f(path, std::ios::binary);
   if (!f) throw Error(path + ": cannot open for writing");
   f.write(text.data(), static_cast<std::streamsize>(text.size()));

@@ -18,9 +18,15 @@ struct Entry {
   mjtNum cutoff = 0;
 };
 
+struct Registered {
+  unsigned long generation = 0;
+  std::vector<Entry> entries;
+};
+
 struct Registry {
   std::shared_mutex mutex;
-  std::unordered_map<const mjModel*, std::vector<Entry>> models;
+  std::unordered_map<const mjModel*, Registered> models;
+  unsigned long next_generation = 1;
   mjfSensor previous = nullptr;  // callback installed before ours
 };
 
@@ -52,7 +58,7 @@ void Callback(const mjModel* m, mjData* d, int stage) {
   if (r.previous) r.previous(m, d, stage);
   if (stage != mjSTAGE_ACC) return;
   auto it = r.models.find(m);
-  if (it != r.models.end()) Compute(m, d, it->second);
+  if (it != r.models.end()) Compute(m, d, it->second.entries);
 }
 
 void InstallCallback() {
@@ -65,11 +71,12 @@ void InstallCallback() {
   });
 }
 
-void Unregister(const mjModel* m) {
+void Unregister(const mjModel* m, unsigned long generation) {
   if (!m) return;
   Registry& r = TheRegistry();
   std::unique_lock lock(r.mutex);
-  r.models.erase(m);
+  auto it = r.models.find(m);
+  if (it != r.models.end() && it->second.generation == generation) r.models.erase(it);
 }
 
 }  // namespace
@@ -77,14 +84,15 @@ void Unregister(const mjModel* m) {
 SoftwareSensorRegistration& SoftwareSensorRegistration::operator=(
     SoftwareSensorRegistration&& o) noexcept {
   if (this != &o) {
-    Unregister(model_);
+    Unregister(model_, generation_);
     model_ = o.model_;
+    generation_ = o.generation_;
     o.model_ = nullptr;
   }
   return *this;
 }
 
-SoftwareSensorRegistration::~SoftwareSensorRegistration() { Unregister(model_); }
+SoftwareSensorRegistration::~SoftwareSensorRegistration() { Unregister(model_, generation_); }
 
 SoftwareSensorRegistration RegisterSoftwareSensors(const mjModel* m,
                                                    std::span<const SoftwareSensorSpec> specs) {
@@ -116,11 +124,13 @@ SoftwareSensorRegistration RegisterSoftwareSensors(const mjModel* m,
   }
   InstallCallback();
   Registry& r = TheRegistry();
+  unsigned long generation = 0;
   {
     std::unique_lock lock(r.mutex);
-    r.models[m] = std::move(entries);
+    generation = r.next_generation++;
+    r.models[m] = Registered{generation, std::move(entries)};
   }
-  return SoftwareSensorRegistration(m);
+  return SoftwareSensorRegistration(m, generation);
 }
 
 int RegisteredSoftwareSensorModels() {
@@ -133,7 +143,7 @@ void ComputeSoftwareSensors(const mjModel* m, mjData* d) {
   Registry& r = TheRegistry();
   std::shared_lock lock(r.mutex);
   auto it = r.models.find(m);
-  if (it != r.models.end()) Compute(m, d, it->second);
+  if (it != r.models.end()) Compute(m, d, it->second.entries);
 }
 
 }  // namespace urlab::physics

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "urlab/mjcf/bridge.h"
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
 
@@ -38,6 +39,35 @@ physics::ModelPtr CompileDocument(const document::Document& doc, std::string* xm
   return model;
 }
 
+// Reads an MJCF file and translates MuJoCo 3.x constructs; `label` prefixes error messages.
+document::Document ReadBridged(const std::string& path, const std::string& label,
+                               mjcf::BridgeReport* report) {
+  try {
+    document::Document doc = mjcf::ReadFile(path);
+    *report = mjcf::ApplyBridge(doc);
+    return doc;
+  } catch (const InputError& e) {
+    throw InputError(e.where(), label + e.message());
+  }
+}
+
+void AddSoftwareSensors(const mjcf::BridgeReport& report, const std::string& prefix,
+                        std::vector<physics::SoftwareSensorSpec>* specs) {
+  for (const mjcf::BridgedSensor& b : report.software_sensors) {
+    specs->push_back({prefix + b.name, b.kind == mjcf::BridgedSensor::Kind::kJointActuatorForce
+                                           ? physics::SoftwareSensorKind::kJointActuatorForce
+                                           : physics::SoftwareSensorKind::kTendonActuatorForce});
+  }
+}
+
+void NoteBridge(const mjcf::BridgeReport& report, const std::string& label, std::string* out) {
+  if (report.changes.empty()) return;
+  spdlog::info("{}MuJoCo 3.x constructs translated for 2.2.2 ({} change(s); `urlab validate "
+               "--bridge-report` lists them)",
+               label, report.changes.size());
+  *out += report.Format();
+}
+
 void SaveDebug(const document::Document& doc, const mjModel* m, const std::string& folder) {
   fs::create_directories(folder);
   const std::string xml = (fs::path(folder) / "scene_compiled.xml").string();
@@ -51,17 +81,19 @@ void SaveDebug(const document::Document& doc, const mjModel* m, const std::strin
 
 CompiledScene BuildScene(const SceneConfig& scene) {
   std::vector<mjcf::ArticulationInput> inputs;
+  std::vector<physics::SoftwareSensorSpec> software;
+  std::string bridge_text;
   for (const ArticulationConfig& a : scene.articulations) {
     mjcf::ArticulationInput in;
     in.name = a.name;
-    try {
-      in.doc = mjcf::ReadFile(a.mjcf);
-    } catch (const InputError& e) {
-      throw InputError(e.where(), a.name + ": " + e.message());
-    }
+    mjcf::BridgeReport report;
+    in.doc = ReadBridged(a.mjcf, a.name + ": ", &report);
+    AddSoftwareSensors(report, a.name + "_", &software);
+    NoteBridge(report, a.name + ": ", &bridge_text);
     in.placement.pos = a.pos;
     in.placement.quat = a.quat;
     in.options = a.options;
+    in.include_world = a.include_world;
     inputs.push_back(std::move(in));
   }
   mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs));
@@ -78,9 +110,12 @@ CompiledScene BuildScene(const SceneConfig& scene) {
       }
     }
   }
+  for (const auto& [k, v] : scene.size) composed.doc.Section("size").Set(k, v);
   CompiledScene out;
   out.model = CompileDocument(composed.doc, &out.xml, &composed.articulations);
   mjcf::ApplyArticulationKeyframes(composed.articulations, out.model.get());
+  out.software_sensors = physics::RegisterSoftwareSensors(out.model.get(), software);
+  out.bridge_report = std::move(bridge_text);
   for (const ArticulationConfig& a : scene.articulations) {
     if (a.keyframe.empty()) continue;
     const std::string key = a.name + "_" + a.keyframe;
@@ -95,14 +130,19 @@ CompiledScene BuildScene(const SceneConfig& scene) {
 }
 
 CompiledScene BuildModel(const std::string& mjcf_path) {
-  document::Document doc = mjcf::ReadFile(mjcf_path);
+  mjcf::BridgeReport report;
+  document::Document doc = ReadBridged(mjcf_path, "", &report);
   CompiledScene out;
   out.diagnostics = doc.diagnostics();
   out.model = CompileDocument(doc, &out.xml, nullptr);
+  std::vector<physics::SoftwareSensorSpec> software;
+  AddSoftwareSensors(report, "", &software);
+  out.software_sensors = physics::RegisterSoftwareSensors(out.model.get(), software);
+  NoteBridge(report, "", &out.bridge_report);
   return out;
 }
 
-ValidationReport Validate(const std::string& path) {
+ValidationReport Validate(const std::string& path, bool bridge_report) {
   ValidationReport report;
   std::vector<std::string> mjcf_files;
   SceneConfig scene;
@@ -128,9 +168,22 @@ ValidationReport Validate(const std::string& path) {
       for (const auto& d : doc.diagnostics()) {
         report.warnings.push_back(label + d.where.str() + ": " + d.message);
       }
-      for (auto* finder : {&mjcf::FindDuplicateNames, &mjcf::FindDanglingReferences,
-                           &mjcf::FindMissingFiles}) {
+      for (auto* finder : {&mjcf::FindDuplicateNames, &mjcf::FindMissingFiles}) {
         for (const InputError& e : finder(doc)) report.errors.push_back(label + e.what());
+      }
+      mjcf::BridgeOptions list_all;
+      list_all.throw_on_refusal = false;
+      const mjcf::BridgeReport bridged = mjcf::ApplyBridge(doc, list_all);
+      for (const InputError& e : bridged.Refusals()) report.errors.push_back(label + e.what());
+      if (bridge_report) {
+        for (const mjcf::BridgeChange& c : bridged.changes) {
+          report.bridge.push_back(label + c.where.str() + ": " +
+                                  mjcf::BridgeKindName(c.kind) + ": " + c.what);
+        }
+      }
+      // References are checked after the bridge (3.x names such as frames are flattened).
+      for (const InputError& e : mjcf::FindDanglingReferences(doc)) {
+        report.errors.push_back(label + e.what());
       }
     } catch (const Error& e) {
       report.errors.push_back(label + e.what());

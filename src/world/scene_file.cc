@@ -168,7 +168,7 @@ class Parser {
   ArticulationConfig Articulation(const YAML::Node& n) const {
     CheckKeys(n, "articulation",
               {"name", "mjcf", "pos", "quat", "euler", "axisangle", "options", "control_source",
-               "controller", "keyframe", "hold_keyframe"});
+               "controller", "keyframe", "hold_keyframe", "include_world"});
     ArticulationConfig a;
     a.where = At(n);
     if (!n["name"]) Fail(n, "an articulation needs a name");
@@ -211,6 +211,7 @@ class Parser {
     if (n["controller"]) a.controller = Controller(n["controller"]);
     if (n["keyframe"]) a.keyframe = String(n["keyframe"], "keyframe");
     if (n["hold_keyframe"]) a.hold_keyframe = Bool(n["hold_keyframe"], "hold_keyframe");
+    if (n["include_world"]) a.include_world = Bool(n["include_world"], "include_world");
     return a;
   }
 
@@ -219,7 +220,7 @@ class Parser {
     s.path = path_;
     if (!root || root.IsNull()) throw InputError({path_, 0}, "the scene file is empty");
     CheckKeys(root, "the scene",
-              {"articulations", "options", "control_source", "network", "save_debug_xml"});
+              {"articulations", "options", "size", "control_source", "network", "save_debug_xml"});
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {
       Fail(arts ? arts : root, "the scene needs a non-empty list 'articulations'");
@@ -232,6 +233,13 @@ class Parser {
       }
     }
     if (root["options"]) s.options = Options(root["options"], "options");
+    if (const auto n = root["size"]) {
+      CheckKeys(n, "size", {"njmax", "nconmax", "nstack", "nuserdata"});
+      for (const auto& kv : n) {
+        s.size[kv.first.as<std::string>()] =
+            std::to_string(static_cast<long long>(Number(kv.second, "size")));
+      }
+    }
     if (root["control_source"]) s.control_source = Source(root["control_source"]);
     if (const auto n = root["network"]) {
       CheckKeys(n, "network", {"enabled", "state", "control", "info", "camera_base_port"});

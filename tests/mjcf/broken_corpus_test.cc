@@ -50,6 +50,11 @@ std::string Lower(std::string s) {
 std::optional<std::pair<SourceLocation, std::string>> Pipeline(const std::string& path) {
   try {
     document::Document doc = mjcf::ReadFile(path);
+    // Unknown attributes are kept (and MuJoCo then rejects them): the reader's diagnostic is the
+    // clearer report.
+    if (!doc.diagnostics().empty()) {
+      return std::make_pair(doc.diagnostics()[0].where, doc.diagnostics()[0].message);
+    }
     mjcf::LineMap map;
     const std::string xml = mjcf::WriteString(doc, {}, &map);
     try {
@@ -65,10 +70,6 @@ std::optional<std::pair<SourceLocation, std::string>> Pipeline(const std::string
         if (l > 0 && l <= map.size() && map[l - 1]) where = map[l - 1]->location();
       }
       return std::make_pair(where, mjcf::ExplainCompileMessage(msg, map));
-    }
-    // Unknown attributes are kept (and MuJoCo rejects them); also report diagnostics.
-    if (!doc.diagnostics().empty()) {
-      return std::make_pair(doc.diagnostics()[0].where, doc.diagnostics()[0].message);
     }
   } catch (const InputError& e) {
     return std::make_pair(e.where(), std::string(e.what()));

@@ -4,10 +4,10 @@
 #include <filesystem>
 
 #include "mujoco_test.h"
-#include "trajectory.h"
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
 #include "urlab/physics/model.h"
+#include "urlab/physics/trajectory_compare.h"
 
 namespace urlab {
 namespace {
@@ -61,8 +61,8 @@ TEST_P(RoundTripTest, BitIdenticalTrajectoryFromAnotherDirectory) {
   fs::current_path(old_cwd);
   EXPECT_EQ(TakeWarnings(), original_warnings);
 
-  EXPECT_EQ(testing::CompareSizes(original.get(), reloaded.get()), "") << path;
-  EXPECT_EQ(testing::CompareTrajectories(original.get(), reloaded.get(), 1000), "") << path;
+  EXPECT_EQ(physics::CompareSizes(original.get(), reloaded.get()), "") << path;
+  EXPECT_EQ(physics::CompareTrajectories(original.get(), reloaded.get(), 1000), "") << path;
 }
 
 std::string TestName(const ::testing::TestParamInfo<std::string>& info) {

@@ -21,7 +21,8 @@
 // A second table (grammar_dialect_table.cc) holds what MJCF written for MuJoCo 3.x adds and the
 // dialect bridge (mjcf/bridge.h) translates: its rows are marked `dialect`, and a row whose id
 // starts with '+' extends the 2.2.2 row of that id with more children and attributes (also
-// marked `dialect`). The writer never emits dialect elements or attributes that the bridge has
+// marked `dialect`); naming an attribute the row already has adds keywords to it (listed in
+// `dialect_keywords`). The writer never emits dialect elements or attributes that the bridge has
 // not translated: compiling such a document fails with a clear message instead.
 //
 // Thread: immutable after first use; any thread may read.
@@ -84,6 +85,7 @@ struct AttributeSpec {
   std::string ref_selector;          // sibling attribute choosing the namespace (objtype, ...)
   std::vector<std::string> keywords;
   bool dialect = false;  // MuJoCo 3.x only: the bridge must translate it
+  std::vector<std::string> dialect_keywords;  // 3.x-only values of a 2.2.2 attribute
 
   bool IsReference() const { return ref != Namespace::kNone || !ref_selector.empty(); }
 };

@@ -38,6 +38,8 @@ struct ArticulationInput {
   // <option> attributes of this articulation (all written to its options), e.g. {"timestep",
   // "0.002"}; applied over the MJCF's own <option>.
   std::map<std::string, std::string> options;
+  // false: drop the elements attached directly to the world body, other than bodies.
+  bool include_world = true;
 };
 
 // A keyframe of one articulation, kept for ApplyArticulationKeyframes.

@@ -35,8 +35,10 @@ struct SoftwareSensorSpec {
 class SoftwareSensorRegistration {
  public:
   SoftwareSensorRegistration() = default;
-  explicit SoftwareSensorRegistration(const mjModel* m) : model_(m) {}
-  SoftwareSensorRegistration(SoftwareSensorRegistration&& o) noexcept : model_(o.model_) {
+  SoftwareSensorRegistration(const mjModel* m, unsigned long generation)
+      : model_(m), generation_(generation) {}
+  SoftwareSensorRegistration(SoftwareSensorRegistration&& o) noexcept
+      : model_(o.model_), generation_(o.generation_) {
     o.model_ = nullptr;
   }
   SoftwareSensorRegistration& operator=(SoftwareSensorRegistration&& o) noexcept;
@@ -48,6 +50,7 @@ class SoftwareSensorRegistration {
 
  private:
   const mjModel* model_ = nullptr;
+  unsigned long generation_ = 0;  // a newer registration of the same model is left alone
 };
 
 // Registers the sensors of `m` named in `specs` (replacing an earlier registration of `m`) and

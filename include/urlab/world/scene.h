@@ -9,12 +9,17 @@
 #include "urlab/document/document.h"
 #include "urlab/mjcf/compose.h"
 #include "urlab/physics/model.h"
+#include "urlab/physics/software_sensors.h"
 #include "urlab/world/scene_file.h"
 
 namespace urlab::world {
 
 struct CompiledScene {
   physics::ModelPtr model;
+  // Sensors 2.2.2 lacks (3.x jointactuatorfrc/tendonactuatorfrc), computed by the runtime; kept
+  // registered while this lives (declared after `model`, so it is released first).
+  physics::SoftwareSensorRegistration software_sensors;
+  std::string bridge_report;  // what the dialect bridge changed ("" when nothing)
   std::vector<mjcf::ArticulationLayout> articulations;
   std::vector<document::Diagnostic> diagnostics;  // warnings worth showing the user
   std::string xml;                                // the composed MJCF MuJoCo compiled
@@ -35,7 +40,9 @@ struct ValidationReport {
   std::vector<std::string> errors;
   std::vector<std::string> warnings;
   std::vector<std::string> sizes;  // "nq 28" ... when it compiled
+  std::vector<std::string> bridge;  // dialect bridge changes, when asked for
 };
-ValidationReport Validate(const std::string& path);
+// With `bridge_report`, lists every change the MuJoCo 3.x dialect bridge makes (file and line).
+ValidationReport Validate(const std::string& path, bool bridge_report = false);
 
 }  // namespace urlab::world

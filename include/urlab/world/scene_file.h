@@ -9,11 +9,13 @@
 #include <string>
 #include <vector>
 
+#include "urlab/control/controller.h"
 #include "urlab/core/error.h"
 
 namespace urlab::world {
 
-enum class ControlSource { kNetwork, kUi };
+// Who drives an articulation's actuators (the control layer's enum).
+using control::ControlSource;
 
 struct PdGains {
   std::optional<double> kp, kv, torque_limit;
@@ -45,6 +47,9 @@ struct ArticulationConfig {
   std::optional<ControlSource> control_source;  // overrides the scene's
   ControllerConfig controller;
   std::string keyframe;  // initial keyframe ("" = none)
+  // false drops what the MJCF attaches directly to its world body other than bodies (a floor,
+  // lights, world cameras): for composing many copies of a model that brings its own floor.
+  bool include_world = true;
   bool hold_keyframe = false;
   SourceLocation where;
 };
@@ -61,6 +66,7 @@ struct SceneConfig {
   std::string path;  // the scene file
   std::vector<ArticulationConfig> articulations;
   std::map<std::string, std::string> options;  // manager overrides: only the fields set
+  std::map<std::string, std::string> size;     // <size> attributes (nconmax, njmax, nstack...)
   ControlSource control_source = ControlSource::kNetwork;
   NetworkConfig network;
   std::string save_debug_xml;  // folder for scene_compiled.xml/.mjb ("" = off)

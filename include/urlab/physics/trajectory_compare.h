@@ -1,10 +1,11 @@
 #pragma once
-// Helpers comparing compiled models and their trajectories bit for bit.
+// Comparing two compiled models and their trajectories bit for bit (round-trip and determinism
+// checks). Thread: any; each call owns its own mjData.
 #include <mujoco/mujoco.h>
 
 #include <string>
 
-namespace urlab::testing {
+namespace urlab::physics {
 
 // "" when the two models have the same sizes, else a description of the first difference.
 std::string CompareSizes(const mjModel* a, const mjModel* b);
@@ -13,4 +14,4 @@ std::string CompareSizes(const mjModel* a, const mjModel* b);
 // returns "" when qpos and qvel are bit-identical after every step, else where they first differ.
 std::string CompareTrajectories(const mjModel* a, const mjModel* b, int steps);
 
-}  // namespace urlab::testing
+}  // namespace urlab::physics

@@ -1,9 +1,9 @@
-#include "trajectory.h"
+#include "urlab/physics/trajectory_compare.h"
 
 #include <cstring>
 #include <memory>
 
-namespace urlab::testing {
+namespace urlab::physics {
 
 std::string CompareSizes(const mjModel* a, const mjModel* b) {
 #define URLAB_CMP(field) \
@@ -35,4 +35,4 @@ std::string CompareTrajectories(const mjModel* a, const mjModel* b, int steps) {
   return "";
 }
 
-}  // namespace urlab::testing
+}  // namespace urlab::physics

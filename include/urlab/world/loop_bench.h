@@ -1,0 +1,44 @@
+#pragma once
+// Loop overhead benchmark shared by bench/bench_loop and `urlab bench loop`: the full physics
+// loop (PhysicsEngine thread, an articulation's controller, one pre-step and one post-step
+// callback, as fast as possible) against a bare mj_step loop on the same model, in one process.
+// Trials alternate and start from the same reset state; the bare loop replays the controls the
+// full loop computed, so both integrate the very same trajectory through the same contacts.
+// Thread: main (it starts and stops its own physics thread).
+#include <mujoco/mujoco.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "urlab/control/articulation_control.h"
+
+namespace urlab::world {
+
+struct LoopBenchOptions {
+  int steps = 20000;  // steps per trial
+  int trials = 9;
+  // The articulation driven by the loop: its actuators are those whose names start with this.
+  std::string prefix;
+  // Installs the controller and targets on the articulation (bound to model `m`). Default: a PD
+  // controller (kp 20, kv 2, torque limit 100) on every actuator, then SetBenchTargets.
+  std::function<void(const mjModel* m, control::ArticulationControl&)> setup;
+  // Receives the report lines (model line, one per trial, medians); empty: silent.
+  std::function<void(const std::string&)> report;
+};
+
+struct LoopBenchResult {
+  int nq = 0, nu = 0;
+  bool identical = false;  // the bare loop reproduced the full loop's trajectory
+  std::vector<double> bare_rates, loop_rates;  // steps per second, per trial
+  double ratio = 0;                            // best full-loop rate / best bare rate
+  double median_ratio = 0;                     // median full-loop rate / median bare rate
+};
+
+// Small alternating targets (0.1 * ((i % 3) - 1)) on every actuator, network source.
+void SetBenchTargets(control::ArticulationControl& articulation);
+
+// Runs the benchmark on copies of `model`. Throws Error for steps or trials < 1.
+LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& options);
+
+}  // namespace urlab::world

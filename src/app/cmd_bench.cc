@@ -1,0 +1,67 @@
+// `urlab bench`: benchmarks that print a ratio against a baseline measured in the same process.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+
+#include "app/commands.h"
+#include "urlab/world/controller_factory.h"
+#include "urlab/world/loop_bench.h"
+#include "urlab/world/manager.h"
+#include "urlab/world/scene.h"
+
+namespace urlab::app {
+
+namespace {
+
+struct BenchLoopArgs {
+  std::string scene;
+  int steps = 20000;
+  int trials = 5;
+};
+
+int BenchLoop(const BenchLoopArgs& args) {
+  world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
+  scene.articulations.resize(1);  // the first articulation only
+  scene.save_debug_xml.clear();
+  world::ArticulationConfig art = scene.articulations.front();
+  if (art.controller.type == "none") art.controller.type = "pd";
+  const world::CompiledScene compiled = world::BuildScene(scene);
+
+  world::LoopBenchOptions options;
+  options.steps = args.steps;
+  options.trials = args.trials;
+  options.prefix = compiled.articulations.front().prefix;
+  options.setup = [&art](const mjModel* m, control::ArticulationControl& control) {
+    world::InstallController(art, control, m);
+    world::SetBenchTargets(control);
+  };
+  options.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
+  std::printf("scene %s: articulation '%s', controller %s\n", scene.path.c_str(), art.name.c_str(),
+              art.controller.type.c_str());
+  const world::LoopBenchResult r = world::RunLoopBench(compiled.model.get(), options);
+  std::printf("ratio=%.4f\n", r.ratio);
+  std::fflush(stdout);
+  return 0;
+}
+
+}  // namespace
+
+void RegisterBenchCommand(CLI::App& app, int& exit_code) {
+  CLI::App* bench =
+      app.add_subcommand("bench", "Benchmarks against a baseline in the same process.");
+  bench->require_subcommand(1);
+  CLI::App* loop = bench->add_subcommand(
+      "loop",
+      "Step rate of the full physics loop (physics thread, the scene's first articulation with "
+      "its controller (PD if none), one pre- and one post-step callback, as fast as possible) "
+      "divided by a bare mj_step loop on the same model; prints ratio=<value> last.");
+  static BenchLoopArgs args;
+  loop->add_option("SCENE", args.scene, "scene file (.yaml) or MJCF model (.xml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  loop->add_option("--steps", args.steps, "steps per trial")->check(CLI::Range(2, 100000000));
+  loop->add_option("--trials", args.trials, "trials per loop (best of)")
+      ->check(CLI::Range(1, 1000));
+  loop->callback([&exit_code] { exit_code = BenchLoop(args); });
+}
+
+}  // namespace urlab::app

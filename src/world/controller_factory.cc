@@ -1,0 +1,82 @@
+#include "urlab/world/controller_factory.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace urlab::world {
+
+namespace {
+
+// Short (unprefixed) name of an element, "" when unnamed or outside the prefix.
+std::string ShortName(const mjModel* m, mjtObj type, int id, const std::string& prefix) {
+  const char* name = id >= 0 ? mj_id2name(m, type, id) : nullptr;
+  if (!name) return "";
+  const std::string_view full(name);
+  return full.starts_with(prefix) ? std::string(full.substr(prefix.size())) : "";
+}
+
+// Applies the per-joint/actuator gains of `config` over the controller's defaults.
+void ApplyJointGains(const ArticulationConfig& config, const control::ArticulationControl& control,
+                     const mjModel* m, control::PdController& pd) {
+  const ControllerConfig& c = config.controller;
+  for (const auto& [key, gains] : c.gains) {
+    bool found = false;
+    for (std::size_t i = 0; i < pd.bindings().size(); ++i) {
+      const control::ActuatorBinding& b = pd.bindings()[i];
+      if (ShortName(m, mjOBJ_ACTUATOR, b.actuator_id, control.prefix()) != key &&
+          ShortName(m, mjOBJ_JOINT, b.joint_id, control.prefix()) != key) {
+        continue;
+      }
+      pd.SetGains(static_cast<int>(i), MergeGains(pd.default_gains(), gains));
+      found = true;
+    }
+    if (!found) {
+      throw InputError(c.where, config.name +
+                                    ": controller gains: no actuated joint or actuator '" + key +
+                                    "' in " + config.mjcf);
+    }
+  }
+}
+
+}  // namespace
+
+control::PdGains MergeGains(const control::PdGains& base, const PdGains& config) {
+  control::PdGains g = base;
+  if (config.kp) g.kp = *config.kp;
+  if (config.kv) g.kv = *config.kv;
+  if (config.torque_limit) g.torque_limit = *config.torque_limit;
+  return g;
+}
+
+void InstallController(const ArticulationConfig& config, control::ArticulationControl& control,
+                       const mjModel* m) {
+  const ControllerConfig& c = config.controller;
+  const control::PdGains defaults = MergeGains(control::PdGains{}, c.defaults);
+  if (c.type == "none" || c.type == "passthrough") {
+    control.Use(std::make_unique<control::PassthroughController>());
+  } else if (c.type == "pd") {
+    auto& pd = control.Use(std::make_unique<control::PdController>(defaults));
+    ApplyJointGains(config, control, m, pd);
+  } else if (c.type == "keyframe") {
+    control::KeyframeController::Options options;
+    options.loop = c.loop;
+    options.autoplay = c.autoplay;
+    options.start_delay = c.start_delay;
+    auto& kf = control.Use(std::make_unique<control::KeyframeController>(options, defaults));
+    ApplyJointGains(config, control, m, kf);
+    for (const KeyframeStep& step : c.sequence) {
+      // Only this articulation's keyframes (an exact scene name could be another's).
+      const int key = mj_name2id(m, mjOBJ_KEY, (control.prefix() + step.keyframe).c_str());
+      if (key < 0) {
+        throw InputError(c.where, config.name + ": controller sequence: keyframe '" +
+                                      step.keyframe + "' is not in " + config.mjcf);
+      }
+      kf.AddPose(kf.PoseFromModelKey(m, key, step.blend, step.hold));
+    }
+  } else {
+    throw InputError(c.where, config.name + ": unknown controller type '" + c.type + "'");
+  }
+}
+
+}  // namespace urlab::world

@@ -1,0 +1,142 @@
+// `urlab run` and `urlab bench loop` end to end: the real binary on real scenes.
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "mujoco_test.h"
+
+extern char** environ;
+
+namespace urlab {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using testing::RunCommand;
+using testing::SourcePath;
+using testing::UrlabBinary;
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string LastLine(const std::string& text) {
+  std::string s = text;
+  while (!s.empty() && s.back() == '\n') s.pop_back();
+  const auto nl = s.rfind('\n');
+  return nl == std::string::npos ? s : s.substr(nl + 1);
+}
+
+TEST(RunTest, RunsASceneAndLogsTheRealTimeFactor) {
+  std::string out;
+  ASSERT_EQ(RunCommand(UrlabBinary() + " run " + SourcePath("examples/scenes/two_arms.yaml") +
+                           " --duration 1",
+                       &out),
+            0)
+      << out;
+  EXPECT_TRUE(std::regex_search(out, std::regex(R"(rtf=[0-9.]+ +steps/s=[0-9]+)"))) << out;
+  EXPECT_TRUE(std::regex_search(out, std::regex(R"(summary: sim_time=[0-9.]+ s steps=[0-9]+)")))
+      << out;
+}
+
+TEST(RunTest, RunsAPlainMjcfFileAtMaxSpeed) {
+  std::string out;
+  ASSERT_EQ(RunCommand(UrlabBinary() + " run " + SourcePath("examples/models/servo_arm.xml") +
+                           " --duration 0.3 --max-speed",
+                       &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("summary:"), std::string::npos) << out;
+}
+
+TEST(RunTest, SigtermStopsItCleanly) {
+  const std::string dir = testing::MakeTempDir("run_sigterm");
+  const std::string log = dir + "/out.txt";
+  const std::string cmd = "exec " + UrlabBinary() + " run " +
+                          SourcePath("examples/scenes/two_arms.yaml") + " > " + log + " 2>&1";
+  const char* argv[] = {"/bin/sh", "-c", cmd.c_str(), nullptr};
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ), 0);
+  // Wait until it plays.
+  const auto started = Clock::now();
+  while (ReadFile(log).find("playing") == std::string::npos) {
+    ASSERT_LT(Clock::now() - started, std::chrono::seconds(30)) << ReadFile(log);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ASSERT_EQ(kill(pid, SIGTERM), 0);
+  const auto signalled = Clock::now();
+  int status = 0;
+  while (waitpid(pid, &status, WNOHANG) == 0) {
+    if (Clock::now() - signalled > std::chrono::seconds(5)) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      FAIL() << "urlab run did not stop within 5 s of SIGTERM\n" << ReadFile(log);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(WIFEXITED(status)) << ReadFile(log);
+  EXPECT_EQ(WEXITSTATUS(status), 0) << ReadFile(log);
+  EXPECT_LT(Clock::now() - signalled, std::chrono::seconds(2));
+  const std::string out = ReadFile(log);
+  EXPECT_NE(out.find("summary:"), std::string::npos) << out;
+  EXPECT_NE(out.find("stopped by signal"), std::string::npos) << out;
+}
+
+TEST(RunTest, BadSceneExitsNonZeroNamingFileAndLine) {
+  const std::string dir = testing::MakeTempDir("run_bad");
+  const std::string scene = dir + "/bad.yaml";
+  std::ofstream(scene) << "articulations:\n  - name: a\n    mjcf: "
+                       << SourcePath("examples/models/servo_arm.xml") << "\n    colour: red\n";
+  std::string out;
+  EXPECT_NE(RunCommand(UrlabBinary() + " run " + scene + " --duration 1", &out), 0) << out;
+  EXPECT_NE(out.find(scene + ":4:"), std::string::npos) << out;
+  EXPECT_NE(out.find("unknown key 'colour'"), std::string::npos) << out;
+}
+
+TEST(RunTest, SpeedIsValidated) {
+  const std::string scene = SourcePath("examples/scenes/two_arms.yaml");
+  std::string out;
+  EXPECT_NE(RunCommand(UrlabBinary() + " run " + scene + " --speed 3 --duration 0.1", &out), 0)
+      << out;
+  EXPECT_NE(out.find("--speed"), std::string::npos) << out;
+  EXPECT_NE(RunCommand(UrlabBinary() + " run " + scene + " --speed 101 --duration 0.1", &out), 0);
+  EXPECT_NE(RunCommand(UrlabBinary() + " run " + scene + " --speed 50 --max-speed", &out), 0);
+  ASSERT_EQ(RunCommand(UrlabBinary() + " run " + scene + " --speed 5 --duration 0.2", &out), 0)
+      << out;
+}
+
+TEST(RunTest, BenchLoopPrintsTheRatioLast) {
+  std::string out;
+  ASSERT_EQ(
+      RunCommand(UrlabBinary() + " bench loop " + SourcePath("examples/scenes/humanoid_pd.yaml") +
+                     " --steps 2000 --trials 2",
+                 &out),
+      0)
+      << out;
+  const std::string last = LastLine(out);
+  EXPECT_TRUE(std::regex_match(last, std::regex(R"(^ratio=[0-9.]+$)"))) << out;
+  EXPECT_NE(out.find("trajectories identical"), std::string::npos) << out;
+}
+
+TEST(RunTest, RunAndBenchHaveHelp) {
+  for (const char* sub : {"run", "bench", "bench loop"}) {
+    std::string out;
+    EXPECT_EQ(RunCommand(UrlabBinary() + " " + sub + " --help", &out), 0) << sub << out;
+    EXPECT_NE(out.find("Usage:"), std::string::npos) << sub;
+  }
+}
+
+}  // namespace
+}  // namespace urlab

@@ -1,0 +1,725 @@
+// The dialect bridge: MJCF written for MuJoCo 3.x, rewritten for MuJoCo 2.2.2. Every translation
+// is checked by what it does in simulation (or in the compiled model), not by the text written.
+#include "urlab/mjcf/bridge.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "mujoco_test.h"
+#include "urlab/document/grammar.h"
+#include "urlab/mjcf/reader.h"
+#include "urlab/mjcf/writer.h"
+#include "urlab/physics/model.h"
+#include "urlab/physics/software_sensors.h"
+
+namespace urlab {
+namespace {
+
+namespace fs = std::filesystem;
+using mjcf::BridgeChange;
+using Kind = BridgeChange::Kind;
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct Bridged {
+  document::Document doc;
+  mjcf::BridgeReport report;
+  physics::ModelPtr model;
+  physics::DataPtr data;
+};
+
+class BridgeTest : public testing::MujocoTest {
+ protected:
+  void SetUp() override { dir_ = testing::MakeTempDir("bridge"); }
+
+  std::string Write(const std::string& rel, const std::string& text) {
+    const fs::path p = fs::path(dir_) / rel;
+    fs::create_directories(p.parent_path());
+    std::ofstream(p) << text;
+    return p.string();
+  }
+
+  // Reads, bridges, writes and compiles `path`.
+  Bridged LoadFile(const std::string& path) {
+    Bridged b{mjcf::ReadFile(path), {}, nullptr, nullptr};
+    b.report = mjcf::ApplyBridge(b.doc);
+    mjcf::LineMap lines;
+    const std::string xml = mjcf::WriteString(b.doc, {}, &lines);
+    try {
+      b.model = physics::CompileXmlString(xml);
+    } catch (const physics::CompileError& e) {
+      ADD_FAILURE() << mjcf::ExplainCompileMessage(e.what(), lines) << "\n" << xml;
+      throw;
+    }
+    b.data = physics::MakeData(b.model.get());
+    return b;
+  }
+  Bridged Load(const std::string& xml) { return LoadFile(Write("m.xml", xml)); }
+
+  // The report of a document whose bridge refuses something (refusals not thrown).
+  mjcf::BridgeReport ReportOf(const std::string& xml) {
+    document::Document doc = mjcf::ReadFile(Write("r.xml", xml));
+    mjcf::BridgeOptions o;
+    o.throw_on_refusal = false;
+    return mjcf::ApplyBridge(doc, o);
+  }
+
+  static int Count(const mjcf::BridgeReport& r, Kind k) {
+    int n = 0;
+    for (const BridgeChange& c : r.changes) n += c.kind == k;
+    return n;
+  }
+  static bool Mentions(const mjcf::BridgeReport& r, Kind k, const std::string& text) {
+    for (const BridgeChange& c : r.changes) {
+      if (c.kind == k && c.what.find(text) != std::string::npos) return true;
+    }
+    return false;
+  }
+
+  static int Id(const mjModel* m, mjtObj type, const char* name) {
+    const int id = mj_name2id(m, type, name);
+    EXPECT_GE(id, 0) << name;
+    return id;
+  }
+
+  std::string dir_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Grammar: the dialect table extends rows that exist (Grammar throws otherwise).
+
+TEST(BridgeGrammarTest, DialectRowsExtendExistingRows) {
+  const document::Grammar& g = document::Grammar::Get();
+  for (const document::GrammarRow& r : document::DialectGrammarTable()) {
+    if (r.id[0] == '+') {
+      EXPECT_NE(g.Find(r.id + 1), nullptr) << r.id;
+    }
+  }
+  const document::ElementSpec* joint = g.Find("joint");
+  ASSERT_NE(joint, nullptr);
+  const document::AttributeSpec* a = joint->FindAttribute("actuatorfrcrange");
+  ASSERT_NE(a, nullptr);
+  EXPECT_TRUE(a->dialect);
+  ASSERT_NE(joint->FindAttribute("range"), nullptr);
+  EXPECT_FALSE(joint->FindAttribute("range")->dialect);
+}
+
+// ---------------------------------------------------------------------------------------------
+// No-op on 2.2.2 documents.
+
+TEST_F(BridgeTest, PlainMujoco222DocumentsAreUntouched) {
+  int checked = 0;
+  for (const char* dir : {"/usr/share/mujoco/model", URLAB_TEST_DATA_DIR "/mjcf/corpus"}) {
+    if (!fs::is_directory(dir)) continue;
+    for (const auto& e : fs::recursive_directory_iterator(dir)) {
+      if (e.path().extension() != ".xml") continue;
+      document::Document doc;
+      try {
+        doc = mjcf::ReadFile(e.path().string());
+      } catch (const InputError&) {
+        continue;  // included fragments
+      }
+      const std::string before = mjcf::WriteString(doc);
+      const mjcf::BridgeReport report = mjcf::ApplyBridge(doc);
+      EXPECT_FALSE(report.dialect) << e.path() << "\n" << report.Format();
+      EXPECT_TRUE(report.changes.empty()) << e.path();
+      EXPECT_EQ(mjcf::WriteString(doc), before) << e.path();
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 10);
+}
+
+TEST_F(BridgeTest, UnknownAttributesStayVerbatimWithDiagnostic) {
+  document::Document doc = mjcf::ReadFile(Write("u.xml", R"(<mujoco>
+  <worldbody>
+    <body><joint name="j" notanattribute="1"/><geom size="1"/></body>
+  </worldbody>
+</mujoco>)"));
+  ASSERT_EQ(doc.diagnostics().size(), 1u);
+  const mjcf::BridgeReport report = mjcf::ApplyBridge(doc);
+  EXPECT_FALSE(report.dialect);
+  EXPECT_NE(mjcf::WriteString(doc).find("notanattribute=\"1\""), std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------------
+// autolimits
+
+TEST_F(BridgeTest, RangeWithoutLimitedGetsThe3xAutolimitsDefault) {
+  Bridged b = Load(R"(<mujoco>
+  <worldbody>
+    <body pos="0 0 1">
+      <joint name="j" axis="0 1 0" range="-10 10"/>
+      <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.02"/>
+    </body>
+  </worldbody>
+</mujoco>)");
+  EXPECT_TRUE(b.report.dialect);
+  EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "autolimits"));
+  const mjModel* m = b.model.get();
+  EXPECT_EQ(m->jnt_limited[0], 1);
+  // The pendulum falls under gravity; the limit holds it near 10 degrees.
+  for (int i = 0; i < 2000; ++i) mj_step(m, b.data.get());
+  EXPECT_LT(std::abs(b.data->qpos[0]), 10 * kPi / 180 + 0.02);
+  EXPECT_GT(std::abs(b.data->qpos[0]), 10 * kPi / 180 - 0.05);
+}
+
+TEST_F(BridgeTest, ExplicitAutolimitsIsKept) {
+  Bridged b = Load(R"(<mujoco>
+  <compiler autolimits="false"/>
+  <worldbody>
+    <body><joint name="j" limited="true" range="-1 1" actuatorfrclimited="false"/><geom size="1"/></body>
+  </worldbody>
+</mujoco>)");
+  EXPECT_FALSE(Mentions(b.report, Kind::kTranslated, "autolimits"));
+  EXPECT_TRUE(Mentions(b.report, Kind::kDropped, "actuator force clamp disabled"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// actuatorfrcrange
+
+constexpr const char* kClampModel = R"(<mujoco>
+  <option gravity="0 0 0"/>
+  <worldbody>
+    <body>
+      <joint name="j" axis="0 0 1" actuatorfrcrange="-3 4"/>
+      <geom type="box" size="0.1 0.2 0.3"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor name="m" joint="j" gear="GEAR" ctrlrange="-100 100"/>
+  </actuator>
+</mujoco>)";
+
+std::string WithGear(const char* gear) {
+  std::string s = kClampModel;
+  s.replace(s.find("GEAR"), 4, gear);
+  return s;
+}
+
+TEST_F(BridgeTest, JointActuatorForceIsClampedInSimulation) {
+  for (const char* gear : {"2", "-0.5"}) {
+    SCOPED_TRACE(gear);
+    Bridged b = Load(WithGear(gear));
+    EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "actuatorfrcrange"));
+    const mjModel* m = b.model.get();
+    mjData* d = b.data.get();
+    for (double ctrl : {100.0, -100.0, 1.0}) {
+      d->ctrl[0] = ctrl;
+      mj_step(m, d);
+      const double g = m->actuator_gear[0];
+      const double expected = std::clamp(g * ctrl, -3.0, 4.0);
+      EXPECT_NEAR(d->qfrc_actuator[0], expected, 1e-12) << ctrl;
+    }
+  }
+}
+
+TEST_F(BridgeTest, ActuatorForceRangeFromDefaultClassIntersectsOwnForceRange) {
+  Bridged b = Load(R"(<mujoco>
+  <option gravity="0 0 0"/>
+  <default>
+    <default class="leg">
+      <joint actuatorfrcrange="-5 5"/>
+      <motor forcerange="-2 8" ctrlrange="-50 50"/>
+    </default>
+  </default>
+  <worldbody>
+    <body childclass="leg">
+      <joint name="a" axis="0 0 1"/>
+      <geom type="box" size="0.1 0.2 0.3"/>
+      <body pos="1 0 0">
+        <joint name="b" axis="0 0 1" class="leg"/>
+        <geom type="box" size="0.1 0.2 0.3"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor class="leg" name="ma" joint="a"/>
+    <motor class="leg" name="mb" joint="b" gear="2"/>
+  </actuator>
+</mujoco>)");
+  const mjModel* m = b.model.get();
+  mjData* d = b.data.get();
+  d->ctrl[0] = 50;
+  d->ctrl[1] = -50;
+  mj_forward(m, d);
+  EXPECT_NEAR(d->qfrc_actuator[m->jnt_dofadr[Id(m, mjOBJ_JOINT, "a")]], 5, 1e-12);
+  // gear 2: own range [-2, 8] gives [-4, 16] at the joint, joint range [-5, 5]: -4.
+  EXPECT_NEAR(d->qfrc_actuator[m->jnt_dofadr[Id(m, mjOBJ_JOINT, "b")]], -4, 1e-12);
+}
+
+TEST_F(BridgeTest, SharedJointClampIsRefusedUnlessNeverActive) {
+  const std::string shared = R"(<mujoco>
+  <worldbody>
+    <body><joint name="j" actuatorfrcrange="-1 1"/><geom size="1"/></body>
+  </worldbody>
+  <actuator>
+    <motor joint="j" FR1/>
+    <motor joint="j" FR2/>
+  </actuator>
+</mujoco>)";
+  auto with = [&](const char* a, const char* c) {
+    std::string s = shared;
+    s.replace(s.find("FR1"), 3, a);
+    s.replace(s.find("FR2"), 3, c);
+    return s;
+  };
+  const mjcf::BridgeReport refused = ReportOf(with("", ""));
+  EXPECT_TRUE(refused.HasRefusals());
+  ASSERT_EQ(refused.Refusals().size(), 1u);
+  EXPECT_EQ(refused.Refusals()[0].where().line, 3);
+  EXPECT_NE(refused.Refusals()[0].message().find("2 actuators"), std::string::npos);
+  // Both clamped to 0.4: the sum never leaves [-1, 1], so the clamp is dropped.
+  Bridged ok = Load(with(R"(forcerange="-0.4 0.4")", R"(forcerange="-0.4 0.4")"));
+  EXPECT_TRUE(Mentions(ok.report, Kind::kDropped, "never active"));
+  // Throwing form names file and line.
+  try {
+    document::Document doc = mjcf::ReadFile(Write("t.xml", with("", "")));
+    mjcf::ApplyBridge(doc);
+    ADD_FAILURE() << "no refusal";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where().line, 3);
+    EXPECT_NE(std::string(e.what()).find("t.xml:3"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(BridgeTest, TendonActuatorForceIsClampedAndSensed) {
+  Bridged b = Load(R"(<mujoco>
+  <option gravity="0 0 0"/>
+  <worldbody>
+    <body><joint name="a" type="slide" axis="1 0 0"/><geom size="0.1"/></body>
+    <body pos="0 1 0"><joint name="b" type="slide" axis="1 0 0"/><geom size="0.1"/></body>
+  </worldbody>
+  <tendon>
+    <fixed name="t" actuatorfrcrange="-2 3">
+      <joint joint="a" coef="1"/>
+      <joint joint="b" coef="-1"/>
+    </fixed>
+  </tendon>
+  <actuator>
+    <motor name="m" tendon="t" ctrlrange="-10 10"/>
+  </actuator>
+  <sensor>
+    <tendonactuatorfrc name="tf" tendon="t"/>
+  </sensor>
+</mujoco>)");
+  const mjModel* m = b.model.get();
+  mjData* d = b.data.get();
+  ASSERT_EQ(b.report.software_sensors.size(), 1u);
+  EXPECT_EQ(b.report.software_sensors[0].name, "tf");
+  const physics::SoftwareSensorSpec spec{"tf", physics::SoftwareSensorKind::kTendonActuatorForce};
+  physics::SoftwareSensorRegistration reg = physics::RegisterSoftwareSensors(m, {&spec, 1});
+  for (double ctrl : {10.0, -10.0, 1.5}) {
+    d->ctrl[0] = ctrl;
+    mj_step(m, d);
+    const double expected = std::clamp(ctrl, -2.0, 3.0);
+    EXPECT_NEAR(d->actuator_force[0], expected, 1e-12);
+    EXPECT_NEAR(d->qfrc_actuator[0], expected, 1e-12);
+    EXPECT_NEAR(d->qfrc_actuator[1], -expected, 1e-12);
+    EXPECT_NEAR(d->sensordata[m->sensor_adr[Id(m, mjOBJ_SENSOR, "tf")]], expected, 1e-12);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// jointactuatorfrc
+
+TEST_F(BridgeTest, JointActuatorForceSensorReadsTheJointsTotalActuatorForce) {
+  Bridged b = Load(R"(<mujoco>
+  <option gravity="0 0 0"/>
+  <worldbody>
+    <body><joint name="j" axis="0 0 1"/><geom type="box" size="0.1 0.2 0.3"/></body>
+  </worldbody>
+  <actuator>
+    <motor name="m1" joint="j" gear="2" ctrlrange="-1 1"/>
+    <motor name="m2" joint="j" gear="-3" ctrlrange="-1 1"/>
+  </actuator>
+  <sensor>
+    <jointactuatorfrc name="torque" joint="j" cutoff="4"/>
+    <jointactuatorfrc joint="j"/>
+  </sensor>
+</mujoco>)");
+  const mjModel* m = b.model.get();
+  mjData* d = b.data.get();
+  ASSERT_EQ(b.report.software_sensors.size(), 2u);
+  EXPECT_EQ(b.report.software_sensors[1].name, "jointactuatorfrc_j");
+  std::vector<physics::SoftwareSensorSpec> specs;
+  for (const mjcf::BridgedSensor& s : b.report.software_sensors) {
+    specs.push_back({s.name, physics::SoftwareSensorKind::kJointActuatorForce});
+  }
+  EXPECT_EQ(m->sensor_type[0], mjSENS_USER);
+  physics::SoftwareSensorRegistration reg = physics::RegisterSoftwareSensors(m, specs);
+  d->ctrl[0] = 1;
+  d->ctrl[1] = 0.5;
+  mj_step(m, d);
+  EXPECT_NEAR(d->qfrc_actuator[0], 2 - 1.5, 1e-12);
+  EXPECT_NEAR(d->sensordata[0], 0.5, 1e-12);
+  EXPECT_NEAR(d->sensordata[1], 0.5, 1e-12);
+  d->ctrl[1] = -1;  // 2 + 3 = 5, cut off at 4 for the first sensor
+  mj_step(m, d);
+  EXPECT_NEAR(d->sensordata[0], 4, 1e-12);
+  EXPECT_NEAR(d->sensordata[1], 5, 1e-12);
+}
+
+// ---------------------------------------------------------------------------------------------
+// <frame>
+
+// The example of the 3.x XML reference (frame section), with its stated result.
+TEST_F(BridgeTest, FrameFollowsTheReferenceExample) {
+  Bridged b = Load(R"(<mujoco>
+  <worldbody>
+    <frame quat="0 0 1 0">
+       <geom name="Alice" quat="0 1 0 0" size="1"/>
+    </frame>
+    <frame pos="0 1 0">
+      <geom name="Bob" pos="0 1 0" size="1"/>
+      <body name="Carl" pos="1 0 0">
+        <geom size="1"/>
+      </body>
+    </frame>
+  </worldbody>
+</mujoco>)");
+  const mjModel* m = b.model.get();
+  const int alice = Id(m, mjOBJ_GEOM, "Alice"), bob = Id(m, mjOBJ_GEOM, "Bob");
+  const int carl = Id(m, mjOBJ_BODY, "Carl");
+  // quat 0 0 0 1 (up to sign)
+  EXPECT_NEAR(std::abs(m->geom_quat[4 * alice + 3]), 1, 1e-12);
+  EXPECT_NEAR(m->geom_pos[3 * bob + 1], 2, 1e-12);
+  EXPECT_NEAR(m->body_pos[3 * carl + 0], 1, 1e-12);
+  EXPECT_NEAR(m->body_pos[3 * carl + 1], 1, 1e-12);
+  EXPECT_EQ(Count(b.report, Kind::kTranslated), 3);  // two frames + autolimits
+}
+
+// World poses of everything in frames.xml equal those of the same model written by hand
+// without frames (poses computed with MuJoCo's own quaternion functions).
+TEST_F(BridgeTest, FramesComposePosesClassesFromtoJointsCamerasAndLights) {
+  Bridged b = LoadFile(testing::TestData("mjcf/dialect3x/frames.xml"));
+  const mjModel* m = b.model.get();
+  mjData* d = b.data.get();
+  mj_forward(m, d);
+  // stage frame: pos (0.5 0 0), euler 90 0 0 with eulerseq zyx => 90 degrees about z.
+  const double s = std::sqrt(0.5);
+  const double qstage[4] = {s, 0, 0, s};
+  auto stage = [&](const double local[3], double out[3]) {
+    mju_rotVecQuat(out, local, qstage);
+    out[0] += 0.5;
+  };
+  // light: pos (0 0 2) -> (0.5 0 2); dir (1 0 -1) -> (0 1 -1) (normalised by MuJoCo)
+  const int lamp = Id(m, mjOBJ_LIGHT, "lamp");
+  EXPECT_NEAR(m->light_pos[3 * lamp + 0], 0.5, 1e-12);
+  EXPECT_NEAR(m->light_pos[3 * lamp + 2], 2, 1e-12);
+  EXPECT_NEAR(m->light_dir[3 * lamp + 0], 0, 1e-12);
+  EXPECT_NEAR(m->light_dir[3 * lamp + 1], s, 1e-12);
+  EXPECT_NEAR(m->light_dir[3 * lamp + 2], -s, 1e-12);
+  // camera pos (1 0 1) -> (0.5 1 1)
+  const int cam = Id(m, mjOBJ_CAMERA, "cam");
+  EXPECT_NEAR(m->cam_pos[3 * cam + 0], 0.5, 1e-12);
+  EXPECT_NEAR(m->cam_pos[3 * cam + 1], 1, 1e-12);
+  // camera x axis (0 1 0) in the frame -> (-1 0 0) in the world
+  EXPECT_NEAR(d->cam_xmat[9 * cam + 0], -1, 1e-9);
+  // fromto geom: from (0 0 0) to (0.3 0 0.3) -> midpoint (0.15 0 0.15) rotated and shifted
+  const int post = Id(m, mjOBJ_GEOM, "post");
+  double mid[3] = {0.15, 0, 0.15}, want[3];
+  stage(mid, want);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(d->geom_xpos[3 * post + i], want[i], 1e-12);
+  // pendulum body: inner frame pos (0 .2 0) euler (0 0 30) zyx (30 deg about x); body pos (0 0 1)
+  const double c30 = std::cos(kPi / 12), s30 = std::sin(kPi / 12);
+  const double qinner[4] = {c30, s30, 0, 0};
+  double local[3] = {0, 0, 1}, inner[3], world[3];
+  mju_rotVecQuat(inner, local, qinner);
+  inner[1] += 0.2;
+  stage(inner, world);
+  const int pend = Id(m, mjOBJ_BODY, "pendulum");
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(d->xpos[3 * pend + i], world[i], 1e-12);
+  double qworld[4];
+  mju_mulQuat(qworld, qstage, qinner);
+  double dot = 0;
+  for (int i = 0; i < 4; ++i) dot += qworld[i] * d->xquat[4 * pend + i];
+  EXPECT_NEAR(std::abs(dot), 1, 1e-12);
+  // childclass: the bob is red (class of the inner frame), the tip geom and tail geom blue.
+  const int bob = Id(m, mjOBJ_GEOM, "bob"), tip = Id(m, mjOBJ_GEOM, "tip_geom");
+  const int tail = Id(m, mjOBJ_GEOM, "tail_geom");
+  EXPECT_EQ(m->geom_rgba[4 * bob + 0], 1.0f);
+  EXPECT_EQ(m->geom_rgba[4 * tip + 2], 1.0f);
+  EXPECT_EQ(m->geom_rgba[4 * tail + 2], 1.0f);
+  EXPECT_NEAR(m->geom_size[3 * tail], 0.04, 1e-12);
+  EXPECT_NEAR(m->dof_damping[m->jnt_dofadr[Id(m, mjOBJ_JOINT, "swing")]], 0.2, 1e-12);
+  EXPECT_NEAR(m->site_size[3 * Id(m, mjOBJ_SITE, "tip")], 0.02, 1e-12);
+  // tip site: at the bob (0 0 -0.3 in the pendulum), frame rotated 90 degrees about x
+  const int tipsite = Id(m, mjOBJ_SITE, "tip");
+  EXPECT_NEAR(m->site_pos[3 * tipsite + 2], -0.3, 1e-12);
+  EXPECT_NEAR(std::abs(m->site_quat[4 * tipsite + 1]), s, 1e-12);
+  // joint in a frame inside a body: axis (0 0 1) turned by 90 degrees about y -> (1 0 0)
+  const int hinge = Id(m, mjOBJ_JOINT, "cart_hinge");
+  EXPECT_NEAR(m->jnt_axis[3 * hinge + 0], 1, 1e-6);
+  EXPECT_NEAR(m->jnt_pos[3 * hinge + 0], 0.1 + 0.05, 1e-6);
+}
+
+// ---------------------------------------------------------------------------------------------
+// position / intvelocity: kv, dampratio, timeconst, inheritrange
+
+TEST_F(BridgeTest, PositionKvDampsLikeThe3xBias) {
+  Bridged b = Load(R"(<mujoco>
+  <option gravity="0 0 0"/>
+  <default><default class="servo"><position kp="10" kv="2"/></default></default>
+  <worldbody>
+    <body><joint name="j" type="slide" axis="1 0 0"/><geom type="box" size="0.1 0.1 0.1"/></body>
+    <body pos="0 1 0"><joint name="k" type="slide" axis="1 0 0"/><geom type="box" size="0.1 0.1 0.1"/></body>
+  </worldbody>
+  <actuator>
+    <position name="p" class="servo" joint="j"/>
+    <position name="q" class="servo" joint="k" kv="0.5"/>
+  </actuator>
+</mujoco>)");
+  const mjModel* m = b.model.get();
+  mjData* d = b.data.get();
+  d->qpos[0] = 0.3;
+  d->qvel[0] = 1.5;
+  d->qvel[1] = -2;
+  d->ctrl[0] = 0.1;
+  mj_forward(m, d);
+  EXPECT_NEAR(d->actuator_force[0], 10 * (0.1 - 0.3) - 2 * 1.5, 1e-12);
+  EXPECT_NEAR(d->actuator_force[1], -0.5 * -2, 1e-12);
+}
+
+TEST_F(BridgeTest, DampRatioGivesCriticalDampingFromTheInertiaAtQpos0) {
+  Bridged b = Load(R"(<mujoco>
+  <option gravity="0 0 0"/>
+  <worldbody>
+    <body>
+      <joint name="j" type="slide" axis="1 0 0" armature="0.5"/>
+      <geom type="box" size="0.1 0.1 0.1" mass="1.5"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <position name="p" joint="j" kp="50" dampratio="1" gear="2"/>
+  </actuator>
+</mujoco>)");
+  const mjModel* m = b.model.get();
+  // mass at the actuator: (1.5 + 0.5) / gear^2 = 0.5; kv = 2 sqrt(50 * 0.5) = 10
+  EXPECT_NEAR(m->actuator_biasprm[2], -10, 1e-9);
+  EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "dampratio=1 -> kv=10"));
+  // Critically damped: released from an offset, it never overshoots the setpoint.
+  mjData* d = b.data.get();
+  d->qpos[0] = 0.2;
+  double min_q = 1;
+  for (int i = 0; i < 3000; ++i) {
+    mj_step(m, d);
+    min_q = std::min(min_q, d->qpos[0]);
+  }
+  EXPECT_GT(min_q, -1e-4);
+  EXPECT_LT(std::abs(d->qpos[0]), 1e-3);
+}
+
+TEST_F(BridgeTest, TimeconstFiltersExactlyLikeFilterexact) {
+  Bridged b = Load(R"(<mujoco>
+  <option gravity="0 0 0" timestep="0.005"/>
+  <worldbody>
+    <body><joint name="j" type="slide" axis="1 0 0"/><geom type="box" size="0.1 0.1 0.1"/></body>
+  </worldbody>
+  <actuator>
+    <position name="p" joint="j" kp="3" timeconst="0.02"/>
+  </actuator>
+</mujoco>)");
+  const mjModel* m = b.model.get();
+  mjData* d = b.data.get();
+  ASSERT_EQ(m->na, 1);
+  d->ctrl[0] = 1;
+  double act = 0;
+  for (int i = 0; i < 10; ++i) {
+    mj_step(m, d);
+    act += (1 - act) * (1 - std::exp(-0.005 / 0.02));  // MuJoCo 3.x filterexact
+    EXPECT_NEAR(d->act[0], act, 1e-12) << i;
+  }
+}
+
+TEST_F(BridgeTest, InheritRangeCopiesTheTargetRange) {
+  Bridged b = Load(R"(<mujoco>
+  <compiler angle="degree"/>
+  <worldbody>
+    <body>
+      <joint name="h" axis="0 0 1" range="-90 30"/>
+      <geom type="box" size="0.1 0.1 0.1"/>
+      <body pos="1 0 0">
+        <joint name="s" type="slide" axis="1 0 0" range="0 1"/>
+        <geom type="box" size="0.1 0.1 0.1"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <position name="p" joint="h" kp="5" inheritrange="1"/>
+    <position name="q" joint="s" kp="5" inheritrange="0.8"/>
+    <intvelocity name="v" joint="s" kp="5" inheritrange="1.2"/>
+  </actuator>
+</mujoco>)");
+  const mjModel* m = b.model.get();
+  EXPECT_EQ(m->actuator_ctrllimited[0], 1);
+  EXPECT_NEAR(m->actuator_ctrlrange[0], -kPi / 2, 1e-12);
+  EXPECT_NEAR(m->actuator_ctrlrange[1], kPi / 6, 1e-12);
+  EXPECT_NEAR(m->actuator_ctrlrange[2], 0.1, 1e-12);
+  EXPECT_NEAR(m->actuator_ctrlrange[3], 0.9, 1e-12);
+  EXPECT_EQ(m->actuator_actlimited[2], 1);
+  EXPECT_NEAR(m->actuator_actrange[4], -0.1, 1e-12);
+  EXPECT_NEAR(m->actuator_actrange[5], 1.1, 1e-12);
+}
+
+TEST_F(BridgeTest, ActuatorArmatureAndDampingMoveToTheJoint) {
+  Bridged b = Load(R"(<mujoco>
+  <worldbody>
+    <body>
+      <joint name="j" axis="0 0 1" armature="0.1" damping="1"/>
+      <geom type="box" size="0.1 0.1 0.1"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor joint="j" gear="3" armature="0.01" damping="0.2"/>
+    <motor joint="j" armature="0.05"/>
+  </actuator>
+</mujoco>)");
+  const mjModel* m = b.model.get();
+  EXPECT_NEAR(m->dof_armature[0], 0.1 + 0.01 * 9 + 0.05, 1e-12);
+  EXPECT_NEAR(m->dof_damping[0], 1 + 0.2 * 9, 1e-12);
+}
+
+TEST_F(BridgeTest, StatefulActuatorsAreMovedAfterStatelessOnes) {
+  Bridged b = Load(R"(<mujoco>
+  <worldbody>
+    <body><joint name="j" type="slide" axis="1 0 0" range="-1 1"/><geom size="0.1"/></body>
+  </worldbody>
+  <actuator>
+    <intvelocity name="iv" joint="j" actrange="-1 1"/>
+    <motor name="m" joint="j"/>
+  </actuator>
+</mujoco>)");
+  const mjModel* m = b.model.get();
+  EXPECT_EQ(mj_name2id(m, mjOBJ_ACTUATOR, "m"), 0);
+  EXPECT_EQ(mj_name2id(m, mjOBJ_ACTUATOR, "iv"), 1);
+  EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "ctrl/act indices"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// option, compiler, rendering attributes
+
+TEST_F(BridgeTest, SpringDamperFlagsBecomePassive) {
+  Bridged b = Load(R"(<mujoco>
+  <option><flag spring="disable" damper="disable"/></option>
+  <worldbody>
+    <body><joint name="j" axis="0 1 0" stiffness="10" damping="3"/><geom size="0.1" pos="0 0 -1"/></body>
+  </worldbody>
+</mujoco>)");
+  EXPECT_TRUE(b.model->opt.disableflags & mjDSBL_PASSIVE);
+  b.data->qvel[0] = 1;
+  b.data->qpos[0] = 0.5;
+  mj_forward(b.model.get(), b.data.get());
+  EXPECT_EQ(b.data->qfrc_passive[0], 0);
+  const mjcf::BridgeReport split = ReportOf(R"(<mujoco>
+  <option><flag spring="disable"/></option>
+</mujoco>)");
+  EXPECT_TRUE(Mentions(split, Kind::kRefused, "spring=\"disable\" damper=\"enable\""));
+}
+
+TEST_F(BridgeTest, OptionsMiscLoadsAndTranslatesWhatIsExact) {
+  Bridged b = LoadFile(testing::TestData("mjcf/dialect3x/options_misc.xml"));
+  const mjModel* m = b.model.get();
+  EXPECT_TRUE(m->opt.disableflags & mjDSBL_PASSIVE);
+  // focalpixel 800 px with 600 px over 3 mm: focal 4 mm; fovy = 2 atan(1.5 / 4)
+  const int eye = Id(m, mjOBJ_CAMERA, "eye");
+  EXPECT_NEAR(m->cam_fovy[eye], 2 * std::atan(1.5 / 4) * 180 / kPi, 1e-9);
+  EXPECT_EQ(m->light_directional[Id(m, mjOBJ_LIGHT, "top")], 1);
+  EXPECT_EQ(m->light_directional[Id(m, mjOBJ_LIGHT, "bulb")], 0);
+  EXPECT_TRUE(Mentions(b.report, Kind::kApproximated, "point light"));
+  EXPECT_TRUE(Mentions(b.report, Kind::kDropped, "metallic"));
+  EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "inteval"));
+  EXPECT_FALSE(b.report.HasRefusals());
+}
+
+TEST_F(BridgeTest, RefusalsAreAllListedWithLines) {
+  const mjcf::BridgeReport r = ReportOf(R"(<mujoco>
+  <worldbody>
+    <body gravcomp="1">
+      <joint name="j"/>
+      <geom size="0.1" surfacevel="1 0 0"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor joint="j" delay="0.01"/>
+  </actuator>
+  <sensor>
+    <e_kinetic name="ke"/>
+  </sensor>
+</mujoco>)");
+  std::vector<int> lines;
+  for (const InputError& e : r.Refusals()) lines.push_back(e.where().line);
+  EXPECT_EQ(lines, (std::vector<int>{3, 5, 9, 12})) << r.Format();
+  EXPECT_NE(r.Format().find("r.xml:3: refused: <body> gravcomp=\"1\""), std::string::npos)
+      << r.Format();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Corpus: every hand-written 3.x model loads, compiles without warnings and simulates.
+
+class DialectCorpusTest : public BridgeTest, public ::testing::WithParamInterface<std::string> {};
+
+TEST_P(DialectCorpusTest, LoadsCompilesAndSimulates) {
+  Bridged b = LoadFile(GetParam());
+  EXPECT_TRUE(b.report.dialect);
+  EXPECT_FALSE(b.report.HasRefusals()) << b.report.Format();
+  const mjModel* m = b.model.get();
+  mjData* d = b.data.get();
+  std::vector<physics::SoftwareSensorSpec> specs;
+  for (const mjcf::BridgedSensor& s : b.report.software_sensors) {
+    specs.push_back({s.name, s.kind == mjcf::BridgedSensor::Kind::kJointActuatorForce
+                                 ? physics::SoftwareSensorKind::kJointActuatorForce
+                                 : physics::SoftwareSensorKind::kTendonActuatorForce});
+  }
+  physics::SoftwareSensorRegistration reg = physics::RegisterSoftwareSensors(m, specs);
+  if (m->nkey > 0) mj_resetDataKeyframe(m, d, 0);
+  for (int i = 0; i < 500; ++i) {
+    for (int u = 0; u < m->nu; ++u) d->ctrl[u] = 0.3 * std::sin(0.01 * i + u);
+    mj_step(m, d);
+  }
+  for (int i = 0; i < m->nq; ++i) ASSERT_TRUE(std::isfinite(d->qpos[i])) << i;
+  for (int i = 0; i < m->nsensordata; ++i) ASSERT_TRUE(std::isfinite(d->sensordata[i])) << i;
+  // Software sensors read the engine's own numbers.
+  for (const physics::SoftwareSensorSpec& s : specs) {
+    if (s.kind != physics::SoftwareSensorKind::kJointActuatorForce) continue;
+    const int id = Id(m, mjOBJ_SENSOR, s.sensor_name.c_str());
+    const int dof = m->jnt_dofadr[m->sensor_objid[id]];
+    double expected = d->qfrc_actuator[dof];
+    if (m->sensor_cutoff[id] > 0) {
+      expected = std::clamp(expected, -m->sensor_cutoff[id], m->sensor_cutoff[id]);
+    }
+    EXPECT_NEAR(d->sensordata[m->sensor_adr[id]], expected, 1e-9) << s.sensor_name;
+  }
+}
+
+std::vector<std::string> CorpusFiles() {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(URLAB_TEST_DATA_DIR "/mjcf/dialect3x")) {
+    if (e.path().extension() == ".xml") out.push_back(e.path().string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string CorpusName(const ::testing::TestParamInfo<std::string>& p) {
+  return fs::path(p.param).stem().string();
+}
+
+INSTANTIATE_TEST_SUITE_P(Dialect3x, DialectCorpusTest, ::testing::ValuesIn(CorpusFiles()),
+                         CorpusName);
+
+// The quadruped's knees: motor ctrlrange 60, joint actuatorfrcrange 45.43 from the default class.
+TEST_F(BridgeTest, QuadrupedKneeTorqueIsClampedAtTheClassRange) {
+  Bridged b = LoadFile(testing::TestData("mjcf/dialect3x/go2_like.xml"));
+  const mjModel* m = b.model.get();
+  mjData* d = b.data.get();
+  for (int u = 0; u < m->nu; ++u) d->ctrl[u] = 60;
+  mj_forward(m, d);
+  const int knee = Id(m, mjOBJ_JOINT, "FL_calf_joint"), hip = Id(m, mjOBJ_JOINT, "FL_hip_joint");
+  EXPECT_NEAR(d->qfrc_actuator[m->jnt_dofadr[knee]], 45.43, 1e-12);
+  EXPECT_NEAR(d->qfrc_actuator[m->jnt_dofadr[hip]], 23.7, 1e-12);
+}
+
+}  // namespace
+}  // namespace urlab

@@ -1,0 +1,256 @@
+// Scene files and composition: many articulations in one model with prefixes and placements,
+// colliding names, per-articulation keyframes, option resolution, and errors that name the
+// articulation and element.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "mujoco_test.h"
+#include "urlab/physics/model.h"
+#include "urlab/world/scene.h"
+
+namespace urlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+class SceneTest : public testing::MujocoTest {
+ protected:
+  void SetUp() override { dir_ = testing::MakeTempDir("scene"); }
+  std::string Write(const std::string& rel, const std::string& text) {
+    const fs::path p = fs::path(dir_) / rel;
+    fs::create_directories(p.parent_path());
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  world::CompiledScene Build(const std::string& yaml) {
+    return world::BuildScene(world::ParseScene(yaml, dir_ + "/scene.yaml"));
+  }
+  std::string dir_;
+};
+
+int Id(const mjModel* m, mjtObj type, const std::string& name) {
+  return mj_name2id(m, type, name.c_str());
+}
+
+TEST_F(SceneTest, TwoHumanoidsWithPrefixesAndPlacement) {
+  world::CompiledScene s = Build(R"(articulations:
+  - name: h0
+    mjcf: /usr/share/mujoco/model/humanoid/humanoid.xml
+    pos: [0, 0, 0]
+  - name: h1
+    mjcf: /usr/share/mujoco/model/humanoid/humanoid.xml
+    pos: [2, 0, 0]
+    euler: [0, 0, 90]   # degrees
+)");
+  const mjModel* m = s.model.get();
+  EXPECT_EQ(m->nq, 56);
+  EXPECT_EQ(m->nu, 42);
+  const int t0 = Id(m, mjOBJ_BODY, "h0_torso"), t1 = Id(m, mjOBJ_BODY, "h1_torso");
+  ASSERT_GE(t0, 0);
+  ASSERT_GE(t1, 0);
+  physics::DataPtr d = physics::MakeData(m);
+  mj_forward(m, d.get());
+  EXPECT_NEAR(d->xpos[3 * t1 + 0] - d->xpos[3 * t0 + 0], 2.0, 1e-12);
+  EXPECT_NEAR(d->xpos[3 * t1 + 1] - d->xpos[3 * t0 + 1], 0.0, 1e-12);
+  // h1 is yawed by 90 degrees: its torso's x axis points along world y.
+  EXPECT_NEAR(d->xmat[9 * t1 + 3], 1.0, 1e-9);
+  // Actuators reference their own articulation's joints.
+  const int a = Id(m, mjOBJ_ACTUATOR, "h1_abdomen_y");
+  ASSERT_GE(a, 0);
+  EXPECT_EQ(m->actuator_trnid[2 * a], Id(m, mjOBJ_JOINT, "h1_abdomen_y"));
+}
+
+TEST_F(SceneTest, TwentyTwoHumanoidsCompileAndSimulate) {
+  std::string yaml = "size: {nconmax: 1000, njmax: 3000}\narticulations:\n";
+  for (int i = 0; i < 22; ++i) {
+    yaml += "  - name: h" + std::to_string(i) +
+            "\n    mjcf: /usr/share/mujoco/model/humanoid/humanoid.xml\n    pos: [" +
+            std::to_string(2 * (i % 5)) + ", " + std::to_string(2 * (i / 5)) + ", 0]\n" + (i ? "    include_world: false\n" : "");
+  }
+  world::CompiledScene s = Build(yaml);
+  const mjModel* m = s.model.get();
+  EXPECT_EQ(m->nq, 616);
+  EXPECT_EQ(m->nu, 462);
+  physics::DataPtr d = physics::MakeData(m);
+  for (int i = 0; i < 1000; ++i) mj_step(m, d.get());
+  for (int i = 0; i < m->nq; ++i) ASSERT_TRUE(std::isfinite(d->qpos[i])) << i;
+  for (int i = 0; i < m->nv; ++i) ASSERT_LT(std::abs(d->qvel[i]), 1e3) << i;
+  EXPECT_EQ(d->warning[mjWARN_BADQACC].number, 0);
+}
+
+// Two different robots whose element, class and asset names all collide.
+constexpr const char* kRobotTemplate = R"(<mujoco model="robot">
+  <default>
+    <default class="link"><geom rgba="RGBA" type="capsule" size="0.05"/></default>
+  </default>
+  <asset>
+    <material name="paint" rgba="RGBA"/>
+    <mesh name="part" vertex="0 0 0  1 0 0  0 1 0  0 0 1" scale="SCALE SCALE SCALE"/>
+  </asset>
+  <worldbody>
+    <body name="base" pos="0 0 1">
+      <joint name="j1" axis="0 1 0"/>
+      <geom name="g" class="link" fromto="0 0 0 0.3 0 0"/>
+      <geom name="m" type="mesh" mesh="part" material="paint"/>
+      <site name="s" pos="0.3 0 0"/>
+      <body name="tip" pos="0.3 0 0">
+        <joint name="j2" axis="0 1 0"/>
+        <geom name="g2" class="link" fromto="0 0 0 0.2 0 0"/>
+        <site name="s2" pos="0.2 0 0"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon><spatial name="t"><site site="s"/><site site="s2"/></spatial></tendon>
+  <equality><joint name="eq" joint1="j1" joint2="j2" active="false"/></equality>
+  <contact><exclude body1="base" body2="tip"/></contact>
+  <actuator><motor name="a1" joint="j1" gear="GEAR"/><motor name="a2" tendon="t"/></actuator>
+  <sensor><jointpos name="p1" joint="j1"/><framepos name="f" objtype="site" objname="s2"/></sensor>
+</mujoco>)";
+
+std::string Robot(const std::string& rgba, const std::string& scale, const std::string& gear) {
+  std::string s = kRobotTemplate;
+  for (auto [k, v] : {std::pair<std::string, std::string>{"RGBA", rgba}, {"SCALE", scale},
+                      {"GEAR", gear}}) {
+    for (size_t p; (p = s.find(k)) != std::string::npos;) s.replace(p, k.size(), v);
+  }
+  return s;
+}
+
+TEST_F(SceneTest, CollidingNamesResolveToTheirOwnArticulation) {
+  Write("a.xml", Robot("1 0 0 1", "1", "2"));
+  Write("b.xml", Robot("0 0 1 1", "2", "3"));
+  world::CompiledScene s = Build(R"(articulations:
+  - {name: A, mjcf: a.xml}
+  - {name: B, mjcf: b.xml, pos: [0, 2, 0]}
+)");
+  const mjModel* m = s.model.get();
+  for (const std::string p : {"A_", "B_"}) {
+    const float want_blue = p == "B_" ? 1.0f : 0.0f;
+    // Default class "link" of each robot applies to its own geoms.
+    const int g = Id(m, mjOBJ_GEOM, p + "g");
+    ASSERT_GE(g, 0) << p;
+    EXPECT_EQ(m->geom_rgba[4 * g + 2], want_blue) << p;
+    // Material and mesh references.
+    const int mg = Id(m, mjOBJ_GEOM, p + "m");
+    EXPECT_EQ(m->geom_matid[mg], Id(m, mjOBJ_MATERIAL, p + "paint")) << p;
+    EXPECT_EQ(m->geom_dataid[mg], Id(m, mjOBJ_MESH, p + "part")) << p;
+    EXPECT_EQ(m->mat_rgba[4 * m->geom_matid[mg] + 2], want_blue) << p;
+    // Actuators, tendons, sensors, equalities, excludes.
+    const int a1 = Id(m, mjOBJ_ACTUATOR, p + "a1"), a2 = Id(m, mjOBJ_ACTUATOR, p + "a2");
+    EXPECT_EQ(m->actuator_trnid[2 * a1], Id(m, mjOBJ_JOINT, p + "j1")) << p;
+    EXPECT_EQ(m->actuator_gear[6 * a1], p == "B_" ? 3.0 : 2.0) << p;
+    EXPECT_EQ(m->actuator_trnid[2 * a2], Id(m, mjOBJ_TENDON, p + "t")) << p;
+    const int t = Id(m, mjOBJ_TENDON, p + "t");
+    EXPECT_EQ(m->wrap_objid[m->tendon_adr[t]], Id(m, mjOBJ_SITE, p + "s")) << p;
+    const int f = Id(m, mjOBJ_SENSOR, p + "f");
+    EXPECT_EQ(m->sensor_objid[f], Id(m, mjOBJ_SITE, p + "s2")) << p;
+    const int eq = Id(m, mjOBJ_EQUALITY, p + "eq");
+    EXPECT_EQ(m->eq_obj1id[eq], Id(m, mjOBJ_JOINT, p + "j1")) << p;
+  }
+  ASSERT_EQ(m->nexclude, 2);
+  // Each exclude pairs its own articulation's bodies (signatures encode body ids + 1).
+  for (int i = 0; i < 2; ++i) {
+    const int sig = m->exclude_signature[i];
+    const std::string p = i == 0 ? "A_" : "B_";
+    const std::set<int> pair = {(sig >> 16) - 1, (sig & 0xFFFF) - 1};
+    EXPECT_EQ(pair, (std::set<int>{Id(m, mjOBJ_BODY, p + "base"), Id(m, mjOBJ_BODY, p + "tip")}));
+  }
+}
+
+TEST_F(SceneTest, KeyframesStayPerArticulation) {
+  world::CompiledScene s = Build("articulations:\n"
+                                 "  - {name: a0, mjcf: " URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml}\n"
+                                 "  - {name: a1, mjcf: " URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml,"
+                                 " pos: [1, 0, 0], keyframe: raised}\n");
+  const mjModel* m = s.model.get();
+  ASSERT_EQ(m->nkey, 2);
+  const int k1 = Id(m, mjOBJ_KEY, "a1_raised");
+  ASSERT_GE(k1, 0);
+  physics::DataPtr d = physics::MakeData(m);
+  mj_resetDataKeyframe(m, d.get(), k1);
+  const int s0 = m->jnt_qposadr[Id(m, mjOBJ_JOINT, "a0_shoulder")];
+  const int s1 = m->jnt_qposadr[Id(m, mjOBJ_JOINT, "a1_shoulder")];
+  const int e1 = m->jnt_qposadr[Id(m, mjOBJ_JOINT, "a1_elbow")];
+  EXPECT_EQ(d->qpos[s0], m->qpos0[s0]);  // a0 keeps its reference pose
+  EXPECT_EQ(d->qpos[s1], 0.5);
+  EXPECT_EQ(d->qpos[e1], -1.0);
+  EXPECT_EQ(d->ctrl[Id(m, mjOBJ_ACTUATOR, "a1_elbow_servo")], -1.0);
+  EXPECT_EQ(d->ctrl[Id(m, mjOBJ_ACTUATOR, "a0_elbow_servo")], 0.0);
+}
+
+TEST_F(SceneTest, OptionResolutionAndDisagreement) {
+  const std::string arm = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
+  world::CompiledScene s = Build("articulations:\n  - {name: a, mjcf: " + arm +
+                                 ", options: {timestep: 0.001}}\n  - {name: b, mjcf: " + arm +
+                                 ", options: {timestep: 0.005}}\n");
+  EXPECT_EQ(s.model->opt.timestep, 0.001);  // first articulation's options win
+  bool warned = false;
+  for (const auto& d : s.diagnostics) {
+    warned = warned || (d.message.find("timestep") != std::string::npos &&
+                        d.message.find("b:") == 0);
+  }
+  EXPECT_TRUE(warned);
+  world::CompiledScene o = Build("options: {timestep: 0.004, gravity: [0, 0, -1]}\n"
+                                 "articulations:\n  - {name: a, mjcf: " + arm +
+                                 ", options: {timestep: 0.001}}\n");
+  EXPECT_EQ(o.model->opt.timestep, 0.004);  // the scene's overrides win
+  EXPECT_EQ(o.model->opt.gravity[2], -1.0);
+  EXPECT_EQ(o.model->opt.integrator, mjINT_IMPLICIT);  // from the MJCF, untouched
+}
+
+TEST_F(SceneTest, ErrorsNameArticulationAndElement) {
+  Write("bad.xml", R"(<mujoco>
+  <worldbody>
+    <body name="leg">
+      <joint name="left_knee" type="hinge" range="0 1" limited="true" stiffness="-1"/>
+      <geom size="0.1"/>
+    </body>
+  </worldbody>
+  <actuator><motor joint="left_kne"/></actuator>
+</mujoco>)");
+  try {
+    Build("articulations:\n  - {name: g1, mjcf: bad.xml}\n");
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("g1: "), std::string::npos) << what;
+    EXPECT_NE(what.find("left_kne"), std::string::npos) << what;
+    EXPECT_EQ(e.where().line, 8) << what;
+  }
+}
+
+TEST_F(SceneTest, SceneFileErrorsHaveFileAndLine) {
+  const std::string arm = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
+  struct Case {
+    std::string yaml;
+    int line;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"articulations:\n  - name: a\n    mjcf: " + arm + "\n    poss: [0, 0, 0]\n", 4,
+       "unknown key 'poss'"},
+      {"articulations:\n  - name: a\n    mjcf: " + arm + "\n    pos: [0, x, 0]\n", 4, "number"},
+      {"articulations:\n  - name: a\n    mjcf: missing.xml\n", 3, "not found"},
+      {"articulations: []\n", 1, "non-empty"},
+      {"articulations:\n  - {name: a, mjcf: " + arm + "}\n  - {name: a, mjcf: " + arm + "}\n", 3,
+       "two articulations"},
+      {"articulations:\n  - name: a\n    mjcf: " + arm + "\n    controller: {type: pdd}\n", 4,
+       "controller type"},
+      {"articulations: [\n", 2, "malformed YAML"},
+  };
+  for (const Case& c : cases) {
+    try {
+      world::ParseScene(c.yaml, dir_ + "/s.yaml");
+      ADD_FAILURE() << "accepted: " << c.yaml;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where().file, dir_ + "/s.yaml");
+      EXPECT_EQ(e.where().line, c.line) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace urlab
