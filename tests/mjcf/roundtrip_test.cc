@@ -20,8 +20,8 @@ std::vector<std::string> ModelFiles() {
     if (!fs::is_directory(dir)) continue;
     for (const auto& e : fs::recursive_directory_iterator(dir)) {
       if (e.path().extension() != ".xml") continue;
-      // Files that are only meant to be included (no <mujoco> of their own to load) are skipped
-      // by checking that MuJoCo itself can load them.
+      // The corpus keeps files that are only meant to be included under parts/.
+      if (e.path().string().find("/parts/") != std::string::npos) continue;
       out.push_back(e.path().string());
     }
   }
