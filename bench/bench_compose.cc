@@ -35,15 +35,15 @@ int main(int argc, char** argv) {
   for (int i = 0; i < 22; ++i) {
     yaml += "  - name: h" + std::to_string(i) +
             "\n    mjcf: /usr/share/mujoco/model/humanoid/humanoid.xml\n    pos: [" +
-            std::to_string(2.0 * (i % 5)) + ", " + std::to_string(2.0 * (i / 5)) + ", 0]\n" + (i ? "    include_world: false\n" : "");
+            std::to_string(2.0 * (i % 5)) + ", " + std::to_string(2.0 * (i / 5)) + ", 0]\n" +
+            (i ? "    include_world: false\n" : "");
   }
   const urlab::world::SceneConfig scene = urlab::world::ParseScene(yaml, "/tmp/bench_22.yaml");
   std::vector<double> ours, mujoco;
   int nq = 0, nu = 0;
   for (int i = 0; i < repeats; ++i) {
-    mujoco.push_back(Seconds([&] {
-      urlab::physics::LoadXmlFile("/usr/share/mujoco/model/humanoid/22_humanoids.xml");
-    }));
+    mujoco.push_back(Seconds(
+        [&] { urlab::physics::LoadXmlFile("/usr/share/mujoco/model/humanoid/22_humanoids.xml"); }));
     ours.push_back(Seconds([&] {
       urlab::world::CompiledScene s = urlab::world::BuildScene(scene);
       nq = s.model->nq;

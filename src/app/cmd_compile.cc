@@ -16,12 +16,24 @@ namespace {
 
 // The model sizes `urlab compile` reports, in print order.
 std::vector<std::pair<const char*, int>> ModelSizes(const mjModel* m) {
-  return {{"nq", m->nq},           {"nv", m->nv},       {"nu", m->nu},
-          {"na", m->na},           {"nbody", m->nbody}, {"njnt", m->njnt},
-          {"ngeom", m->ngeom},     {"nsite", m->nsite}, {"ncam", m->ncam},
-          {"nlight", m->nlight},   {"nmesh", m->nmesh}, {"ntex", m->ntex},
-          {"nmat", m->nmat},       {"ntendon", m->ntendon}, {"nsensor", m->nsensor},
-          {"nkey", m->nkey},       {"neq", m->neq},     {"npair", m->npair},
+  return {{"nq", m->nq},
+          {"nv", m->nv},
+          {"nu", m->nu},
+          {"na", m->na},
+          {"nbody", m->nbody},
+          {"njnt", m->njnt},
+          {"ngeom", m->ngeom},
+          {"nsite", m->nsite},
+          {"ncam", m->ncam},
+          {"nlight", m->nlight},
+          {"nmesh", m->nmesh},
+          {"ntex", m->ntex},
+          {"nmat", m->nmat},
+          {"ntendon", m->ntendon},
+          {"nsensor", m->nsensor},
+          {"nkey", m->nkey},
+          {"neq", m->neq},
+          {"npair", m->npair},
           {"nexclude", m->nexclude}};
 }
 

@@ -19,9 +19,8 @@ int main(int argc, char** argv) {
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
-  app.set_version_flag("--version",
-                       std::string("urlab ") + urlab::kVersion + " (MuJoCo " +
-                           urlab::physics::MujocoVersion() + ")");
+  app.set_version_flag("--version", std::string("urlab ") + urlab::kVersion + " (MuJoCo " +
+                                        urlab::physics::MujocoVersion() + ")");
   app.parse_complete_callback([&] { urlab::SetLogLevel(log_level); });
 
   int exit_code = 0;

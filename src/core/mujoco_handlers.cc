@@ -72,8 +72,6 @@ void WarningCapture::Add(const std::string& text) {
   impl_->warnings.push_back(text);
 }
 
-void SetLogLevel(const std::string& level) {
-  spdlog::set_level(spdlog::level::from_str(level));
-}
+void SetLogLevel(const std::string& level) { spdlog::set_level(spdlog::level::from_str(level)); }
 
 }  // namespace urlab

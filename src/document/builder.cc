@@ -56,8 +56,8 @@ Element& ArticulationBuilder::Geom(Element* body, const std::string& type,
   return g;
 }
 
-Element& ArticulationBuilder::Joint(Element& body, const std::string& name,
-                                    const std::string& type, std::initializer_list<double> axis) {
+Element& ArticulationBuilder::Joint(Element& body, const std::string& name, const std::string& type,
+                                    std::initializer_list<double> axis) {
   Element& j = body.AddChild(type == "free" ? "freejoint" : "joint");
   Named(j, Namespace::kJoint, name);
   if (type != "free") j.Set("type", type);

@@ -30,9 +30,7 @@ Element& Document::Section(std::string_view tag) {
   return root_->AddChild(tag);
 }
 
-const Element* Document::FindSection(std::string_view tag) const {
-  return root_->FirstChild(tag);
-}
+const Element* Document::FindSection(std::string_view tag) const { return root_->FirstChild(tag); }
 
 const Element* Document::FindNamed(Namespace ns, std::string_view name) const {
   const Element* found = nullptr;

@@ -64,7 +64,8 @@ std::optional<double> Element::GetReal(std::string_view name) const {
   auto v = GetReals(name);
   if (!v) return std::nullopt;
   if (v->size() != 1) {
-    throw InputError(location_, tag_ + " attribute '" + std::string(name) + "': expected one number");
+    throw InputError(location_,
+                     tag_ + " attribute '" + std::string(name) + "': expected one number");
   }
   return (*v)[0];
 }
@@ -91,8 +92,8 @@ void Element::Set(std::string_view name, std::string value) {
   if (spec) {
     const std::string problem = CheckValue(*spec, value);
     if (!problem.empty()) {
-      throw InputError(location_, "<" + tag_ + "> attribute '" + std::string(name) + "': " +
-                                      problem);
+      throw InputError(location_,
+                       "<" + tag_ + "> attribute '" + std::string(name) + "': " + problem);
     }
   }
   edited_ = true;
@@ -223,7 +224,9 @@ std::string FormatReals(std::span<const double> v) {
 }
 
 namespace {
-bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v'; }
+bool IsSpace(char c) {
+  return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v';
+}
 }  // namespace
 
 std::optional<std::vector<double>> ParseReals(std::string_view text) {

@@ -12,9 +12,9 @@ namespace urlab::document {
 namespace {
 
 constexpr std::array<std::string_view, static_cast<size_t>(Namespace::kCount)> kNamespaceNames = {
-    "",        "body",  "joint",   "geom",     "site",     "camera",  "light",    "mesh",
-    "skin",    "hfield", "texture", "material", "pair",     "exclude", "equality", "tendon",
-    "actuator", "sensor", "numeric", "text",     "tuple",    "key",     "class"};
+    "",         "body",   "joint",   "geom",     "site",  "camera",  "light",    "mesh",
+    "skin",     "hfield", "texture", "material", "pair",  "exclude", "equality", "tendon",
+    "actuator", "sensor", "numeric", "text",     "tuple", "key",     "class"};
 
 std::vector<std::string_view> SplitSpaces(std::string_view s) {
   std::vector<std::string_view> out;
@@ -50,14 +50,32 @@ AttributeSpec ParseAttribute(std::string_view row, std::string_view spec) {
   std::string_view rest = spec.substr(colon + 1);
   if (rest.empty()) Bad(row, spec, "missing type");
   switch (rest[0]) {
-    case 's': a.type = ValueType::kString; break;
-    case 'r': a.type = ValueType::kReal; break;
-    case 'i': a.type = ValueType::kInt; break;
-    case 'k': a.type = ValueType::kKeyword; break;
-    case 'f': a.type = ValueType::kFile; a.file_base = FileBase::kModelDir; break;
-    case 'm': a.type = ValueType::kFile; a.file_base = FileBase::kMeshDir; break;
-    case 't': a.type = ValueType::kFile; a.file_base = FileBase::kTextureDir; break;
-    default: Bad(row, spec, "unknown type letter");
+    case 's':
+      a.type = ValueType::kString;
+      break;
+    case 'r':
+      a.type = ValueType::kReal;
+      break;
+    case 'i':
+      a.type = ValueType::kInt;
+      break;
+    case 'k':
+      a.type = ValueType::kKeyword;
+      break;
+    case 'f':
+      a.type = ValueType::kFile;
+      a.file_base = FileBase::kModelDir;
+      break;
+    case 'm':
+      a.type = ValueType::kFile;
+      a.file_base = FileBase::kMeshDir;
+      break;
+    case 't':
+      a.type = ValueType::kFile;
+      a.file_base = FileBase::kTextureDir;
+      break;
+    default:
+      Bad(row, spec, "unknown type letter");
   }
   rest.remove_prefix(1);
   // Keyword list.

@@ -65,9 +65,8 @@ const Element* FindDefaultClass(const Document& doc, const std::string& name) {
 }
 
 bool IsActuatorTag(std::string_view t) {
-  return t == "general" || t == "motor" || t == "position" || t == "velocity" ||
-         t == "cylinder" || t == "muscle" || t == "adhesion" || t == "intvelocity" ||
-         t == "damper";
+  return t == "general" || t == "motor" || t == "position" || t == "velocity" || t == "cylinder" ||
+         t == "muscle" || t == "adhesion" || t == "intvelocity" || t == "damper";
 }
 
 // The template in default class `d` for elements with tag `tag` that sets `name` (last wins).
@@ -156,8 +155,8 @@ std::optional<Quat> OwnOrientation(const Element& e, const CompilerSettings& com
     auto v = Values(e, "xyaxes", 6);
     const Vec3 x = Normalized({v[0], v[1], v[2]}, e, "xyaxes x axis");
     const double d = x[0] * v[3] + x[1] * v[4] + x[2] * v[5];
-    const Vec3 y = Normalized({v[3] - x[0] * d, v[4] - x[1] * d, v[5] - x[2] * d}, e,
-                              "xyaxes y axis");
+    const Vec3 y =
+        Normalized({v[3] - x[0] * d, v[4] - x[1] * d, v[5] - x[2] * d}, e, "xyaxes y axis");
     const Vec3 z = {x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2],
                     x[0] * y[1] - x[1] * y[0]};
     return FrameToQuat(x, y, z);

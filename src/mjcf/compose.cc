@@ -70,12 +70,23 @@ void NameUnnamed(Document& doc) {
     if (pt == "default" || e.tag() == "composite") return;
     if (e.parent()->parent() && e.parent()->tag() == "composite") return;
     switch (ns) {
-      case Namespace::kBody: name_it(e, "body"); break;
-      case Namespace::kSite: name_it(e, "site"); break;
-      case Namespace::kTendon: name_it(e, "tendon"); break;
-      case Namespace::kActuator: name_it(e, "actuator"); break;
-      case Namespace::kSensor: name_it(e, "sensor"); break;
-      default: break;
+      case Namespace::kBody:
+        name_it(e, "body");
+        break;
+      case Namespace::kSite:
+        name_it(e, "site");
+        break;
+      case Namespace::kTendon:
+        name_it(e, "tendon");
+        break;
+      case Namespace::kActuator:
+        name_it(e, "actuator");
+        break;
+      case Namespace::kSensor:
+        name_it(e, "sensor");
+        break;
+      default:
+        break;
     }
   });
   // Joints in MuJoCo's order: a body's own joints, then its child bodies depth first.
@@ -106,8 +117,9 @@ void ApplyPrefix(Document& doc, const std::string& prefix) {
     std::vector<std::pair<std::string, std::string>> updates;
     for (const document::Attribute& a : e.attributes()) {
       if (!a.spec || a.value.empty()) continue;
-      const bool defines = (a.name == "name" && own != Namespace::kNone && own != Namespace::kClass) ||
-                           (a.name == "class" && own == Namespace::kClass);
+      const bool defines =
+          (a.name == "name" && own != Namespace::kNone && own != Namespace::kClass) ||
+          (a.name == "class" && own == Namespace::kClass);
       if (defines) {
         updates.emplace_back(a.name, prefix + a.value);
         continue;
@@ -133,9 +145,9 @@ void ApplyPrefix(Document& doc, const std::string& prefix) {
 // nullptr when the articulation has no defaults.
 // True when default class `d` (not its children classes) has a template for elements `tag`.
 bool HasTemplate(const Element& d, const std::string& tag) {
-  static const std::unordered_set<std::string> kActuators = {
-      "general", "motor", "position", "velocity", "cylinder", "muscle", "adhesion", "intvelocity",
-      "damper"};
+  static const std::unordered_set<std::string> kActuators = {"general",  "motor",       "position",
+                                                             "velocity", "cylinder",    "muscle",
+                                                             "adhesion", "intvelocity", "damper"};
   for (const auto& c : d.children()) {
     if (c->tag() == tag || (kActuators.count(tag) && kActuators.count(c->tag()))) return true;
   }
@@ -274,14 +286,16 @@ void PlaceTopLevel(const Document& doc, Element& e, const Placement& p) {
     return document::Vec3{p.pos[0] + r[0], p.pos[1] + r[1], p.pos[2] + r[2]};
   };
   if ((e.tag() == "geom" || e.tag() == "site") && document::ResolveAttribute(doc, e, "fromto")) {
-    const std::vector<double> f = *document::ParseReals(*document::ResolveAttribute(doc, e, "fromto"));
+    const std::vector<double> f =
+        *document::ParseReals(*document::ResolveAttribute(doc, e, "fromto"));
     const document::Vec3 a = transform_point({f[0], f[1], f[2]});
     const document::Vec3 b = transform_point({f[3], f[4], f[5]});
     e.SetReals("fromto", std::vector<double>{a[0], a[1], a[2], b[0], b[1], b[2]});
     return;
   }
   const std::string* pos_text = document::ResolveAttribute(doc, e, "pos");
-  std::vector<double> pos = pos_text ? *document::ParseReals(*pos_text) : std::vector<double>{0, 0, 0};
+  std::vector<double> pos =
+      pos_text ? *document::ParseReals(*pos_text) : std::vector<double>{0, 0, 0};
   pos.resize(3, 0);
   e.SetReals("pos", transform_point({pos[0], pos[1], pos[2]}));
   if (e.tag() == "light") {
@@ -335,7 +349,8 @@ void ExtractKeyframes(Document& doc, const std::string& prefix, ArticulationLayo
     int index = 0;
     for (auto& k : s->children()) {
       ArticulationKeyframe key;
-      key.name = k->Name().empty() ? "key" + std::to_string(index) : k->Name().substr(prefix.size());
+      key.name =
+          k->Name().empty() ? "key" + std::to_string(index) : k->Name().substr(prefix.size());
       ++index;
       key.scene_name = prefix + key.name;
       key.time = k->GetReal("time").value_or(0.0);
@@ -375,9 +390,8 @@ void SetOption(Element& option, const std::string& key, const std::string& value
 }
 
 // Sections merged child by child into the scene, in MuJoCo's processing order.
-constexpr const char* kMergedSections[] = {"custom",   "asset",    "worldbody", "contact",
-                                           "equality", "tendon",   "actuator",  "sensor",
-                                           "keyframe"};
+constexpr const char* kMergedSections[] = {"custom", "asset",    "worldbody", "contact", "equality",
+                                           "tendon", "actuator", "sensor",    "keyframe"};
 
 }  // namespace
 
@@ -453,7 +467,8 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs) {
         const std::string theirs = b == scene_options.end() ? "(default)" : b->second;
         if (mine != theirs) {
           result.diagnostics.push_back(
-              {Diagnostic::Severity::kWarning, {doc.source_path(), 0},
+              {Diagnostic::Severity::kWarning,
+               {doc.source_path(), 0},
                in.name + ": option " + k + "=" + mine + " differs from the scene's " + theirs +
                    " (taken from the first articulation, '" + inputs[0].name +
                    "'; set it in the scene's options to choose)"});
@@ -518,9 +533,9 @@ void ApplyArticulationKeyframes(const std::vector<ArticulationLayout>& layouts, 
         mjtNum* qpos = m->key_qpos + static_cast<size_t>(k) * m->nq + m->jnt_qposadr[j];
         if (qi + nq <= key.qpos.size()) {
           for (int c = 0; c < nq; ++c) qpos[c] = key.qpos[qi + c];
-          const bool top_free = std::find(art.free_joints_at_top.begin(),
-                                          art.free_joints_at_top.end(),
-                                          jn) != art.free_joints_at_top.end();
+          const bool top_free =
+              std::find(art.free_joints_at_top.begin(), art.free_joints_at_top.end(), jn) !=
+              art.free_joints_at_top.end();
           if (top_free && !art.placement.IsIdentity()) {
             const document::Vec3 r =
                 document::QuatRotate(art.placement.quat, {qpos[0], qpos[1], qpos[2]});
@@ -546,7 +561,8 @@ void ApplyArticulationKeyframes(const std::vector<ArticulationLayout>& layouts, 
         if (m->actuator_dyntype[id] != mjDYN_NONE) {
           int act_adr = 0;
           for (int b = 0; b < id; ++b) act_adr += m->actuator_dyntype[b] != mjDYN_NONE;
-          if (ai < key.act.size()) m->key_act[static_cast<size_t>(k) * m->na + act_adr] = key.act[ai];
+          if (ai < key.act.size())
+            m->key_act[static_cast<size_t>(k) * m->na + act_adr] = key.act[ai];
           ++ai;
         }
       }

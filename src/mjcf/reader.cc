@@ -2,13 +2,12 @@
 
 #include <tinyxml2.h>
 
-#include <unordered_map>
-
 #include <array>
 #include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <unordered_map>
 #include <unordered_set>
 
 namespace urlab::mjcf {
@@ -49,9 +48,9 @@ class Reader {
     tinyxml2::XMLDocument xml;
     const tinyxml2::XMLElement* top = Parse(xml, text, main_path_);
     if (std::string_view(top->Name()) != "mujoco") {
-      throw InputError({main_path_, top->GetLineNum()},
-                       "the top-level element must be <mujoco>, found <" +
-                           std::string(top->Name()) + ">");
+      throw InputError(
+          {main_path_, top->GetLineNum()},
+          "the top-level element must be <mujoco>, found <" + std::string(top->Name()) + ">");
     }
     Document doc;
     doc.set_source_path(main_path_);
@@ -76,17 +75,18 @@ class Reader {
   static void ThrowFirst(const std::vector<InputError>& errors) {
     if (errors.empty()) return;
     if (errors.size() == 1) throw errors.front();
-    throw InputError(errors.front().where(),
-                     errors.front().message() + " (and " + std::to_string(errors.size() - 1) +
-                         " more problem(s) of this kind)");
+    throw InputError(errors.front().where(), errors.front().message() + " (and " +
+                                                 std::to_string(errors.size() - 1) +
+                                                 " more problem(s) of this kind)");
   }
 
   // Parses `text`; returns its single top-level element.
   static const tinyxml2::XMLElement* Parse(tinyxml2::XMLDocument& xml, const std::string& text,
                                            const std::string& file) {
     if (text.find('<') == std::string::npos) {
-      throw InputError({file, 0}, "malformed XML: no root element (the file is empty or has no "
-                                  "elements)");
+      throw InputError({file, 0},
+                       "malformed XML: no root element (the file is empty or has no "
+                       "elements)");
     }
     if (xml.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS) {
       std::string why = xml.ErrorStr() ? xml.ErrorStr() : "parse error";
@@ -95,8 +95,7 @@ class Reader {
     const tinyxml2::XMLElement* top = xml.RootElement();
     if (!top) throw InputError({file, 0}, "malformed XML: no root element (only comments?)");
     if (const auto* second = top->NextSiblingElement()) {
-      throw InputError({file, second->GetLineNum()},
-                       "malformed XML: more than one root element");
+      throw InputError({file, second->GetLineNum()}, "malformed XML: more than one root element");
     }
     return top;
   }
@@ -107,7 +106,8 @@ class Reader {
       const AttributeSpec* spec = to.spec()->FindAttribute(a->Name());
       if (!spec) {
         doc_->diagnostics().push_back(
-            Diagnostic{Diagnostic::Severity::kWarning, {file, a->GetLineNum()},
+            Diagnostic{Diagnostic::Severity::kWarning,
+                       {file, a->GetLineNum()},
                        "<" + to.tag() + "> unknown attribute '" + a->Name() +
                            "' (not in MuJoCo 2.2.2's grammar): kept verbatim"});
         continue;
@@ -129,8 +129,8 @@ class Reader {
       }
       const ElementSpec* spec = to.spec()->FindChild(tag);
       if (!spec) {
-        throw InputError({file, c->GetLineNum()}, "unknown element <" + std::string(tag) +
-                                                      "> inside <" + to.tag() + ">");
+        throw InputError({file, c->GetLineNum()},
+                         "unknown element <" + std::string(tag) + "> inside <" + to.tag() + ">");
       }
       auto child = std::make_unique<Element>(spec, std::string(tag));
       child->set_location({file, c->GetLineNum()});
@@ -157,7 +157,8 @@ class Reader {
     for (const std::string& open : include_stack_) {
       if (open == key) {
         std::string chain;
-        for (const std::string& s : include_stack_) chain += fs::path(s).filename().string() + " -> ";
+        for (const std::string& s : include_stack_)
+          chain += fs::path(s).filename().string() + " -> ";
         throw InputError(where, "include cycle: " + chain + fs::path(key).filename().string());
       }
     }
@@ -207,7 +208,8 @@ class Reader {
 };
 
 // Names defined per namespace.
-using NameTable = std::array<std::unordered_set<std::string>, static_cast<size_t>(Namespace::kCount)>;
+using NameTable =
+    std::array<std::unordered_set<std::string>, static_cast<size_t>(Namespace::kCount)>;
 
 NameTable CollectNames(const Document& doc, std::vector<std::string>* composite_prefixes) {
   NameTable names;
@@ -248,11 +250,10 @@ std::vector<InputError> FindDanglingReferences(const Document& doc) {
         maybe_generated = maybe_generated || a.value.compare(0, p.size(), p) == 0;
       }
       if (maybe_generated) continue;
-      errors.emplace_back(e.location(),
-                          "<" + e.tag() + "> attribute " + a.name + "=\"" + a.value +
-                              "\": dangling reference, no " +
-                              std::string(document::NamespaceName(ns)) + " named '" + a.value +
-                              "' in this model");
+      errors.emplace_back(e.location(), "<" + e.tag() + "> attribute " + a.name + "=\"" + a.value +
+                                            "\": dangling reference, no " +
+                                            std::string(document::NamespaceName(ns)) + " named '" +
+                                            a.value + "' in this model");
     }
   });
   return errors;
@@ -269,10 +270,10 @@ std::vector<InputError> FindDuplicateNames(const Document& doc) {
     if (n.empty()) return;
     auto [it, fresh] = seen[static_cast<size_t>(e.spec()->name_space)].emplace(n, &e);
     if (!fresh) {
-      errors.emplace_back(e.location(), "duplicate " +
-                                            std::string(document::NamespaceName(e.spec()->name_space)) +
-                                            " name '" + n + "' (first defined at " +
-                                            it->second->location().str() + ")");
+      errors.emplace_back(
+          e.location(), "duplicate " + std::string(document::NamespaceName(e.spec()->name_space)) +
+                            " name '" + n + "' (first defined at " + it->second->location().str() +
+                            ")");
     }
   });
   return errors;

@@ -15,14 +15,29 @@ namespace {
 void AppendEscaped(std::string& out, std::string_view v) {
   for (char c : v) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\n': out += "&#10;"; break;
-      case '\r': out += "&#13;"; break;
-      case '\t': out += "&#9;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\n':
+        out += "&#10;";
+        break;
+      case '\r':
+        out += "&#13;";
+        break;
+      case '\t':
+        out += "&#9;";
+        break;
+      default:
+        out += c;
     }
   }
 }
@@ -35,8 +50,7 @@ bool IsConsumedCompilerAttribute(const Element& e, std::string_view name) {
 
 class Writer {
  public:
-  Writer(const WriteOptions& options, LineMap* line_map)
-      : options_(options), line_map_(line_map) {}
+  Writer(const WriteOptions& options, LineMap* line_map) : options_(options), line_map_(line_map) {}
 
   void Write(const Element& e, int depth, std::string& out) const {
     if (line_map_) line_map_->push_back(&e);
@@ -103,8 +117,7 @@ std::string ExplainCompileMessage(const std::string& message, const LineMap& lin
 void WriteFile(const Document& doc, const std::string& path, bool absolute_paths) {
   WriteOptions options;
   if (!absolute_paths) {
-    options.relative_to =
-        fs::absolute(fs::path(path)).parent_path().lexically_normal().string();
+    options.relative_to = fs::absolute(fs::path(path)).parent_path().lexically_normal().string();
   }
   const std::string text = WriteString(doc, options);
   const fs::path parent = fs::absolute(fs::path(path)).parent_path();

@@ -62,9 +62,10 @@ void AddSoftwareSensors(const mjcf::BridgeReport& report, const std::string& pre
 
 void NoteBridge(const mjcf::BridgeReport& report, const std::string& label, std::string* out) {
   if (report.changes.empty()) return;
-  spdlog::info("{}MuJoCo 3.x constructs translated for 2.2.2 ({} change(s); `urlab validate "
-               "--bridge-report` lists them)",
-               label, report.changes.size());
+  spdlog::info(
+      "{}MuJoCo 3.x constructs translated for 2.2.2 ({} change(s); `urlab validate "
+      "--bridge-report` lists them)",
+      label, report.changes.size());
   *out += report.Format();
 }
 
@@ -177,8 +178,8 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
       for (const InputError& e : bridged.Refusals()) report.errors.push_back(label + e.what());
       if (bridge_report) {
         for (const mjcf::BridgeChange& c : bridged.changes) {
-          report.bridge.push_back(label + c.where.str() + ": " +
-                                  mjcf::BridgeKindName(c.kind) + ": " + c.what);
+          report.bridge.push_back(label + c.where.str() + ": " + mjcf::BridgeKindName(c.kind) +
+                                  ": " + c.what);
         }
       }
       // References are checked after the bridge (3.x names such as frames are flattened).

@@ -29,9 +29,8 @@ TEST(CliTest, EverySubcommandHasHelp) {
 
 TEST(CliTest, CompileJsonPrintsSizes) {
   std::string out;
-  ASSERT_EQ(RunCommand(UrlabBinary() +
-                           " --log-level off compile --json "
-                           "/usr/share/mujoco/model/humanoid/humanoid.xml",
+  ASSERT_EQ(RunCommand(UrlabBinary() + " --log-level off compile --json "
+                                       "/usr/share/mujoco/model/humanoid/humanoid.xml",
                        &out),
             0)
       << out;
@@ -70,8 +69,9 @@ TEST(CliTest, CompileSavesLoadableXmlAndMjb) {
 TEST(CliTest, RoundtripWritesOutput) {
   const std::string dir = testing::MakeTempDir("cli_rt");
   std::string out;
-  ASSERT_EQ(RunCommand(UrlabBinary() + " mjcf roundtrip /usr/share/mujoco/model/humanoid100/"
-                                       "humanoid100.xml -o " +
+  ASSERT_EQ(RunCommand(UrlabBinary() +
+                           " mjcf roundtrip /usr/share/mujoco/model/humanoid100/"
+                           "humanoid100.xml -o " +
                            dir + "/h.xml",
                        &out),
             0)
@@ -87,8 +87,7 @@ TEST(CliTest, BrokenModelExitsNonZeroWithFileAndLine) {
   EXPECT_EQ(RunCommand(UrlabBinary() + " compile " + bad, &out), 1) << out;
   EXPECT_NE(out.find(bad + ":3:"), std::string::npos) << out;
   EXPECT_NE(out.find("unknown element"), std::string::npos) << out;
-  EXPECT_EQ(RunCommand(UrlabBinary() + " mjcf roundtrip " + bad + " -o " + dir + "/o.xml", &out),
-            1)
+  EXPECT_EQ(RunCommand(UrlabBinary() + " mjcf roundtrip " + bad + " -o " + dir + "/o.xml", &out), 1)
       << out;
   EXPECT_FALSE(fs::exists(dir + "/o.xml"));
 }

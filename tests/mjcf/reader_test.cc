@@ -1,9 +1,10 @@
 // Reader behaviour: includes, unknown attributes kept, errors with file and line.
+#include "urlab/mjcf/reader.h"
+
 #include <filesystem>
 #include <fstream>
 
 #include "mujoco_test.h"
-#include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
 #include "urlab/physics/model.h"
 
@@ -107,7 +108,8 @@ TEST_F(ReaderTest, CyclicAndRepeatedIncludesAreErrors) {
 
   Write("c.xml", "<mujoco>\n  <option timestep=\"0.01\"/>\n</mujoco>\n");
   const std::string twice =
-      Write("twice.xml", "<mujoco>\n  <include file=\"c.xml\"/>\n  <include file=\"c.xml\"/>\n</mujoco>\n");
+      Write("twice.xml",
+            "<mujoco>\n  <include file=\"c.xml\"/>\n  <include file=\"c.xml\"/>\n</mujoco>\n");
   e = ExpectError(twice);
   EXPECT_NE(std::string(e.what()).find("more than once"), std::string::npos) << e.what();
   EXPECT_EQ(e.where().line, 3);
@@ -125,16 +127,20 @@ TEST_F(ReaderTest, BrokenInputsGiveFileAndLine) {
        "unknown element <bodyy>"},
       {"<mujoco>\n  <worldbody>\n    <geom size=\"1 x\"/>\n  </worldbody>\n</mujoco>\n", 3,
        "not a list of numbers"},
-      {"<mujoco>\n  <worldbody>\n    <geom type=\"sphere2\" size=\"1\"/>\n  </worldbody>\n</mujoco>\n",
+      {"<mujoco>\n  <worldbody>\n    <geom type=\"sphere2\" size=\"1\"/>\n  "
+       "</worldbody>\n</mujoco>\n",
        3, "invalid keyword"},
-      {"<mujoco>\n  <worldbody>\n    <geom pos=\"1 2 3 4\" size=\"1\"/>\n  </worldbody>\n</mujoco>\n",
+      {"<mujoco>\n  <worldbody>\n    <geom pos=\"1 2 3 4\" size=\"1\"/>\n  "
+       "</worldbody>\n</mujoco>\n",
        3, "at most 3"},
       {"<mujoco>\n  <worldbody>\n    <body><joint name=\"j\"/><geom size=\"1\"/></body>\n"
        "  </worldbody>\n  <actuator>\n    <motor joint=\"nope\"/>\n  </actuator>\n</mujoco>\n",
        6, "no joint named 'nope'"},
-      {"<mujoco>\n  <worldbody>\n    <geom size=\"1\" material=\"nope\"/>\n  </worldbody>\n</mujoco>\n",
+      {"<mujoco>\n  <worldbody>\n    <geom size=\"1\" material=\"nope\"/>\n  "
+       "</worldbody>\n</mujoco>\n",
        3, "no material named 'nope'"},
-      {"<mujoco>\n  <worldbody>\n    <geom size=\"1\" class=\"nope\"/>\n  </worldbody>\n</mujoco>\n",
+      {"<mujoco>\n  <worldbody>\n    <geom size=\"1\" class=\"nope\"/>\n  "
+       "</worldbody>\n</mujoco>\n",
        3, "no class named 'nope'"},
       {"<mujoco>\n  <asset>\n    <mesh file=\"missing.stl\"/>\n  </asset>\n</mujoco>\n", 3,
        "not found"},

@@ -1,6 +1,8 @@
 // Scene files and composition: many articulations in one model with prefixes and placements,
 // colliding names, per-articulation keyframes, option resolution, and errors that name the
 // articulation and element.
+#include "urlab/world/scene.h"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -8,7 +10,6 @@
 
 #include "mujoco_test.h"
 #include "urlab/physics/model.h"
-#include "urlab/world/scene.h"
 
 namespace urlab {
 namespace {
@@ -67,7 +68,8 @@ TEST_F(SceneTest, TwentyTwoHumanoidsCompileAndSimulate) {
   for (int i = 0; i < 22; ++i) {
     yaml += "  - name: h" + std::to_string(i) +
             "\n    mjcf: /usr/share/mujoco/model/humanoid/humanoid.xml\n    pos: [" +
-            std::to_string(2 * (i % 5)) + ", " + std::to_string(2 * (i / 5)) + ", 0]\n" + (i ? "    include_world: false\n" : "");
+            std::to_string(2 * (i % 5)) + ", " + std::to_string(2 * (i / 5)) + ", 0]\n" +
+            (i ? "    include_world: false\n" : "");
   }
   world::CompiledScene s = Build(yaml);
   const mjModel* m = s.model.get();
@@ -111,8 +113,8 @@ constexpr const char* kRobotTemplate = R"(<mujoco model="robot">
 
 std::string Robot(const std::string& rgba, const std::string& scale, const std::string& gear) {
   std::string s = kRobotTemplate;
-  for (auto [k, v] : {std::pair<std::string, std::string>{"RGBA", rgba}, {"SCALE", scale},
-                      {"GEAR", gear}}) {
+  for (auto [k, v] :
+       {std::pair<std::string, std::string>{"RGBA", rgba}, {"SCALE", scale}, {"GEAR", gear}}) {
     for (size_t p; (p = s.find(k)) != std::string::npos;) s.replace(p, k.size(), v);
   }
   return s;
@@ -160,10 +162,13 @@ TEST_F(SceneTest, CollidingNamesResolveToTheirOwnArticulation) {
 }
 
 TEST_F(SceneTest, KeyframesStayPerArticulation) {
-  world::CompiledScene s = Build("articulations:\n"
-                                 "  - {name: a0, mjcf: " URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml}\n"
-                                 "  - {name: a1, mjcf: " URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml,"
-                                 " pos: [1, 0, 0], keyframe: raised}\n");
+  world::CompiledScene s = Build(
+      "articulations:\n"
+      "  - {name: a0, mjcf: " URLAB_SOURCE_DIR
+      "/examples/models/pendulum_arm.xml}\n"
+      "  - {name: a1, mjcf: " URLAB_SOURCE_DIR
+      "/examples/models/pendulum_arm.xml,"
+      " pos: [1, 0, 0], keyframe: raised}\n");
   const mjModel* m = s.model.get();
   ASSERT_EQ(m->nkey, 2);
   const int k1 = Id(m, mjOBJ_KEY, "a1_raised");
@@ -188,13 +193,14 @@ TEST_F(SceneTest, OptionResolutionAndDisagreement) {
   EXPECT_EQ(s.model->opt.timestep, 0.001);  // first articulation's options win
   bool warned = false;
   for (const auto& d : s.diagnostics) {
-    warned = warned || (d.message.find("timestep") != std::string::npos &&
-                        d.message.find("b:") == 0);
+    warned =
+        warned || (d.message.find("timestep") != std::string::npos && d.message.find("b:") == 0);
   }
   EXPECT_TRUE(warned);
-  world::CompiledScene o = Build("options: {timestep: 0.004, gravity: [0, 0, -1]}\n"
-                                 "articulations:\n  - {name: a, mjcf: " + arm +
-                                 ", options: {timestep: 0.001}}\n");
+  world::CompiledScene o = Build(
+      "options: {timestep: 0.004, gravity: [0, 0, -1]}\n"
+      "articulations:\n  - {name: a, mjcf: " +
+      arm + ", options: {timestep: 0.001}}\n");
   EXPECT_EQ(o.model->opt.timestep, 0.004);  // the scene's overrides win
   EXPECT_EQ(o.model->opt.gravity[2], -1.0);
   EXPECT_EQ(o.model->opt.integrator, mjINT_IMPLICIT);  // from the MJCF, untouched

@@ -53,7 +53,10 @@ static std::string oneline(const char* s) {
 
 static void set_ctrl(const mjModel* m, mjData* d, bool sinus) {
   for (int i = 0; i < m->nu; ++i) {
-    if (!sinus) { d->ctrl[i] = 0; continue; }
+    if (!sinus) {
+      d->ctrl[i] = 0;
+      continue;
+    }
     double s = 0.5 + 0.5 * std::sin(2 * M_PI * (0.7 + 0.13 * i) * d->time);
     if (m->actuator_ctrllimited[i]) {
       double lo = m->actuator_ctrlrange[2 * i], hi = m->actuator_ctrlrange[2 * i + 1];
@@ -85,7 +88,11 @@ static RunResult run(const mjModel* m, int steps, bool sinus, int key) {
       mj_step(m, d);
       for (int i = 0; i < m->nq; ++i) {
         double dq = std::fabs(d->qpos[i] - q0[i]);
-        if (!std::isfinite(d->qpos[i])) { r.ok = false; r.why = "non-finite qpos"; break; }
+        if (!std::isfinite(d->qpos[i])) {
+          r.ok = false;
+          r.why = "non-finite qpos";
+          break;
+        }
         if (dq > r.maxdisp) r.maxdisp = dq;
       }
       if (!r.ok) break;
@@ -121,14 +128,17 @@ int main(int argc, char** argv) {
   bool expect_reject = false;
   std::vector<const char*> files;
   for (int i = 1; i < argc; ++i) {
-    if (!strcmp(argv[i], "--steps") && i + 1 < argc) steps = atoi(argv[++i]);
-    else if (!strcmp(argv[i], "--expect-reject")) expect_reject = true;
+    if (!strcmp(argv[i], "--steps") && i + 1 < argc)
+      steps = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--expect-reject"))
+      expect_reject = true;
     else if (!strcmp(argv[i], "--schema")) {
       std::vector<char> buf(1 << 20);
       mj_printSchema(nullptr, buf.data(), (int)buf.size(), 0, 0);
       fputs(buf.data(), stdout);
       return 0;
-    } else files.push_back(argv[i]);
+    } else
+      files.push_back(argv[i]);
   }
   mju_user_warning = on_warning;
   mju_user_error = on_error;

@@ -13,9 +13,9 @@ namespace urlab::document {
 
 // Compiler settings that change how attributes are interpreted (merged over every <compiler>).
 struct CompilerSettings {
-  bool degree = true;          // angle="degree" (MJCF's default)
+  bool degree = true;  // angle="degree" (MJCF's default)
   std::string eulerseq = "xyz";
-  bool autolimits = false;     // 2.2.2 default
+  bool autolimits = false;  // 2.2.2 default
 };
 
 // A non-fatal finding of the reader or a later pass (unknown attribute kept, etc.).

@@ -32,8 +32,8 @@ struct FileBases {
 
 struct Attribute {
   std::string name;
-  std::string value;                     // exact text (XML entities decoded)
-  const AttributeSpec* spec = nullptr;   // nullptr: not in the grammar, kept verbatim
+  std::string value;                    // exact text (XML entities decoded)
+  const AttributeSpec* spec = nullptr;  // nullptr: not in the grammar, kept verbatim
 };
 
 class Element {

@@ -84,7 +84,7 @@ struct AttributeSpec {
   Namespace ref = Namespace::kNone;  // namespace named by the value, when fixed
   std::string ref_selector;          // sibling attribute choosing the namespace (objtype, ...)
   std::vector<std::string> keywords;
-  bool dialect = false;  // MuJoCo 3.x only: the bridge must translate it
+  bool dialect = false;                       // MuJoCo 3.x only: the bridge must translate it
   std::vector<std::string> dialect_keywords;  // 3.x-only values of a 2.2.2 attribute
 
   bool IsReference() const { return ref != Namespace::kNone || !ref_selector.empty(); }
@@ -123,8 +123,7 @@ class Grammar {
   std::span<const ElementSpec> Elements() const { return elements_; }
 
   // Parses `rows`, then `dialect_rows` (used by Get() and by tests of the mini-language).
-  explicit Grammar(std::span<const GrammarRow> rows,
-                   std::span<const GrammarRow> dialect_rows = {});
+  explicit Grammar(std::span<const GrammarRow> rows, std::span<const GrammarRow> dialect_rows = {});
 
  private:
   std::vector<ElementSpec> elements_;

@@ -13,12 +13,12 @@
 // the compiled model's sizes tell).
 //
 // Thread: pure functions over documents; any thread that owns them.
+#include <mujoco/mujoco.h>
+
 #include <array>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 #include "urlab/document/document.h"
 
@@ -44,8 +44,8 @@ struct ArticulationInput {
 
 // A keyframe of one articulation, kept for ApplyArticulationKeyframes.
 struct ArticulationKeyframe {
-  std::string name;         // as in the articulation's MJCF
-  std::string scene_name;   // "{art}_{name}" in the composed model
+  std::string name;        // as in the articulation's MJCF
+  std::string scene_name;  // "{art}_{name}" in the composed model
   double time = 0;
   std::vector<double> qpos, qvel, act, ctrl, mocap_pos, mocap_quat;  // empty = not given
 };

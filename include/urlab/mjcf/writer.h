@@ -31,7 +31,6 @@ std::string ExplainCompileMessage(const std::string& message, const LineMap& lin
 // Writes `doc` to `path` with asset paths relative to the file's folder (so the folder can be
 // moved with its assets' relative layout) or absolute when `absolute_paths`. Throws Error on
 // I/O failure.
-void WriteFile(const document::Document& doc, const std::string& path,
-               bool absolute_paths = false);
+void WriteFile(const document::Document& doc, const std::string& path, bool absolute_paths = false);
 
 }  // namespace urlab::mjcf

@@ -39,7 +39,7 @@ CompiledScene BuildModel(const std::string& mjcf_path);
 struct ValidationReport {
   std::vector<std::string> errors;
   std::vector<std::string> warnings;
-  std::vector<std::string> sizes;  // "nq 28" ... when it compiled
+  std::vector<std::string> sizes;   // "nq 28" ... when it compiled
   std::vector<std::string> bridge;  // dialect bridge changes, when asked for
 };
 // With `bridge_report`, lists every change the MuJoCo 3.x dialect bridge makes (file and line).
