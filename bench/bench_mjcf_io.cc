@@ -8,26 +8,14 @@
 #include <string>
 #include <vector>
 
+#include "bench_util.h"
 #include "urlab/core/mujoco_handlers.h"
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
 #include "urlab/physics/model.h"
 
-namespace {
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
-template <typename F>
-double Seconds(F&& f) {
-  const auto t0 = std::chrono::steady_clock::now();
-  f();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-}  // namespace
+using urlab::bench::Median;
+using urlab::bench::Seconds;
 
 int main(int argc, char** argv) {
   urlab::InstallMujocoHandlers();

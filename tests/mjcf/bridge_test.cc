@@ -34,10 +34,7 @@ class BridgeTest : public testing::MujocoTest {
   void SetUp() override { dir_ = testing::MakeTempDir("bridge"); }
 
   std::string Write(const std::string& rel, const std::string& text) {
-    const fs::path p = fs::path(dir_) / rel;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p) << text;
-    return p.string();
+    return testing::WriteTextFile(dir_, rel, text);
   }
 
   // Reads, bridges, writes and compiles `path`.

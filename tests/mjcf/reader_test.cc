@@ -17,10 +17,7 @@ class ReaderTest : public testing::MujocoTest {
  protected:
   void SetUp() override { dir_ = testing::MakeTempDir("reader"); }
   std::string Write(const std::string& rel, const std::string& text) {
-    const fs::path p = fs::path(dir_) / rel;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p) << text;
-    return p.string();
+    return testing::WriteTextFile(dir_, rel, text);
   }
   // Reads `path` expecting an InputError; returns it.
   InputError ExpectError(const std::string& path) {

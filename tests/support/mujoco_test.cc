@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 namespace urlab::testing {
 
@@ -65,6 +66,14 @@ int RunCommand(const std::string& command, std::string* output) {
   int status = pclose(pipe);
   if (output) *output = out;
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string WriteTextFile(const std::string& dir, const std::string& rel,
+                          const std::string& text) {
+  const std::filesystem::path p = std::filesystem::path(dir) / rel;
+  std::filesystem::create_directories(p.parent_path());
+  std::ofstream(p) << text;
+  return p.string();
 }
 
 std::string MakeTempDir(const std::string& tag) {

@@ -40,5 +40,7 @@ std::string UrlabBinary();
 int RunCommand(const std::string& command, std::string* output = nullptr);
 // A fresh empty temporary directory, removed when the process exits normally.
 std::string MakeTempDir(const std::string& tag);
+// Writes `text` to dir/rel (creating folders); returns the file's path.
+std::string WriteTextFile(const std::string& dir, const std::string& rel, const std::string& text);
 
 }  // namespace urlab::testing

@@ -20,10 +20,7 @@ class SceneTest : public testing::MujocoTest {
  protected:
   void SetUp() override { dir_ = testing::MakeTempDir("scene"); }
   std::string Write(const std::string& rel, const std::string& text) {
-    const fs::path p = fs::path(dir_) / rel;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p) << text;
-    return p.string();
+    return testing::WriteTextFile(dir_, rel, text);
   }
   world::CompiledScene Build(const std::string& yaml) {
     return world::BuildScene(world::ParseScene(yaml, dir_ + "/scene.yaml"));
