@@ -2,7 +2,8 @@
 
 #include <filesystem>
 #include <fstream>
-#include <regex>
+#include <cctype>
+#include <optional>
 
 namespace urlab::mjcf {
 
@@ -104,14 +105,23 @@ std::string WriteString(const Document& doc, const WriteOptions& options, LineMa
   return out;
 }
 
+std::optional<size_t> CompileMessageLine(const std::string& message) {
+  // MuJoCo ends its compiler messages with "..., line N" (or "line = N").
+  for (size_t at = message.rfind("line"); at != std::string::npos;
+       at = at == 0 ? std::string::npos : message.rfind("line", at - 1)) {
+    size_t i = at + 4;
+    while (i < message.size() && (message[i] == ' ' || message[i] == '=')) ++i;
+    size_t j = i;
+    while (j < message.size() && std::isdigit(static_cast<unsigned char>(message[j]))) ++j;
+    if (j > i) return std::stoul(message.substr(i, j - i));
+  }
+  return std::nullopt;
+}
+
 std::string ExplainCompileMessage(const std::string& message, const LineMap& line_map) {
-  static const std::regex kLine(R"(line (\d+))");
-  std::smatch m;
-  if (!std::regex_search(message, m, kLine)) return message;
-  const size_t line = std::stoul(m[1].str());
-  if (line == 0 || line > line_map.size() || !line_map[line - 1]) return message;
-  const Element& e = *line_map[line - 1];
-  return message + "\n  in " + e.Describe();
+  const std::optional<size_t> line = CompileMessageLine(message);
+  if (!line || *line == 0 || *line > line_map.size() || !line_map[*line - 1]) return message;
+  return message + "\n  in " + line_map[*line - 1]->Describe();
 }
 
 void WriteFile(const Document& doc, const std::string& path, bool absolute_paths) {

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <sstream>
 
 #include "mujoco_test.h"
@@ -61,13 +60,10 @@ std::optional<std::pair<SourceLocation, std::string>> Pipeline(const std::string
       physics::CompileXmlString(xml);
     } catch (const physics::CompileError& e) {
       // Point at the source element MuJoCo's message names.
-      static const std::regex kLine(R"(line (\d+))");
-      std::smatch m;
       const std::string msg = e.what();
       SourceLocation where{path, 0};
-      if (std::regex_search(msg, m, kLine)) {
-        const size_t l = std::stoul(m[1].str());
-        if (l > 0 && l <= map.size() && map[l - 1]) where = map[l - 1]->location();
+      if (const auto l = mjcf::CompileMessageLine(msg)) {
+        if (*l > 0 && *l <= map.size() && map[*l - 1]) where = map[*l - 1]->location();
       }
       return std::make_pair(where, mjcf::ExplainCompileMessage(msg, map));
     }

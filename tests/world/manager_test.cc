@@ -6,8 +6,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <thread>
 
 #include "mujoco_test.h"
@@ -16,7 +14,6 @@
 namespace urlab {
 namespace {
 
-namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using physics::EngineEvent;
 using physics::EngineEventKind;
@@ -53,10 +50,7 @@ class ManagerTest : public testing::MujocoTest {
     arm_ = Write("arm.xml", kArmXml);
   }
   std::string Write(const std::string& rel, const std::string& text) {
-    const fs::path p = fs::path(dir_) / rel;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p) << text;
-    return p.string();
+    return testing::WriteTextFile(dir_, rel, text);
   }
   world::SceneConfig Scene(const std::string& yaml) {
     return world::ParseScene(yaml, dir_ + "/scene.yaml");

@@ -4,6 +4,7 @@
 // reader; asset file paths are written resolved (absolute, or relative to a chosen folder) and
 // the <compiler> meshdir/texturedir/strippath attributes they consumed are left out, so the
 // output loads from any working directory. Thread: any.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,9 @@ using LineMap = std::vector<const document::Element*>;
 // MJCF text of `doc`.
 std::string WriteString(const document::Document& doc, const WriteOptions& options = {},
                         LineMap* line_map = nullptr);
+
+// The line number a MuJoCo compiler message names ("line N" / "line = N"), if any.
+std::optional<size_t> CompileMessageLine(const std::string& message);
 
 // Rewrites a MuJoCo compiler message that mentions "line N" of text written with `line_map`
 // so that it also names the source element and its file:line.
