@@ -1,8 +1,8 @@
 #include "urlab/mjcf/writer.h"
 
+#include <cctype>
 #include <filesystem>
 #include <fstream>
-#include <cctype>
 #include <optional>
 
 namespace urlab::mjcf {

@@ -10,13 +10,14 @@ std::string CompareSizes(const mjModel* a, const mjModel* b) {
   if (a->field != b->field) \
     return #field ": " + std::to_string(a->field) + " vs " + std::to_string(b->field);
   URLAB_CMP(nq)
-  URLAB_CMP(nv) URLAB_CMP(nu) URLAB_CMP(na) URLAB_CMP(nbody) URLAB_CMP(njnt) URLAB_CMP(ngeom)
-      URLAB_CMP(nsite) URLAB_CMP(ncam) URLAB_CMP(nlight) URLAB_CMP(nmesh) URLAB_CMP(ntex)
-          URLAB_CMP(nmat) URLAB_CMP(ntendon) URLAB_CMP(nsensor) URLAB_CMP(nkey) URLAB_CMP(neq)
-              URLAB_CMP(npair) URLAB_CMP(nexclude) URLAB_CMP(nmocap) URLAB_CMP(nskin)
-                  URLAB_CMP(nhfield) URLAB_CMP(nwrap) URLAB_CMP(nnumeric) URLAB_CMP(ntext)
-                      URLAB_CMP(ntuple) URLAB_CMP(nsensordata) URLAB_CMP(nuserdata)
-                          URLAB_CMP(nmeshvert) URLAB_CMP(nmeshface)
+  URLAB_CMP(nv)
+  URLAB_CMP(nu) URLAB_CMP(na) URLAB_CMP(nbody) URLAB_CMP(njnt) URLAB_CMP(ngeom) URLAB_CMP(nsite)
+      URLAB_CMP(ncam) URLAB_CMP(nlight) URLAB_CMP(nmesh) URLAB_CMP(ntex) URLAB_CMP(nmat)
+          URLAB_CMP(ntendon) URLAB_CMP(nsensor) URLAB_CMP(nkey) URLAB_CMP(neq) URLAB_CMP(npair)
+              URLAB_CMP(nexclude) URLAB_CMP(nmocap) URLAB_CMP(nskin) URLAB_CMP(nhfield)
+                  URLAB_CMP(nwrap) URLAB_CMP(nnumeric) URLAB_CMP(ntext) URLAB_CMP(ntuple)
+                      URLAB_CMP(nsensordata) URLAB_CMP(nuserdata) URLAB_CMP(nmeshvert)
+                          URLAB_CMP(nmeshface)
 #undef URLAB_CMP
                               return "";
 }

@@ -36,7 +36,8 @@ class Parser {
       if (!allowed.count(key)) {
         std::string list;
         for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-        Fail(kv.first, "unknown key '" + key + "' in " + where + " (expected one of: " + list + ")");
+        Fail(kv.first,
+             "unknown key '" + key + "' in " + where + " (expected one of: " + list + ")");
       }
     }
   }

@@ -20,7 +20,8 @@ TEST(CliTest, VersionNamesMujoco) {
 }
 
 TEST(CliTest, EverySubcommandHasHelp) {
-  for (const char* sub : {"", "mjcf", "mjcf roundtrip", "compile"}) {
+  for (const char* sub :
+       {"", "mjcf", "mjcf roundtrip", "compile", "validate", "run", "bench", "bench loop"}) {
     std::string out;
     EXPECT_EQ(RunCommand(UrlabBinary() + " " + sub + " --help", &out), 0) << sub << out;
     EXPECT_NE(out.find("Usage:"), std::string::npos) << sub;
@@ -101,6 +102,52 @@ TEST(CliTest, MujocoCompileErrorIsReportedNotFatal) {
   std::string out;
   EXPECT_EQ(RunCommand(UrlabBinary() + " compile " + bad, &out), 1) << out;
   EXPECT_NE(out.find("error"), std::string::npos) << out;
+}
+
+TEST(CliTest, ValidateReportsEveryProblem) {
+  const std::string dir = testing::MakeTempDir("cli_validate");
+  const std::string bad = testing::WriteTextFile(dir, "bad.xml", R"(<mujoco>
+  <asset><mesh file="missing.stl"/></asset>
+  <worldbody>
+    <body name="b"><joint name="j"/><geom size="1" material="nope"/></body>
+    <body name="b"><geom size="1"/></body>
+  </worldbody>
+  <actuator><motor joint="jj"/></actuator>
+</mujoco>
+)");
+  std::string out;
+  EXPECT_EQ(RunCommand(UrlabBinary() + " validate " + bad, &out), 1) << out;
+  for (const char* want :
+       {"bad.xml:2:", "bad.xml:4:", "bad.xml:5:", "bad.xml:7:", "4 problem(s)"}) {
+    EXPECT_NE(out.find(want), std::string::npos) << want << " missing in:\n" << out;
+  }
+  const std::string scene =
+      testing::WriteTextFile(dir, "s.yaml",
+                             "articulations:\n  - {name: a, mjcf: " URLAB_SOURCE_DIR
+                             "/examples/models/pendulum_arm.xml}\n  - {name: b, mjcf: bad.xml}\n");
+  EXPECT_EQ(RunCommand(UrlabBinary() + " validate " + scene, &out), 1) << out;
+  EXPECT_NE(out.find("b: "), std::string::npos) << out;
+}
+
+TEST(CliTest, ValidateBridgeReportListsTranslationsWithLines) {
+  std::string out;
+  const std::string file = std::string(URLAB_TEST_DATA_DIR) + "/mjcf/dialect3x/go2_like.xml";
+  ASSERT_EQ(RunCommand(UrlabBinary() + " --log-level off validate --bridge-report " + file, &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("bridge: " + file + ":"), std::string::npos) << out;
+  EXPECT_NE(out.find("actuatorfrcrange"), std::string::npos) << out;
+  EXPECT_NE(out.find(": OK"), std::string::npos) << out;
+}
+
+TEST(CliTest, CompileAcceptsSceneFiles) {
+  std::string out;
+  ASSERT_EQ(RunCommand(UrlabBinary() + " --log-level off compile --json " URLAB_SOURCE_DIR
+                                       "/examples/scenes/two_arms.yaml",
+                       &out),
+            0)
+      << out;
+  EXPECT_EQ(nlohmann::json::parse(out).at("nu"), 4);
 }
 
 }  // namespace

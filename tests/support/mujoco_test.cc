@@ -68,8 +68,7 @@ int RunCommand(const std::string& command, std::string* output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-std::string WriteTextFile(const std::string& dir, const std::string& rel,
-                          const std::string& text) {
+std::string WriteTextFile(const std::string& dir, const std::string& rel, const std::string& text) {
   const std::filesystem::path p = std::filesystem::path(dir) / rel;
   std::filesystem::create_directories(p.parent_path());
   std::ofstream(p) << text;

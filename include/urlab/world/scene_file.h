@@ -28,8 +28,8 @@ struct KeyframeStep {
 };
 
 struct ControllerConfig {
-  std::string type = "none";  // none | pd | passthrough | keyframe
-  PdGains defaults;           // pd: gains for every actuator
+  std::string type = "none";             // none | pd | passthrough | keyframe
+  PdGains defaults;                      // pd: gains for every actuator
   std::map<std::string, PdGains> gains;  // pd: per joint or actuator (short name)
   std::vector<KeyframeStep> sequence;    // keyframe controller
   bool loop = false;
@@ -42,8 +42,8 @@ struct ArticulationConfig {
   std::string name;
   std::string mjcf;  // absolute path
   std::array<double, 3> pos = {0, 0, 0};
-  std::array<double, 4> quat = {1, 0, 0, 0};  // from quat, euler (degrees, xyz) or axisangle
-  std::map<std::string, std::string> options;  // <option> attributes, "flag.X" for flags
+  std::array<double, 4> quat = {1, 0, 0, 0};    // from quat, euler (degrees, xyz) or axisangle
+  std::map<std::string, std::string> options;   // <option> attributes, "flag.X" for flags
   std::optional<ControlSource> control_source;  // overrides the scene's
   ControllerConfig controller;
   std::string keyframe;  // initial keyframe ("" = none)
