@@ -214,7 +214,9 @@ std::optional<FromTo> ResolveFromTo(const Document& doc, const Element& e) {
   auto v = ParseReals(*text);
   if (!v || v->size() != 6) throw InputError(e.location(), "fromto needs 6 numbers");
   const Vec3 a = {(*v)[0], (*v)[1], (*v)[2]}, b = {(*v)[3], (*v)[4], (*v)[5]};
-  const Vec3 d = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  // MuJoCo 2.2.2 orients the frame's +Z from the second point towards the first (its manual
+  // says the opposite; the engine wins, tests/document/normalization_test.cc checks it).
+  const Vec3 d = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
   FromTo f;
   f.pos = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
   f.quat = QuatZ2Vec(d);
