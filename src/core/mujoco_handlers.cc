@@ -36,6 +36,9 @@ void WarningHandler(const char* msg) { ReportMujocoWarning(msg ? msg : "(no mess
 }  // namespace
 
 void InstallMujocoHandlers() {
+  // Create spdlog's registry now, on the starting thread, before any physics thread logs: its
+  // lazy initialisation inside the (uninstrumented) shared library is invisible to TSan.
+  spdlog::default_logger();
   mju_user_error = &ErrorHandler;
   mju_user_warning = &WarningHandler;
 }
