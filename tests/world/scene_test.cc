@@ -224,6 +224,31 @@ TEST_F(SceneTest, ErrorsNameArticulationAndElement) {
   }
 }
 
+TEST_F(SceneTest, MixedAngleUnitsAreNormalised) {
+  // The first articulation is in radians, the second in degrees (MJCF's default) with euler
+  // orientations and hinge ranges coming partly from a default class.
+  Write("rad.xml", R"(<mujoco><compiler angle="radian"/><worldbody>
+    <body name="b" euler="0 0 1.5707963267948966"><joint name="j" range="-1 1" limited="true"/>
+      <geom size="0.1"/></body></worldbody></mujoco>)");
+  Write("deg.xml", R"(<mujoco><default><joint range="-90 45" limited="true"/></default>
+    <worldbody><body name="b" euler="0 0 90"><joint name="j"/><joint name="s" type="slide"/>
+      <geom size="0.1"/></body></worldbody></mujoco>)");
+  world::CompiledScene s = Build(
+      "articulations:\n  - {name: r, mjcf: rad.xml}\n"
+      "  - {name: d, mjcf: deg.xml}\n");
+  const mjModel* m = s.model.get();
+  const int rj = Id(m, mjOBJ_JOINT, "r_j"), dj = Id(m, mjOBJ_JOINT, "d_j");
+  const int ds = Id(m, mjOBJ_JOINT, "d_s");
+  EXPECT_DOUBLE_EQ(m->jnt_range[2 * rj + 1], 1.0);
+  EXPECT_NEAR(m->jnt_range[2 * dj], -M_PI / 2, 1e-12);
+  EXPECT_NEAR(m->jnt_range[2 * dj + 1], M_PI / 4, 1e-12);
+  // A slide joint's range is a length: not converted.
+  EXPECT_DOUBLE_EQ(m->jnt_range[2 * ds], -90.0);
+  const int rb = Id(m, mjOBJ_BODY, "r_b"), db = Id(m, mjOBJ_BODY, "d_b");
+  for (int k = 0; k < 4; ++k)
+    EXPECT_NEAR(m->body_quat[4 * rb + k], m->body_quat[4 * db + k], 1e-12);
+}
+
 TEST_F(SceneTest, SceneFileErrorsHaveFileAndLine) {
   const std::string arm = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
   struct Case {
