@@ -2,24 +2,50 @@
 
 #include <cstring>
 #include <memory>
+#include <string>
+#include <utility>
 
 namespace urlab::physics {
 
 std::string CompareSizes(const mjModel* a, const mjModel* b) {
-#define URLAB_CMP(field)    \
-  if (a->field != b->field) \
-    return #field ": " + std::to_string(a->field) + " vs " + std::to_string(b->field);
-  URLAB_CMP(nq)
-  URLAB_CMP(nv)
-  URLAB_CMP(nu) URLAB_CMP(na) URLAB_CMP(nbody) URLAB_CMP(njnt) URLAB_CMP(ngeom) URLAB_CMP(nsite)
-      URLAB_CMP(ncam) URLAB_CMP(nlight) URLAB_CMP(nmesh) URLAB_CMP(ntex) URLAB_CMP(nmat)
-          URLAB_CMP(ntendon) URLAB_CMP(nsensor) URLAB_CMP(nkey) URLAB_CMP(neq) URLAB_CMP(npair)
-              URLAB_CMP(nexclude) URLAB_CMP(nmocap) URLAB_CMP(nskin) URLAB_CMP(nhfield)
-                  URLAB_CMP(nwrap) URLAB_CMP(nnumeric) URLAB_CMP(ntext) URLAB_CMP(ntuple)
-                      URLAB_CMP(nsensordata) URLAB_CMP(nuserdata) URLAB_CMP(nmeshvert)
-                          URLAB_CMP(nmeshface)
-#undef URLAB_CMP
-                              return "";
+  static constexpr std::pair<const char*, int mjModel::*> kSizes[] = {
+      {"nq", &mjModel::nq},
+      {"nv", &mjModel::nv},
+      {"nu", &mjModel::nu},
+      {"na", &mjModel::na},
+      {"nbody", &mjModel::nbody},
+      {"njnt", &mjModel::njnt},
+      {"ngeom", &mjModel::ngeom},
+      {"nsite", &mjModel::nsite},
+      {"ncam", &mjModel::ncam},
+      {"nlight", &mjModel::nlight},
+      {"nmesh", &mjModel::nmesh},
+      {"ntex", &mjModel::ntex},
+      {"nmat", &mjModel::nmat},
+      {"ntendon", &mjModel::ntendon},
+      {"nsensor", &mjModel::nsensor},
+      {"nkey", &mjModel::nkey},
+      {"neq", &mjModel::neq},
+      {"npair", &mjModel::npair},
+      {"nexclude", &mjModel::nexclude},
+      {"nmocap", &mjModel::nmocap},
+      {"nskin", &mjModel::nskin},
+      {"nhfield", &mjModel::nhfield},
+      {"nwrap", &mjModel::nwrap},
+      {"nnumeric", &mjModel::nnumeric},
+      {"ntext", &mjModel::ntext},
+      {"ntuple", &mjModel::ntuple},
+      {"nsensordata", &mjModel::nsensordata},
+      {"nuserdata", &mjModel::nuserdata},
+      {"nmeshvert", &mjModel::nmeshvert},
+      {"nmeshface", &mjModel::nmeshface}};
+  for (const auto& [name, field] : kSizes) {
+    if (a->*field != b->*field) {
+      return std::string(name) + ": " + std::to_string(a->*field) + " vs " +
+             std::to_string(b->*field);
+    }
+  }
+  return "";
 }
 
 std::string CompareTrajectories(const mjModel* a, const mjModel* b, int steps) {

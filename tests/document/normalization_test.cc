@@ -28,15 +28,17 @@ void ExpectSameRotation(const Quat& a, const mjtNum* b, const std::string& what)
 }
 
 TEST_F(NormalizationTest, EveryOrientationFormMatchesMujoco) {
-  for (const std::string compiler : {"angle=\"degree\"", "angle=\"radian\"",
-                                     "angle=\"degree\" eulerseq=\"ZYX\"",
-                                     "angle=\"radian\" eulerseq=\"zXz\""}) {
+  for (const std::string compiler :
+       {"angle=\"degree\"", "angle=\"radian\"", "angle=\"degree\" eulerseq=\"ZYX\"",
+        "angle=\"radian\" eulerseq=\"zXz\""}) {
     const bool degree = compiler.find("degree") != std::string::npos;
     const std::string a = degree ? "40" : "0.7";
     const std::string xml = "<mujoco><compiler " + compiler + R"(/><worldbody>
       <body name="q" quat="0.9 0.1 -0.3 0.2"><geom size="1"/></body>
-      <body name="aa" axisangle="1 2 3 )" + a + R"("><geom size="1"/></body>
-      <body name="eu" euler=")" + a + " -" + a + " " + a + R"("><geom size="1"/></body>
+      <body name="aa" axisangle="1 2 3 )" +
+                            a + R"("><geom size="1"/></body>
+      <body name="eu" euler=")" +
+                            a + " -" + a + " " + a + R"("><geom size="1"/></body>
       <body name="xy" xyaxes="1 1 0 -1 2 0.5"><geom size="1"/></body>
       <body name="z" zaxis="0.3 -1 0.2"><geom size="1"/></body>
       <body name="zdown" zaxis="0 0 -1"><geom size="1"/></body>
@@ -113,7 +115,8 @@ TEST_F(NormalizationTest, DefaultChainAndInheritedVisualOffset) {
 }
 
 TEST_F(NormalizationTest, EditedValuesRoundTripExactly) {
-  document::Document doc = Read("<mujoco><worldbody><geom name=\"g\" size=\"1\"/></worldbody></mujoco>");
+  document::Document doc =
+      Read("<mujoco><worldbody><geom name=\"g\" size=\"1\"/></worldbody></mujoco>");
   document::Element* g = doc.FindNamed(document::Namespace::kGeom, "g");
   const double v = 0.1 + 0.2;  // not representable in short decimal
   g->SetReals("pos", std::vector<double>{v, -1e-300, 3.0});

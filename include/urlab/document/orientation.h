@@ -48,8 +48,9 @@ struct InheritedPose {
 InheritedPose InheritedDefaultPose(const Document& doc, const Element& e);
 
 // fromto of a geom or site resolved as MuJoCo 2.2.2 does: pos at the midpoint, orientation
-// taking +Z along the segment (from the second point towards the first, as the engine does), half-length in slot `slot` of size (1 for capsule/cylinder, 2 for
-// box/ellipsoid). nullopt when the element has no fromto.
+// taking +Z along the segment (from the second point towards the first, as the engine does),
+// half-length in slot `slot` of size (1 for capsule/cylinder, 2 for box/ellipsoid). nullopt when
+// the element has no fromto.
 struct FromTo {
   Vec3 pos;
   Quat quat;
