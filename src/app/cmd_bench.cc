@@ -14,8 +14,8 @@ namespace {
 
 struct BenchLoopArgs {
   std::string scene;
-  int steps = 20000;
-  int trials = 5;
+  int steps = 10000;
+  int trials = 15;
 };
 
 int BenchLoop(const BenchLoopArgs& args) {

@@ -109,6 +109,7 @@ LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& optio
     if (n == steps) {
       last = Clock::now();
       done.store(true, std::memory_order_release);
+      done.notify_one();
       engine.SetPaused(true);
     }
   });
@@ -137,8 +138,13 @@ LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& optio
 
   for (int t = 0; t < options.trials; ++t) {
     double bare_ncon = 0;
-    r.bare_rates.push_back(
-        BareTrial(bare_model.get(), bare_data.get(), steps, ctrl_log, &bare_ncon));
+    // The bare loop also runs on a thread of its own, so both sides see the same scheduling.
+    double bare_rate = 0;
+    std::thread bare([&] {
+      bare_rate = BareTrial(bare_model.get(), bare_data.get(), steps, ctrl_log, &bare_ncon);
+    });
+    bare.join();
+    r.bare_rates.push_back(bare_rate);
 
     engine.Reset();  // not running: applied now
     engine.SetPaused(false);
@@ -146,8 +152,7 @@ LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& optio
     done = false;
     ncon_sum = 0;
     engine.Start();
-    while (!done.load(std::memory_order_acquire))
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    done.wait(false, std::memory_order_acquire);  // no polling wake-ups during the trial
     engine.Stop();
     const double s = std::chrono::duration<double>(last - first).count();
     r.loop_rates.push_back((steps - 1) / s);  // first..last spans steps-1 full iterations
