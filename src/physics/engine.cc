@@ -91,6 +91,7 @@ PhysicsEngine::PhysicsEngine(ModelPtr model, Options options)
   as_fast_.store(options.as_fast_as_possible);
   reset_on_divergence_.store(options.reset_on_divergence);
   resync_threshold_ = options.resync_threshold;
+  log_events_ = options.log_events;
   measure_window_ = options.measure_window > 0 ? options.measure_window : 0.25;
   qpos_joint_.assign(static_cast<std::size_t>(model_->nq), -1);
   for (int j = 0; j < model_->njnt; ++j) {
@@ -472,7 +473,8 @@ void PhysicsEngine::CheckDivergenceLocked(double time_before) {
   }
   e.auto_reset = reset_on_divergence_.load(std::memory_order_relaxed);
   const auto now = Clock::now();
-  if (now - last_divergence_log_ > std::chrono::seconds(1)) {  // a broken model diverges often
+  if (log_events_ &&
+      now - last_divergence_log_ > std::chrono::seconds(1)) {  // a broken model diverges often
     spdlog::warn("{}", Describe(e));
     last_divergence_log_ = now;
   }
@@ -511,7 +513,7 @@ void PhysicsEngine::HandleErrorLocked(const std::exception& e) {
   ev.kind = EngineEventKind::kError;
   ev.sim_time = data_->time;
   ev.message = std::string("physics loop paused after an error: ") + e.what();
-  spdlog::error("{}", ev.message);
+  if (log_events_) spdlog::error("{}", ev.message);
   QueueEvent(std::move(ev));
 }
 

@@ -65,6 +65,7 @@ void Manager::Build(const SceneConfig& scene) {
   eo.speed_percent = options_.speed_percent;
   eo.as_fast_as_possible = options_.as_fast_as_possible;
   eo.reset_on_divergence = options_.reset_on_divergence;
+  eo.log_events = false;  // Tick() logs each event it delivers
   engine_ = std::make_unique<physics::PhysicsEngine>(std::move(compiled_.model), eo);
   controls_ = std::make_unique<control::ControlSystem>();
   controls_->SetGlobalSource(scene.control_source);

@@ -111,6 +111,9 @@ class PhysicsEngine {
     double resync_threshold = 0.05;  // seconds behind schedule before the schedule is reset
     bool reset_on_divergence = false;
     double measure_window = 0.25;  // wall seconds over which RTF and step rate are averaged
+    // Log divergence and errors from the physics thread as they happen. An owner that logs the
+    // events it drains (the Manager) turns this off so each is logged once.
+    bool log_events = true;
   };
 
   // Takes ownership of a compiled model and allocates its data (mj_forward applied). Main thread.
@@ -269,6 +272,7 @@ class PhysicsEngine {
   std::atomic<bool> as_fast_{false};
   std::atomic<double> target_interval_{0};
   std::atomic<bool> reset_on_divergence_{false};
+  bool log_events_ = true;  // see Options::log_events; set at construction
   double resync_threshold_ = 0.05;
   double measure_window_ = 0.25;
 
