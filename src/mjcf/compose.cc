@@ -570,16 +570,23 @@ void ApplyArticulationKeyframes(const std::vector<ArticulationLayout>& layouts, 
         const int body = mj_name2id(m, mjOBJ_BODY, art.mocap_bodies[b].c_str());
         if (body < 0 || m->body_mocapid[body] < 0) continue;
         const int mid = m->body_mocapid[body];
+        // Mocap bodies are always children of the world: their key poses get the placement.
         if (3 * b + 3 <= key.mocap_pos.size()) {
+          const document::Vec3 r = document::QuatRotate(
+              art.placement.quat,
+              {key.mocap_pos[3 * b], key.mocap_pos[3 * b + 1], key.mocap_pos[3 * b + 2]});
           for (int c = 0; c < 3; ++c) {
             m->key_mpos[static_cast<size_t>(k) * 3 * m->nmocap + 3 * mid + c] =
-                key.mocap_pos[3 * b + c];
+                art.placement.IsIdentity() ? key.mocap_pos[3 * b + c] : art.placement.pos[c] + r[c];
           }
         }
         if (4 * b + 4 <= key.mocap_quat.size()) {
+          const document::Quat q = document::QuatMul(
+              art.placement.quat, {key.mocap_quat[4 * b], key.mocap_quat[4 * b + 1],
+                                   key.mocap_quat[4 * b + 2], key.mocap_quat[4 * b + 3]});
           for (int c = 0; c < 4; ++c) {
             m->key_mquat[static_cast<size_t>(k) * 4 * m->nmocap + 4 * mid + c] =
-                key.mocap_quat[4 * b + c];
+                art.placement.IsIdentity() ? key.mocap_quat[4 * b + c] : q[c];
           }
         }
       }

@@ -182,6 +182,30 @@ TEST_F(SceneTest, KeyframesStayPerArticulation) {
   EXPECT_EQ(d->ctrl[Id(m, mjOBJ_ACTUATOR, "a0_elbow_servo")], 0.0);
 }
 
+TEST_F(SceneTest, PlacedKeyframesMoveFreeAndMocapBodies) {
+  Write("free.xml", R"(<mujoco><worldbody>
+    <body name="box" pos="0 0 1"><freejoint name="f"/><geom type="box" size="0.1 0.1 0.1"/></body>
+    <body name="target" mocap="true" pos="1 0 0"><geom size="0.05" contype="0" conaffinity="0"/></body>
+  </worldbody><keyframe><key name="k" qpos="0.5 0 1 1 0 0 0" mpos="2 0 0" mquat="1 0 0 0"/>
+  </keyframe></mujoco>)");
+  world::CompiledScene s =
+      Build("articulations:\n  - {name: a, mjcf: free.xml, pos: [10, 0, 0], euler: [0, 0, 90]}\n");
+  const mjModel* m = s.model.get();
+  const int k = Id(m, mjOBJ_KEY, "a_k");
+  ASSERT_GE(k, 0);
+  // (0.5, 0, 1) yawed by 90 degrees and moved by (10, 0, 0).
+  EXPECT_NEAR(m->key_qpos[m->nq * k + 0], 10.0, 1e-12);
+  EXPECT_NEAR(m->key_qpos[m->nq * k + 1], 0.5, 1e-12);
+  EXPECT_NEAR(m->key_qpos[m->nq * k + 2], 1.0, 1e-12);
+  EXPECT_NEAR(m->key_qpos[m->nq * k + 3], std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(m->key_qpos[m->nq * k + 6], std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(m->key_mpos[3 * m->nmocap * k + 0], 10.0, 1e-12);
+  EXPECT_NEAR(m->key_mpos[3 * m->nmocap * k + 1], 2.0, 1e-12);
+  // The reference configuration is placed too.
+  const int box = Id(m, mjOBJ_BODY, "a_box");
+  EXPECT_NEAR(m->qpos0[m->jnt_qposadr[m->body_jntadr[box]]], 10.0, 1e-12);
+}
+
 TEST_F(SceneTest, OptionResolutionAndDisagreement) {
   const std::string arm = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
   world::CompiledScene s = Build("articulations:\n  - {name: a, mjcf: " + arm +
