@@ -422,8 +422,37 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs) {
     layout.placement = in.placement;
 
     for (const auto& s : doc.root().children()) {
-      if (s->tag() == "compiler" && s->GetOr("coordinate", "local") == "global") {
+      if (s->tag() != "compiler") continue;
+      if (s->GetOr("coordinate", "local") == "global") {
         Fail(in.name, *s, "compiler coordinate=\"global\" cannot be composed; use local");
+      }
+      if (s->Has("settotalmass") && inputs.size() > 1) {
+        Fail(in.name, *s,
+             "compiler settotalmass rescales the whole model, so in a scene it would change every "
+             "articulation's mass; remove it or set the masses in the MJCF");
+      }
+    }
+    if (i > 0) {
+      // Compiler settings are scene-wide: the first articulation's apply (paths and angle units
+      // are normalised per articulation, so those may differ).
+      static const std::set<std::string> kPerArticulation = {"meshdir",   "texturedir", "assetdir",
+                                                             "strippath", "angle",      "eulerseq"};
+      std::map<std::string, std::string> mine, first;
+      for (const auto* d : {&doc, &inputs[0].doc}) {
+        auto& out = d == &doc ? mine : first;
+        for (const auto& s : d->root().children()) {
+          if (s->tag() != "compiler") continue;
+          for (const auto& a : s->attributes()) {
+            if (!kPerArticulation.count(a.name)) out[a.name] = a.value;
+          }
+        }
+      }
+      if (mine != first) {
+        result.diagnostics.push_back(
+            {Diagnostic::Severity::kWarning,
+             {doc.source_path(), 0},
+             in.name + ": its <compiler> settings differ from the first articulation's ('" +
+                 inputs[0].name + "'), whose settings the scene uses"});
       }
     }
     if (!in.include_world) {

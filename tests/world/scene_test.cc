@@ -273,6 +273,29 @@ TEST_F(SceneTest, MixedAngleUnitsAreNormalised) {
     EXPECT_NEAR(m->body_quat[4 * rb + k], m->body_quat[4 * db + k], 1e-12);
 }
 
+TEST_F(SceneTest, SceneWideCompilerSettingsAreGuarded) {
+  Write("mass.xml", R"(<mujoco><compiler settotalmass="5"/><worldbody><body name="b">
+    <joint/><geom size="0.1"/></body></worldbody></mujoco>)");
+  Write("plain.xml", R"(<mujoco><compiler boundmass="0.01"/><worldbody><body name="b">
+    <joint/><geom size="0.1"/></body></worldbody></mujoco>)");
+  try {
+    Build("articulations:\n  - {name: p, mjcf: plain.xml}\n  - {name: m, mjcf: mass.xml}\n");
+    FAIL() << "settotalmass was composed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("m: "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("settotalmass"), std::string::npos) << e.what();
+    EXPECT_EQ(e.where().line, 1);
+  }
+  Build("articulations:\n  - {name: m, mjcf: mass.xml}\n");  // alone it is fine
+  Write("other.xml", R"(<mujoco><worldbody><body name="b">
+    <joint/><geom size="0.1"/></body></worldbody></mujoco>)");
+  world::CompiledScene s =
+      Build("articulations:\n  - {name: p, mjcf: plain.xml}\n  - {name: o, mjcf: other.xml}\n");
+  bool warned = false;
+  for (const auto& d : s.diagnostics) warned = warned || d.message.find("o: its <compiler>") == 0;
+  EXPECT_TRUE(warned);
+}
+
 TEST_F(SceneTest, SceneFileErrorsHaveFileAndLine) {
   const std::string arm = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
   struct Case {
