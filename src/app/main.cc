@@ -1,4 +1,5 @@
 // urlab: the command-line front end of the URLab runtime.
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -12,6 +13,8 @@
 
 int main(int argc, char** argv) {
   urlab::InstallMujocoHandlers();
+  // Logs go to stderr so that stdout carries only results (e.g. `compile --json`).
+  spdlog::set_default_logger(spdlog::stderr_color_mt("urlab"));
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
 
   CLI::App app{"URLab: MuJoCo robotics simulation runtime (scenes, control over ZeroMQ, replay)."};

@@ -140,6 +140,17 @@ TEST(CliTest, ValidateBridgeReportListsTranslationsWithLines) {
   EXPECT_NE(out.find(": OK"), std::string::npos) << out;
 }
 
+TEST(CliTest, LogsGoToStderrSoJsonStaysClean) {
+  std::string out;
+  // The bridge logs what it translated; stdout must still be exactly one JSON object.
+  ASSERT_EQ(RunCommand(UrlabBinary() + " compile --json " URLAB_TEST_DATA_DIR
+                                       "/mjcf/dialect3x/go2_like.xml 2>/dev/null",
+                       &out),
+            0)
+      << out;
+  EXPECT_EQ(nlohmann::json::parse(out).at("nu"), 12);
+}
+
 TEST(CliTest, CompileAcceptsSceneFiles) {
   std::string out;
   ASSERT_EQ(RunCommand(UrlabBinary() + " --log-level off compile --json " URLAB_SOURCE_DIR
