@@ -143,8 +143,9 @@ TEST(CliTest, ValidateBridgeReportListsTranslationsWithLines) {
 TEST(CliTest, LogsGoToStderrSoJsonStaysClean) {
   std::string out;
   // The bridge logs what it translated; stdout must still be exactly one JSON object.
-  ASSERT_EQ(RunCommand(UrlabBinary() + " compile --json " URLAB_TEST_DATA_DIR
-                                       "/mjcf/dialect3x/go2_like.xml 2>/dev/null",
+  ASSERT_EQ(RunCommand("(" + UrlabBinary() +
+                           " compile --json " URLAB_TEST_DATA_DIR
+                           "/mjcf/dialect3x/go2_like.xml 2>/dev/null)",
                        &out),
             0)
       << out;
