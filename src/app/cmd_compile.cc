@@ -63,9 +63,7 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
     }
     for (const auto& d : compiled.diagnostics) spdlog::warn("{}: {}", d.where.str(), d.message);
     if (!save_xml.empty()) {
-      // Re-read the compiled text so its asset paths can be written relative to the output.
-      document::Document doc = mjcf::ReadString(compiled.xml, "/" + std::string("urlab_scene.xml"));
-      mjcf::WriteFile(doc, save_xml);
+      mjcf::WriteFile(compiled.doc, save_xml);  // asset paths relative to the output folder
       spdlog::info("saved {}", save_xml);
     }
     if (!save_mjb.empty()) {

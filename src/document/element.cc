@@ -207,6 +207,16 @@ std::string Element::Describe() const {
   return out;
 }
 
+Namespace ReferencedNamespace(const Element& e, const Attribute& a) {
+  if (!a.spec || !a.spec->IsReference()) return Namespace::kNone;
+  if (e.spec() && e.spec()->name_space == Namespace::kClass && a.name == "class") {
+    return Namespace::kNone;
+  }
+  if (a.spec->ref_selector.empty()) return a.spec->ref;
+  const std::string* sel = e.Get(a.spec->ref_selector);
+  return sel ? NamespaceFromObjType(*sel) : Namespace::kNone;
+}
+
 std::string FormatReal(double v) {
   char buf[64];
   auto [p, ec] = std::to_chars(buf, buf + sizeof(buf), v);

@@ -124,13 +124,8 @@ void ApplyPrefix(Document& doc, const std::string& prefix) {
         updates.emplace_back(a.name, prefix + a.value);
         continue;
       }
-      if (!a.spec->IsReference()) continue;
-      Namespace ns = a.spec->ref;
-      if (!a.spec->ref_selector.empty()) {
-        const std::string* sel = e.Get(a.spec->ref_selector);
-        ns = sel ? document::NamespaceFromObjType(*sel) : Namespace::kNone;
-        if (ns == Namespace::kNone) continue;
-      }
+      const Namespace ns = document::ReferencedNamespace(e, a);
+      if (ns == Namespace::kNone) continue;
       if (ns == Namespace::kBody && a.value == "world") continue;
       updates.emplace_back(a.name, prefix + a.value);
     }
@@ -379,7 +374,10 @@ std::map<std::string, std::string> OptionAttributes(const Document& doc) {
   return out;
 }
 
-void SetOption(Element& option, const std::string& key, const std::string& value) {
+}  // namespace
+
+void SetOptionAttribute(Document& doc, const std::string& key, const std::string& value) {
+  Element& option = doc.Section("option");
   if (key.rfind("flag.", 0) == 0) {
     Element* flag = option.FirstChild("flag");
     if (!flag) flag = &option.AddChild("flag");
@@ -388,6 +386,8 @@ void SetOption(Element& option, const std::string& key, const std::string& value
     option.Set(key, value);
   }
 }
+
+namespace {
 
 // Sections merged child by child into the scene, in MuJoCo's processing order.
 constexpr const char* kMergedSections[] = {"custom", "asset",    "worldbody", "contact", "equality",
@@ -541,8 +541,7 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs) {
     for (const auto& d : doc.diagnostics()) result.diagnostics.push_back(d);
     result.articulations.push_back(std::move(layout));
   }
-  Element& option = scene.Section("option");
-  for (const auto& [k, v] : scene_options) SetOption(option, k, v);
+  for (const auto& [k, v] : scene_options) SetOptionAttribute(scene, k, v);
   return result;
 }
 

@@ -233,15 +233,8 @@ std::vector<InputError> FindDanglingReferences(const Document& doc) {
   doc.root().Visit([&](const Element& e) {
     if (!e.spec()) return;
     for (const document::Attribute& a : e.attributes()) {
-      if (!a.spec || !a.spec->IsReference() || a.value.empty()) continue;
-      // A default's own `class` defines its name rather than referencing one.
-      if (e.spec()->name_space == Namespace::kClass && a.name == "class") continue;
-      Namespace ns = a.spec->ref;
-      if (!a.spec->ref_selector.empty()) {
-        const std::string* sel = e.Get(a.spec->ref_selector);
-        ns = sel ? document::NamespaceFromObjType(*sel) : Namespace::kNone;
-        if (ns == Namespace::kNone) continue;
-      }
+      const Namespace ns = document::ReferencedNamespace(e, a);
+      if (ns == Namespace::kNone || a.value.empty()) continue;
       if (names[static_cast<size_t>(ns)].count(a.value)) continue;
       // <composite> generates bodies, joints, geoms, sites, tendons and skins named after its
       // prefix; names that may come from one cannot be checked without running the generator.

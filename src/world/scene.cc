@@ -15,10 +15,10 @@ namespace fs = std::filesystem;
 namespace {
 
 // Compiles `doc`; a MuJoCo error is rethrown naming the source element (and its articulation).
-physics::ModelPtr CompileDocument(const document::Document& doc, std::string* xml_out,
+physics::ModelPtr CompileDocument(const document::Document& doc,
                                   const std::vector<mjcf::ArticulationLayout>* layouts) {
   mjcf::LineMap map;
-  std::string xml = mjcf::WriteString(doc, {}, &map);
+  const std::string xml = mjcf::WriteString(doc, {}, &map);
   physics::ModelPtr model;
   try {
     model = physics::CompileXmlString(xml);
@@ -35,7 +35,6 @@ physics::ModelPtr CompileDocument(const document::Document& doc, std::string* xm
     }
     throw physics::CompileError(msg);
   }
-  if (xml_out) *xml_out = std::move(xml);
   return model;
 }
 
@@ -69,6 +68,29 @@ void NoteBridge(const mjcf::BridgeReport& report, const std::string& label, std:
   *out += report.Format();
 }
 
+// Writes the compiled keyframes back into the composed document's placeholder keys, so that the
+// document (and the debug XML saved from it) holds the full-length keys MuJoCo needs.
+void WriteKeyframeValues(document::Document& doc, const mjModel* m) {
+  document::Element* section = doc.root().FirstChild("keyframe");
+  if (!section) return;
+  auto row = [](const mjtNum* base, int k, int n) {
+    return std::vector<double>(base + static_cast<size_t>(k) * n,
+                               base + static_cast<size_t>(k + 1) * n);
+  };
+  int k = 0;
+  for (const auto& key : section->children()) {
+    key->SetReals("qpos", row(m->key_qpos, k, m->nq));
+    if (m->nv) key->SetReals("qvel", row(m->key_qvel, k, m->nv));
+    if (m->na) key->SetReals("act", row(m->key_act, k, m->na));
+    if (m->nu) key->SetReals("ctrl", row(m->key_ctrl, k, m->nu));
+    if (m->nmocap) {
+      key->SetReals("mpos", row(m->key_mpos, k, 3 * m->nmocap));
+      key->SetReals("mquat", row(m->key_mquat, k, 4 * m->nmocap));
+    }
+    ++k;
+  }
+}
+
 void SaveDebug(const document::Document& doc, const mjModel* m, const std::string& folder) {
   fs::create_directories(folder);
   const std::string xml = (fs::path(folder) / "scene_compiled.xml").string();
@@ -99,22 +121,12 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   }
   mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs));
   // Scene overrides: only the fields set, over whatever the articulations gave.
-  if (!scene.options.empty()) {
-    document::Element& option = composed.doc.Section("option");
-    for (const auto& [k, v] : scene.options) {
-      if (k.rfind("flag.", 0) == 0) {
-        document::Element* flag = option.FirstChild("flag");
-        if (!flag) flag = &option.AddChild("flag");
-        flag->Set(k.substr(5), v);
-      } else {
-        option.Set(k, v);
-      }
-    }
-  }
+  for (const auto& [k, v] : scene.options) mjcf::SetOptionAttribute(composed.doc, k, v);
   for (const auto& [k, v] : scene.size) composed.doc.Section("size").Set(k, v);
   CompiledScene out;
-  out.model = CompileDocument(composed.doc, &out.xml, &composed.articulations);
+  out.model = CompileDocument(composed.doc, &composed.articulations);
   mjcf::ApplyArticulationKeyframes(composed.articulations, out.model.get());
+  WriteKeyframeValues(composed.doc, out.model.get());
   out.software_sensors = physics::RegisterSoftwareSensors(out.model.get(), software);
   out.bridge_report = std::move(bridge_text);
   for (const ArticulationConfig& a : scene.articulations) {
@@ -127,6 +139,7 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   if (!scene.save_debug_xml.empty()) SaveDebug(composed.doc, out.model.get(), scene.save_debug_xml);
   out.articulations = std::move(composed.articulations);
   out.diagnostics = std::move(composed.diagnostics);
+  out.doc = std::move(composed.doc);
   return out;
 }
 
@@ -135,11 +148,12 @@ CompiledScene BuildModel(const std::string& mjcf_path) {
   document::Document doc = ReadBridged(mjcf_path, "", &report);
   CompiledScene out;
   out.diagnostics = doc.diagnostics();
-  out.model = CompileDocument(doc, &out.xml, nullptr);
+  out.model = CompileDocument(doc, nullptr);
   std::vector<physics::SoftwareSensorSpec> software;
   AddSoftwareSensors(report, "", &software);
   out.software_sensors = physics::RegisterSoftwareSensors(out.model.get(), software);
   NoteBridge(report, "", &out.bridge_report);
+  out.doc = std::move(doc);
   return out;
 }
 

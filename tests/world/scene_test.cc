@@ -9,6 +9,7 @@
 #include <set>
 
 #include "mujoco_test.h"
+#include "urlab/mjcf/writer.h"
 #include "urlab/physics/model.h"
 
 namespace urlab {
@@ -180,6 +181,13 @@ TEST_F(SceneTest, KeyframesStayPerArticulation) {
   EXPECT_EQ(d->qpos[e1], -1.0);
   EXPECT_EQ(d->ctrl[Id(m, mjOBJ_ACTUATOR, "a1_elbow_servo")], -1.0);
   EXPECT_EQ(d->ctrl[Id(m, mjOBJ_ACTUATOR, "a0_elbow_servo")], 0.0);
+  // The saved scene holds full-length keys and loads on its own with the same keyframes.
+  const std::string saved = dir_ + "/out/scene_compiled.xml";
+  mjcf::WriteFile(s.doc, saved);
+  physics::ModelPtr again = physics::LoadXmlFile(saved);
+  ASSERT_EQ(again->nkey, m->nkey);
+  for (int i = 0; i < m->nkey * m->nq; ++i) EXPECT_EQ(again->key_qpos[i], m->key_qpos[i]) << i;
+  for (int i = 0; i < m->nkey * m->nu; ++i) EXPECT_EQ(again->key_ctrl[i], m->key_ctrl[i]) << i;
 }
 
 TEST_F(SceneTest, PlacedKeyframesMoveFreeAndMocapBodies) {

@@ -29,7 +29,8 @@ struct Diagnostic {
 class Document {
  public:
   // An empty model: <mujoco model="name"/>.
-  explicit Document(std::string model_name = "");
+  Document() : Document(std::string()) {}
+  explicit Document(std::string model_name);
   Document(Document&&) noexcept;
   Document& operator=(Document&&) noexcept;
   ~Document();

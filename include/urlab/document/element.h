@@ -133,6 +133,11 @@ class Element {
   bool edited_ = false;
 };
 
+// The namespace attribute `a` of `e` names: the grammar's fixed one, or the one chosen by the
+// selector attribute (objtype/reftype). kNone when `a` is not a reference (a default's own
+// `class` defines a name rather than naming one) or the selector is missing or unknown.
+Namespace ReferencedNamespace(const Element& e, const Attribute& a);
+
 // Formats a real with the shortest text that reads back to the same double.
 std::string FormatReal(double v);
 // Formats reals separated by single spaces.

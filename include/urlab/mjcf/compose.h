@@ -74,6 +74,10 @@ struct ComposeResult {
 // cannot be composed.
 ComposeResult Compose(std::vector<ArticulationInput> inputs);
 
+// Sets one <option> attribute of `doc` ("timestep", ...; "flag.X" for <option><flag X=>),
+// creating the elements as needed.
+void SetOptionAttribute(document::Document& doc, const std::string& key, const std::string& value);
+
 // Writes every articulation keyframe into the compiled model's key arrays (the placeholder
 // keys Compose added): the articulation's own values where given, the model's reference
 // configuration elsewhere. Throws Error when the model does not match the layout.

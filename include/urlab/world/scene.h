@@ -22,7 +22,7 @@ struct CompiledScene {
   std::string bridge_report;  // what the dialect bridge changed ("" when nothing)
   std::vector<mjcf::ArticulationLayout> articulations;
   std::vector<document::Diagnostic> diagnostics;  // warnings worth showing the user
-  std::string xml;                                // the composed MJCF MuJoCo compiled
+  document::Document doc;  // the (composed) document MuJoCo compiled, e.g. for --save-xml
 };
 
 // Composes and compiles a scene. Throws InputError / CompileError with the articulation, element
