@@ -49,7 +49,7 @@ int Run(const RunArgs& args) {
   options.reset_on_divergence = args.reset_on_divergence;
   world::Manager manager(options);
   manager.BeginPlay(world::LoadSceneOrModel(args.scene));
-  physics::PhysicsEngine& engine = manager.engine();
+  physics::PhysicsEngine& engine = manager.session().engine();
   const double timestep = engine.model()->opt.timestep;
 
   const auto start = Clock::now();

@@ -26,11 +26,7 @@ ArticulationControl::ArticulationControl(const ArticulationBindings& bindings)
     body_ids_.push_back(b.id);
     if (b.mocap_id >= 0) mocap_ids_.push_back(b.mocap_id);
   }
-  const std::size_t n = actuator_ids_.size();
-  network_ = AtomicValues(n);
-  ui_ = AtomicValues(n);
-  hold_ = AtomicValues(n);
-  scratch_.assign(n, 0);
+  for (auto& c : channels_) c = std::make_unique<FrameChannel>(actuator_ids_.size());
   SetController(std::make_unique<PassthroughController>());
 }
 
@@ -47,10 +43,19 @@ void ArticulationControl::SetController(std::unique_ptr<Controller> controller) 
   controller_ = std::move(controller);
 }
 
+FrameChannel& ArticulationControl::channel(ControlSource source) const {
+  const int i = static_cast<int>(source);
+  if (i < 0 || i >= kNumControlSources) throw Error("ArticulationControl: bad control source");
+  return *channels_[static_cast<std::size_t>(i)];
+}
+
+bool ArticulationControl::PublishFrame(ControlSource source, std::span<const double> targets,
+                                       std::span<const double> kp, std::span<const double> kv) {
+  return channel(source).Publish(targets, kp, kv);
+}
+
 bool ArticulationControl::SetTarget(ControlSource source, int index, double value) {
-  if (index < 0 || index >= num_actuators()) return false;
-  (source == ControlSource::kNetwork ? network_ : ui_).Set(static_cast<std::size_t>(index), value);
-  return true;
+  return channel(source).Set(index, value);
 }
 
 bool ArticulationControl::SetTarget(ControlSource source, std::string_view short_name,
@@ -59,8 +64,7 @@ bool ArticulationControl::SetTarget(ControlSource source, std::string_view short
 }
 
 double ArticulationControl::GetTarget(ControlSource source, int index) const {
-  if (index < 0 || index >= num_actuators()) return 0;
-  return (source == ControlSource::kNetwork ? network_ : ui_).Get(static_cast<std::size_t>(index));
+  return channel(source).Get(index);
 }
 
 void ArticulationControl::SetSourceOverride(std::optional<ControlSource> source) {
@@ -74,6 +78,7 @@ std::optional<ControlSource> ArticulationControl::source_override() const {
 }
 
 ControlSource ArticulationControl::EffectiveSource(ControlSource global) const {
+  if (holding()) return ControlSource::kHold;
   return source_override().value_or(global);
 }
 
@@ -96,21 +101,20 @@ void ArticulationControl::HoldKeyframe(int key) {
     throw Error("HoldKeyframe: keyframe id " + std::to_string(key) + " out of range");
   }
   const bool positions = controller_->TargetsArePositions();
+  std::vector<double> pose(actuator_ids_.size());
   for (std::size_t i = 0; i < actuator_ids_.size(); ++i) {
     const ActuatorBinding b = MakeActuatorBinding(m, actuator_ids_[i]);
-    double v = m->key_ctrl[key * m->nu + b.actuator_id];
-    if (positions && b.has_joint()) v = m->key_qpos[key * m->nq + b.qpos_adr];
-    hold_.Set(i, v);
+    pose[i] = m->key_ctrl[key * m->nu + b.actuator_id];
+    if (positions && b.has_joint()) pose[i] = m->key_qpos[key * m->nq + b.qpos_adr];
   }
+  channel(ControlSource::kHold).Publish(pose);  // the whole pose first, then the switch
   holding_.store(true, std::memory_order_release);
 }
 
 void ArticulationControl::ApplyControls(const mjModel* m, mjData* d, ControlSource global) {
-  const AtomicValues& src = holding()                                            ? hold_
-                            : EffectiveSource(global) == ControlSource::kNetwork ? network_
-                                                                                 : ui_;
-  src.CopyTo(scratch_);
-  controller_->ComputeAndApply(m, d, scratch_);
+  const CommandFrame& frame = channel(EffectiveSource(global)).Read();
+  controller_->UseFrameGains(frame.kp, frame.kv);
+  controller_->ComputeAndApply(m, d, frame.targets);
 }
 
 void ArticulationControl::ResetToKeyframe(const mjModel* m, mjData* d, int key) const {
@@ -160,8 +164,8 @@ void ControlSystem::ApplyControls(const mjModel* m, mjData* d) {
   for (const auto& a : all_) a->ApplyControls(m, d, global);
 }
 
-void ControlSystem::RequestKeyframeReset(PhysicsEngine& engine, std::string_view prefix,
-                                         std::string_view key_name) const {
+std::uint64_t ControlSystem::RequestKeyframeReset(PhysicsEngine& engine, std::string_view prefix,
+                                                  std::string_view key_name) const {
   const ArticulationControl* a = Find(prefix);
   if (!a) throw Error("RequestKeyframeReset: no articulation '" + std::string(prefix) + "'");
   const int key = a->FindKeyframe(engine.model(), key_name);
@@ -169,9 +173,9 @@ void ControlSystem::RequestKeyframeReset(PhysicsEngine& engine, std::string_view
     throw Error("RequestKeyframeReset: no keyframe '" + std::string(key_name) + "' or '" +
                 std::string(prefix) + std::string(key_name) + "'");
   }
-  engine.ResetWith([a, key](const mjModel* m, mjData* d) { a->ResetToKeyframe(m, d, key); },
-                   "reset articulation '" + std::string(prefix) + "' to keyframe '" +
-                       std::string(key_name) + "'");
+  return engine.ResetWith([a, key](const mjModel* m, mjData* d) { a->ResetToKeyframe(m, d, key); },
+                          "reset articulation '" + std::string(prefix) + "' to keyframe '" +
+                              std::string(key_name) + "'");
 }
 
 }  // namespace urlab::control

@@ -4,18 +4,21 @@
 
 namespace urlab::control {
 
+namespace {
+constexpr const char* kSourceNames[kNumControlSources] = {"network", "ui", "input", "hold",
+                                                          "replay"};
+}  // namespace
+
 const char* ToString(ControlSource source) {
-  return source == ControlSource::kNetwork ? "network" : "ui";
+  const int i = static_cast<int>(source);
+  return i >= 0 && i < kNumControlSources ? kSourceNames[i] : "?";
 }
 
-AtomicValues::AtomicValues(std::size_t n, double initial)
-    : n_(n), values_(new std::atomic<double>[n]) {
-  for (std::size_t i = 0; i < n; ++i) values_[i].store(initial, std::memory_order_relaxed);
-}
-
-void AtomicValues::CopyTo(std::span<double> out) const {
-  const std::size_t n = std::min(n_, out.size());
-  for (std::size_t i = 0; i < n; ++i) out[i] = values_[i].load(std::memory_order_relaxed);
+std::optional<ControlSource> ParseControlSource(std::string_view name) {
+  for (int i = 0; i < kNumControlSources; ++i) {
+    if (name == kSourceNames[i]) return static_cast<ControlSource>(i);
+  }
+  return std::nullopt;
 }
 
 double ActuatorBinding::ClampToJoint(double q) const {

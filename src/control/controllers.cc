@@ -62,8 +62,13 @@ void PdController::ApplyPositionTargets(const mjModel*, mjData* d,
     if (b.motor && b.has_joint()) {
       const AtomicGains& g = gains_[i];
       const double limit = g.limit.load(std::memory_order_relaxed);
-      double tau = g.kp.load(std::memory_order_relaxed) * (target - d->qpos[b.qpos_adr]) -
-                   g.kv.load(std::memory_order_relaxed) * d->qvel[b.dof_adr];
+      const double kp = i < frame_kp_.size() && !std::isnan(frame_kp_[i])
+                            ? frame_kp_[i]
+                            : g.kp.load(std::memory_order_relaxed);
+      const double kv = i < frame_kv_.size() && !std::isnan(frame_kv_[i])
+                            ? frame_kv_[i]
+                            : g.kv.load(std::memory_order_relaxed);
+      double tau = kp * (target - d->qpos[b.qpos_adr]) - kv * d->qvel[b.dof_adr];
       tau = std::clamp(tau, -limit, limit);
       const double scale = b.gain * b.gear;
       u = scale != 0 ? tau / scale : 0;

@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
+#include <variant>
 
 #include "urlab/core/error.h"
 
@@ -15,9 +17,27 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// MuJoCo's instability warnings watched after every step, with whether the info is a qpos index.
-constexpr std::array<int, 3> kWatchedWarnings = {mjWARN_BADQPOS, mjWARN_BADQVEL, mjWARN_BADQACC};
-constexpr std::array<const char*, 3> kWatchedNames = {"qpos", "qvel", "qacc"};
+// MuJoCo's instability warnings watched after every step: what went bad, and what the warning's
+// info indexes (a qpos address, a dof address or an actuator id).
+enum class WarnIndex { kQpos, kDof, kActuator };
+struct WatchedWarning {
+  int warning;
+  const char* what;
+  WarnIndex index;
+};
+constexpr std::array<WatchedWarning, 4> kWatched = {{
+    {mjWARN_BADQPOS, "qpos", WarnIndex::kQpos},
+    {mjWARN_BADQVEL, "qvel", WarnIndex::kDof},
+    {mjWARN_BADQACC, "qacc", WarnIndex::kDof},
+    {mjWARN_BADCTRL, "ctrl", WarnIndex::kActuator},
+}};
+
+bool AllFinite(const mjtNum* v, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(v[i])) return false;
+  }
+  return true;
+}
 
 // Below this much remaining wait the loop yields instead of sleeping (sleep overshoots).
 constexpr auto kSpinMargin = std::chrono::microseconds(200);
@@ -55,35 +75,13 @@ struct IteratingScope {
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
-// RenderBuffer
-
-RenderBuffer::RenderBuffer(int nbody) {
-  for (auto& s : slots_) {
-    s.xpos.assign(static_cast<std::size_t>(3 * nbody), 0);
-    s.xquat.assign(static_cast<std::size_t>(4 * nbody), 0);
-  }
-}
-
-void RenderBuffer::Publish() {
-  back_ = middle_.exchange(back_ | kFresh, std::memory_order_acq_rel) & kIndex;
-}
-
-const RenderSnapshot* RenderBuffer::Latest() {
-  if (middle_.load(std::memory_order_acquire) & kFresh) {
-    front_ = middle_.exchange(front_, std::memory_order_acq_rel) & kIndex;
-    has_front_ = true;
-  }
-  return has_front_ ? &slots_[front_] : nullptr;
-}
-
-// ---------------------------------------------------------------------------------------------
 // PhysicsEngine: construction and lifecycle
 
 PhysicsEngine::PhysicsEngine(ModelPtr model) : PhysicsEngine(std::move(model), Options{}) {}
 
 PhysicsEngine::PhysicsEngine(ModelPtr model, Options options)
-    : model_(std::move(model)), render_(model_ ? model_->nbody : 0) {
-  if (!model_) throw Error("PhysicsEngine needs a compiled model");
+    : model_(model ? std::move(model) : throw Error("PhysicsEngine needs a compiled model")),
+      publisher_(model_.get()) {
   data_ = MakeData(model_.get());
   mj_forward(model_.get(), data_.get());
   SetSpeedPercent(options.speed_percent);
@@ -99,7 +97,6 @@ PhysicsEngine::PhysicsEngine(ModelPtr model, Options options)
     for (int i = model_->jnt_qposadr[j]; i < next; ++i)
       qpos_joint_[static_cast<std::size_t>(i)] = j;
   }
-  PublishRenderLocked();
 }
 
 PhysicsEngine::~PhysicsEngine() { Stop(); }
@@ -120,7 +117,7 @@ void PhysicsEngine::Stop() {
   running_.store(false, std::memory_order_release);
   // Commands queued while the thread was winding down are applied now.
   std::lock_guard<std::mutex> lock(step_mutex_);
-  ApplyPendingLocked();
+  if (ApplyPendingLocked()) PublishFrameLocked();
 }
 
 void PhysicsEngine::WithLockedData(const std::function<void(mjModel*, mjData*)>& fn) {
@@ -169,7 +166,7 @@ bool PhysicsEngine::RemoveCallback(CallbackId id) {
       return true;
     }
   }
-  return false;
+  return std::erase_if(command_listeners_, [id](const auto& l) { return l.first == id; }) > 0;
 }
 
 void PhysicsEngine::SetApplyControlsHook(StepCallback fn) {
@@ -190,72 +187,137 @@ void PhysicsEngine::SetArticulationResolver(ArticulationResolver fn) {
   resolver_ = std::move(fn);
 }
 
+PhysicsEngine::CallbackId PhysicsEngine::AddCommandListener(CommandListener fn) {
+  ThrowIfOnPhysicsThread("AddCommandListener");
+  if (!fn) throw Error("PhysicsEngine: empty command listener");
+  std::lock_guard<std::mutex> lock(step_mutex_);
+  const CallbackId id = next_id_++;
+  command_listeners_.emplace_back(id, std::move(fn));
+  return id;
+}
+
+// ---------------------------------------------------------------------------------------------
+// State readers
+
+std::shared_ptr<StateSubscription> PhysicsEngine::SubscribeState(std::string name) {
+  ThrowIfOnPhysicsThread("SubscribeState");
+  if (running()) throw Error("SubscribeState('" + name + "'): subscribe before Start");
+  std::lock_guard<std::mutex> lock(step_mutex_);
+  auto s = publisher_.SubscribeLatest(std::move(name));
+  PublishFrameLocked();  // the current state, so a reader has a frame before the first step
+  return s;
+}
+
+std::shared_ptr<StateRing> PhysicsEngine::SubscribeEveryStep(std::string name,
+                                                             std::size_t capacity) {
+  ThrowIfOnPhysicsThread("SubscribeEveryStep");
+  if (running()) throw Error("SubscribeEveryStep('" + name + "'): subscribe before Start");
+  std::lock_guard<std::mutex> lock(step_mutex_);
+  return publisher_.SubscribeEveryStep(std::move(name), capacity);
+}
+
+bool PhysicsEngine::Unsubscribe(const void* subscription) {
+  ThrowIfOnPhysicsThread("Unsubscribe");
+  if (running()) throw Error("Unsubscribe: stop the engine first");
+  std::lock_guard<std::mutex> lock(step_mutex_);
+  return publisher_.Unsubscribe(subscription);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Commands
 
-void PhysicsEngine::QueueReset(PendingReset reset) {
-  {
-    std::lock_guard<std::mutex> lock(pending_mutex_);
-    pending_reset_ = std::move(reset);
-    has_pending_.store(true, std::memory_order_release);
-  }
+void PhysicsEngine::ValidateCommand(const Command& command) const {
+  const mjModel* m = model_.get();
+  const auto range = [](const char* what, int adr, std::size_t n, int size) {
+    if (adr < 0 || n == 0 || static_cast<std::size_t>(adr) + n > static_cast<std::size_t>(size)) {
+      throw Error(std::string(what) + ": " + std::to_string(n) + " value(s) at address " +
+                  std::to_string(adr) + " do not fit the model's " + std::to_string(size));
+    }
+  };
+  const auto finite = [](const char* what, const mjtNum* v, std::size_t n) {
+    if (!AllFinite(v, n)) throw Error(std::string(what) + ": non-finite value");
+  };
+  std::visit(
+      [&](const auto& c) {
+        using T = std::decay_t<decltype(c)>;
+        if constexpr (std::is_same_v<T, cmd::ResetKeyframe>) {
+          if (c.key < 0 || c.key >= m->nkey) {
+            throw Error("ResetToKeyframe: keyframe id " + std::to_string(c.key) +
+                        " out of range (model has " + std::to_string(m->nkey) + ")");
+          }
+        } else if constexpr (std::is_same_v<T, cmd::ResetCustom>) {
+          if (!c.fn) throw Error("ResetWith: empty reset function");
+        } else if constexpr (std::is_same_v<T, cmd::Restore>) {
+          const StateLayout expected = StateLayout::Of(m);
+          if (!(c.state.layout == expected)) {
+            throw StateError("Restore: state has " + c.state.layout.str() + ", model has " +
+                             expected.str());
+          }
+          if (!c.state.IsConsistent()) {
+            throw StateError("Restore: state arrays do not match their layout");
+          }
+        } else if constexpr (std::is_same_v<T, cmd::SetQpos>) {
+          range("SetQpos", c.adr, c.values.size(), m->nq);
+          finite("SetQpos", c.values.data(), c.values.size());
+        } else if constexpr (std::is_same_v<T, cmd::SetQvel>) {
+          range("SetQvel", c.adr, c.values.size(), m->nv);
+          finite("SetQvel", c.values.data(), c.values.size());
+        } else if constexpr (std::is_same_v<T, cmd::SetMocap>) {
+          range("SetMocap", c.mocap_id, 1, m->nmocap);
+          finite("SetMocap", c.pos.data(), 3);
+          finite("SetMocap", c.quat.data(), 4);
+          if (mju_norm(c.quat.data(), 4) < 1e-12) throw Error("SetMocap: zero quaternion");
+        } else if constexpr (std::is_same_v<T, cmd::ApplyForce>) {
+          range("ApplyForce", c.body, 1, m->nbody);
+          finite("ApplyForce", c.force.data(), 3);
+          finite("ApplyForce", c.torque.data(), 3);
+        } else if constexpr (std::is_same_v<T, cmd::SetOptions>) {
+          if (!c.fn) throw Error("SetOptions: empty function");
+        }
+      },
+      command);
+}
+
+std::uint64_t PhysicsEngine::Submit(Command command) {
+  ValidateCommand(command);
+  const std::uint64_t seq = commands_.Push(std::move(command));
   if (!running() && tls_iterating != this) {
     // Not running: apply now. If the thread starts meanwhile, whoever locks first applies it.
     // From inside a StepSync callback it stays queued for the next iteration.
     std::lock_guard<std::mutex> lock(step_mutex_);
-    ApplyPendingLocked();
+    if (ApplyPendingLocked()) PublishFrameLocked();
   }
+  return seq;
 }
 
-void PhysicsEngine::Reset() { QueueReset(PendingReset{}); }
-
-void PhysicsEngine::ResetToKeyframe(int key) {
-  if (key < 0 || key >= model_->nkey) {
-    throw Error("ResetToKeyframe: keyframe id " + std::to_string(key) +
-                " out of range (model has " + std::to_string(model_->nkey) + ")");
-  }
-  PendingReset r;
-  r.kind = PendingReset::Kind::kKeyframe;
-  r.key = key;
-  QueueReset(std::move(r));
+CommandResult PhysicsEngine::WaitForCommand(std::uint64_t seq,
+                                            std::chrono::steady_clock::duration timeout) {
+  ThrowIfOnPhysicsThread("WaitForCommand");
+  return commands_.Wait(seq, timeout);
 }
 
-void PhysicsEngine::ResetToKeyframe(const std::string& name) {
+std::uint64_t PhysicsEngine::Reset() { return Submit(cmd::Reset{}); }
+
+std::uint64_t PhysicsEngine::ResetToKeyframe(int key) { return Submit(cmd::ResetKeyframe{key}); }
+
+std::uint64_t PhysicsEngine::ResetToKeyframe(const std::string& name) {
   const int key = mj_name2id(model_.get(), mjOBJ_KEY, name.c_str());
   if (key < 0) throw Error("ResetToKeyframe: no keyframe named '" + name + "'");
-  ResetToKeyframe(key);
+  return ResetToKeyframe(key);
 }
 
-void PhysicsEngine::ResetWith(StepCallback fn, std::string label) {
-  if (!fn) throw Error("ResetWith: empty reset function");
-  PendingReset r;
-  r.kind = PendingReset::Kind::kCustom;
-  r.fn = std::move(fn);
-  r.label = std::move(label);
-  QueueReset(std::move(r));
+std::uint64_t PhysicsEngine::ResetWith(StepCallback fn, std::string label) {
+  return Submit(cmd::ResetCustom{std::move(fn), std::move(label)});
+}
+
+std::uint64_t PhysicsEngine::Restore(PhysicsState state) {
+  return Submit(cmd::Restore{std::move(state)});
 }
 
 PhysicsState PhysicsEngine::Snapshot() {
   ThrowIfOnPhysicsThread("Snapshot");
   std::lock_guard<std::mutex> lock(step_mutex_);
   return CaptureState(model_.get(), data_.get());
-}
-
-void PhysicsEngine::Restore(PhysicsState state) {
-  const StateLayout expected = StateLayout::Of(model_.get());
-  if (!(state.layout == expected)) {
-    throw StateError("Restore: state has " + state.layout.str() + ", model has " + expected.str());
-  }
-  if (!state.IsConsistent()) throw StateError("Restore: state arrays do not match their layout");
-  {
-    std::lock_guard<std::mutex> lock(pending_mutex_);
-    pending_restore_ = std::move(state);
-    has_pending_.store(true, std::memory_order_release);
-  }
-  if (!running() && tls_iterating != this) {
-    std::lock_guard<std::mutex> lock(step_mutex_);
-    ApplyPendingLocked();
-  }
 }
 
 void PhysicsEngine::StepSync(int n) {
@@ -338,74 +400,127 @@ PhysicsEngine::CallbackId PhysicsEngine::AddEventListener(EventListener fn) {
 // ---------------------------------------------------------------------------------------------
 // The iteration
 
-void PhysicsEngine::ApplyResetLocked(const PendingReset& reset) {
-  const mjModel* m = model_.get();
+std::uint32_t PhysicsEngine::ApplyCommandLocked(Command& command) {
+  mjModel* m = model_.get();
   mjData* d = data_.get();
-  EngineEvent e;
-  e.kind = EngineEventKind::kReset;
-  e.sim_time = d->time;
-  switch (reset.kind) {
-    case PendingReset::Kind::kFull:
-      mj_resetData(m, d);
-      e.message = "reset";
-      break;
-    case PendingReset::Kind::kKeyframe:
-      mj_resetDataKeyframe(m, d, reset.key);
-      e.message = "reset to keyframe " + std::to_string(reset.key);
-      if (const char* name = mj_id2name(m, mjOBJ_KEY, reset.key); name && name[0]) {
-        e.message += " '" + std::string(name) + "'";
-      }
-      break;
-    case PendingReset::Kind::kCustom:
-      reset.fn(m, d);
-      e.message = reset.label.empty() ? "custom reset" : reset.label;
-      break;
-  }
-  mj_forward(m, d);
-  in_divergence_ = false;
-  QueueEvent(std::move(e));
+  const auto reset_event = [&](double before, std::string message) {
+    in_divergence_ = false;
+    QueueEvent({EngineEventKind::kReset, before, std::move(message)});
+  };
+  const double before = d->time;
+  return std::visit(
+      [&](auto& c) -> std::uint32_t {
+        using T = std::decay_t<decltype(c)>;
+        if constexpr (std::is_same_v<T, cmd::Reset>) {
+          mj_resetData(m, d);
+          mj_forward(m, d);
+          reset_event(before, "reset");
+          return kDiscontinuityReset;
+        } else if constexpr (std::is_same_v<T, cmd::ResetKeyframe>) {
+          mj_resetDataKeyframe(m, d, c.key);
+          mj_forward(m, d);
+          std::string msg = "reset to keyframe " + std::to_string(c.key);
+          if (const char* name = mj_id2name(m, mjOBJ_KEY, c.key); name && name[0]) {
+            msg += " '" + std::string(name) + "'";
+          }
+          reset_event(before, std::move(msg));
+          return kDiscontinuityReset;
+        } else if constexpr (std::is_same_v<T, cmd::ResetCustom>) {
+          c.fn(m, d);
+          mj_forward(m, d);
+          reset_event(before, c.label.empty() ? "custom reset" : c.label);
+          return kDiscontinuityReset;
+        } else if constexpr (std::is_same_v<T, cmd::Restore>) {
+          RestoreState(m, d, c.state);
+          in_divergence_ = false;
+          QueueEvent({EngineEventKind::kRestored, before,
+                      "restored state at t=" + std::to_string(c.state.time)});
+          return kDiscontinuityRestore;
+        } else if constexpr (std::is_same_v<T, cmd::SetQpos>) {
+          std::copy(c.values.begin(), c.values.end(), d->qpos + c.adr);
+          mj_forward(m, d);
+          return kDiscontinuitySetState;
+        } else if constexpr (std::is_same_v<T, cmd::SetQvel>) {
+          std::copy(c.values.begin(), c.values.end(), d->qvel + c.adr);
+          mj_forward(m, d);
+          return kDiscontinuitySetState;
+        } else if constexpr (std::is_same_v<T, cmd::SetMocap>) {
+          mju_copy3(d->mocap_pos + 3 * c.mocap_id, c.pos.data());
+          mju_copy4(d->mocap_quat + 4 * c.mocap_id, c.quat.data());
+          mju_normalize4(d->mocap_quat + 4 * c.mocap_id);
+          return kNoDiscontinuity;
+        } else if constexpr (std::is_same_v<T, cmd::ApplyForce>) {
+          mjtNum* x = d->xfrc_applied + 6 * c.body;
+          mju_addTo3(x, c.force.data());
+          mju_addTo3(x + 3, c.torque.data());
+          one_shot_.push_back(c);
+          return kNoDiscontinuity;
+        } else if constexpr (std::is_same_v<T, cmd::SetOptions>) {
+          const mjOption saved = m->opt;
+          c.fn(m->opt);
+          if (!(m->opt.timestep > 0) || !std::isfinite(m->opt.timestep)) {
+            m->opt = saved;
+            throw Error("SetOptions: timestep must be a positive finite number");
+          }
+          return kDiscontinuityOptions;
+        } else {
+          static_assert(std::is_same_v<T, cmd::SetPaused>);
+          SetPaused(c.paused);
+          return kNoDiscontinuity;
+        }
+      },
+      command);
 }
 
-void PhysicsEngine::ApplyPendingLocked() {
-  if (!has_pending_.load(std::memory_order_acquire)) return;
+bool PhysicsEngine::ApplyPendingLocked() {
+  if (!commands_.pending()) return false;
   IteratingScope scope(this);
-  std::optional<PendingReset> reset;
-  std::optional<PhysicsState> restore;
-  {
-    std::lock_guard<std::mutex> lock(pending_mutex_);
-    reset.swap(pending_reset_);
-    restore.swap(pending_restore_);
-    has_pending_.store(false, std::memory_order_release);
+  commands_.TakeAll(&taken_);
+  for (CommandQueue::Entry& e : taken_) {
+    AppliedCommand applied;
+    applied.seq = e.seq;
+    applied.name = CommandName(e.command);
+    try {
+      applied.discontinuity = ApplyCommandLocked(e.command);
+    } catch (const std::exception& ex) {
+      // The command did not take effect (or only partly: a custom reset that threw); the state
+      // is recomputed so the loop goes on from something consistent.
+      applied.error = std::string(applied.name) + ": " + ex.what();
+      data_->pstack = 0;
+      mj_forward(model_.get(), data_.get());
+      if (log_events_) spdlog::warn("physics: command failed: {}", applied.error);
+    }
+    if (applied.discontinuity) {
+      pending_discontinuity_ |= applied.discontinuity;
+      ++epoch_;
+    }
+    for (const auto& [id, fn] : command_listeners_) fn(applied, model_.get(), data_.get());
+    commands_.Finish(e.seq, applied.error);
   }
-  if (reset) ApplyResetLocked(*reset);
-  if (restore) {
-    const double before = data_->time;
-    RestoreState(model_.get(), data_.get(), *restore);
-    in_divergence_ = false;
-    QueueEvent({EngineEventKind::kRestored, before,
-                "restored state at t=" + std::to_string(restore->time)});
-  }
-  if (reset || restore) PublishRenderLocked();
+  const bool any = !taken_.empty();
+  taken_.clear();  // drop what the commands held (states, functions) now
+  return any;
 }
 
 void PhysicsEngine::IterateLocked(bool force_step) {
   const mjModel* m = model_.get();
   mjData* d = data_.get();
   IteratingScope scope(this);
-  ApplyPendingLocked();
+  const bool applied = ApplyPendingLocked();
   for (const Hook& h : pre_step_) h.fn(m, d);
   if (apply_controls_) apply_controls_(m, d);
   const bool step = force_step || !paused_.load(std::memory_order_acquire);
   if (step) {
     const double time_before = d->time;
-    for (std::size_t i = 0; i < kWatchedWarnings.size(); ++i) {
-      d->warning[kWatchedWarnings[i]].lastinfo = -1;  // sentinel: MuJoCo sets it on a warning
+    for (const WatchedWarning& w : kWatched) {
+      d->warning[w.warning].lastinfo = -1;  // sentinel: MuJoCo sets it on a warning
     }
     if (custom_step_) {
       custom_step_(m, d);
     } else {
       mj_step(m, d);
     }
+    RemoveOneShotForcesLocked();  // they act for one step only
     step_count_.fetch_add(1, std::memory_order_relaxed);
     if (d->time > time_before) sim_advanced_ += d->time - time_before;
     ++window_steps_;
@@ -414,8 +529,8 @@ void PhysicsEngine::IterateLocked(bool force_step) {
   for (const Hook& h : post_step_) h.fn(m, d);
   if (step) {
     for (const Hook& h : on_post_step_) h.fn(m, d);
-    PublishRenderLocked();
   }
+  if (step || applied || published_paused_ != paused()) PublishFrameLocked();
 }
 
 int PhysicsEngine::JointOfIndex(int index, bool is_qpos) const {
@@ -430,14 +545,23 @@ void PhysicsEngine::CheckDivergenceLocked(double time_before) {
   mjData* d = data_.get();
   const char* what = nullptr;
   int joint = -1;
+  int actuator = -1;
   // MuJoCo's own checks (which also reset mjData) report through the warning statistics.
-  for (std::size_t i = 0; i < kWatchedWarnings.size() && !what; ++i) {
-    const mjWarningStat& w = d->warning[kWatchedWarnings[i]];
+  for (const WatchedWarning& watched : kWatched) {
+    const mjWarningStat& w = d->warning[watched.warning];
     // mj_resetData (which MuJoCo calls after the warning) zeroes every statistic and then
     // re-raises the offending one, so only a raised counter with a fresh lastinfo counts.
     if (w.number > 0 && w.lastinfo != -1) {
-      what = kWatchedNames[i];
-      joint = JointOfIndex(w.lastinfo, kWatchedWarnings[i] == mjWARN_BADQPOS);
+      what = watched.what;
+      if (watched.index == WarnIndex::kActuator) {
+        actuator = w.lastinfo;
+        if (actuator >= 0 && actuator < m->nu && m->actuator_trntype[actuator] == mjTRN_JOINT) {
+          joint = m->actuator_trnid[2 * actuator];
+        }
+      } else {
+        joint = JointOfIndex(w.lastinfo, watched.index == WarnIndex::kQpos);
+      }
+      break;
     }
   }
   // Non-finite values MuJoCo has not caught yet (e.g. written by a custom step handler).
@@ -465,6 +589,10 @@ void PhysicsEngine::CheckDivergenceLocked(double time_before) {
   e.sim_time = time_before;
   e.message =
       std::string("simulation diverged: bad ") + what + " at t=" + std::to_string(time_before);
+  if (actuator >= 0 && actuator < m->nu) {
+    const char* name = mj_id2name(m, mjOBJ_ACTUATOR, actuator);
+    e.message += " (actuator " + (name ? std::string(name) : "#" + std::to_string(actuator)) + ")";
+  }
   e.joint_id = joint;
   if (joint >= 0) {
     const char* name = mj_id2name(m, mjOBJ_JOINT, joint);
@@ -487,26 +615,38 @@ void PhysicsEngine::CheckDivergenceLocked(double time_before) {
     std::memcpy(d->warning, warnings, sizeof(warnings));
     mj_forward(m, d);
     in_divergence_ = false;
+    pending_discontinuity_ |= kDiscontinuityReset;
+    ++epoch_;
     QueueEvent({EngineEventKind::kReset, time_before, "reset after divergence"});
   }
 }
 
-void PhysicsEngine::PublishRenderLocked() {
-  const mjModel* m = model_.get();
-  const mjData* d = data_.get();
-  RenderSnapshot& s = render_.Back();
-  s.time = d->time;
-  s.step = step_count_.load(std::memory_order_relaxed);
-  s.ncon = d->ncon;
-  std::memcpy(s.xpos.data(), d->xpos, sizeof(mjtNum) * 3 * static_cast<std::size_t>(m->nbody));
-  std::memcpy(s.xquat.data(), d->xquat, sizeof(mjtNum) * 4 * static_cast<std::size_t>(m->nbody));
-  render_.Publish();
+void PhysicsEngine::RemoveOneShotForcesLocked() {
+  for (const cmd::ApplyForce& f : one_shot_) {
+    mju_subFrom3(data_->xfrc_applied + 6 * f.body, f.force.data());
+    mju_subFrom3(data_->xfrc_applied + 6 * f.body + 3, f.torque.data());
+  }
+  one_shot_.clear();
+}
+
+void PhysicsEngine::PublishFrameLocked() {
+  FrameMeta meta;
+  meta.step = step_count_.load(std::memory_order_relaxed);
+  meta.frame = ++frames_;
+  meta.command_seq = commands_.last_applied();
+  meta.discontinuity = pending_discontinuity_;
+  meta.epoch = epoch_;
+  meta.paused = paused();
+  publisher_.Publish(model_.get(), data_.get(), meta);
+  pending_discontinuity_ = 0;
+  published_paused_ = meta.paused;
 }
 
 void PhysicsEngine::HandleErrorLocked(const std::exception& e) {
   // An error thrown out of MuJoCo leaves its stack pointer where it was; nothing of ours is on
   // the mjData stack between iterations, so it is safe to release it all.
   data_->pstack = 0;
+  RemoveOneShotForcesLocked();  // a step that threw keeps no one-shot force
   paused_.store(true, std::memory_order_release);
   error_latched_.store(true, std::memory_order_release);
   EngineEvent ev;
@@ -531,8 +671,8 @@ void PhysicsEngine::Loop() {
       std::lock_guard<std::mutex> lock(step_mutex_);
       try {
         if (error_latched_.load(std::memory_order_acquire) && paused()) {
-          IteratingScope scope(this);
-          ApplyPendingLocked();  // resets/restores still work; callbacks stay quiet
+          // Commands still work; callbacks stay quiet.
+          if (ApplyPendingLocked() || published_paused_ != paused()) PublishFrameLocked();
         } else {
           IterateLocked(/*force_step=*/false);
         }

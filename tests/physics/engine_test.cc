@@ -10,6 +10,7 @@
 
 #include "physics/test_models.h"
 #include "support/mujoco_test.h"
+#include "support/wait.h"
 
 namespace urlab::physics {
 namespace {
@@ -21,13 +22,7 @@ using testing::kPendulumXml;
 
 class EngineTest : public urlab::testing::MujocoTest {};
 
-// Waits (polling) until `pred` holds or `timeout` passes; returns pred().
-template <typename Pred>
-bool WaitFor(Pred pred, std::chrono::milliseconds timeout = 5000ms) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (!pred() && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(1ms);
-  return pred();
-}
+using testing::WaitFor;
 
 double SimTime(PhysicsEngine& e) {
   double t = 0;
@@ -37,6 +32,7 @@ double SimTime(PhysicsEngine& e) {
 
 TEST_F(EngineTest, StepSyncRunsTheIterationInOrder) {
   PhysicsEngine engine(CompileXmlString(kArmXml));
+  const auto frames = engine.SubscribeState("test");
   std::vector<std::string> order;
   engine.AddPreStepCallback([&](const mjModel*, mjData*) { order.push_back("pre"); });
   engine.SetApplyControlsHook([&](const mjModel*, mjData* d) {
@@ -53,7 +49,7 @@ TEST_F(EngineTest, StepSyncRunsTheIterationInOrder) {
   EXPECT_EQ(order[3], "event");
   EXPECT_EQ(engine.step_count(), 3u);
   EXPECT_NEAR(SimTime(engine), 3 * 0.002, 1e-12);
-  const RenderSnapshot* r = engine.LatestRenderSnapshot();
+  const StateFrame* r = frames->Latest();
   ASSERT_NE(r, nullptr);
   EXPECT_EQ(r->step, 3u);
   EXPECT_NEAR(r->time, 0.006, 1e-12);
@@ -333,9 +329,10 @@ TEST_F(EngineTest, PacingFollowsSpeed) {
   engine.Stop();
 }
 
-TEST_F(EngineTest, RenderSnapshotReadableWhileRunning) {
+TEST_F(EngineTest, StateFrameReadableWhileRunning) {
   PhysicsEngine engine(LoadXmlFile(kHumanoidPath));
   engine.SetAsFastAsPossible(true);
+  const auto frames = engine.SubscribeState("render");
   std::atomic<bool> done{false};
   std::atomic<int> reads{0};
   std::atomic<bool> ok{true};
@@ -343,7 +340,7 @@ TEST_F(EngineTest, RenderSnapshotReadableWhileRunning) {
     double last = -1;
     std::uint64_t last_step = 0;
     while (!done.load()) {
-      const RenderSnapshot* s = engine.LatestRenderSnapshot();
+      const StateFrame* s = frames->Latest();
       if (!s) continue;
       if (s->step < last_step) ok = false;
       if (s->step > last_step && s->time <= last && s->time != 0) ok = false;
@@ -364,6 +361,7 @@ TEST_F(EngineTest, RenderSnapshotReadableWhileRunning) {
 // Another thread storms the running loop with every cross-thread command (run under TSan).
 TEST_F(EngineTest, StressCommandsFromOtherThreads) {
   PhysicsEngine engine(CompileXmlString(kArmXml));
+  const auto frames = engine.SubscribeState("render");
   std::atomic<double> control{0};
   engine.SetApplyControlsHook([&](const mjModel*, mjData* d) { d->ctrl[0] = control.load(); });
   engine.AddPostStepCallback([](const mjModel*, mjData* d) { d->userdata[0] += 1; });
@@ -405,7 +403,7 @@ TEST_F(EngineTest, StressCommandsFromOtherThreads) {
     }
   });
   std::thread render([&] {
-    while (!done.load()) (void)engine.LatestRenderSnapshot();
+    while (!done.load()) (void)frames->Latest();
   });
   const auto end = std::chrono::steady_clock::now() + 1500ms;
   int events = 0;

@@ -10,6 +10,7 @@
 
 #include "mujoco_test.h"
 #include "urlab/control/controllers.h"
+#include "wait.h"
 
 namespace urlab {
 namespace {
@@ -17,6 +18,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using physics::EngineEvent;
 using physics::EngineEventKind;
+using testing::WaitFor;
 using world::Manager;
 using world::ManagerOptions;
 
@@ -69,9 +71,9 @@ class ManagerTest : public testing::MujocoTest {
   }
   // Ticks until `steps` more physics steps were taken (fails after 30 s).
   static void TickSteps(Manager& m, std::uint64_t steps) {
-    const std::uint64_t target = m.engine().step_count() + steps;
+    const std::uint64_t target = m.session().engine().step_count() + steps;
     const auto deadline = Clock::now() + std::chrono::seconds(30);
-    while (m.engine().step_count() < target) {
+    while (m.session().engine().step_count() < target) {
       m.Tick();
       ASSERT_LT(Clock::now(), deadline) << "the physics thread did not advance";
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -89,16 +91,16 @@ class ManagerTest : public testing::MujocoTest {
     }
   }
   static double Qpos(Manager& m, const std::string& joint) {
-    const physics::PhysicsState s = m.engine().Snapshot();
-    const int j = mj_name2id(m.engine().model(), mjOBJ_JOINT, joint.c_str());
+    const physics::PhysicsState s = m.session().engine().Snapshot();
+    const int j = mj_name2id(m.session().engine().model(), mjOBJ_JOINT, joint.c_str());
     EXPECT_GE(j, 0) << joint;
-    return s.qpos[static_cast<std::size_t>(m.engine().model()->jnt_qposadr[j])];
+    return s.qpos[static_cast<std::size_t>(m.session().engine().model()->jnt_qposadr[j])];
   }
   static double Qvel(Manager& m, const std::string& joint) {
-    const physics::PhysicsState s = m.engine().Snapshot();
-    const int j = mj_name2id(m.engine().model(), mjOBJ_JOINT, joint.c_str());
+    const physics::PhysicsState s = m.session().engine().Snapshot();
+    const int j = mj_name2id(m.session().engine().model(), mjOBJ_JOINT, joint.c_str());
     EXPECT_GE(j, 0) << joint;
-    return s.qvel[static_cast<std::size_t>(m.engine().model()->jnt_dofadr[j])];
+    return s.qvel[static_cast<std::size_t>(m.session().engine().model()->jnt_dofadr[j])];
   }
 
   std::string dir_;
@@ -111,13 +113,13 @@ TEST_F(ManagerTest, BeginPlayTickEndPlay) {
   EXPECT_EQ(m.Tick(), 0);  // not playing: nothing happens
   m.BeginPlay(TwoArms("", ""));
   ASSERT_TRUE(m.playing());
-  EXPECT_TRUE(m.engine().running());
-  ASSERT_EQ(m.articulations().size(), 2u);
-  EXPECT_EQ(m.articulations()[0].prefix, "a_");
-  EXPECT_EQ(m.articulations()[1].name(), "b");
-  EXPECT_EQ(m.articulations()[1].control->num_actuators(), 1);
-  EXPECT_EQ(m.OwnerOf("b_hinge"), &m.articulations()[1]);
-  EXPECT_EQ(m.OwnerOf("hinge"), nullptr);
+  EXPECT_TRUE(m.session().engine().running());
+  ASSERT_EQ(m.session().articulations().size(), 2u);
+  EXPECT_EQ(m.session().articulations()[0].prefix, "a_");
+  EXPECT_EQ(m.session().articulations()[1].name(), "b");
+  EXPECT_EQ(m.session().articulations()[1].control->num_actuators(), 1);
+  EXPECT_EQ(m.session().OwnerOf("b_hinge"), &m.session().articulations()[1]);
+  EXPECT_EQ(m.session().OwnerOf("hinge"), nullptr);
   TickSteps(m, 200);
   ASSERT_NE(m.frame(), nullptr);
   EXPECT_GT(m.frame()->step, 0u);
@@ -127,7 +129,7 @@ TEST_F(ManagerTest, BeginPlayTickEndPlay) {
   m.EndPlay();
   EXPECT_FALSE(m.playing());
   EXPECT_EQ(m.frame(), nullptr);
-  EXPECT_THROW(m.engine(), Error);
+  EXPECT_THROW(m.session().engine(), Error);
   m.EndPlay();  // idempotent
   // The same manager can play again.
   m.BeginPlay(TwoArms("", ""));
@@ -145,7 +147,7 @@ TEST_F(ManagerTest, OnlyOneManagerPlays) {
         << e.what();
   }
   EXPECT_FALSE(second.playing());
-  EXPECT_TRUE(first.engine().running());
+  EXPECT_TRUE(first.session().engine().running());
   EXPECT_THROW(first.BeginPlay(TwoArms("", "")), Error);  // already playing
   first.EndPlay();
   second.BeginPlay(TwoArms("", ""));  // free again
@@ -191,27 +193,28 @@ TEST_F(ManagerTest, InitialKeyframeAppliesOnlyToItsArticulation) {
   m.BeginPlay(TwoArms("    keyframe: up\n", "    keyframe: down\n", ""));
   EXPECT_DOUBLE_EQ(Qpos(m, "a_hinge"), 0.7);
   EXPECT_DOUBLE_EQ(Qpos(m, "b_hinge"), -0.4);
-  EXPECT_EQ(m.articulations()[0].initial_key, mj_name2id(m.engine().model(), mjOBJ_KEY, "a_up"));
+  EXPECT_EQ(m.session().articulations()[0].initial_key,
+            mj_name2id(m.session().engine().model(), mjOBJ_KEY, "a_up"));
 
   // A per-articulation reset leaves the other one untouched.
-  m.ResetArticulation("b", "up");
+  m.session().ResetArticulation("b", "up");
   TickUntil(m, [&] { return Qpos(m, "b_hinge") == 0.7; });
   EXPECT_DOUBLE_EQ(Qpos(m, "a_hinge"), 0.7);
-  m.ResetArticulation("a", "down");
+  m.session().ResetArticulation("a", "down");
   TickUntil(m, [&] { return Qpos(m, "a_hinge") == -0.4; });
   EXPECT_DOUBLE_EQ(Qpos(m, "b_hinge"), 0.7);
   // Back to the initial keyframes.
-  m.ResetToInitialState();
+  m.session().ResetToInitialState();
   TickUntil(m, [&] { return Qpos(m, "b_hinge") == -0.4 && Qpos(m, "a_hinge") == 0.7; });
-  EXPECT_THROW(m.ResetArticulation("c"), Error);
-  EXPECT_THROW(m.ResetArticulation("a", "nope"), Error);
+  EXPECT_THROW(m.session().ResetArticulation("c"), Error);
+  EXPECT_THROW(m.session().ResetArticulation("a", "nope"), Error);
 
   // An articulation without an initial keyframe starts at its reference configuration.
   m.EndPlay();
   m.BeginPlay(TwoArms("    keyframe: up\n", ""));
   EXPECT_DOUBLE_EQ(Qpos(m, "a_hinge"), 0.7);
   EXPECT_DOUBLE_EQ(Qpos(m, "b_hinge"), 0.0);
-  EXPECT_THROW(m.ResetArticulation("b"), Error);  // no initial keyframe to go back to
+  EXPECT_THROW(m.session().ResetArticulation("b"), Error);  // no initial keyframe to go back to
 }
 
 TEST_F(ManagerTest, HoldKeyframeKeepsThePose) {
@@ -219,8 +222,8 @@ TEST_F(ManagerTest, HoldKeyframeKeepsThePose) {
   const std::string pd = "    controller: {type: pd, kp: 1000, kv: 50}\n";
   m.BeginPlay(TwoArms(pd + "    keyframe: up\n    hold_keyframe: true\n",
                       pd + "    keyframe: up\n"));  // b: PD towards its targets (0)
-  EXPECT_TRUE(m.articulations()[0].control->holding());
-  EXPECT_FALSE(m.articulations()[1].control->holding());
+  EXPECT_TRUE(m.session().articulations()[0].control->holding());
+  EXPECT_FALSE(m.session().articulations()[1].control->holding());
   TickSteps(m, 1500);                          // 3 s
   EXPECT_NEAR(Qpos(m, "a_hinge"), 0.7, 5e-3);  // gravity sag of a PD servo: ~1.4 Nm / kp
   EXPECT_NEAR(Qvel(m, "a_hinge"), 0.0, 1e-3);
@@ -233,12 +236,13 @@ TEST_F(ManagerTest, PdHeldJointSettlesAtItsTarget) {
       TwoArms("    controller:\n      type: pd\n      kp: 50\n      gains:\n"
               "        hinge: {kp: 2000, kv: 60}\n",
               "", "control_source: ui\n"));
-  auto& pd = dynamic_cast<control::PdController&>(*m.articulations()[0].control->controller());
+  auto& pd =
+      dynamic_cast<control::PdController&>(*m.session().articulations()[0].control->controller());
   EXPECT_DOUBLE_EQ(pd.gains(0).kp, 2000);  // per-joint gains over the defaults
   EXPECT_DOUBLE_EQ(pd.gains(0).kv, 60);
-  EXPECT_EQ(m.controls().global_source(), control::ControlSource::kUi);
-  ASSERT_TRUE(
-      m.articulations()[0].control->SetTarget(control::ControlSource::kUi, "hinge_motor", -0.3));
+  EXPECT_EQ(m.session().controls().global_source(), control::ControlSource::kUi);
+  ASSERT_TRUE(m.session().articulations()[0].control->SetTarget(control::ControlSource::kUi,
+                                                                "hinge_motor", -0.3));
   TickSteps(m, 2000);
   EXPECT_NEAR(Qpos(m, "a_hinge"), -0.3, 2e-3);
   EXPECT_NEAR(Qvel(m, "a_hinge"), 0.0, 1e-3);
@@ -247,16 +251,18 @@ TEST_F(ManagerTest, PdHeldJointSettlesAtItsTarget) {
 TEST_F(ManagerTest, ControlSourceGlobalAndOverride) {
   Manager m(Fast(/*paused=*/true));
   m.BeginPlay(TwoArms("", "    control_source: network\n", "control_source: ui\n"));
-  auto* a = m.articulations()[0].control;
-  auto* b = m.articulations()[1].control;
-  EXPECT_EQ(a->EffectiveSource(m.controls().global_source()), control::ControlSource::kUi);
-  EXPECT_EQ(b->EffectiveSource(m.controls().global_source()), control::ControlSource::kNetwork);
+  auto* a = m.session().articulations()[0].control;
+  auto* b = m.session().articulations()[1].control;
+  EXPECT_EQ(a->EffectiveSource(m.session().controls().global_source()),
+            control::ControlSource::kUi);
+  EXPECT_EQ(b->EffectiveSource(m.session().controls().global_source()),
+            control::ControlSource::kNetwork);
   for (auto* c : {a, b}) {
     c->SetTarget(control::ControlSource::kUi, 0, 1.5);
     c->SetTarget(control::ControlSource::kNetwork, 0, -2.5);
   }
-  m.engine().StepSync(1);  // passthrough: the active source's target lands in d->ctrl
-  const physics::PhysicsState s = m.engine().Snapshot();
+  m.session().engine().StepSync(1);  // passthrough: the active source's target lands in d->ctrl
+  const physics::PhysicsState s = m.session().engine().Snapshot();
   EXPECT_DOUBLE_EQ(s.ctrl[static_cast<std::size_t>(a->actuator_ids()[0])], 1.5);
   EXPECT_DOUBLE_EQ(s.ctrl[static_cast<std::size_t>(b->actuator_ids()[0])], -2.5);
 }
@@ -268,15 +274,15 @@ TEST_F(ManagerTest, KeyframeControllerFromTheScene) {
       "      sequence:\n        - {keyframe: up, blend: 0.2, hold: 0.3}\n"
       "        - {keyframe: down, blend: 0.2, hold: 0.3}\n",
       ""));
-  auto& kf =
-      dynamic_cast<control::KeyframeController&>(*m.articulations()[0].control->controller());
+  auto& kf = dynamic_cast<control::KeyframeController&>(
+      *m.session().articulations()[0].control->controller());
   ASSERT_EQ(kf.poses().size(), 2u);
   EXPECT_DOUBLE_EQ(kf.poses()[1].positions[0], -0.4);
   for (int i = 0; i < 2000 && !(kf.current_pose() == 1 && !kf.blending()); ++i) {
-    m.engine().StepSync(1);
+    m.session().engine().StepSync(1);
   }
   ASSERT_EQ(kf.current_pose(), 1);
-  m.engine().StepSync(100);  // 0.2 s into holding "down" (0.3 s)
+  m.session().engine().StepSync(100);  // 0.2 s into holding "down" (0.3 s)
   m.Tick();
   EXPECT_NEAR(Qpos(m, "a_hinge"), -0.4, 0.02);
   EXPECT_THROW(
@@ -320,8 +326,8 @@ TEST_F(ManagerTest, DivergenceIsReportedWithArticulationAndJoint) {
   EXPECT_EQ(it->articulation, "b");
   EXPECT_EQ(it->joint_name, "b_hinge");
   EXPECT_TRUE(it->auto_reset);
-  EXPECT_TRUE(m.engine().running());
-  m.SetResetOnDivergence(false);
+  EXPECT_TRUE(m.session().engine().running());
+  m.session().SetResetOnDivergence(false);
 }
 
 TEST_F(ManagerTest, MujocoErrorDoesNotEndTheProcess) {
@@ -329,7 +335,7 @@ TEST_F(ManagerTest, MujocoErrorDoesNotEndTheProcess) {
   std::vector<EngineEvent> errors;
   Manager m(Fast());
   m.BeginPlay(TwoArms("", ""));
-  m.engine().AddPreStepCallback([&](const mjModel*, mjData*) {
+  m.session().engine().AddPreStepCallback([&](const mjModel*, mjData*) {
     if (fire.exchange(false)) mju_error("injected engine failure");
   });
   m.AddEventListener([&](const EngineEvent& e) {
@@ -338,24 +344,24 @@ TEST_F(ManagerTest, MujocoErrorDoesNotEndTheProcess) {
   TickUntil(m, [&] { return !errors.empty(); });
   EXPECT_NE(errors[0].message.find("injected engine failure"), std::string::npos)
       << errors[0].message;
-  EXPECT_TRUE(m.engine().paused());
+  EXPECT_TRUE(m.session().engine().paused());
   EXPECT_TRUE(m.playing());
-  m.SetPaused(false);  // the simulation goes on
+  m.session().SetPaused(false);  // the simulation goes on
   TickSteps(m, 50);
 }
 
 TEST_F(ManagerTest, HostDrivenMocapBodyFollowsThePose) {
   Manager m(Fast());
   m.BeginPlay(TwoArms("", ""));
-  EXPECT_THROW(m.SetHostDrivenPose("a", "link", {}), Error);  // not a mocap body
-  EXPECT_THROW(m.SetHostDrivenPose("a", "nope", {}), Error);
-  EXPECT_THROW(m.SetHostDrivenPose("z", "marker", {}), Error);
+  EXPECT_THROW(m.session().SetHostDrivenPose("a", "link", {}), Error);  // not a mocap body
+  EXPECT_THROW(m.session().SetHostDrivenPose("a", "nope", {}), Error);
+  EXPECT_THROW(m.session().SetHostDrivenPose("z", "marker", {}), Error);
   for (int i = 0; i < 5; ++i) {
     world::Pose p;
     p.pos = {0.1 * i, -1.0 + 0.2 * i, 1.5};
     const double h = 0.3 * i / 2;
     p.quat = {2 * std::cos(h), 0, 0, 2 * std::sin(h)};  // not unit: normalised
-    m.SetHostDrivenPose("a", "marker", p);
+    m.session().SetHostDrivenPose("a", "marker", p);
     TickUntil(m, [&] {
       const auto got = m.BodyPose("a", "marker");
       return got && std::abs(got->pos[0] - p.pos[0]) < 1e-12 &&
@@ -368,46 +374,95 @@ TEST_F(ManagerTest, HostDrivenMocapBodyFollowsThePose) {
   ASSERT_TRUE(b);
   EXPECT_NEAR(b->pos[1], 1.0, 1e-12);
   EXPECT_NEAR(b->pos[2], 2.0, 1e-12);
-  EXPECT_TRUE(m.ClearHostDriven("a", "marker"));
-  EXPECT_FALSE(m.ClearHostDriven("a", "marker"));
+  EXPECT_TRUE(m.session().ClearHostDriven("a", "marker"));
+  EXPECT_FALSE(m.session().ClearHostDriven("a", "marker"));
   EXPECT_FALSE(m.BodyPose("a", "nope"));
 }
 
-TEST_F(ManagerTest, SubsystemSlotsAreCalled) {
-  struct Probe : world::Subsystem {
-    int begin = 0, tick = 0, end = 0;
-    int* ends;
-    explicit Probe(int* e) : ends(e) {}
-    void BeginPlay(Manager& m) override {
-      ++begin;
-      EXPECT_FALSE(m.engine().running());  // before the thread starts
-    }
-    void Tick(Manager&) override { ++tick; }
-    void EndPlay(Manager& m) override {
-      ++*ends;
-      EXPECT_FALSE(m.engine().running());
-    }
-  };
-  int ends = 0;
+// Records every hook call of several subsystems in one log.
+struct Probe : world::Subsystem {
+  Probe(std::string n, std::vector<std::string>* l, bool fail = false)
+      : name_(std::move(n)), log(l), fail_begin(fail) {}
+  std::string_view name() const override { return name_; }
+  void BeginPlay(world::Session& s) override {
+    log->push_back(name_ + ".begin");
+    EXPECT_FALSE(s.engine().running());         // before the thread starts
+    frames = s.engine().SubscribeState(name_);  // its own reader, made before Start
+    kept = s.shared_from_this();
+    if (fail_begin) throw Error(name_ + " refuses to begin");
+  }
+  void Tick(world::Session&, world::TickPhase phase) override {
+    if (log->size() < 40) log->push_back(name_ + ".tick" + std::to_string(static_cast<int>(phase)));
+  }
+  void OnEngineEvent(world::Session&, const EngineEvent& e) override {
+    if (e.kind == EngineEventKind::kReset) ++resets;
+  }
+  void EndPlay(world::Session& s) override {
+    log->push_back(name_ + ".end");
+    running_at_end = s.engine().running();
+  }
+  std::string name_;
+  std::vector<std::string>* log;
+  bool fail_begin;
+  int resets = 0;
+  bool running_at_end = false;
+  std::shared_ptr<physics::StateSubscription> frames;
+  std::shared_ptr<world::Session> kept;
+};
+
+TEST_F(ManagerTest, SubsystemsBeginInOrderTickInPhasesAndEndInReverse) {
+  std::vector<std::string> log;
   Manager m(Fast());
-  auto probe = std::make_unique<Probe>(&ends);
-  Probe* p = probe.get();
-  m.SetDebugVisualizer(std::move(probe));
-  EXPECT_EQ(m.network(), nullptr);
-  EXPECT_EQ(m.input_handler(), nullptr);
+  Probe& a = static_cast<Probe&>(m.AddSubsystem(std::make_unique<Probe>("a", &log)));
+  m.AddSubsystem(std::make_unique<Probe>("b", &log));
+  EXPECT_THROW(m.AddSubsystem(std::make_unique<Probe>("a", &log)), Error);
+  EXPECT_EQ(m.FindSubsystem("b")->name(), "b");
+  EXPECT_EQ(m.FindSubsystem("c"), nullptr);
   m.BeginPlay(TwoArms("", ""));
+  EXPECT_THROW(m.AddSubsystem(std::make_unique<Probe>("c", &log)), Error);
   m.Tick();
-  m.Tick();
-  EXPECT_EQ(p->begin, 1);
-  EXPECT_EQ(p->tick, 2);
+  m.session().ResetToInitialState();
+  ASSERT_TRUE(WaitFor([&] { return m.session().engine().last_applied_command() > 0; }));
+  m.Tick();  // delivers the reset event
+  EXPECT_EQ(a.resets, 1);
+  // The subsystem's own subscription sees the state without touching mjData.
+  ASSERT_TRUE(WaitFor([&] { return a.frames->published() > 10; }));
+  const physics::StateFrame* f = a.frames->Latest();
+  ASSERT_NE(f, nullptr);
+  EXPECT_EQ(f->qpos.size(), static_cast<std::size_t>(m.session().engine().model()->nq));
   m.EndPlay();
-  EXPECT_EQ(ends, 1);
+  const std::vector<std::string> expected_start = {"a.begin", "b.begin", "a.tick0", "b.tick0",
+                                                   "a.tick1", "b.tick1", "a.tick2", "b.tick2"};
+  ASSERT_GE(log.size(), expected_start.size() + 2);
+  EXPECT_EQ(std::vector<std::string>(log.begin(), log.begin() + 8), expected_start);
+  EXPECT_EQ(log[log.size() - 2], "b.end");
+  EXPECT_EQ(log.back(), "a.end");
+  EXPECT_TRUE(a.running_at_end);  // subsystems end before the engine stops
+  // The session a subsystem kept is still usable (stopped) after the manager released it.
+  ASSERT_NE(a.kept, nullptr);
+  EXPECT_FALSE(a.kept->engine().running());
+  EXPECT_EQ(a.kept->articulations().size(), 2u);
+}
+
+TEST_F(ManagerTest, SubsystemFailingToBeginEndsThoseBegunAndLeavesNothingRunning) {
+  std::vector<std::string> log;
+  Manager m(Fast());
+  m.AddSubsystem(std::make_unique<Probe>("a", &log));
+  m.AddSubsystem(std::make_unique<Probe>("b", &log, /*fail=*/true));
+  m.AddSubsystem(std::make_unique<Probe>("c", &log));
+  EXPECT_THROW(m.BeginPlay(TwoArms("", "")), Error);
+  EXPECT_FALSE(m.playing());
+  // a began and ended; b threw inside BeginPlay (it is not ended); c never began.
+  EXPECT_EQ(log, (std::vector<std::string>{"a.begin", "b.begin", "a.end"}));
+  Manager again(Fast());  // the world is free again
+  again.BeginPlay(TwoArms("", ""));
+  again.EndPlay();
 }
 
 TEST_F(ManagerTest, ExampleSceneHoldsBothArmsRaised) {
   Manager m(Fast());
   m.BeginPlay(world::LoadSceneFile(testing::SourcePath("examples/scenes/two_arms.yaml")));
-  ASSERT_EQ(m.articulations().size(), 2u);
+  ASSERT_EQ(m.session().articulations().size(), 2u);
   TickSteps(m, 2500);  // 5 s
   for (const char* arm : {"left", "right"}) {
     const std::string p(std::string(arm) + "_");
@@ -423,7 +478,7 @@ TEST_F(ManagerTest, LoadSceneOrModelWrapsAnMjcfFile) {
   EXPECT_EQ(s.articulations[0].name, "arm");
   Manager m(Fast());
   m.BeginPlay(s);
-  EXPECT_GE(mj_name2id(m.engine().model(), mjOBJ_JOINT, "arm_hinge"), 0);
+  EXPECT_GE(mj_name2id(m.session().engine().model(), mjOBJ_JOINT, "arm_hinge"), 0);
   EXPECT_THROW(world::LoadSceneOrModel(dir_ + "/missing.xml"), InputError);
 }
 
@@ -436,31 +491,31 @@ TEST_F(ManagerTest, CommandStormWhileTicking) {
   std::atomic<bool> stop{false};
   std::atomic<int> rounds{0};
   std::thread storm([&] {
-    control::ArticulationControl* b = m.articulations()[1].control;
+    control::ArticulationControl* b = m.session().articulations()[1].control;
     for (int i = 0; !stop.load(); ++i) {
       switch (i % 8) {
         case 0:
-          m.engine().Reset();
+          m.session().engine().Reset();
           break;
         case 1:
-          m.engine().Restore(m.engine().Snapshot());
+          m.session().engine().Restore(m.session().engine().Snapshot());
           break;
         case 2:
-          m.SetPaused(i % 16 == 2);
+          m.session().SetPaused(i % 16 == 2);
           break;
         case 3:
-          m.ResetArticulation("b", "down");
+          m.session().ResetArticulation("b", "down");
           break;
         case 4:
-          m.articulations()[0].control->StopHold();
-          m.articulations()[0].control->HoldKeyframe("a_up");
+          m.session().articulations()[0].control->StopHold();
+          m.session().articulations()[0].control->HoldKeyframe("a_up");
           break;
         case 5:
-          m.controls().SetGlobalSource(i % 16 == 5 ? control::ControlSource::kUi
-                                                   : control::ControlSource::kNetwork);
+          m.session().controls().SetGlobalSource(i % 16 == 5 ? control::ControlSource::kUi
+                                                             : control::ControlSource::kNetwork);
           break;
         case 6:
-          m.ResetToInitialState();
+          m.session().ResetToInitialState();
           break;
         default:
           b->SetTarget(control::ControlSource::kNetwork, 0, std::sin(i));
@@ -475,17 +530,17 @@ TEST_F(ManagerTest, CommandStormWhileTicking) {
   while (Clock::now() < end) {
     world::Pose p;
     p.pos = {0.001 * ticks, -1, 2};
-    m.SetHostDrivenPose("a", "marker", p);
+    m.session().SetHostDrivenPose("a", "marker", p);
     m.Tick();
     ++ticks;
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   stop.store(true);
   storm.join();
-  m.SetPaused(false);
+  m.session().SetPaused(false);
   TickSteps(m, 10);
   EXPECT_GT(rounds.load(), 100);
-  const physics::PhysicsState s = m.engine().Snapshot();
+  const physics::PhysicsState s = m.session().engine().Snapshot();
   for (double q : s.qpos) EXPECT_TRUE(std::isfinite(q));
   m.EndPlay();
 }

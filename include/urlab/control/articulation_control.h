@@ -1,23 +1,28 @@
 #pragma once
-// Per-articulation control: actuator targets from two sources (network, UI), a control-source
-// override, the articulation's controller, "hold keyframe", and per-articulation keyframe reset.
-// ControlSystem holds every articulation and the global control source and hooks them into a
-// PhysicsEngine as its apply-controls step.
+// Per-articulation control: one command-frame channel per named source (network, UI, input,
+// keyframe hold, replay), one source active at a time (the scene's global source, a
+// per-articulation override, or the hold while holding a keyframe), the articulation's
+// controller, and per-articulation keyframe reset. ControlSystem holds every articulation and
+// the global control source and hooks them into a PhysicsEngine as its apply-controls step.
 //
 // Threading:
 // - Main thread, before the engine runs: construction, SetController, ControlSystem::Add and
 //   Install.
-// - Any thread: SetTarget/GetTarget, the source setters/getters, HoldKeyframe/StopHold,
-//   ControlSystem::SetGlobalSource, ControlSystem::RequestKeyframeReset. All are atomics or go
+// - Any thread: PublishFrame/SetTarget/GetTarget/channel(), the source setters/getters,
+//   HoldKeyframe/StopHold, ControlSystem::SetGlobalSource, ControlSystem::RequestKeyframeReset.
+//   Frames are published whole (command_frame.h); the source switches are atomics; resets go
 //   through the engine's command queue.
 // - Physics thread (step mutex held): ApplyControls, ResetToKeyframe.
+#include <array>
 #include <atomic>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "urlab/control/command_frame.h"
 #include "urlab/control/controller.h"
 #include "urlab/core/error.h"
 #include "urlab/physics/engine.h"
@@ -51,7 +56,14 @@ class ArticulationControl {
   }
   Controller* controller() const { return controller_.get(); }
 
-  // Target values per source (any thread). Returns false for an unknown name/index.
+  // The frame channel of a source (any thread: publish whole frames there).
+  FrameChannel& channel(ControlSource source) const;
+  // Publishes a whole frame to `source`: every target, optional gains (see FrameChannel). False
+  // on a size mismatch. Any thread.
+  bool PublishFrame(ControlSource source, std::span<const double> targets,
+                    std::span<const double> kp = {}, std::span<const double> kv = {});
+  // One target of a source's frame (the rest keep their values). Any thread. Returns false for
+  // an unknown name/index.
   bool SetTarget(ControlSource source, int index, double value);
   bool SetTarget(ControlSource source, std::string_view short_name, double value);
   double GetTarget(ControlSource source, int index) const;
@@ -59,11 +71,12 @@ class ArticulationControl {
   // Per-articulation override of the global control source (std::nullopt: follow the global).
   void SetSourceOverride(std::optional<ControlSource> source);
   std::optional<ControlSource> source_override() const;
-  // The source in effect given the global one.
+  // The source in effect given the global one (kHold while holding a keyframe).
   ControlSource EffectiveSource(ControlSource global) const;
 
-  // Keeps the pose of model keyframe `key` (joint positions for position-target controllers,
-  // the keyframe's ctrl otherwise) until StopHold. Any thread. Throws Error for a bad key.
+  // Publishes the pose of model keyframe `key` (joint positions for position-target
+  // controllers, the keyframe's ctrl otherwise) to the hold source and makes it the active one
+  // until StopHold. Any thread. Throws Error for a bad key.
   void HoldKeyframe(int key);
   void HoldKeyframe(std::string_view name);
   void StopHold() { holding_.store(false, std::memory_order_release); }
@@ -93,12 +106,9 @@ class ArticulationControl {
   std::vector<int> body_ids_;
 
   std::unique_ptr<Controller> controller_;
-  AtomicValues network_;
-  AtomicValues ui_;
-  AtomicValues hold_;
+  std::array<std::unique_ptr<FrameChannel>, kNumControlSources> channels_;
   std::atomic<int> override_{-1};  // -1: none, else ControlSource
   std::atomic<bool> holding_{false};
-  std::vector<double> scratch_;  // physics thread
 };
 
 class ControlSystem {
@@ -124,9 +134,10 @@ class ControlSystem {
   void ApplyControls(const mjModel* m, mjData* d);
 
   // Queues a reset of one articulation to keyframe `key_name` (or prefix + name) on `engine`;
-  // other articulations keep their state. Any thread. Throws Error for unknown names.
-  void RequestKeyframeReset(physics::PhysicsEngine& engine, std::string_view prefix,
-                            std::string_view key_name) const;
+  // other articulations keep their state; returns the command's sequence number. Any thread.
+  // Throws Error for unknown names.
+  std::uint64_t RequestKeyframeReset(physics::PhysicsEngine& engine, std::string_view prefix,
+                                     std::string_view key_name) const;
 
  private:
   std::atomic<int> global_{static_cast<int>(ControlSource::kNetwork)};

@@ -9,33 +9,29 @@
 #include <atomic>
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace urlab::control {
 
-// Who drives an articulation's actuators: external clients over the network, or the UI.
-enum class ControlSource { kNetwork, kUi };
-
-// "network" / "ui".
-const char* ToString(ControlSource source);
-
-// A fixed-size array of values written by any thread and read by the physics thread, one
-// std::atomic<double> per actuator (relaxed: each value is independent).
-class AtomicValues {
- public:
-  explicit AtomicValues(std::size_t n = 0, double initial = 0);
-  std::size_t size() const { return n_; }
-  void Set(std::size_t i, double v) { values_[i].store(v, std::memory_order_relaxed); }
-  double Get(std::size_t i) const { return values_[i].load(std::memory_order_relaxed); }
-  // Copies every value into out[0..size()).
-  void CopyTo(std::span<double> out) const;
-
- private:
-  std::size_t n_;
-  std::unique_ptr<std::atomic<double>[]> values_;
+// Who drives an articulation's actuators. Each source has its own command frames per
+// articulation; one source is active per articulation at a time.
+enum class ControlSource {
+  kNetwork,  // external clients (ZeroMQ)
+  kUi,       // the viewer's panel sliders
+  kInput,    // keyboard / gamepad input mapping
+  kHold,     // "hold keyframe": the pose of a model keyframe
+  kReplay,   // playback of a recording
 };
+inline constexpr int kNumControlSources = 5;
+
+// "network", "ui", "input", "hold", "replay".
+const char* ToString(ControlSource source);
+// The inverse of ToString; std::nullopt for an unknown name.
+std::optional<ControlSource> ParseControlSource(std::string_view name);
 
 // What a controller needs to know about one actuator, resolved once at Bind.
 struct ActuatorBinding {
@@ -71,6 +67,10 @@ class Controller {
   virtual void Bind(const mjModel* m, std::span<const int> actuator_ids);
   // Writes d->ctrl for the bound actuators from targets[i] (one per binding). Physics thread.
   virtual void ComputeAndApply(const mjModel* m, mjData* d, std::span<const double> targets) = 0;
+  // Gains that arrived with the command frame of this step (one per binding, NaN: the
+  // controller's own), or empty spans. Physics thread, right before ComputeAndApply; the spans
+  // stay valid until ComputeAndApply returns. Controllers without gains ignore them.
+  virtual void UseFrameGains(std::span<const double> /*kp*/, std::span<const double> /*kv*/) {}
   // True when targets are joint positions (PD, keyframe); false when they are raw controls.
   virtual bool TargetsArePositions() const { return false; }
 

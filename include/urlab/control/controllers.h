@@ -54,6 +54,7 @@ class PdController : public Controller {
   };
   PdGains defaults_;
   std::unique_ptr<AtomicGains[]> gains_;
+  std::span<const double> frame_kp_, frame_kv_;  // physics thread: this step's frame gains
 };
 
 // One pose of a keyframe sequence: joint position targets for each binding.

@@ -4,24 +4,29 @@
 //
 // Threading contract
 // - The physics thread (started by Start) owns mjModel/mjData while it runs. Each loop iteration
-//   takes the step mutex once and, in this order: applies a pending reset, applies a pending
-//   restore, runs the pre-step callbacks, runs the apply-controls hook, steps (unless paused:
-//   the custom step handler if set, else mj_step), checks for divergence, runs the post-step
-//   callbacks, fires the OnPostStep listeners (only when a step happened) and publishes a render
-//   snapshot. It then releases the mutex and waits for the next deadline (pacing).
-// - Callbacks, the controls hook and the custom step handler run on the physics thread (or on the
-//   StepSync caller's thread) with the step mutex held; they may read and write mjData freely.
-//   From inside a callback, Reset*/Restore/SetPaused are allowed (queued for the next
-//   iteration); registration, Snapshot, WithLockedData, StepSync, Start and Stop throw Error
-//   (they would deadlock).
-// - Any thread: SetPaused/TogglePause, Reset*, Restore, Snapshot, the pacing setters, the
-//   measurement getters (atomics) and WithLockedData. Reset and Restore are applied by the
-//   physics thread at its next iteration when it runs, immediately (under the mutex) when not.
-// - Main thread: Start, Stop, the destructor, callback registration, and event delivery
-//   (PollEvents/DrainEvents). Reset notifications, divergence and error reports are queued by the
-//   physics thread and only delivered there.
-// - Render thread (exactly one consumer): LatestRenderSnapshot, which never blocks the physics
-//   thread (triple buffer).
+//   takes the step mutex once and, in this order: applies every queued command in submission
+//   order (resets, restores, state writes, mocap poses, one-shot forces, options, pause; see
+//   commands.h) and tells the command listeners, runs the pre-step callbacks, runs the
+//   apply-controls hook, steps (unless paused: the custom step handler if set, else mj_step),
+//   removes the one-shot forces, checks for divergence, runs the post-step callbacks, fires the
+//   OnPostStep listeners (only when a step happened) and publishes a state frame to every
+//   subscriber (after a step, after commands, and when the pause state changed). It then releases
+//   the mutex and waits for the next deadline (pacing).
+// - Callbacks, command listeners, the controls hook and the custom step handler run on the
+//   physics thread (or on the StepSync caller's thread) with the step mutex held; they may read
+//   and write mjData freely. From inside a callback, Submit and its wrappers and SetPaused are
+//   allowed (queued for the next iteration); registration, Snapshot, WithLockedData, StepSync,
+//   WaitForCommand, Start and Stop throw Error (they would deadlock).
+// - Any thread: Submit and its wrappers (Reset*, Restore, ...), WaitForCommand, SetPaused,
+//   Snapshot, the pacing setters, the measurement getters (atomics) and WithLockedData. Commands
+//   are applied by the physics thread at its next iteration when it runs, immediately (under the
+//   mutex, on the caller's thread) when it does not.
+// - Main thread: Start, Stop, the destructor, callback and listener registration, state
+//   subscriptions (before Start), and event delivery (PollEvents/DrainEvents). Reset
+//   notifications, divergence and error reports are queued by the physics thread and only
+//   delivered there.
+// - State readers (any number, each on its own thread): their StateSubscription / StateRing
+//   (state_frame.h); they never block the physics thread and never see live mjData.
 // - A MuJoCo error (urlab::MujocoError from the installed handler) or any exception escaping a
 //   callback is caught, reported as an kError event and pauses the loop; the process continues.
 #include <mujoco/mujoco.h>
@@ -40,8 +45,10 @@
 #include <thread>
 #include <vector>
 
+#include "urlab/physics/commands.h"
 #include "urlab/physics/model.h"
 #include "urlab/physics/state.h"
+#include "urlab/physics/state_frame.h"
 
 namespace urlab::physics {
 
@@ -64,41 +71,20 @@ struct EngineEvent {
   bool auto_reset = false;   // kDivergence: the engine reset the simulation in response
 };
 
-// Poses and contact count after a step, for the render thread.
-struct RenderSnapshot {
-  double time = 0;
-  std::uint64_t step = 0;     // steps taken since construction
-  int ncon = 0;               // contacts
-  std::vector<mjtNum> xpos;   // 3 * nbody
-  std::vector<mjtNum> xquat;  // 4 * nbody
-};
-
-// Lock-free triple buffer: one producer thread (physics) publishes, one consumer thread reads the
-// newest complete snapshot. Neither side ever waits for the other.
-class RenderBuffer {
- public:
-  explicit RenderBuffer(int nbody);
-  // Producer: the buffer to fill, then Publish() it.
-  RenderSnapshot& Back() { return slots_[back_]; }
-  void Publish();
-  // Consumer: the newest published snapshot (stable until the next call), nullptr before the
-  // first publication.
-  const RenderSnapshot* Latest();
-
- private:
-  static constexpr std::uint32_t kFresh = 4;
-  static constexpr std::uint32_t kIndex = 3;
-  std::array<RenderSnapshot, 3> slots_;
-  std::atomic<std::uint32_t> middle_{1};
-  std::uint32_t back_ = 0;   // producer-owned
-  std::uint32_t front_ = 2;  // consumer-owned
-  bool has_front_ = false;   // consumer-owned
+// A command as the physics thread applied it, for the command listeners.
+struct AppliedCommand {
+  std::uint64_t seq = 0;
+  const char* name = "";            // CommandName
+  std::uint32_t discontinuity = 0;  // Discontinuity flags it caused (0: none)
+  std::string error;                // non-empty when it failed
 };
 
 class PhysicsEngine {
  public:
   // A hook run with the step mutex held. The model is const: change it via WithLockedData.
-  using StepCallback = std::function<void(const mjModel*, mjData*)>;
+  using StepCallback = physics::StepCallback;
+  // Told on the physics thread (step mutex held) after each command was applied.
+  using CommandListener = std::function<void(const AppliedCommand&, const mjModel*, const mjData*)>;
   // Maps a full element name (e.g. "g1_left_knee") to the articulation owning it ("g1").
   using ArticulationResolver = std::function<std::string(std::string_view name)>;
   using EventListener = std::function<void(const EngineEvent&)>;
@@ -150,25 +136,47 @@ class PhysicsEngine {
   void SetCustomStepHandler(StepCallback fn);
   // Names the articulation in divergence reports.
   void SetArticulationResolver(ArticulationResolver fn);
+  // Called after every applied command (a recorder marks resets and restores here). Removed with
+  // RemoveCallback.
+  CallbackId AddCommandListener(CommandListener fn);
 
-  // ---- Simulation control (any thread) ----
+  // ---- State readers (main thread, before Start or after Stop) ----
+  // The newest frame for one reader thread.
+  std::shared_ptr<StateSubscription> SubscribeState(std::string name);
+  // Every frame, in order, through a ring of `capacity` frames (full: dropped and counted).
+  std::shared_ptr<StateRing> SubscribeEveryStep(std::string name, std::size_t capacity);
+  // Drops a subscription made above; false when unknown.
+  bool Unsubscribe(const void* subscription);
+
+  // ---- Commands (any thread) ----
+  // Queues `command` (applied in submission order at the top of the next iteration; at once when
+  // the loop does not run) and returns its sequence number. Throws Error / StateError at once
+  // for a command that cannot apply to this model (bad id, wrong size, non-finite value).
+  std::uint64_t Submit(Command command);
+  // Waits until command `seq` took effect (or failed). Not from inside a step callback.
+  CommandResult WaitForCommand(std::uint64_t seq, std::chrono::steady_clock::duration timeout);
+  // Newest command applied (every older one is applied too).
+  std::uint64_t last_applied_command() const { return commands_.last_applied(); }
+  // Wrappers of Submit. mj_resetData + mj_forward.
+  std::uint64_t Reset();
+  // mj_resetDataKeyframe + mj_forward. Throws Error for a bad key id / unknown name.
+  std::uint64_t ResetToKeyframe(int key);
+  std::uint64_t ResetToKeyframe(const std::string& name);
+  // Runs `fn` (on the physics thread, mutex held) then mj_forward; used for per-articulation
+  // resets that must not touch the rest of the scene. `label` appears in the reset event.
+  std::uint64_t ResetWith(StepCallback fn, std::string label);
+  // Restores `state` then mj_forward. Throws StateError at once when it does not fit the model.
+  std::uint64_t Restore(PhysicsState state);
+  // Captures the full state (blocks for at most one iteration).
+  PhysicsState Snapshot();
+
+  // ---- Pause (any thread) ----
+  // Immediate (an atomic; use Submit(cmd::SetPaused) to pause in order with other commands).
   // Unpausing also clears the error latch (after an error the paused loop runs no callbacks,
-  // only pending resets/restores, until it is unpaused).
+  // only commands, until it is unpaused).
   void SetPaused(bool paused);
   void TogglePause();
   bool paused() const { return paused_.load(std::memory_order_acquire); }
-  // mj_resetData + mj_forward.
-  void Reset();
-  // mj_resetDataKeyframe + mj_forward. Throws Error for a bad key id / unknown name.
-  void ResetToKeyframe(int key);
-  void ResetToKeyframe(const std::string& name);
-  // Runs `fn` (on the physics thread, mutex held) then mj_forward; used for per-articulation
-  // resets that must not touch the rest of the scene. `label` appears in the reset event.
-  void ResetWith(StepCallback fn, std::string label);
-  // Captures the full state (blocks for at most one iteration).
-  PhysicsState Snapshot();
-  // Restores `state` then mj_forward. Throws StateError at once when it does not fit the model.
-  void Restore(PhysicsState state);
   // Runs `n` full iterations on the caller's thread, stepping even when paused. Only while the
   // loop is paused or not started (throws Error otherwise). A MuJoCo error is reported as an
   // event, pauses the loop and is rethrown.
@@ -202,17 +210,7 @@ class PhysicsEngine {
   std::uint64_t dropped_events() const { return dropped_events_.load(std::memory_order_relaxed); }
   static constexpr std::size_t kMaxQueuedEvents = 1024;
 
-  // ---- Rendering (one render thread) ----
-  // Newest published snapshot; never blocks the physics thread. Non-null after construction.
-  const RenderSnapshot* LatestRenderSnapshot() { return render_.Latest(); }
-
  private:
-  struct PendingReset {
-    enum class Kind { kFull, kKeyframe, kCustom } kind = Kind::kFull;
-    int key = -1;
-    StepCallback fn;
-    std::string label;
-  };
   struct Hook {
     CallbackId id;
     StepCallback fn;
@@ -221,13 +219,16 @@ class PhysicsEngine {
   void Loop();
   // One iteration, step mutex held by the caller. Throws what the step or callbacks throw.
   void IterateLocked(bool force_step);
-  void ApplyPendingLocked();
-  void ApplyResetLocked(const PendingReset& reset);
+  // Applies every queued command in order; true when any was applied.
+  bool ApplyPendingLocked();
+  // Applies one command; returns the discontinuity it caused. Throws what applying throws.
+  std::uint32_t ApplyCommandLocked(Command& command);
+  void ValidateCommand(const Command& command) const;
   void CheckDivergenceLocked(double time_before);
-  void PublishRenderLocked();
+  void PublishFrameLocked();
+  void RemoveOneShotForcesLocked();
   void HandleErrorLocked(const std::exception& e);
   void QueueEvent(EngineEvent event);
-  void QueueReset(PendingReset reset);
   void ThrowIfOnPhysicsThread(const char* what) const;
   CallbackId AddHook(std::vector<Hook>* hooks, StepCallback fn);
   // Resolves a qpos (is_qpos) or dof index to a joint id, -1 when out of range.
@@ -241,6 +242,7 @@ class PhysicsEngine {
   std::vector<Hook> pre_step_;
   std::vector<Hook> post_step_;
   std::vector<Hook> on_post_step_;
+  std::vector<std::pair<CallbackId, CommandListener>> command_listeners_;
   StepCallback apply_controls_;
   StepCallback custom_step_;
   ArticulationResolver resolver_;
@@ -250,11 +252,14 @@ class PhysicsEngine {
   std::chrono::steady_clock::time_point last_divergence_log_{};
   std::vector<int> qpos_joint_;  // qpos index -> joint id
 
-  // Pending commands from other threads.
-  std::mutex pending_mutex_;
-  std::optional<PendingReset> pending_reset_;
-  std::optional<PhysicsState> pending_restore_;
-  std::atomic<bool> has_pending_{false};
+  // Commands from other threads, and the physics thread's working copies.
+  CommandQueue commands_;
+  std::deque<CommandQueue::Entry> taken_;    // mutex held
+  std::vector<cmd::ApplyForce> one_shot_;    // mutex held: forces to remove after the step
+  std::uint32_t pending_discontinuity_ = 0;  // mutex held: since the last published frame
+  std::uint64_t epoch_ = 0;                  // mutex held: discontinuities so far
+  std::uint64_t frames_ = 0;                 // mutex held: frames published
+  bool published_paused_ = false;            // mutex held: pause state of the last frame
 
   // Events for the main thread.
   std::mutex events_mutex_;
@@ -284,7 +289,7 @@ class PhysicsEngine {
   std::uint64_t window_steps_ = 0;
 
   std::thread thread_;
-  RenderBuffer render_;
+  StatePublisher publisher_;
 };
 
 }  // namespace urlab::physics

@@ -1,0 +1,129 @@
+#pragma once
+// State frames: what the physics thread publishes after each step (and after commands that
+// change the state), for any number of readers that never touch live mjData.
+//
+// A reader subscribes before the physics thread starts, choosing one of two kinds:
+// - StateSubscription (latest): the newest frame, through a triple buffer of its own, so readers
+//   never see each other's progress and the physics thread never waits (viewer, network, cameras).
+// - StateRing (every step): a bounded single-producer single-consumer ring of preallocated frames
+//   with a drop counter (recorder). The physics thread never waits: a full ring drops and counts.
+//
+// Threading contract
+// - Main thread, while the engine does not run: StatePublisher::Subscribe*, Unsubscribe.
+// - Physics thread (step mutex held): StatePublisher::Publish.
+// - One consumer thread per subscription: Latest() / TryPop() / Front() / Pop(); any thread:
+//   the counters.
+#include <mujoco/mujoco.h>
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "urlab/core/spsc_ring.h"
+#include "urlab/core/triple_buffer.h"
+
+namespace urlab::physics {
+
+// Why the state jumped right before a frame (bit flags; 0 for an ordinary step).
+enum Discontinuity : std::uint32_t {
+  kNoDiscontinuity = 0,
+  kDiscontinuityReset = 1u << 0,     // full, keyframe or custom reset (also after divergence)
+  kDiscontinuityRestore = 1u << 1,   // a PhysicsState was restored
+  kDiscontinuitySetState = 1u << 2,  // qpos/qvel written by a command
+  kDiscontinuityOptions = 1u << 3,   // physics options changed
+};
+
+// Text for a set of Discontinuity flags ("reset|restore"), "" for none.
+std::string DiscontinuityString(std::uint32_t flags);
+
+// One published state. Arrays are sized for the model; a frame is only ever filled whole.
+struct StateFrame {
+  double time = 0;
+  std::uint64_t step = 0;           // physics steps taken since the engine was constructed
+  std::uint64_t frame = 0;          // frames published since construction (1 for the first)
+  std::uint64_t command_seq = 0;    // newest command applied before this frame
+  std::uint32_t discontinuity = 0;  // Discontinuity flags since the previous published frame
+  std::uint64_t epoch = 0;  // discontinuities so far: a reader that skipped frames compares it
+  bool paused = false;
+  int ncon = 0;
+  std::vector<mjtNum> qpos, qvel, act, ctrl, qacc, sensordata;
+  std::vector<mjtNum> xpos, xquat;            // 3 / 4 per body
+  std::vector<mjtNum> mocap_pos, mocap_quat;  // 3 / 4 per mocap body
+
+  // A frame with every array sized for `m` (zeros).
+  static StateFrame SizedFor(const mjModel* m);
+  // Copies everything from `d` except the bookkeeping fields (no allocation when sized).
+  void CopyFrom(const mjModel* m, const mjData* d);
+};
+
+// The bookkeeping of one publication.
+struct FrameMeta {
+  std::uint64_t step = 0;
+  std::uint64_t frame = 0;
+  std::uint64_t command_seq = 0;
+  std::uint32_t discontinuity = 0;
+  std::uint64_t epoch = 0;
+  bool paused = false;
+};
+
+// Latest-frame subscription: one consumer thread reads the newest frame.
+class StateSubscription {
+ public:
+  StateSubscription(std::string name, const mjModel* m);
+  const std::string& name() const { return name_; }
+  // Consumer: the newest frame (stable until the next call), nullptr before the first.
+  const StateFrame* Latest() { return buffer_.Latest(); }
+  // Consumer: true when a frame newer than the last Latest() is waiting.
+  bool has_new() const { return buffer_.has_new(); }
+  // Any thread: frames published to this subscription.
+  std::uint64_t published() const { return buffer_.published(); }
+
+ private:
+  friend class StatePublisher;
+  std::string name_;
+  TripleBuffer<StateFrame> buffer_;
+};
+
+// Every-step subscription: one consumer thread takes frames in order.
+class StateRing {
+ public:
+  StateRing(std::string name, const mjModel* m, std::size_t capacity);
+  const std::string& name() const { return name_; }
+  // Consumer: swaps the oldest frame into *out (keep reusing the same frame); false when empty.
+  bool TryPop(StateFrame* out) { return ring_.TryPop(out); }
+  // Consumer: the oldest frame without copying, nullptr when empty; Pop() releases it.
+  const StateFrame* Front() { return ring_.Front(); }
+  void Pop() { ring_.Pop(); }
+  // Any thread.
+  std::size_t size() const { return ring_.size(); }
+  std::size_t capacity() const { return ring_.capacity(); }
+  std::uint64_t dropped() const { return ring_.dropped(); }
+
+ private:
+  friend class StatePublisher;
+  std::string name_;
+  SpscRing<StateFrame> ring_;
+};
+
+// The physics thread's side: fills every subscription.
+class StatePublisher {
+ public:
+  explicit StatePublisher(const mjModel* m) : model_(m) {}
+  // Main thread, engine not running. `name` identifies the reader in logs.
+  std::shared_ptr<StateSubscription> SubscribeLatest(std::string name);
+  std::shared_ptr<StateRing> SubscribeEveryStep(std::string name, std::size_t capacity);
+  // Main thread, engine not running: false when unknown.
+  bool Unsubscribe(const void* subscription);
+  int num_subscribers() const;
+  // Physics thread: copies the state into every subscription.
+  void Publish(const mjModel* m, const mjData* d, const FrameMeta& meta);
+
+ private:
+  const mjModel* model_;
+  std::vector<std::shared_ptr<StateSubscription>> latest_;
+  std::vector<std::shared_ptr<StateRing>> rings_;
+};
+
+}  // namespace urlab::physics

@@ -1,0 +1,139 @@
+#pragma once
+// Session: one built, bound scene ready to run: the compiled model inside the PhysicsEngine, the
+// ControlSystem with every articulation's controller, the articulation registry and bindings,
+// and the command API (pause, resets, host-driven mocap poses). The Manager creates one per
+// BeginPlay and hands it to every subsystem; a subsystem may keep the shared_ptr for as long as
+// it likes (everything stays valid; the physics thread stops when the Manager ends play).
+//
+// Threading contract
+// - Main thread: Create, Start, Stop, SyncHostPoses, SetHostDrivenPose/ClearHostDriven.
+// - Any thread: engine() and controls() (under their own contracts), the registry getters
+//   (immutable after Create), SetPaused, SetResetOnDivergence, ResetToInitialState,
+//   ResetArticulation.
+// - Physics thread: the session's pre-step callback copies the host-driven poses into
+//   d->mocap_pos/d->mocap_quat (a small mutex shared with SyncHostPoses, held for a copy).
+#include <array>
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "urlab/control/articulation_control.h"
+#include "urlab/physics/engine.h"
+#include "urlab/physics/views.h"
+#include "urlab/world/scene.h"
+#include "urlab/world/scene_file.h"
+
+namespace urlab::world {
+
+// What a session needs beyond the scene file.
+struct SessionOptions {
+  int speed_percent = 100;  // 5..100 of real time
+  bool as_fast_as_possible = false;
+  bool start_paused = false;
+  // Reset the simulation when it diverges (NaN/Inf, MuJoCo instability warnings): the engine
+  // resets at once, then the session puts every articulation back in its initial keyframe.
+  bool reset_on_divergence = false;
+};
+
+// A world-space pose (MuJoCo frame: metres, quaternion w x y z).
+struct Pose {
+  std::array<double, 3> pos = {0, 0, 0};
+  std::array<double, 4> quat = {1, 0, 0, 0};
+};
+
+// One articulation of the running scene.
+struct Articulation {
+  ArticulationConfig config;
+  std::string prefix;                                       // "{name}_"
+  std::unique_ptr<physics::ArticulationBindings> bindings;  // views into the engine's model/data
+  control::ArticulationControl* control = nullptr;          // owned by the ControlSystem
+  int initial_key = -1;                                     // scene keyframe id, -1 when none
+
+  const std::string& name() const { return config.name; }
+};
+
+class Session : public std::enable_shared_from_this<Session> {
+ public:
+  // Composes and compiles `scene`, creates the engine (not started), binds every articulation by
+  // its "{name}_" prefix, builds each controller, sets the control sources and puts every
+  // articulation in its initial keyframe (holding it when asked). Throws InputError /
+  // CompileError for a bad scene (file:line).
+  static std::shared_ptr<Session> Create(const SceneConfig& scene, SessionOptions options = {});
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  // ---- Lifecycle (main thread) ----
+  // Starts the physics thread (paused when the options say so).
+  void Start();
+  // Stops and joins it; commands queued meanwhile are applied. Idempotent.
+  void Stop();
+
+  // ---- Registry (any thread) ----
+  physics::PhysicsEngine& engine() { return *engine_; }
+  const physics::PhysicsEngine& engine() const { return *engine_; }
+  control::ControlSystem& controls() { return *controls_; }
+  // The compiled scene (layouts, diagnostics, document); its model lives in engine().
+  const CompiledScene& scene() const { return compiled_; }
+  const SceneConfig& scene_config() const { return config_; }
+  const SessionOptions& options() const { return options_; }
+  const std::vector<Articulation>& articulations() const { return articulations_; }
+  // nullptr when absent.
+  const Articulation* FindArticulation(std::string_view name) const;
+  // Articulation owning a full (prefixed) element name, nullptr when none (longest prefix wins).
+  const Articulation* OwnerOf(std::string_view full_name) const;
+  // Throws Error naming the articulation when absent.
+  const Articulation& Require(std::string_view name) const;
+
+  // ---- Commands (any thread) ----
+  void SetPaused(bool paused) { engine_->SetPaused(paused); }
+  void SetResetOnDivergence(bool on) { engine_->SetResetOnDivergence(on); }
+  // Resets the whole simulation to qpos0, then every articulation to its initial keyframe, as
+  // one queued command; returns its sequence number.
+  std::uint64_t ResetToInitialState();
+  // Resets one articulation to keyframe `key` (its initial keyframe when empty); the rest of the
+  // scene is untouched. Throws Error for an unknown articulation or keyframe.
+  std::uint64_t ResetArticulation(std::string_view name, std::string_view key = {});
+
+  // ---- Host-driven mocap bodies (main thread) ----
+  // Marks a mocap body of an articulation as driven by the host and sets its world pose; from the
+  // next SyncHostPoses on, the physics thread writes it into mocap_pos/mocap_quat before every
+  // step. Throws Error when the body is unknown or not a mocap body, or the pose is not finite.
+  void SetHostDrivenPose(std::string_view articulation, std::string_view body, const Pose& pose);
+  // Stops driving the body (it keeps its last mocap pose). False when it was not host-driven.
+  bool ClearHostDriven(std::string_view articulation, std::string_view body);
+  // Publishes the host's poses to the physics thread (the Manager calls it every Tick).
+  void SyncHostPoses();
+
+ private:
+  struct HostPose {
+    int mocap_id = -1;
+    Pose pose;
+  };
+
+  explicit Session(SessionOptions options) : options_(options) {}
+  void Build(const SceneConfig& scene);
+  int MocapOf(std::string_view articulation, std::string_view body) const;
+  void ApplyHostPoses(mjData* d);  // physics thread
+  // Queues one reset restoring every articulation's initial keyframe (qpos0 first when `full`).
+  std::uint64_t QueueInitialReset(bool full);
+
+  SessionOptions options_;
+  SceneConfig config_;
+  CompiledScene compiled_;
+  std::unique_ptr<control::ControlSystem> controls_;
+  std::unique_ptr<physics::PhysicsEngine> engine_;
+  std::vector<Articulation> articulations_;
+
+  std::vector<HostPose> host_poses_;  // main thread: the host's latest poses
+  bool host_dirty_ = false;           // main thread: host_poses_ changed since the last sync
+  std::atomic<bool> has_host_poses_{false};
+  std::mutex host_mutex_;  // guards published_poses_
+  std::vector<HostPose> published_poses_;
+  std::vector<HostPose> applying_;  // physics thread scratch
+};
+
+}  // namespace urlab::world

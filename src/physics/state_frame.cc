@@ -1,0 +1,120 @@
+#include "urlab/physics/state_frame.h"
+
+#include <algorithm>
+
+#include "urlab/core/error.h"
+
+namespace urlab::physics {
+
+namespace {
+
+void CopyArray(std::vector<mjtNum>* out, const mjtNum* src, int n) {
+  out->assign(src, src + n);  // no allocation once sized
+}
+
+void ApplyMeta(StateFrame* f, const FrameMeta& meta) {
+  f->step = meta.step;
+  f->frame = meta.frame;
+  f->command_seq = meta.command_seq;
+  f->discontinuity = meta.discontinuity;
+  f->epoch = meta.epoch;
+  f->paused = meta.paused;
+}
+
+}  // namespace
+
+std::string DiscontinuityString(std::uint32_t flags) {
+  static constexpr struct {
+    std::uint32_t flag;
+    const char* name;
+  } kNames[] = {{kDiscontinuityReset, "reset"},
+                {kDiscontinuityRestore, "restore"},
+                {kDiscontinuitySetState, "set_state"},
+                {kDiscontinuityOptions, "options"}};
+  std::string s;
+  for (const auto& n : kNames) {
+    if (flags & n.flag) s += (s.empty() ? "" : "|") + std::string(n.name);
+  }
+  return s;
+}
+
+StateFrame StateFrame::SizedFor(const mjModel* m) {
+  StateFrame f;
+  const auto z = [](int n) { return std::vector<mjtNum>(static_cast<std::size_t>(n), 0); };
+  f.qpos = z(m->nq);
+  f.qvel = z(m->nv);
+  f.act = z(m->na);
+  f.ctrl = z(m->nu);
+  f.qacc = z(m->nv);
+  f.sensordata = z(m->nsensordata);
+  f.xpos = z(3 * m->nbody);
+  f.xquat = z(4 * m->nbody);
+  f.mocap_pos = z(3 * m->nmocap);
+  f.mocap_quat = z(4 * m->nmocap);
+  return f;
+}
+
+void StateFrame::CopyFrom(const mjModel* m, const mjData* d) {
+  time = d->time;
+  ncon = d->ncon;
+  CopyArray(&qpos, d->qpos, m->nq);
+  CopyArray(&qvel, d->qvel, m->nv);
+  CopyArray(&act, d->act, m->na);
+  CopyArray(&ctrl, d->ctrl, m->nu);
+  CopyArray(&qacc, d->qacc, m->nv);
+  CopyArray(&sensordata, d->sensordata, m->nsensordata);
+  CopyArray(&xpos, d->xpos, 3 * m->nbody);
+  CopyArray(&xquat, d->xquat, 4 * m->nbody);
+  CopyArray(&mocap_pos, d->mocap_pos, 3 * m->nmocap);
+  CopyArray(&mocap_quat, d->mocap_quat, 4 * m->nmocap);
+}
+
+StateSubscription::StateSubscription(std::string name, const mjModel* m)
+    : name_(std::move(name)), buffer_(StateFrame::SizedFor(m)) {}
+
+StateRing::StateRing(std::string name, const mjModel* m, std::size_t capacity)
+    : name_(std::move(name)), ring_(capacity, StateFrame::SizedFor(m)) {
+  if (capacity == 0) throw Error("StateRing '" + name_ + "': capacity must be at least 1");
+}
+
+std::shared_ptr<StateSubscription> StatePublisher::SubscribeLatest(std::string name) {
+  auto s = std::make_shared<StateSubscription>(std::move(name), model_);
+  latest_.push_back(s);
+  return s;
+}
+
+std::shared_ptr<StateRing> StatePublisher::SubscribeEveryStep(std::string name,
+                                                              std::size_t capacity) {
+  auto r = std::make_shared<StateRing>(std::move(name), model_, capacity);
+  rings_.push_back(r);
+  return r;
+}
+
+bool StatePublisher::Unsubscribe(const void* subscription) {
+  const auto before = latest_.size() + rings_.size();
+  std::erase_if(latest_, [&](const auto& s) { return s.get() == subscription; });
+  std::erase_if(rings_, [&](const auto& r) { return r.get() == subscription; });
+  return latest_.size() + rings_.size() != before;
+}
+
+int StatePublisher::num_subscribers() const {
+  return static_cast<int>(latest_.size() + rings_.size());
+}
+
+void StatePublisher::Publish(const mjModel* m, const mjData* d, const FrameMeta& meta) {
+  for (const auto& s : latest_) {
+    StateFrame& f = s->buffer_.Back();
+    f.CopyFrom(m, d);
+    ApplyMeta(&f, meta);
+    s->buffer_.Publish();
+  }
+  for (const auto& r : rings_) {
+    if (StateFrame* f = r->ring_.BeginPush()) {
+      f->CopyFrom(m, d);
+      ApplyMeta(f, meta);
+      r->ring_.CommitPush();
+    }
+  }
+}
+
+}  // namespace urlab::physics

@@ -1,0 +1,235 @@
+#include "urlab/world/session.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "urlab/world/controller_factory.h"
+
+namespace urlab::world {
+
+std::shared_ptr<Session> Session::Create(const SceneConfig& scene, SessionOptions options) {
+  std::shared_ptr<Session> s(new Session(options));
+  s->Build(scene);
+  return s;
+}
+
+Session::~Session() {
+  Stop();
+  // What the compiled scene keeps registered against the model (software sensors) goes first:
+  // the model itself lives in the engine.
+  compiled_ = CompiledScene{};
+  articulations_.clear();
+  engine_.reset();
+  controls_.reset();
+}
+
+void Session::Build(const SceneConfig& scene) {
+  // Articulation names where one prefix starts another would make prefix binding ambiguous
+  // ("arm_" would also own "arm_left_..."): refuse them with the place to fix.
+  for (const ArticulationConfig& a : scene.articulations) {
+    for (const ArticulationConfig& b : scene.articulations) {
+      if (&a != &b && (b.name + "_").starts_with(a.name + "_")) {
+        throw InputError(b.where, "articulation names '" + a.name + "' and '" + b.name +
+                                      "' overlap (prefix '" + a.name + "_' would also own '" +
+                                      b.name + "_' elements); rename one");
+      }
+    }
+    if (a.hold_keyframe && a.keyframe.empty()) {
+      throw InputError(a.where, a.name + ": hold_keyframe needs an initial 'keyframe'");
+    }
+  }
+
+  config_ = scene;
+  compiled_ = BuildScene(scene);
+  for (const auto& d : compiled_.diagnostics) spdlog::warn("{}: {}", d.where.str(), d.message);
+
+  physics::PhysicsEngine::Options eo;
+  eo.speed_percent = options_.speed_percent;
+  eo.as_fast_as_possible = options_.as_fast_as_possible;
+  eo.reset_on_divergence = options_.reset_on_divergence;
+  eo.log_events = false;  // the Manager's event log reports each event once
+  engine_ = std::make_unique<physics::PhysicsEngine>(std::move(compiled_.model), eo);
+  controls_ = std::make_unique<control::ControlSystem>();
+  controls_->SetGlobalSource(scene.control_source);
+
+  // Bind every articulation and build its controller (the thread does not run yet).
+  engine_->WithLockedData([&](mjModel* m, mjData* d) {
+    for (std::size_t i = 0; i < scene.articulations.size(); ++i) {
+      const ArticulationConfig& ac = scene.articulations[i];
+      Articulation a;
+      a.config = ac;
+      a.prefix =
+          i < compiled_.articulations.size() ? compiled_.articulations[i].prefix : ac.name + "_";
+      a.bindings = std::make_unique<physics::ArticulationBindings>(m, d, a.prefix);
+      a.control = &controls_->Add(std::make_unique<control::ArticulationControl>(*a.bindings));
+      a.control->SetSourceOverride(ac.control_source);
+      InstallController(ac, *a.control, m);
+      if (!ac.keyframe.empty()) {
+        a.initial_key = mj_name2id(m, mjOBJ_KEY, (a.prefix + ac.keyframe).c_str());
+        if (a.initial_key < 0) {
+          throw InputError(ac.where,
+                           ac.name + ": keyframe '" + ac.keyframe + "' is not in " + ac.mjcf);
+        }
+      }
+      articulations_.push_back(std::move(a));
+    }
+  });
+  controls_->Install(*engine_);
+  engine_->SetArticulationResolver([this](std::string_view name) {
+    const Articulation* a = OwnerOf(name);
+    return a ? a->name() : std::string();
+  });
+  engine_->AddPreStepCallback([this](const mjModel*, mjData* d) { ApplyHostPoses(d); });
+  // After a divergence the engine reset the data at once; put every articulation back in its
+  // initial keyframe (delivered on the main thread by whoever polls the engine's events).
+  engine_->AddEventListener([this](const physics::EngineEvent& e) {
+    if (e.kind == physics::EngineEventKind::kDivergence && e.auto_reset) ResetToInitialState();
+  });
+
+  // Initial keyframes (applied now: the thread is not running), then holds.
+  QueueInitialReset(/*full=*/false);
+  for (Articulation& a : articulations_) {
+    if (a.config.hold_keyframe) a.control->HoldKeyframe(a.initial_key);
+  }
+  engine_->DrainEvents();  // the initial reset is not news
+}
+
+void Session::Start() {
+  engine_->SetPaused(options_.start_paused);
+  engine_->Start();
+}
+
+void Session::Stop() {
+  if (engine_) engine_->Stop();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Registry
+
+const Articulation* Session::FindArticulation(std::string_view name) const {
+  for (const Articulation& a : articulations_) {
+    if (a.name() == name) return &a;
+  }
+  return nullptr;
+}
+
+const Articulation* Session::OwnerOf(std::string_view full_name) const {
+  const Articulation* best = nullptr;
+  for (const Articulation& a : articulations_) {
+    if (full_name.starts_with(a.prefix) && (!best || a.prefix.size() > best->prefix.size())) {
+      best = &a;
+    }
+  }
+  return best;
+}
+
+const Articulation& Session::Require(std::string_view name) const {
+  const Articulation* a = FindArticulation(name);
+  if (!a) throw Error("no articulation '" + std::string(name) + "' in the scene");
+  return *a;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Commands
+
+std::uint64_t Session::ResetToInitialState() { return QueueInitialReset(/*full=*/true); }
+
+std::uint64_t Session::ResetArticulation(std::string_view name, std::string_view key) {
+  const Articulation& a = Require(name);
+  if (key.empty()) {
+    if (a.initial_key < 0) {
+      throw Error("ResetArticulation: '" + a.name() + "' has no initial keyframe; name one");
+    }
+    return controls_->RequestKeyframeReset(*engine_, a.prefix, a.prefix + a.config.keyframe);
+  }
+  // Only this articulation's keyframes: "{prefix}{key}".
+  return controls_->RequestKeyframeReset(*engine_, a.prefix, a.prefix + std::string(key));
+}
+
+std::uint64_t Session::QueueInitialReset(bool full) {
+  std::vector<std::pair<const control::ArticulationControl*, int>> keys;
+  for (const Articulation& a : articulations_) {
+    if (a.initial_key >= 0) keys.emplace_back(a.control, a.initial_key);
+  }
+  if (!full && keys.empty()) return 0;
+  return engine_->ResetWith(
+      [keys = std::move(keys), full](const mjModel* m, mjData* d) {
+        if (full) mj_resetData(m, d);
+        for (const auto& [control, key] : keys) control->ResetToKeyframe(m, d, key);
+      },
+      full ? "reset to the initial state" : "initial keyframes");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Host-driven mocap bodies
+
+int Session::MocapOf(std::string_view articulation, std::string_view body) const {
+  const Articulation& a = Require(articulation);
+  const physics::BodyView* v = a.bindings->bodies().Find(body);
+  if (!v) {
+    throw Error("articulation '" + a.name() + "' has no body '" + std::string(body) + "'");
+  }
+  if (v->mocap_id < 0) {
+    throw Error("body '" + v->name +
+                "' is not a mocap body (only mocap=\"true\" bodies can be driven by the host)");
+  }
+  return v->mocap_id;
+}
+
+void Session::SetHostDrivenPose(std::string_view articulation, std::string_view body,
+                                const Pose& pose) {
+  const int mocap = MocapOf(articulation, body);
+  HostPose hp{mocap, pose};
+  const double n = std::sqrt(pose.quat[0] * pose.quat[0] + pose.quat[1] * pose.quat[1] +
+                             pose.quat[2] * pose.quat[2] + pose.quat[3] * pose.quat[3]);
+  if (!(n > 1e-12) || !std::isfinite(n)) throw Error("SetHostDrivenPose: invalid quaternion");
+  for (double& q : hp.pose.quat) q /= n;
+  for (double p : pose.pos) {
+    if (!std::isfinite(p)) throw Error("SetHostDrivenPose: non-finite position");
+  }
+  auto it = std::find_if(host_poses_.begin(), host_poses_.end(),
+                         [mocap](const HostPose& h) { return h.mocap_id == mocap; });
+  if (it == host_poses_.end()) {
+    host_poses_.push_back(hp);
+  } else {
+    *it = hp;
+  }
+  host_dirty_ = true;
+}
+
+bool Session::ClearHostDriven(std::string_view articulation, std::string_view body) {
+  const int mocap = MocapOf(articulation, body);
+  auto it = std::find_if(host_poses_.begin(), host_poses_.end(),
+                         [mocap](const HostPose& h) { return h.mocap_id == mocap; });
+  if (it == host_poses_.end()) return false;
+  host_poses_.erase(it);
+  host_dirty_ = true;
+  return true;
+}
+
+void Session::SyncHostPoses() {
+  if (!host_dirty_) return;
+  {
+    std::lock_guard<std::mutex> lock(host_mutex_);
+    published_poses_ = host_poses_;
+  }
+  has_host_poses_.store(!host_poses_.empty(), std::memory_order_release);
+  host_dirty_ = false;
+}
+
+void Session::ApplyHostPoses(mjData* d) {
+  if (!has_host_poses_.load(std::memory_order_acquire)) return;
+  {
+    std::lock_guard<std::mutex> lock(host_mutex_);
+    applying_ = published_poses_;
+  }
+  for (const HostPose& h : applying_) {
+    std::memcpy(d->mocap_pos + 3 * h.mocap_id, h.pose.pos.data(), 3 * sizeof(mjtNum));
+    std::memcpy(d->mocap_quat + 4 * h.mocap_id, h.pose.quat.data(), 4 * sizeof(mjtNum));
+  }
+}
+
+}  // namespace urlab::world

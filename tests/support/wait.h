@@ -1,0 +1,19 @@
+#pragma once
+// Polling wait for threaded tests: the condition is what is asserted, the timeout only bounds a
+// failing test (never a measurement).
+#include <chrono>
+#include <thread>
+
+namespace urlab::testing {
+
+// Waits (polling every millisecond) until `pred` holds or `timeout` passes; returns pred().
+template <typename Pred>
+bool WaitFor(Pred pred, std::chrono::milliseconds timeout = std::chrono::milliseconds(5000)) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (!pred() && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return pred();
+}
+
+}  // namespace urlab::testing
