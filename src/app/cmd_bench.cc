@@ -16,6 +16,7 @@ struct BenchLoopArgs {
   std::string scene;
   int steps = 10000;
   int trials = 15;
+  int subscribers = 0;
 };
 
 int BenchLoop(const BenchLoopArgs& args) {
@@ -29,6 +30,7 @@ int BenchLoop(const BenchLoopArgs& args) {
   world::LoopBenchOptions options;
   options.steps = args.steps;
   options.trials = args.trials;
+  options.subscribers = args.subscribers;
   options.prefix = compiled.articulations.front().prefix;
   options.setup = [&art](const mjModel* m, control::ArticulationControl& control) {
     world::InstallController(art, control, m);
@@ -61,6 +63,10 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
   loop->add_option("--steps", args.steps, "steps per trial")->check(CLI::Range(2, 100000000));
   loop->add_option("--trials", args.trials, "trials per loop (best of)")
       ->check(CLI::Range(1, 1000));
+  loop->add_option("--subscribers", args.subscribers,
+                   "state readers attached to the loop: an every-step ring, then newest-frame "
+                   "readers polling at 1 kHz and 60 Hz in turn")
+      ->check(CLI::Range(0, 16));
   loop->callback([&exit_code] { exit_code = BenchLoop(args); });
 }
 

@@ -204,7 +204,14 @@ std::shared_ptr<StateSubscription> PhysicsEngine::SubscribeState(std::string nam
   if (running()) throw Error("SubscribeState('" + name + "'): subscribe before Start");
   std::lock_guard<std::mutex> lock(step_mutex_);
   auto s = publisher_.SubscribeLatest(std::move(name));
-  PublishFrameLocked();  // the current state, so a reader has a frame before the first step
+  // The current state, so a reader has a frame before the first step (others get nothing new).
+  FrameMeta meta;
+  meta.step = step_count_.load(std::memory_order_relaxed);
+  meta.frame = frames_;
+  meta.command_seq = commands_.last_applied();
+  meta.epoch = epoch_;
+  meta.paused = paused();
+  StatePublisher::PublishTo(*s, model_.get(), data_.get(), meta);
   return s;
 }
 
@@ -408,7 +415,7 @@ std::uint32_t PhysicsEngine::ApplyCommandLocked(Command& command) {
     QueueEvent({EngineEventKind::kReset, before, std::move(message)});
   };
   const double before = d->time;
-  return std::visit(
+  const std::uint32_t what = std::visit(
       [&](auto& c) -> std::uint32_t {
         using T = std::decay_t<decltype(c)>;
         if constexpr (std::is_same_v<T, cmd::Reset>) {
@@ -450,10 +457,7 @@ std::uint32_t PhysicsEngine::ApplyCommandLocked(Command& command) {
           mju_normalize4(d->mocap_quat + 4 * c.mocap_id);
           return kNoDiscontinuity;
         } else if constexpr (std::is_same_v<T, cmd::ApplyForce>) {
-          mjtNum* x = d->xfrc_applied + 6 * c.body;
-          mju_addTo3(x, c.force.data());
-          mju_addTo3(x + 3, c.torque.data());
-          one_shot_.push_back(c);
+          one_shot_.push_back(c);  // added right before the next step, removed after it
           return kNoDiscontinuity;
         } else if constexpr (std::is_same_v<T, cmd::SetOptions>) {
           const mjOption saved = m->opt;
@@ -470,6 +474,9 @@ std::uint32_t PhysicsEngine::ApplyCommandLocked(Command& command) {
         }
       },
       command);
+  // A reset or restore also cancels forces still waiting for their step.
+  if (what & (kDiscontinuityReset | kDiscontinuityRestore)) one_shot_.clear();
+  return what;
 }
 
 bool PhysicsEngine::ApplyPendingLocked() {
@@ -515,6 +522,11 @@ void PhysicsEngine::IterateLocked(bool force_step) {
     for (const WatchedWarning& w : kWatched) {
       d->warning[w.warning].lastinfo = -1;  // sentinel: MuJoCo sets it on a warning
     }
+    for (const cmd::ApplyForce& f : one_shot_) {
+      mju_addTo3(d->xfrc_applied + 6 * f.body, f.force.data());
+      mju_addTo3(d->xfrc_applied + 6 * f.body + 3, f.torque.data());
+    }
+    one_shot_added_ = !one_shot_.empty();
     if (custom_step_) {
       custom_step_(m, d);
     } else {
@@ -622,10 +634,13 @@ void PhysicsEngine::CheckDivergenceLocked(double time_before) {
 }
 
 void PhysicsEngine::RemoveOneShotForcesLocked() {
-  for (const cmd::ApplyForce& f : one_shot_) {
-    mju_subFrom3(data_->xfrc_applied + 6 * f.body, f.force.data());
-    mju_subFrom3(data_->xfrc_applied + 6 * f.body + 3, f.torque.data());
+  if (one_shot_added_) {
+    for (const cmd::ApplyForce& f : one_shot_) {
+      mju_subFrom3(data_->xfrc_applied + 6 * f.body, f.force.data());
+      mju_subFrom3(data_->xfrc_applied + 6 * f.body + 3, f.torque.data());
+    }
   }
+  one_shot_added_ = false;
   one_shot_.clear();
 }
 
@@ -646,7 +661,7 @@ void PhysicsEngine::HandleErrorLocked(const std::exception& e) {
   // An error thrown out of MuJoCo leaves its stack pointer where it was; nothing of ours is on
   // the mjData stack between iterations, so it is safe to release it all.
   data_->pstack = 0;
-  RemoveOneShotForcesLocked();  // a step that threw keeps no one-shot force
+  RemoveOneShotForcesLocked();  // a step that threw keeps no one-shot force (added or not)
   paused_.store(true, std::memory_order_release);
   error_latched_.store(true, std::memory_order_release);
   EngineEvent ev;

@@ -101,13 +101,16 @@ int StatePublisher::num_subscribers() const {
   return static_cast<int>(latest_.size() + rings_.size());
 }
 
+void StatePublisher::PublishTo(StateSubscription& s, const mjModel* m, const mjData* d,
+                               const FrameMeta& meta) {
+  StateFrame& f = s.buffer_.Back();
+  f.CopyFrom(m, d);
+  ApplyMeta(&f, meta);
+  s.buffer_.Publish();
+}
+
 void StatePublisher::Publish(const mjModel* m, const mjData* d, const FrameMeta& meta) {
-  for (const auto& s : latest_) {
-    StateFrame& f = s->buffer_.Back();
-    f.CopyFrom(m, d);
-    ApplyMeta(&f, meta);
-    s->buffer_.Publish();
-  }
+  for (const auto& s : latest_) PublishTo(*s, m, d, meta);
   for (const auto& r : rings_) {
     if (StateFrame* f = r->ring_.BeginPush()) {
       f->CopyFrom(m, d);

@@ -57,6 +57,52 @@ double BareTrial(const mjModel* m, mjData* d, int steps, const std::vector<mjtNu
   return steps / s;
 }
 
+// Reader threads on the engine's state subscriptions (see LoopBenchOptions::subscribers). Each
+// copies what it reads out, as a real reader would.
+class BenchReaders {
+ public:
+  BenchReaders(physics::PhysicsEngine& engine, int n) {
+    for (int i = 0; i < n; ++i) {
+      if (i == 0) {
+        ring_ = engine.SubscribeEveryStep("bench_ring", 4096);
+        threads_.emplace_back([this, ring = ring_, m = engine.model()] {
+          physics::StateFrame f = physics::StateFrame::SizedFor(m);
+          while (!stop_.load(std::memory_order_relaxed)) {
+            while (ring->TryPop(&f)) sink_ += f.qpos.empty() ? 0 : f.qpos[0];
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+          }
+        });
+      } else {
+        auto sub = engine.SubscribeState("bench_latest_" + std::to_string(i));
+        const auto period =
+            i % 2 ? std::chrono::microseconds(1000) : std::chrono::microseconds(16667);
+        threads_.emplace_back([this, sub, period] {
+          std::vector<mjtNum> copy;
+          while (!stop_.load(std::memory_order_relaxed)) {
+            if (const physics::StateFrame* f = sub->Latest()) {
+              copy.assign(f->qpos.begin(), f->qpos.end());
+              copy.insert(copy.end(), f->xpos.begin(), f->xpos.end());
+            }
+            std::this_thread::sleep_for(period);
+          }
+        });
+      }
+    }
+  }
+  ~BenchReaders() {
+    stop_.store(true);
+    for (std::thread& t : threads_) t.join();
+  }
+  // Frames the every-step reader's ring had to drop (0 without readers). Any thread.
+  std::uint64_t ring_dropped() const { return ring_ ? ring_->dropped() : 0; }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::vector<std::thread> threads_;
+  std::shared_ptr<physics::StateRing> ring_;
+  double sink_ = 0;  // written by the ring reader only
+};
+
 }  // namespace
 
 void SetBenchTargets(control::ArticulationControl& articulation) {
@@ -129,6 +175,13 @@ LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& optio
   double warm_ncon = 0;
   BareTrial(bare_model.get(), bare_data.get(), steps, ctrl_log, &warm_ncon);
 
+  // Readers attach before the timed trials (subscriptions are made while the loop is stopped).
+  BenchReaders readers(engine, options.subscribers);
+  if (options.subscribers > 0) {
+    report(Format("%d state reader(s) attached (every-step ring, 1 kHz and 60 Hz newest-frame)",
+                  options.subscribers));
+  }
+
   LoopBenchResult r;
   r.nq = engine.model()->nq;
   r.nu = engine.model()->nu;
@@ -169,6 +222,10 @@ LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& optio
   const double best_loop = *std::max_element(r.loop_rates.begin(), r.loop_rates.end());
   r.ratio = best_loop / best_bare;
   r.median_ratio = Median(r.loop_rates) / Median(r.bare_rates);
+  if (options.subscribers > 0) {
+    report(Format("every-step reader: %llu frame(s) dropped",
+                  static_cast<unsigned long long>(readers.ring_dropped())));
+  }
   report(Format("median bare=%.0f loop=%.0f steps/s (median ratio %.4f)", Median(r.bare_rates),
                 Median(r.loop_rates), r.median_ratio));
   report(Format("best bare=%.0f loop=%.0f steps/s", best_bare, best_loop));

@@ -38,6 +38,11 @@ class PdController : public Controller {
   void Bind(const mjModel* m, std::span<const int> actuator_ids) override;
   void ComputeAndApply(const mjModel* m, mjData* d, std::span<const double> targets) override;
   bool TargetsArePositions() const override { return true; }
+  // Frame gains override the per-binding gains for this step where they are not NaN.
+  void UseFrameGains(std::span<const double> kp, std::span<const double> kv) override {
+    frame_kp_ = kp;
+    frame_kv_ = kv;
+  }
 
   // Gains of binding i. Any thread (atomics); takes effect at the next step.
   void SetGains(int i, PdGains gains);

@@ -255,7 +255,8 @@ class PhysicsEngine {
   // Commands from other threads, and the physics thread's working copies.
   CommandQueue commands_;
   std::deque<CommandQueue::Entry> taken_;    // mutex held
-  std::vector<cmd::ApplyForce> one_shot_;    // mutex held: forces to remove after the step
+  std::vector<cmd::ApplyForce> one_shot_;    // mutex held: forces for the next step
+  bool one_shot_added_ = false;              // mutex held: one_shot_ is in xfrc_applied now
   std::uint32_t pending_discontinuity_ = 0;  // mutex held: since the last published frame
   std::uint64_t epoch_ = 0;                  // mutex held: discontinuities so far
   std::uint64_t frames_ = 0;                 // mutex held: frames published

@@ -119,6 +119,9 @@ class StatePublisher {
   int num_subscribers() const;
   // Physics thread: copies the state into every subscription.
   void Publish(const mjModel* m, const mjData* d, const FrameMeta& meta);
+  // Step mutex held: gives one new latest-frame subscription the current state.
+  static void PublishTo(StateSubscription& s, const mjModel* m, const mjData* d,
+                        const FrameMeta& meta);
 
  private:
   const mjModel* model_;

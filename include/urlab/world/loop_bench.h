@@ -23,6 +23,11 @@ struct LoopBenchOptions {
   // Installs the controller and targets on the articulation (bound to model `m`). Default: a PD
   // controller (kp 20, kv 2, torque limit 100) on every actuator, then SetBenchTargets.
   std::function<void(const mjModel* m, control::ArticulationControl&)> setup;
+  // State readers attached to the full loop, as subsystems attach them: reader 0 takes every
+  // frame from a ring (a recorder), odd readers poll the newest frame every millisecond (a
+  // network broadcaster), even ones at 60 Hz (a viewer). Their threads run through the bare
+  // trials too, so both loops share the machine with the same background.
+  int subscribers = 0;
   // Receives the report lines (model line, one per trial, medians); empty: silent.
   std::function<void(const std::string&)> report;
 };
