@@ -205,6 +205,25 @@ TEST_F(EngineTest, DivergenceFromNaNNamesJointAndArticulation) {
   EXPECT_NE(events[0].message.find("qvel"), std::string::npos);
 }
 
+// A bad control (NaN from a controller) is watched like the other instability warnings and names
+// the actuator and the joint it drives.
+TEST_F(EngineTest, DivergenceFromBadControlNamesActuatorAndJoint) {
+  ExpectWarning("CTRL");
+  PhysicsEngine engine(CompileXmlString(kArmXml));
+  engine.SetArticulationResolver([](std::string_view) { return std::string("arm"); });
+  engine.SetApplyControlsHook([](const mjModel*, mjData* d) {
+    d->ctrl[0] = d->time > 0.05 ? std::numeric_limits<double>::quiet_NaN() : 0.0;
+  });
+  engine.StepSync(100);
+  auto events = engine.DrainEvents();
+  ASSERT_EQ(events.size(), 1u);  // one report per episode, not one per bad step
+  EXPECT_EQ(events[0].kind, EngineEventKind::kDivergence);
+  EXPECT_NE(events[0].message.find("bad ctrl"), std::string::npos) << events[0].message;
+  EXPECT_NE(events[0].message.find("arm_shoulder_motor"), std::string::npos);
+  EXPECT_EQ(events[0].joint_name, "arm_shoulder");
+  EXPECT_EQ(events[0].articulation, "arm");
+}
+
 TEST_F(EngineTest, DivergenceFromHugeTimestepWithAutoReset) {
   ExpectWarning("unstable");
   PhysicsEngine::Options options;
