@@ -38,10 +38,11 @@ std::string Join(std::string_view art, std::string_view kind, std::string_view n
   return s;
 }
 
-constexpr const char* kDropNames[kNumDrops] = {"unknown_topic",  "truncated",    "bad_size",
-                                               "negative_count", "too_many",     "foreign_actuator",
-                                               "non_finite",     "bad_json",     "unknown_name",
-                                               "bad_number",     "unknown_field"};
+constexpr const char* kDropNames[] = {
+    "unknown_topic",    "truncated",     "bad_size",   "negative_count", "too_many",
+    "foreign_actuator", "non_finite",    "bad_json",   "unknown_name",   "bad_number",
+    "unknown_field",    "no_controller", "bad_framing"};
+static_assert(std::size(kDropNames) == kNumDrops, "one name per Drop reason");
 
 }  // namespace
 

@@ -63,6 +63,8 @@ enum class Drop {
   kUnknownName,      // a set_gains name that is neither an actuator nor a joint
   kBadNumber,        // a gain that is not a finite number >= 0
   kUnknownField,     // a set_gains field other than kp, kv, torque_limit
+  kNoController,     // set_gains for an articulation whose controller has no gains
+  kBadFraming,       // not exactly two frames [topic][payload]
   kCount_,           // number of reasons (not a reason)
 };
 inline constexpr int kNumDrops = static_cast<int>(Drop::kCount_);

@@ -1,0 +1,70 @@
+#pragma once
+// NetworkSubsystem: the streaming topics of protocol.md over ZeroMQ. One I/O thread owns every
+// socket: it publishes each physics step's state (joint, ball joint, base_state and sensor
+// topics) from its own every-step state subscription, drains the control SUB socket (control
+// and set_gains topics, validated, applied as whole command frames or gain changes, or dropped
+// and counted per reason), and publishes discovery info at the protocol's cadence.
+//
+// Threading contract
+// - Main thread: construction, the Subsystem hooks (the manager calls them), endpoints().
+// - I/O thread (started in BeginPlay, joined in EndPlay): every ZeroMQ socket; nothing else
+//   touches them.
+// - Any thread: the counters (drops, published, dropped_frames).
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "urlab/net/wire.h"
+#include "urlab/world/subsystem.h"
+
+namespace urlab::net {
+
+struct NetworkOptions {
+  std::string state = "tcp://*:5555";            // PUB: state topics
+  std::string control = "tcp://127.0.0.1:5556";  // SUB: control and set_gains
+  std::string info = "tcp://*:5557";             // PUB: discovery
+  // Frames the I/O thread may fall behind the physics thread before frames are dropped.
+  std::size_t ring_capacity = 4096;
+};
+
+// Counts of what the network did, readable from any thread.
+struct NetworkCounters {
+  std::array<std::uint64_t, wire::kNumDrops> drops{};  // inbound messages dropped, per reason
+  std::uint64_t controls_applied = 0;                  // control messages applied
+  std::uint64_t gains_applied = 0;                     // set_gains messages applied
+  std::uint64_t steps_published = 0;                   // physics steps whose state went out
+  std::uint64_t frames_dropped = 0;  // steps the I/O thread could not keep up with
+  std::uint64_t info_published = 0;  // discovery messages
+  std::uint64_t total_drops() const;
+};
+
+class NetworkSubsystem : public world::Subsystem {
+ public:
+  explicit NetworkSubsystem(NetworkOptions options = {});
+  ~NetworkSubsystem() override;
+
+  std::string_view name() const override { return "network"; }
+  void BeginPlay(world::Session& session) override;
+  void EndPlay(world::Session& session) override;
+
+  // The endpoints actually bound (a wildcard port resolved), "" for one that failed to bind.
+  // Main thread, after BeginPlay.
+  struct Endpoints {
+    std::string state, control, info;
+  };
+  const Endpoints& endpoints() const { return bound_; }
+  // Any thread.
+  NetworkCounters counters() const;
+
+ private:
+  struct Impl;
+  NetworkOptions options_;
+  Endpoints bound_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace urlab::net

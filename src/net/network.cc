@@ -1,0 +1,336 @@
+#include "urlab/net/network.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <future>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <thread>
+#include <unordered_map>
+#include <zmq.hpp>
+#include <zmq_addon.hpp>
+
+#include "net/port_owner.h"
+#include "net/topic_table.h"
+#include "urlab/control/controllers.h"
+#include "urlab/world/session.h"
+
+namespace urlab::net {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr auto kPollInterval = std::chrono::milliseconds(1);
+constexpr auto kPausedRepublish = std::chrono::milliseconds(100);  // at most 10 Hz while paused
+constexpr auto kPausedInfo = std::chrono::seconds(1);
+constexpr auto kDropLogPeriod = std::chrono::seconds(1);
+
+// Discovery cadence: every 50 steps for the first 2500 steps, then every 500.
+bool InfoDue(std::uint64_t step) { return step <= 2500 ? step % 50 == 0 : step % 500 == 0; }
+
+std::string InfoJson(const ArticulationTopics& t) {
+  nlohmann::ordered_json j;
+  j["type"] = "actuator_list";
+  j["robot"] = t.name;
+  j["names"] = t.actuator_names;
+  j["ids"] = t.actuator_ids;
+  j["mins"] = t.mins;
+  j["maxs"] = t.maxs;
+  j["camera_list"] = nlohmann::ordered_json::array();
+  return j.dump();
+}
+
+}  // namespace
+
+std::uint64_t NetworkCounters::total_drops() const {
+  std::uint64_t n = 0;
+  for (std::uint64_t d : drops) n += d;
+  return n;
+}
+
+struct NetworkSubsystem::Impl {
+  enum class Kind { kControl, kSetGains };
+  struct Route {
+    std::size_t articulation;
+    Kind kind;
+  };
+
+  NetworkOptions options;
+  std::vector<ArticulationTopics> tables;
+  std::unordered_map<std::string, Route> routes;  // inbound topic -> articulation and kind
+  std::shared_ptr<physics::StateRing> ring;
+  std::vector<std::string> info_messages;
+  const mjModel* model = nullptr;
+
+  std::thread thread;
+  std::atomic<bool> stop{false};
+  std::array<std::atomic<std::uint64_t>, wire::kNumDrops> drops{};
+  std::atomic<std::uint64_t> controls_applied{0}, gains_applied{0}, steps_published{0},
+      info_published{0};
+
+  // ---- I/O thread only ----
+  std::optional<zmq::context_t> context;
+  std::optional<zmq::socket_t> pub, sub, info;
+  physics::StateFrame frame;  // the newest frame taken from the ring
+  bool have_frame = false;
+  std::string payload;
+  std::vector<std::pair<std::int32_t, float>> control_scratch;
+  std::vector<std::pair<int, double>> patch_scratch;
+  std::vector<wire::GainPatch> gains_scratch;
+  std::array<std::uint64_t, wire::kNumDrops> logged_drops{};
+  Clock::time_point last_drop_log{}, last_republish{}, last_paused_info{};
+
+  void Drop(wire::Drop d) { drops[static_cast<std::size_t>(d)].fetch_add(1); }
+
+  // Creates and binds a socket; on failure logs the endpoint (and who holds the port) and
+  // returns nothing. Returns the bound endpoint (a wildcard port resolved).
+  std::string Bind(std::optional<zmq::socket_t>* slot, zmq::socket_type type, const char* what,
+                   const std::string& endpoint) {
+    if (endpoint.empty()) return "";
+    zmq::socket_t s(*context, type);
+    s.set(zmq::sockopt::linger, 0);
+    if (type == zmq::socket_type::pub) s.set(zmq::sockopt::sndhwm, 10000);
+    try {
+      s.bind(endpoint);
+    } catch (const zmq::error_t& e) {
+      const std::string owner =
+          e.num() == EADDRINUSE ? DescribePortOwner(EndpointPort(endpoint)) : std::string();
+      spdlog::error("network: cannot bind the {} socket to {}: {}{}; running without it", what,
+                    endpoint, e.what(), owner.empty() ? "" : " (held by " + owner + ")");
+      return "";
+    }
+    const std::string bound = s.get(zmq::sockopt::last_endpoint);
+    if (endpoint.find("127.0.0.1") == std::string::npos &&
+        endpoint.find("localhost") == std::string::npos && !endpoint.starts_with("ipc://") &&
+        !endpoint.starts_with("inproc://") && type == zmq::socket_type::sub) {
+      spdlog::warn("network: the {} socket accepts connections from other hosts ({})", what,
+                   endpoint);
+    }
+    *slot = std::move(s);
+    return bound;
+  }
+
+  void Send(zmq::socket_t& s, std::string_view topic, std::string_view body) {
+    // Non-blocking: a PUB socket drops at its high-water mark instead of blocking.
+    s.send(zmq::buffer(topic), zmq::send_flags::sndmore | zmq::send_flags::dontwait);
+    s.send(zmq::buffer(body), zmq::send_flags::dontwait);
+  }
+
+  void PublishState(const physics::StateFrame& f) {
+    if (!pub) return;
+    for (const ArticulationTopics& t : tables) {
+      for (const JointTopicEntry& j : t.joints) {
+        payload.clear();
+        const double* q = f.qpos.data() + j.qpos_adr;
+        const double* v = f.qvel.data() + j.dof_adr;
+        const double* a = f.qacc.data() + j.dof_adr;
+        switch (j.type) {
+          case mjJNT_FREE:
+            wire::AppendBaseState(&payload, q, v);
+            break;
+          case mjJNT_BALL:
+            wire::AppendBallJoint(&payload, j.id, q, v, a);
+            break;
+          default:
+            wire::AppendJoint(&payload, j.id, *q, *v, *a);
+            break;
+        }
+        Send(*pub, j.topic, payload);
+      }
+      for (const SensorTopicEntry& s : t.sensors) {
+        payload.clear();
+        wire::AppendSensor(&payload, s.id,
+                           std::span(f.sensordata.data() + s.adr, static_cast<std::size_t>(s.dim)));
+        Send(*pub, s.topic, payload);
+      }
+    }
+  }
+
+  void PublishInfo() {
+    if (!info) return;
+    for (const std::string& m : info_messages) {
+      info->send(zmq::buffer(m), zmq::send_flags::dontwait);
+      info_published.fetch_add(1);
+    }
+  }
+
+  void HandleControl(ArticulationTopics& t, std::string_view body) {
+    if (auto d = wire::DecodeControl(body, &control_scratch)) return Drop(*d);
+    if (control_scratch.size() > t.actuator_ids.size()) return Drop(wire::Drop::kTooMany);
+    patch_scratch.clear();
+    for (const auto& [id, value] : control_scratch) {
+      const auto it = t.index_of_actuator.find(id);
+      if (it == t.index_of_actuator.end()) return Drop(wire::Drop::kForeignActuator);
+      patch_scratch.emplace_back(it->second, value);
+    }
+    // One whole frame: every value of the message or none.
+    t.control->channel(control::ControlSource::kNetwork).Patch(patch_scratch);
+    controls_applied.fetch_add(1);
+  }
+
+  void HandleSetGains(ArticulationTopics& t, std::string_view body) {
+    if (auto d = wire::DecodeSetGains(body, &gains_scratch)) return Drop(*d);
+    auto* pd = dynamic_cast<control::PdController*>(t.control->controller());
+    if (!pd) return Drop(wire::Drop::kNoController);
+    std::vector<std::pair<int, control::PdGains>> updates;
+    for (const wire::GainPatch& p : gains_scratch) {
+      const auto it = t.gain_index.find(p.name);
+      if (it == t.gain_index.end()) return Drop(wire::Drop::kUnknownName);
+      control::PdGains g = pd->gains(it->second);
+      if (p.kp) g.kp = *p.kp;
+      if (p.kv) g.kv = *p.kv;
+      if (p.torque_limit) g.torque_limit = *p.torque_limit;
+      updates.emplace_back(it->second, g);
+    }
+    for (const auto& [i, g] : updates) pd->SetGains(i, g);  // all names resolved: apply all
+    gains_applied.fetch_add(1);
+  }
+
+  void DrainControl() {
+    if (!sub) return;
+    std::vector<zmq::message_t> parts;
+    while (true) {
+      parts.clear();
+      const auto n =
+          zmq::recv_multipart(*sub, std::back_inserter(parts), zmq::recv_flags::dontwait);
+      if (!n) return;
+      if (parts.size() != 2) {
+        Drop(wire::Drop::kBadFraming);
+        continue;
+      }
+      const auto it = routes.find(std::string(parts[0].to_string_view()));
+      if (it == routes.end()) {
+        Drop(wire::Drop::kUnknownTopic);
+        continue;
+      }
+      ArticulationTopics& t = tables[it->second.articulation];
+      if (it->second.kind == Kind::kControl) {
+        HandleControl(t, parts[1].to_string_view());
+      } else {
+        HandleSetGains(t, parts[1].to_string_view());
+      }
+    }
+  }
+
+  void LogDrops(Clock::time_point now) {
+    if (now - last_drop_log < kDropLogPeriod) return;
+    last_drop_log = now;
+    std::string what;
+    for (int i = 0; i < wire::kNumDrops; ++i) {
+      const std::uint64_t n = drops[static_cast<std::size_t>(i)].load();
+      const std::uint64_t delta = n - logged_drops[static_cast<std::size_t>(i)];
+      if (delta == 0) continue;
+      logged_drops[static_cast<std::size_t>(i)] = n;
+      what += fmt::format("{}{} {}", what.empty() ? "" : ", ",
+                          wire::DropName(static_cast<wire::Drop>(i)), delta);
+    }
+    if (!what.empty())
+      spdlog::warn("network: dropped inbound message(s) in the last second: {}", what);
+  }
+
+  void Run(std::promise<Endpoints>* ready) {
+    Endpoints bound;
+    try {
+      context.emplace(1);
+      bound.state = Bind(&pub, zmq::socket_type::pub, "state", options.state);
+      bound.control = Bind(&sub, zmq::socket_type::sub, "control", options.control);
+      bound.info = Bind(&info, zmq::socket_type::pub, "info", options.info);
+      if (sub) sub->set(zmq::sockopt::subscribe, "");
+    } catch (const std::exception& e) {
+      spdlog::error("network: {}", e.what());
+    }
+    ready->set_value(bound);
+    while (!stop.load(std::memory_order_acquire)) {
+      bool got = false;
+      while (ring->TryPop(&frame)) {
+        got = have_frame = true;
+        PublishState(frame);
+        steps_published.fetch_add(1);
+        if (InfoDue(frame.step) && frame.discontinuity == 0) PublishInfo();
+      }
+      const auto now = Clock::now();
+      if (!got && have_frame && frame.paused) {
+        if (now - last_republish >= kPausedRepublish) {  // late subscribers see a paused state
+          PublishState(frame);
+          last_republish = now;
+        }
+        if (now - last_paused_info >= kPausedInfo) {
+          PublishInfo();
+          last_paused_info = now;
+        }
+      }
+      if (sub) {
+        zmq::pollitem_t item{static_cast<void*>(*sub), 0, ZMQ_POLLIN, 0};
+        zmq::poll(&item, 1, got ? std::chrono::milliseconds(0) : kPollInterval);
+        DrainControl();
+      } else if (!got) {
+        std::this_thread::sleep_for(kPollInterval);
+      }
+      LogDrops(now);
+    }
+    LogDrops(Clock::now() + kDropLogPeriod);
+    pub.reset();
+    sub.reset();
+    info.reset();
+    context.reset();
+  }
+};
+
+NetworkSubsystem::NetworkSubsystem(NetworkOptions options)
+    : options_(std::move(options)), impl_(std::make_unique<Impl>()) {}
+
+NetworkSubsystem::~NetworkSubsystem() {
+  if (impl_ && impl_->thread.joinable()) {
+    impl_->stop.store(true);
+    impl_->thread.join();
+  }
+}
+
+void NetworkSubsystem::BeginPlay(world::Session& session) {
+  impl_ = std::make_unique<Impl>();
+  impl_->options = options_;
+  impl_->model = session.engine().model();
+  impl_->tables = BuildTopicTables(session);
+  for (std::size_t i = 0; i < impl_->tables.size(); ++i) {
+    impl_->routes[impl_->tables[i].control_topic] = {i, Impl::Kind::kControl};
+    impl_->routes[impl_->tables[i].set_gains_topic] = {i, Impl::Kind::kSetGains};
+    impl_->info_messages.push_back(InfoJson(impl_->tables[i]));
+  }
+  impl_->frame = physics::StateFrame::SizedFor(impl_->model);
+  impl_->ring = session.engine().SubscribeEveryStep("network", options_.ring_capacity);
+  std::promise<Endpoints> ready;
+  std::future<Endpoints> bound = ready.get_future();
+  impl_->thread = std::thread([this, &ready] { impl_->Run(&ready); });
+  bound_ = bound.get();
+  spdlog::info("network: state {} | control {} | info {}",
+               bound_.state.empty() ? "(none)" : bound_.state,
+               bound_.control.empty() ? "(none)" : bound_.control,
+               bound_.info.empty() ? "(none)" : bound_.info);
+}
+
+void NetworkSubsystem::EndPlay(world::Session&) {
+  if (impl_->thread.joinable()) {
+    impl_->stop.store(true, std::memory_order_release);
+    impl_->thread.join();
+  }
+  const NetworkCounters c = counters();
+  spdlog::info(
+      "network: {} step(s) published, {} control and {} gain message(s) applied, {} "
+      "dropped, {} frame(s) the I/O thread missed",
+      c.steps_published, c.controls_applied, c.gains_applied, c.total_drops(), c.frames_dropped);
+}
+
+NetworkCounters NetworkSubsystem::counters() const {
+  NetworkCounters c;
+  for (std::size_t i = 0; i < c.drops.size(); ++i) c.drops[i] = impl_->drops[i].load();
+  c.controls_applied = impl_->controls_applied.load();
+  c.gains_applied = impl_->gains_applied.load();
+  c.steps_published = impl_->steps_published.load();
+  c.info_published = impl_->info_published.load();
+  c.frames_dropped = impl_->ring ? impl_->ring->dropped() : 0;
+  return c;
+}
+
+}  // namespace urlab::net

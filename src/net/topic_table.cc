@@ -1,0 +1,61 @@
+#include "net/topic_table.h"
+
+#include "urlab/net/wire.h"
+
+namespace urlab::net {
+
+std::vector<ArticulationTopics> BuildTopicTables(world::Session& session) {
+  std::vector<ArticulationTopics> out;
+  const mjModel* m = session.engine().model();
+  for (const world::Articulation& a : session.articulations()) {
+    ArticulationTopics t;
+    t.name = a.name();
+    t.control = a.control;
+    t.control_topic = wire::ControlTopic(t.name);
+    t.set_gains_topic = wire::SetGainsTopic(t.name);
+    const physics::ArticulationBindings& b = *a.bindings;
+    for (std::size_t i = 0; i < b.joints().size(); ++i) {
+      const physics::JointView& j = b.joints().all()[i];
+      const std::string& short_name = b.joints().short_names()[i];
+      JointTopicEntry e;
+      e.topic = j.type == mjJNT_FREE ? wire::BaseStateTopic(t.name, short_name)
+                                     : wire::JointTopic(t.name, short_name);
+      e.id = j.id;
+      e.type = j.type;
+      e.qpos_adr = j.qpos_adr;
+      e.dof_adr = j.dof_adr;
+      t.joints.push_back(std::move(e));
+    }
+    for (std::size_t i = 0; i < b.sensors().size(); ++i) {
+      const physics::SensorView& s = b.sensors().all()[i];
+      t.sensors.push_back(
+          {wire::SensorTopic(t.name, b.sensors().short_names()[i]), s.id, s.adr, s.dim});
+    }
+    const std::vector<int>& ids = a.control->actuator_ids();
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      const int id = ids[i];
+      t.actuator_ids.push_back(id);
+      const char* name = mj_id2name(m, mjOBJ_ACTUATOR, id);
+      t.actuator_names.push_back(name ? name : "");
+      const bool limited = m->actuator_ctrllimited[id] != 0;
+      t.mins.push_back(limited ? m->actuator_ctrlrange[2 * id] : -100.0);
+      t.maxs.push_back(limited ? m->actuator_ctrlrange[2 * id + 1] : 100.0);
+      t.index_of_actuator[id] = static_cast<int>(i);
+      if (name) {
+        t.gain_index[name] = static_cast<int>(i);
+        t.gain_index[std::string(name).substr(a.prefix.size())] = static_cast<int>(i);
+      }
+      // A joint name reaches the actuator that drives it (clients key gains by joint).
+      if (m->actuator_trntype[id] == mjTRN_JOINT) {
+        if (const char* jn = mj_id2name(m, mjOBJ_JOINT, m->actuator_trnid[2 * id])) {
+          t.gain_index.emplace(jn, static_cast<int>(i));
+          t.gain_index.emplace(std::string(jn).substr(a.prefix.size()), static_cast<int>(i));
+        }
+      }
+    }
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+}  // namespace urlab::net

@@ -1,0 +1,46 @@
+#pragma once
+// What the network publishes and accepts for each articulation, resolved once at BeginPlay from
+// the session's bindings: joint and sensor topics with their state addresses, actuator ids and
+// ranges for discovery, and the name lookups set_gains needs. Immutable afterwards, so the I/O
+// thread reads it without locks.
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "urlab/world/session.h"
+
+namespace urlab::net {
+
+struct JointTopicEntry {
+  std::string topic;
+  int id = -1;
+  int type = mjJNT_HINGE;
+  int qpos_adr = 0, dof_adr = 0;
+};
+
+struct SensorTopicEntry {
+  std::string topic;
+  int id = -1;
+  int adr = 0, dim = 0;
+};
+
+struct ArticulationTopics {
+  std::string name;  // the articulation ({art})
+  std::string control_topic, set_gains_topic;
+  std::vector<JointTopicEntry> joints;    // hinge/slide/ball on /joint/, free on /base_state/
+  std::vector<SensorTopicEntry> sensors;  // in id order
+  // Actuators in the articulation's order (the command frame's order).
+  std::vector<int> actuator_ids;
+  std::vector<std::string> actuator_names;         // full (prefixed) names, for discovery
+  std::vector<double> mins, maxs;                  // ctrlrange when limited, else -100/100
+  std::unordered_map<int, int> index_of_actuator;  // global id -> frame index
+  // set_gains: short or prefixed actuator names, and joint names (the actuator driving it).
+  std::unordered_map<std::string, int> gain_index;
+  control::ArticulationControl* control = nullptr;
+};
+
+// Builds the tables of every articulation of `session` (main thread, before the engine runs).
+std::vector<ArticulationTopics> BuildTopicTables(world::Session& session);
+
+}  // namespace urlab::net
