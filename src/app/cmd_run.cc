@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "app/commands.h"
+#include "urlab/net/network.h"
 #include "urlab/world/manager.h"
 
 namespace urlab::app {
@@ -35,6 +36,7 @@ struct RunArgs {
   bool max_speed = false;
   bool paused = false;
   bool reset_on_divergence = false;
+  bool no_network = false;
 };
 
 int Run(const RunArgs& args) {
@@ -48,7 +50,12 @@ int Run(const RunArgs& args) {
   options.start_paused = args.paused;
   options.reset_on_divergence = args.reset_on_divergence;
   world::Manager manager(options);
-  manager.BeginPlay(world::LoadSceneOrModel(args.scene));
+  const world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
+  if (!args.no_network && scene.network.enabled) {
+    manager.AddSubsystem(
+        std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network)));
+  }
+  manager.BeginPlay(scene);
   physics::PhysicsEngine& engine = manager.session().engine();
   const double timestep = engine.model()->opt.timestep;
 
@@ -114,6 +121,9 @@ void RegisterRunCommand(CLI::App& app, int& exit_code) {
       cmd->add_flag("--max-speed", args.max_speed, "step as fast as possible (no pacing)");
   speed->excludes(max_speed);
   cmd->add_flag("--paused", args.paused, "start paused");
+  cmd->add_flag("--no-network", args.no_network,
+                "no ZeroMQ sockets (by default the state, control and info topics of "
+                "protocol.md are served on the scene's endpoints or the defaults 5555-5557)");
   cmd->add_flag("--reset-on-divergence", args.reset_on_divergence,
                 "reset to the initial state when the simulation diverges");
   cmd->callback([&exit_code] { exit_code = Run(args); });

@@ -44,6 +44,14 @@ std::string InfoJson(const ArticulationTopics& t) {
 
 }  // namespace
 
+NetworkOptions NetworkOptionsFromScene(const world::NetworkConfig& config) {
+  NetworkOptions o;
+  o.state = config.state;
+  o.control = config.control;
+  o.info = config.info;
+  return o;
+}
+
 std::uint64_t NetworkCounters::total_drops() const {
   std::uint64_t n = 0;
   for (std::uint64_t d : drops) n += d;

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "urlab/net/wire.h"
+#include "urlab/world/scene_file.h"
 #include "urlab/world/subsystem.h"
 
 namespace urlab::net {
@@ -30,6 +31,9 @@ struct NetworkOptions {
   // Frames the I/O thread may fall behind the physics thread before frames are dropped.
   std::size_t ring_capacity = 4096;
 };
+
+// The endpoints a scene file's `network:` section names (protocol.md's defaults otherwise).
+NetworkOptions NetworkOptionsFromScene(const world::NetworkConfig& config);
 
 // Counts of what the network did, readable from any thread.
 struct NetworkCounters {
