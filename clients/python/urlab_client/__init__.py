@@ -1,0 +1,16 @@
+"""Client for the URLab simulation runtime.
+
+The streaming topics of protocol.md: discovery of every robot's actuators, decoded state as
+numpy arrays keyed by name, and control by actuator name or id.
+
+    from urlab_client import StreamClient
+    client = StreamClient("127.0.0.1")
+    robots = client.discover()              # {"arm": Robot(...)}
+    client.send_control("arm", {"shoulder_motor": 0.3})
+    state = client.poll()                    # {"arm": {"joint": {...}, "sensor": {...}}}
+"""
+from urlab_client.stream import Robot, StreamClient
+from urlab_client import wire
+
+__all__ = ["Robot", "StreamClient", "wire"]
+__version__ = "0.1.0"

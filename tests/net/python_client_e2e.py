@@ -1,0 +1,91 @@
+#!/usr/bin/python3
+"""End to end: `urlab run` on loopback with ephemeral ports, driven by the Python client.
+
+The client discovers the arm's actuators, sends a PD target for the shoulder by name, reads the
+joint back from the streaming topics until it arrives, and leaves the process to stop cleanly.
+Usage: python_client_e2e.py URLAB_BINARY SOURCE_DIR
+"""
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
+sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
+from urlab_client import StreamClient  # noqa: E402
+
+
+def fail(message, proc=None):
+    if proc:
+        proc.kill()
+        print(proc.stderr.read() if proc.stderr else "", file=sys.stderr)
+    print("FAIL:", message)
+    sys.exit(1)
+
+
+def main():
+    tmp = tempfile.mkdtemp(prefix="urlab_py_")
+    scene = os.path.join(tmp, "scene.yaml")
+    model = os.path.join(SOURCE, "examples", "models", "servo_arm.xml")
+    with open(scene, "w") as f:
+        f.write(f"""control_source: network
+network:
+  state: "tcp://127.0.0.1:*"
+  control: "tcp://127.0.0.1:*"
+  info: "tcp://127.0.0.1:*"
+articulations:
+  - name: arm
+    mjcf: {model}
+    controller: {{type: pd, kp: 400, kv: 20}}
+""")
+    proc = subprocess.Popen([URLAB, "run", scene, "--duration", "60"], stderr=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True)
+    endpoints = None
+    deadline = time.monotonic() + 30
+    while endpoints is None and time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if not line:
+            fail("urlab exited before serving the network", proc)
+        m = re.search(r"network: state (\S+) \| control (\S+) \| info (\S+)", line)
+        if m:
+            endpoints = m.groups()
+    if endpoints is None:
+        fail("no network line in urlab's log", proc)
+    try:
+        with StreamClient(state=endpoints[0], control=endpoints[1], info=endpoints[2]) as client:
+            robots = client.discover(timeout=10, expect=["arm"])
+            arm = robots["arm"]
+            assert arm.actuator_names == ["arm_shoulder_motor", "arm_elbow_motor"], arm
+            end = time.monotonic() + 15
+            q = None
+            while time.monotonic() < end:
+                client.send_control("arm", {"shoulder_motor": 0.5, "elbow_motor": -0.3})
+                client.poll(timeout=0.05)
+                q = client.joint_position("arm", "shoulder")
+                e = client.joint_position("arm", "elbow")
+                if q is not None and abs(q - 0.5) < 0.05 and abs(e + 0.3) < 0.05:
+                    break
+            else:
+                fail(f"shoulder did not reach 0.5 (last {q})", proc)
+            sensors = client.state["arm"]["sensor"]
+            assert abs(sensors["shoulder_pos"][0] - q) < 0.05, sensors
+            assert len(sensors["tip_pos"]) == 3, sensors
+            print(f"shoulder reached {q:.3f}, elbow {e:.3f}; sensors {sorted(sensors)}")
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            out, _ = proc.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            fail("urlab did not stop on SIGINT", proc)
+    if proc.returncode not in (0, 130):
+        fail(f"urlab exited with {proc.returncode}")
+    if "summary:" not in out:
+        fail("no summary line")
+    print("1 passed, 0 failed")
+
+
+if __name__ == "__main__":
+    main()
