@@ -4,8 +4,8 @@ namespace urlab::physics {
 
 const char* CommandName(const Command& c) {
   static constexpr const char* kNames[] = {
-      "reset",    "reset_keyframe", "reset_custom", "restore",     "set_qpos",
-      "set_qvel", "set_mocap",      "apply_force",  "set_options", "set_paused"};
+      "reset",     "reset_keyframe", "reset_custom", "restore",    "set_qpos", "set_qvel",
+      "set_mocap", "apply_force",    "set_options",  "set_paused", "step"};
   static_assert(std::size(kNames) == std::variant_size_v<Command>);
   return kNames[c.index()];
 }
@@ -37,10 +37,14 @@ CommandResult CommandQueue::Wait(std::uint64_t seq, Clock::duration timeout) {
 }
 
 void CommandQueue::TakeAll(std::deque<Entry>* out) {
-  out->clear();
   if (!has_pending_.load(std::memory_order_acquire)) return;
   std::lock_guard<std::mutex> lock(mutex_);
-  out->swap(queue_);
+  if (out->empty()) {
+    out->swap(queue_);
+  } else {
+    for (Entry& e : queue_) out->push_back(std::move(e));
+    queue_.clear();
+  }
   has_pending_.store(false, std::memory_order_release);
 }
 

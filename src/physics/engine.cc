@@ -113,6 +113,7 @@ void PhysicsEngine::Stop() {
   if (!thread_.joinable()) return;
   ThrowIfOnPhysicsThread("Stop");
   stop_.store(true, std::memory_order_release);
+  wake_cv_.notify_all();
   thread_.join();
   running_.store(false, std::memory_order_release);
   // Commands queued while the thread was winding down are applied now.
@@ -280,6 +281,10 @@ void PhysicsEngine::ValidateCommand(const Command& command) const {
           finite("ApplyForce", c.torque.data(), 3);
         } else if constexpr (std::is_same_v<T, cmd::SetOptions>) {
           if (!c.fn) throw Error("SetOptions: empty function");
+        } else if constexpr (std::is_same_v<T, cmd::Step>) {
+          if (c.n < 1 || c.n > 10'000'000) {
+            throw Error("Step: n must be 1..10000000 (got " + std::to_string(c.n) + ")");
+          }
         }
       },
       command);
@@ -289,10 +294,19 @@ std::uint64_t PhysicsEngine::Submit(Command command) {
   ValidateCommand(command);
   const std::uint64_t seq = commands_.Push(std::move(command));
   if (!running() && tls_iterating != this) {
-    // Not running: apply now. If the thread starts meanwhile, whoever locks first applies it.
-    // From inside a StepSync callback it stays queued for the next iteration.
+    // Not running: apply now (step commands run their iterations here). If the thread starts
+    // meanwhile, whoever locks first applies it. From inside a StepSync callback it stays
+    // queued for the next iteration.
     std::lock_guard<std::mutex> lock(step_mutex_);
-    if (ApplyPendingLocked()) PublishFrameLocked();
+    try {
+      if (ApplyPendingLocked()) PublishFrameLocked();
+      while (step_budget_ > 0 || !backlog_.empty()) IterateLocked(/*force_step=*/false);
+    } catch (const std::exception& e) {
+      HandleErrorLocked(e);
+      throw;
+    }
+  } else {
+    wake_cv_.notify_one();  // a paused loop sleeping until the next period
   }
   return seq;
 }
@@ -346,6 +360,7 @@ void PhysicsEngine::StepSync(int n) {
 void PhysicsEngine::SetPaused(bool paused) {
   if (!paused) error_latched_.store(false, std::memory_order_release);
   paused_.store(paused, std::memory_order_release);
+  if (!paused) wake_cv_.notify_one();
 }
 
 void PhysicsEngine::TogglePause() {
@@ -467,9 +482,11 @@ std::uint32_t PhysicsEngine::ApplyCommandLocked(Command& command) {
             throw Error("SetOptions: timestep must be a positive finite number");
           }
           return kDiscontinuityOptions;
-        } else {
-          static_assert(std::is_same_v<T, cmd::SetPaused>);
+        } else if constexpr (std::is_same_v<T, cmd::SetPaused>) {
           SetPaused(c.paused);
+          return kNoDiscontinuity;
+        } else {
+          static_assert(std::is_same_v<T, cmd::Step>);  // handled by ApplyPendingLocked
           return kNoDiscontinuity;
         }
       },
@@ -480,10 +497,20 @@ std::uint32_t PhysicsEngine::ApplyCommandLocked(Command& command) {
 }
 
 bool PhysicsEngine::ApplyPendingLocked() {
-  if (!commands_.pending()) return false;
+  if (step_budget_ > 0) return false;  // a step command runs first; the rest waits behind it
+  if (!commands_.pending() && backlog_.empty()) return false;
   IteratingScope scope(this);
-  commands_.TakeAll(&taken_);
-  for (CommandQueue::Entry& e : taken_) {
+  commands_.TakeAll(&backlog_);
+  bool any = false;
+  while (!backlog_.empty() && step_budget_ == 0) {
+    CommandQueue::Entry e = std::move(backlog_.front());
+    backlog_.pop_front();
+    any = true;
+    if (const auto* step = std::get_if<cmd::Step>(&e.command)) {
+      step_budget_ = step->n;  // finished by IterateLocked after its last iteration
+      step_seq_ = e.seq;
+      break;
+    }
     AppliedCommand applied;
     applied.seq = e.seq;
     applied.name = CommandName(e.command);
@@ -502,11 +529,14 @@ bool PhysicsEngine::ApplyPendingLocked() {
       ++epoch_;
     }
     for (const auto& [id, fn] : command_listeners_) fn(applied, model_.get(), data_.get());
-    commands_.Finish(e.seq, applied.error);
+    to_finish_.emplace_back(e.seq, std::move(applied.error));
   }
-  const bool any = !taken_.empty();
-  taken_.clear();  // drop what the commands held (states, functions) now
   return any;
+}
+
+void PhysicsEngine::FinishCommandsLocked() {
+  for (auto& [seq, error] : to_finish_) commands_.Finish(seq, std::move(error));
+  to_finish_.clear();
 }
 
 void PhysicsEngine::IterateLocked(bool force_step) {
@@ -516,7 +546,8 @@ void PhysicsEngine::IterateLocked(bool force_step) {
   const bool applied = ApplyPendingLocked();
   for (const Hook& h : pre_step_) h.fn(m, d);
   if (apply_controls_) apply_controls_(m, d);
-  const bool step = force_step || !paused_.load(std::memory_order_acquire);
+  const bool budgeted = step_budget_ > 0;
+  const bool step = force_step || budgeted || !paused_.load(std::memory_order_acquire);
   if (step) {
     const double time_before = d->time;
     for (const WatchedWarning& w : kWatched) {
@@ -542,7 +573,16 @@ void PhysicsEngine::IterateLocked(bool force_step) {
   if (step) {
     for (const Hook& h : on_post_step_) h.fn(m, d);
   }
-  if (step || applied || published_paused_ != paused()) PublishFrameLocked();
+  if (budgeted && --step_budget_ == 0) {  // the step command's last iteration
+    AppliedCommand done;
+    done.seq = step_seq_;
+    done.name = "step";
+    for (const auto& [id, fn] : command_listeners_) fn(done, m, d);
+    to_finish_.emplace_back(step_seq_, std::string());
+  }
+  if (step || applied || !to_finish_.empty() || published_paused_ != paused()) {
+    PublishFrameLocked();
+  }
 }
 
 int PhysicsEngine::JointOfIndex(int index, bool is_qpos) const {
@@ -648,13 +688,15 @@ void PhysicsEngine::PublishFrameLocked() {
   FrameMeta meta;
   meta.step = step_count_.load(std::memory_order_relaxed);
   meta.frame = ++frames_;
-  meta.command_seq = commands_.last_applied();
+  meta.command_seq = to_finish_.empty() ? commands_.last_applied() : to_finish_.back().first;
   meta.discontinuity = pending_discontinuity_;
   meta.epoch = epoch_;
   meta.paused = paused();
   publisher_.Publish(model_.get(), data_.get(), meta);
   pending_discontinuity_ = 0;
   published_paused_ = meta.paused;
+  // Waiters are released only now, so the frame they read next shows their command.
+  FinishCommandsLocked();
 }
 
 void PhysicsEngine::HandleErrorLocked(const std::exception& e) {
@@ -664,6 +706,11 @@ void PhysicsEngine::HandleErrorLocked(const std::exception& e) {
   RemoveOneShotForcesLocked();  // a step that threw keeps no one-shot force (added or not)
   paused_.store(true, std::memory_order_release);
   error_latched_.store(true, std::memory_order_release);
+  if (step_budget_ > 0) {  // the step window ends here, failed
+    step_budget_ = 0;
+    to_finish_.emplace_back(step_seq_, std::string("step: ") + e.what());
+  }
+  PublishFrameLocked();
   EngineEvent ev;
   ev.kind = EngineEventKind::kError;
   ev.sim_time = data_->time;
@@ -686,8 +733,15 @@ void PhysicsEngine::Loop() {
       std::lock_guard<std::mutex> lock(step_mutex_);
       try {
         if (error_latched_.load(std::memory_order_acquire) && paused()) {
-          // Commands still work; callbacks stay quiet.
-          if (ApplyPendingLocked() || published_paused_ != paused()) PublishFrameLocked();
+          // Commands still work; callbacks stay quiet; a step window cannot run.
+          bool changed = ApplyPendingLocked();
+          if (step_budget_ > 0) {
+            step_budget_ = 0;
+            to_finish_.emplace_back(step_seq_,
+                                    "step: the simulation is paused after an error; unpause it");
+            changed = true;
+          }
+          if (changed || published_paused_ != paused()) PublishFrameLocked();
         } else {
           IterateLocked(/*force_step=*/false);
         }
@@ -704,7 +758,21 @@ void PhysicsEngine::Loop() {
         window_start = now;
       }
     }
-    if (as_fast_.load(std::memory_order_relaxed) && !paused_now) {
+    bool stepping = false;
+    {
+      std::lock_guard<std::mutex> lock(step_mutex_);
+      stepping = step_budget_ > 0 || !backlog_.empty();
+    }
+    if (stepping || (as_fast_.load(std::memory_order_relaxed) && !paused_now)) {
+      next = Clock::now();  // lockstep windows and as-fast-as-possible run without pacing
+      continue;
+    }
+    if (paused_now) {
+      // Paused: sleep until a command arrives (lockstep requests wake the loop at once).
+      std::unique_lock<std::mutex> lock(wake_mutex_);
+      wake_cv_.wait_for(lock, kMaxSleep, [&] {
+        return commands_.pending() || !paused() || stop_.load(std::memory_order_relaxed);
+      });
       next = Clock::now();
       continue;
     }

@@ -281,5 +281,68 @@ TEST_F(CommandsTest, ListenersSeeResetsAndRestoresWithTheirDiscontinuity) {
   EXPECT_EQ(DiscontinuityString(kDiscontinuityReset | kDiscontinuityOptions), "reset|options");
 }
 
+// Lockstep: a step command runs exactly n full iterations (controls every iteration) even while
+// paused, is finished after the last one with the frame that shows it, and holds back the
+// commands queued behind it until then.
+TEST_F(CommandsTest, StepCommandRunsExactlyNIterationsThenReleasesItsWaiter) {
+  PhysicsEngine engine(CompileXmlString(kArmXml));
+  const auto frames = engine.SubscribeState("server");
+  std::atomic<int> controls{0};
+  engine.SetApplyControlsHook([&](const mjModel*, mjData*) { controls.fetch_add(1); });
+  // Not running: the caller's thread runs the window.
+  const std::uint64_t first = engine.Submit(cmd::Step{5});
+  EXPECT_TRUE(engine.WaitForCommand(first, 0s).ok());
+  EXPECT_EQ(engine.step_count(), 5u);
+  EXPECT_EQ(controls.load(), 5);
+  // Running but paused (direct mode): the loop waits for requests.
+  engine.SetPaused(true);
+  engine.Start();
+  for (int round = 0; round < 50; ++round) {
+    const std::uint64_t before = engine.step_count();
+    const int n = 1 + round % 7;
+    const std::uint64_t seq = engine.Submit(cmd::Step{n});
+    ASSERT_TRUE(engine.WaitForCommand(seq, 5s).ok());
+    EXPECT_EQ(engine.step_count(), before + static_cast<std::uint64_t>(n));
+    const StateFrame* f = frames->Latest();
+    ASSERT_NE(f, nullptr);
+    EXPECT_EQ(f->command_seq, seq);  // the frame a reply reads shows the whole window
+    EXPECT_EQ(f->step, before + static_cast<std::uint64_t>(n));
+  }
+  // A command behind a long window waits for it.
+  const std::uint64_t before = engine.step_count();
+  const std::uint64_t window = engine.Submit(cmd::Step{2000});
+  const std::uint64_t behind = engine.Submit(cmd::SetQpos{0, {0.2}});
+  ASSERT_TRUE(engine.WaitForCommand(behind, 10s).ok());
+  EXPECT_TRUE(engine.WaitForCommand(window, 0s).ok());
+  EXPECT_EQ(engine.step_count(), before + 2000);
+  std::this_thread::sleep_for(20ms);
+  EXPECT_EQ(engine.step_count(), before + 2000);  // paused again: no step without a request
+  engine.Stop();
+  EXPECT_DOUBLE_EQ(Qpos(engine, 0), 0.2);
+  EXPECT_THROW(engine.Submit(cmd::Step{0}), Error);
+}
+
+TEST_F(CommandsTest, StepWindowThatFailsReportsTheError) {
+  PhysicsEngine engine(CompileXmlString(kArmXml));
+  engine.SetCustomStepHandler([](const mjModel*, mjData* d) {
+    if (d->time > 0.01) throw std::runtime_error("replay ran out");
+    d->time += 0.002;
+  });
+  engine.SetPaused(true);
+  engine.Start();
+  const std::uint64_t seq = engine.Submit(cmd::Step{100});
+  const CommandResult r = engine.WaitForCommand(seq, 5s);
+  EXPECT_EQ(r.status, CommandStatus::kFailed);
+  EXPECT_NE(r.error.find("replay ran out"), std::string::npos) << r.error;
+  // While the error latch holds, a step request fails at once instead of waiting forever.
+  const CommandResult latched = engine.WaitForCommand(engine.Submit(cmd::Step{1}), 5s);
+  EXPECT_EQ(latched.status, CommandStatus::kFailed);
+  EXPECT_NE(latched.error.find("unpause"), std::string::npos) << latched.error;
+  engine.Stop();
+  int errors = 0;
+  for (const EngineEvent& e : engine.DrainEvents()) errors += e.kind == EngineEventKind::kError;
+  EXPECT_EQ(errors, 1);
+}
+
 }  // namespace
 }  // namespace urlab::physics

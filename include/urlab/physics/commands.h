@@ -79,11 +79,17 @@ struct SetOptions {
 struct SetPaused {
   bool paused = true;
 };
+// Runs exactly `n` full iterations (controls, step, post-step work) even while paused, without
+// pacing; the command is finished after the last one, and commands queued behind it wait until
+// then (lockstep stepping).
+struct Step {
+  int n = 1;
+};
 }  // namespace cmd
 
-using Command =
-    std::variant<cmd::Reset, cmd::ResetKeyframe, cmd::ResetCustom, cmd::Restore, cmd::SetQpos,
-                 cmd::SetQvel, cmd::SetMocap, cmd::ApplyForce, cmd::SetOptions, cmd::SetPaused>;
+using Command = std::variant<cmd::Reset, cmd::ResetKeyframe, cmd::ResetCustom, cmd::Restore,
+                             cmd::SetQpos, cmd::SetQvel, cmd::SetMocap, cmd::ApplyForce,
+                             cmd::SetOptions, cmd::SetPaused, cmd::Step>;
 
 // Short name of a command's kind ("reset", "restore", "set_qpos", ...).
 const char* CommandName(const Command& c);
@@ -120,7 +126,7 @@ class CommandQueue {
   // Any thread: commands pushed but not yet taken.
   bool pending() const { return has_pending_.load(std::memory_order_acquire); }
 
-  // Physics thread: moves every queued command (in order) into *out, which is cleared first.
+  // Physics thread: moves every queued command (in order) to the end of *out.
   void TakeAll(std::deque<Entry>* out);
   // Physics thread: records the outcome of the oldest taken, unfinished command (`error` empty
   // on success) and releases its waiters.

@@ -34,6 +34,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -219,8 +220,10 @@ class PhysicsEngine {
   void Loop();
   // One iteration, step mutex held by the caller. Throws what the step or callbacks throw.
   void IterateLocked(bool force_step);
-  // Applies every queued command in order; true when any was applied.
+  // Applies queued commands in order up to the first step command (which starts a step window);
+  // true when any was taken. Their waiters are released by the next PublishFrameLocked.
   bool ApplyPendingLocked();
+  void FinishCommandsLocked();
   // Applies one command; returns the discontinuity it caused. Throws what applying throws.
   std::uint32_t ApplyCommandLocked(Command& command);
   void ValidateCommand(const Command& command) const;
@@ -254,7 +257,13 @@ class PhysicsEngine {
 
   // Commands from other threads, and the physics thread's working copies.
   CommandQueue commands_;
-  std::deque<CommandQueue::Entry> taken_;    // mutex held
+  std::deque<CommandQueue::Entry> backlog_;  // mutex held: taken, not yet applied
+  std::vector<std::pair<std::uint64_t, std::string>> to_finish_;  // mutex held: applied, to
+                                                                  // release after publishing
+  int step_budget_ = 0;         // mutex held: iterations left in a step command's window
+  std::uint64_t step_seq_ = 0;  // mutex held: that step command
+  std::mutex wake_mutex_;       // with wake_cv_: a paused loop waits for commands
+  std::condition_variable wake_cv_;
   std::vector<cmd::ApplyForce> one_shot_;    // mutex held: forces for the next step
   bool one_shot_added_ = false;              // mutex held: one_shot_ is in xfrc_applied now
   std::uint32_t pending_discontinuity_ = 0;  // mutex held: since the last published frame
