@@ -729,6 +729,7 @@ void PhysicsEngine::Loop() {
   }
   while (!stop_.load(std::memory_order_acquire)) {
     const bool paused_now = paused();
+    bool stepping = false;  // a lockstep window is under way (or commands wait behind one)
     {
       std::lock_guard<std::mutex> lock(step_mutex_);
       try {
@@ -757,10 +758,6 @@ void PhysicsEngine::Loop() {
         window_steps_ = 0;
         window_start = now;
       }
-    }
-    bool stepping = false;
-    {
-      std::lock_guard<std::mutex> lock(step_mutex_);
       stepping = step_budget_ > 0 || !backlog_.empty();
     }
     if (stepping || (as_fast_.load(std::memory_order_relaxed) && !paused_now)) {
