@@ -12,6 +12,7 @@
 #include <zmq_addon.hpp>
 
 #include "net/port_owner.h"
+#include "net/step_server.h"
 #include "net/topic_table.h"
 #include "urlab/control/controllers.h"
 #include "urlab/world/session.h"
@@ -49,6 +50,8 @@ NetworkOptions NetworkOptionsFromScene(const world::NetworkConfig& config) {
   o.state = config.state;
   o.control = config.control;
   o.info = config.info;
+  o.rpc = config.rpc;
+  o.step_mode = config.step_mode;
   return o;
 }
 
@@ -69,6 +72,7 @@ struct NetworkSubsystem::Impl {
   std::vector<ArticulationTopics> tables;
   std::unordered_map<std::string, Route> routes;  // inbound topic -> articulation and kind
   std::shared_ptr<physics::StateRing> ring;
+  std::unique_ptr<StepServer> server;  // built on the main thread, then used by the I/O thread
   std::vector<std::string> info_messages;
   const mjModel* model = nullptr;
 
@@ -246,6 +250,7 @@ struct NetworkSubsystem::Impl {
       bound.control = Bind(&sub, zmq::socket_type::sub, "control", options.control);
       bound.info = Bind(&info, zmq::socket_type::pub, "info", options.info);
       if (sub) sub->set(zmq::sockopt::subscribe, "");
+      if (server) bound.rpc = server->Bind(*context);
     } catch (const std::exception& e) {
       spdlog::error("network: {}", e.what());
     }
@@ -269,16 +274,30 @@ struct NetworkSubsystem::Impl {
           last_paused_info = now;
         }
       }
-      if (sub) {
-        zmq::pollitem_t item{static_cast<void*>(*sub), 0, ZMQ_POLLIN, 0};
-        zmq::poll(&item, 1, got ? std::chrono::milliseconds(0) : kPollInterval);
-        DrainControl();
-      } else if (!got) {
+      // A parked lockstep reply leaves as soon as its window ends.
+      if (server && server->has_pending()) server->WaitForFront(std::chrono::microseconds(500));
+      zmq::pollitem_t items[2];
+      int n = 0;
+      if (sub) items[n++] = {static_cast<void*>(*sub), 0, ZMQ_POLLIN, 0};
+      if (server && server->socket()) {
+        items[n++] = {static_cast<void*>(*server->socket()), 0, ZMQ_POLLIN, 0};
+      }
+      const bool busy = got || (server && server->has_pending());
+      if (n > 0) {
+        zmq::poll(items, static_cast<std::size_t>(n),
+                  busy ? std::chrono::milliseconds(0) : kPollInterval);
+      } else if (!busy) {
         std::this_thread::sleep_for(kPollInterval);
+      }
+      DrainControl();
+      if (server) {
+        server->HandleIncoming();
+        server->Service(Clock::now());
       }
       LogDrops(now);
     }
     LogDrops(Clock::now() + kDropLogPeriod);
+    if (server) server->Close();
     pub.reset();
     sub.reset();
     info.reset();
@@ -308,14 +327,21 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
   }
   impl_->frame = physics::StateFrame::SizedFor(impl_->model);
   impl_->ring = session.engine().SubscribeEveryStep("network", options_.ring_capacity);
+  if (!options_.rpc.empty()) {
+    StepServerOptions so;
+    so.endpoint = options_.rpc;
+    so.mode = options_.step_mode;
+    so.lease_timeout = options_.lease_timeout;
+    impl_->server = std::make_unique<StepServer>(
+        session, impl_->tables, session.engine().SubscribeState("step_server"), so);
+  }
   std::promise<Endpoints> ready;
   std::future<Endpoints> bound = ready.get_future();
   impl_->thread = std::thread([this, &ready] { impl_->Run(&ready); });
   bound_ = bound.get();
-  spdlog::info("network: state {} | control {} | info {}",
-               bound_.state.empty() ? "(none)" : bound_.state,
-               bound_.control.empty() ? "(none)" : bound_.control,
-               bound_.info.empty() ? "(none)" : bound_.info);
+  const auto shown = [](const std::string& e) { return e.empty() ? std::string("(none)") : e; };
+  spdlog::info("network: state {} | control {} | info {} | rpc {}", shown(bound_.state),
+               shown(bound_.control), shown(bound_.info), shown(bound_.rpc));
 }
 
 void NetworkSubsystem::EndPlay(world::Session&) {

@@ -24,12 +24,24 @@ std::vector<ArticulationTopics> BuildTopicTables(world::Session& session) {
       e.type = j.type;
       e.qpos_adr = j.qpos_adr;
       e.dof_adr = j.dof_adr;
+      if (j.type == mjJNT_FREE && t.free_joint < 0) t.free_joint = static_cast<int>(i);
+      for (int k = 0; k < j.qpos_size; ++k) t.qpos_adrs.push_back(j.qpos_adr + k);
+      for (int k = 0; k < j.dof_size; ++k) t.dof_adrs.push_back(j.dof_adr + k);
+      t.joint_names.push_back(short_name);
       t.joints.push_back(std::move(e));
     }
     for (std::size_t i = 0; i < b.sensors().size(); ++i) {
       const physics::SensorView& s = b.sensors().all()[i];
       t.sensors.push_back(
           {wire::SensorTopic(t.name, b.sensors().short_names()[i]), s.id, s.adr, s.dim});
+      t.sensor_names.push_back(b.sensors().short_names()[i]);
+    }
+    for (std::size_t i = 0; i < b.bodies().size(); ++i) {
+      t.body_ids.push_back(b.bodies().all()[i].id);
+      t.body_names.push_back(b.bodies().short_names()[i]);
+    }
+    for (const physics::ActuatorView& v : b.actuators().all()) {
+      if (v.act_adr >= 0) t.act_adrs.push_back(v.act_adr);
     }
     const std::vector<int>& ids = a.control->actuator_ids();
     for (std::size_t i = 0; i < ids.size(); ++i) {

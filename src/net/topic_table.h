@@ -38,6 +38,11 @@ struct ArticulationTopics {
   // set_gains: short or prefixed actuator names, and joint names (the actuator driving it).
   std::unordered_map<std::string, int> gain_index;
   control::ArticulationControl* control = nullptr;
+  // For observations: the articulation's state addresses (joint order), activations, bodies,
+  // and sensors by short name.
+  std::vector<int> qpos_adrs, dof_adrs, act_adrs, body_ids;
+  std::vector<std::string> joint_names, body_names, sensor_names;  // short names
+  int free_joint = -1;  // index into joints of the root free joint, -1 when fixed base
 };
 
 // Builds the tables of every articulation of `session` (main thread, before the engine runs).

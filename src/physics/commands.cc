@@ -5,7 +5,7 @@ namespace urlab::physics {
 const char* CommandName(const Command& c) {
   static constexpr const char* kNames[] = {
       "reset",     "reset_keyframe", "reset_custom", "restore",    "set_qpos", "set_qvel",
-      "set_mocap", "apply_force",    "set_options",  "set_paused", "step"};
+      "set_mocap", "apply_force",    "set_options",  "set_paused", "step", "forward"};
   static_assert(std::size(kNames) == std::variant_size_v<Command>);
   return kNames[c.index()];
 }

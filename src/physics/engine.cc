@@ -485,6 +485,9 @@ std::uint32_t PhysicsEngine::ApplyCommandLocked(Command& command) {
         } else if constexpr (std::is_same_v<T, cmd::SetPaused>) {
           SetPaused(c.paused);
           return kNoDiscontinuity;
+        } else if constexpr (std::is_same_v<T, cmd::Forward>) {
+          mj_forward(m, d);
+          return kNoDiscontinuity;
         } else {
           static_assert(std::is_same_v<T, cmd::Step>);  // handled by ApplyPendingLocked
           return kNoDiscontinuity;

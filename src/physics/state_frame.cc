@@ -47,6 +47,7 @@ StateFrame StateFrame::SizedFor(const mjModel* m) {
   f.ctrl = z(m->nu);
   f.qacc = z(m->nv);
   f.sensordata = z(m->nsensordata);
+  f.actuator_force = z(m->nu);
   f.xpos = z(3 * m->nbody);
   f.xquat = z(4 * m->nbody);
   f.mocap_pos = z(3 * m->nmocap);
@@ -63,6 +64,7 @@ void StateFrame::CopyFrom(const mjModel* m, const mjData* d) {
   CopyArray(&ctrl, d->ctrl, m->nu);
   CopyArray(&qacc, d->qacc, m->nv);
   CopyArray(&sensordata, d->sensordata, m->nsensordata);
+  CopyArray(&actuator_force, d->actuator_force, m->nu);
   CopyArray(&xpos, d->xpos, 3 * m->nbody);
   CopyArray(&xquat, d->xquat, 4 * m->nbody);
   CopyArray(&mocap_pos, d->mocap_pos, 3 * m->nmocap);

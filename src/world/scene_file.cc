@@ -243,11 +243,19 @@ class Parser {
     }
     if (root["control_source"]) s.control_source = Source(root["control_source"]);
     if (const auto n = root["network"]) {
-      CheckKeys(n, "network", {"enabled", "state", "control", "info", "camera_base_port"});
+      CheckKeys(n, "network",
+                {"enabled", "state", "control", "info", "rpc", "step_mode", "camera_base_port"});
       if (n["enabled"]) s.network.enabled = Bool(n["enabled"], "network.enabled");
       if (n["state"]) s.network.state = String(n["state"], "network.state");
       if (n["control"]) s.network.control = String(n["control"], "network.control");
       if (n["info"]) s.network.info = String(n["info"], "network.info");
+      if (n["rpc"]) s.network.rpc = String(n["rpc"], "network.rpc");
+      if (n["step_mode"]) {
+        s.network.step_mode = String(n["step_mode"], "network.step_mode");
+        if (s.network.step_mode != "live" && s.network.step_mode != "direct") {
+          throw InputError(At(n["step_mode"]), "network.step_mode must be live or direct");
+        }
+      }
       if (n["camera_base_port"]) s.network.camera_base_port = String(n["camera_base_port"], "port");
     }
     if (const auto n = root["save_debug_xml"]) {

@@ -98,7 +98,8 @@ void Session::Build(const SceneConfig& scene) {
 }
 
 void Session::Start() {
-  engine_->SetPaused(options_.start_paused);
+  // Only ever pauses: a subsystem may have paused the engine in BeginPlay (lockstep).
+  if (options_.start_paused) engine_->SetPaused(true);
   engine_->Start();
 }
 

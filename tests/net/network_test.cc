@@ -70,7 +70,7 @@ class NetworkTest : public urlab::testing::MujocoTest {
         "  - {name: b, mjcf: robot.xml, pos: [0, 2, 0], controller: " +
         controller + "}\n";
     NetworkOptions o;
-    o.state = o.control = o.info = "tcp://127.0.0.1:*";
+    o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
     auto net = std::make_unique<NetworkSubsystem>(o);
     net_ = net.get();
     world::ManagerOptions mo;
@@ -254,7 +254,7 @@ TEST_F(NetworkTest, PortInUseIsReportedAndTheSimulationRuns) {
   const std::string taken = squatter.get(zmq::sockopt::last_endpoint);
   NetworkOptions o;
   o.state = taken;  // already bound by this process
-  o.control = o.info = "tcp://127.0.0.1:*";
+  o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
   world::Manager m;
   auto* net =
       &static_cast<NetworkSubsystem&>(m.AddSubsystem(std::make_unique<NetworkSubsystem>(o)));

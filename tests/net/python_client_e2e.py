@@ -36,6 +36,7 @@ network:
   state: "tcp://127.0.0.1:*"
   control: "tcp://127.0.0.1:*"
   info: "tcp://127.0.0.1:*"
+  rpc: "tcp://127.0.0.1:*"
 articulations:
   - name: arm
     mjcf: {model}
@@ -49,7 +50,7 @@ articulations:
         line = proc.stderr.readline()
         if not line:
             fail("urlab exited before serving the network", proc)
-        m = re.search(r"network: state (\S+) \| control (\S+) \| info (\S+)", line)
+        m = re.search(r"network: state (\S+) \| control (\S+) \| info (\S+) \| rpc (\S+)", line)
         if m:
             endpoints = m.groups()
     if endpoints is None:

@@ -1,9 +1,10 @@
 #pragma once
-// NetworkSubsystem: the streaming topics of protocol.md over ZeroMQ. One I/O thread owns every
-// socket: it publishes each physics step's state (joint, ball joint, base_state and sensor
-// topics) from its own every-step state subscription, drains the control SUB socket (control
-// and set_gains topics, validated, applied as whole command frames or gain changes, or dropped
-// and counted per reason), and publishes discovery info at the protocol's cadence.
+// NetworkSubsystem: protocol.md over ZeroMQ. One I/O thread owns every socket: it publishes
+// each physics step's state (joint, ball joint, base_state and sensor topics) from its own
+// every-step state subscription, drains the control SUB socket (control and set_gains topics,
+// validated, applied as whole command frames or gain changes, or dropped and counted per
+// reason), publishes discovery info at the protocol's cadence, and serves the step server
+// (request/reply, msgpack or JSON; see src/net/step_server.h).
 //
 // Threading contract
 // - Main thread: construction, the Subsystem hooks (the manager calls them), endpoints().
@@ -12,6 +13,7 @@
 // - Any thread: the counters (drops, published, dropped_frames).
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -25,9 +27,12 @@
 namespace urlab::net {
 
 struct NetworkOptions {
-  std::string state = "tcp://*:5555";            // PUB: state topics
-  std::string control = "tcp://127.0.0.1:5556";  // SUB: control and set_gains
-  std::string info = "tcp://*:5557";             // PUB: discovery
+  std::string state = "tcp://*:5555";             // PUB: state topics
+  std::string control = "tcp://127.0.0.1:5556";   // SUB: control and set_gains
+  std::string info = "tcp://*:5557";              // PUB: discovery
+  std::string rpc = "tcp://127.0.0.1:5559";       // ROUTER: the step server ("" : none)
+  std::string step_mode = "live";                 // the step server's initial mode
+  std::chrono::milliseconds lease_timeout{5000};  // a silent driver loses its lease
   // Frames the I/O thread may fall behind the physics thread before frames are dropped.
   std::size_t ring_capacity = 4096;
 };
@@ -58,7 +63,7 @@ class NetworkSubsystem : public world::Subsystem {
   // The endpoints actually bound (a wildcard port resolved), "" for one that failed to bind.
   // Main thread, after BeginPlay.
   struct Endpoints {
-    std::string state, control, info;
+    std::string state, control, info, rpc;
   };
   const Endpoints& endpoints() const { return bound_; }
   // Any thread.

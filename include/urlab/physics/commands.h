@@ -79,6 +79,8 @@ struct SetOptions {
 struct SetPaused {
   bool paused = true;
 };
+// mj_forward: recomputes the derived quantities from the current state (no discontinuity).
+struct Forward {};
 // Runs exactly `n` full iterations (controls, step, post-step work) even while paused, without
 // pacing; the command is finished after the last one, and commands queued behind it wait until
 // then (lockstep stepping).
@@ -89,7 +91,7 @@ struct Step {
 
 using Command = std::variant<cmd::Reset, cmd::ResetKeyframe, cmd::ResetCustom, cmd::Restore,
                              cmd::SetQpos, cmd::SetQvel, cmd::SetMocap, cmd::ApplyForce,
-                             cmd::SetOptions, cmd::SetPaused, cmd::Step>;
+                             cmd::SetOptions, cmd::SetPaused, cmd::Step, cmd::Forward>;
 
 // Short name of a command's kind ("reset", "restore", "set_qpos", ...).
 const char* CommandName(const Command& c);

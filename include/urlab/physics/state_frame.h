@@ -49,6 +49,7 @@ struct StateFrame {
   bool paused = false;
   int ncon = 0;
   std::vector<mjtNum> qpos, qvel, act, ctrl, qacc, sensordata;
+  std::vector<mjtNum> actuator_force;          // per actuator
   std::vector<mjtNum> xpos, xquat;            // 3 / 4 per body
   std::vector<mjtNum> mocap_pos, mocap_quat;  // 3 / 4 per mocap body
 

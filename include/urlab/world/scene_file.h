@@ -59,6 +59,8 @@ struct NetworkConfig {
   std::string state = "tcp://*:5555";
   std::string control = "tcp://127.0.0.1:5556";
   std::string info = "tcp://*:5557";
+  std::string rpc = "tcp://127.0.0.1:5559";  // the step server (request/reply)
+  std::string step_mode = "live";            // live | direct (lockstep)
   std::string camera_base_port = "5558";
 };
 

@@ -1,0 +1,846 @@
+#include "net/step_server.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <zmq_addon.hpp>
+
+#include "urlab/core/version.h"
+
+namespace urlab::net {
+
+namespace {
+
+using Json = StepServer::Json;
+
+// A request refused with a protocol error code.
+struct Failure {
+  std::string code, message;
+};
+
+[[noreturn]] void Fail(std::string code, std::string message) {
+  throw Failure{std::move(code), std::move(message)};
+}
+
+const Json& Require(const Json& body, const char* field) {
+  const auto it = body.find(field);
+  if (it == body.end()) Fail("missing_field", std::string("'") + field + "' is required");
+  return *it;
+}
+
+double Number(const Json& v, const char* field) {
+  if (!v.is_number()) Fail("bad_value", std::string("'") + field + "' must be a number");
+  const double x = v.get<double>();
+  if (!std::isfinite(x)) Fail("bad_value", std::string("'") + field + "' must be finite");
+  return x;
+}
+
+std::vector<double> Numbers(const Json& v, const char* field) {
+  if (!v.is_array()) Fail("bad_value", std::string("'") + field + "' must be an array");
+  std::vector<double> out;
+  out.reserve(v.size());
+  for (const Json& x : v) out.push_back(Number(x, field));
+  return out;
+}
+
+bool Bool(const Json& v, const char* field) {
+  if (!v.is_boolean()) Fail("bad_value", std::string("'") + field + "' must be true or false");
+  return v.get<bool>();
+}
+
+std::string String(const Json& v, const char* field) {
+  if (!v.is_string()) Fail("bad_value", std::string("'") + field + "' must be a string");
+  return v.get<std::string>();
+}
+
+Json TimeOf(double seconds) {
+  const double sec = std::floor(seconds);
+  return Json{{"sec", static_cast<std::int64_t>(sec)},
+              {"nsec", static_cast<std::int64_t>((seconds - sec) * 1e9)}};
+}
+
+std::string NewSessionId(std::uint64_t n) {
+  static std::mt19937_64 rng{std::random_device{}()};
+  char buf[40];
+  std::snprintf(buf, sizeof(buf), "%016llx%04llx", static_cast<unsigned long long>(rng()),
+                static_cast<unsigned long long>(n & 0xffff));
+  return buf;
+}
+
+const char* JointType(int t) {
+  switch (t) {
+    case mjJNT_FREE:
+      return "free";
+    case mjJNT_BALL:
+      return "ball";
+    case mjJNT_SLIDE:
+      return "slide";
+    default:
+      return "hinge";
+  }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// The operation catalogue (meta reports it; Dispatch enforces sessions, leases and fields).
+
+const std::vector<StepServer::OpSpec>& StepServer::Ops() {
+  static const std::vector<OpSpec> ops = {
+      {"hello", &StepServer::Hello, false, false, {}, "session_id, protocol_version, ..."},
+      {"meta", &StepServer::Meta, false, false, {}, "operations"},
+      {"bye", &StepServer::Bye, true, false, {}, ""},
+      {"step", &StepServer::Step, true, true, {}, "time, step, sim_time, per_articulation"},
+      {"reset", &StepServer::Reset, true, true, {}, "like step_ok"},
+      {"forward", &StepServer::Forward, true, false, {}, "like step_ok"},
+      {"set_mode", &StepServer::SetMode, true, true, {"mode"}, "previous_mode, current_mode"},
+      {"set_paused", &StepServer::SetPaused, true, true, {"paused"}, "paused"},
+      {"set_sim_speed", &StepServer::SetSimSpeed, true, true, {"percent"}, "percent"},
+      {"set_control_source",
+       &StepServer::SetControlSource,
+       true,
+       true,
+       {"source"},
+       "source, articulation"},
+      {"set_qpos", &StepServer::SetQpos, true, true, {"articulation", "qpos"}, "like step_ok"},
+      {"set_mocap_pose", &StepServer::SetMocapPose, true, true, {"body"}, "body, pos, quat"},
+      {"read_mocap_pose", &StepServer::ReadMocapPose, true, false, {"body"}, "body, pos, quat"},
+      {"list_keyframes", &StepServer::ListKeyframes, true, false, {}, "keyframes"},
+      {"set_sim_options", &StepServer::SetSimOptions, true, true, {"options"}, "options"},
+      {"get_counters", &StepServer::GetCounters, true, false, {}, "errors, clients, driver"},
+  };
+  return ops;
+}
+
+StepServer::StepServer(world::Session& session, const std::vector<ArticulationTopics>& tables,
+                       std::shared_ptr<physics::StateSubscription> state, StepServerOptions options)
+    : session_(session),
+      tables_(tables),
+      state_(std::move(state)),
+      options_(std::move(options)),
+      mode_(options_.mode == "direct" ? "direct" : "live") {
+  // The compiled model for hello, saved once here (main thread, before the physics thread).
+  const mjModel* m = session_.engine().model();
+  mjb_.resize(static_cast<std::size_t>(mj_sizeModel(m)));
+  mj_saveModel(m, nullptr, mjb_.data(), static_cast<int>(mjb_.size()));
+  if (mode_ == "direct") session_.engine().SetPaused(true);
+}
+
+std::string StepServer::Bind(zmq::context_t& context) {
+  zmq::socket_t s(context, zmq::socket_type::router);
+  s.set(zmq::sockopt::linger, 0);
+  s.set(zmq::sockopt::router_mandatory, 0);
+  try {
+    s.bind(options_.endpoint);
+  } catch (const zmq::error_t& e) {
+    spdlog::error("step server: cannot bind {}: {}; running without it", options_.endpoint,
+                  e.what());
+    return "";
+  }
+  std::string bound = s.get(zmq::sockopt::last_endpoint);
+  socket_ = std::move(s);
+  return bound;
+}
+
+void StepServer::Close() {
+  for (Pending& p : pending_) {
+    SendError(p.envelope, p.seq, p.json, "shutting_down", "the simulation is stopping");
+  }
+  pending_.clear();
+  socket_.reset();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Transport
+
+void StepServer::Send(const std::vector<zmq::message_t>& envelope, const Json& reply, bool json) {
+  if (!socket_) return;
+  for (const zmq::message_t& f : envelope) {
+    socket_->send(zmq::buffer(f.data(), f.size()), zmq::send_flags::sndmore);
+  }
+  if (json) {
+    const std::string text = reply.dump(-1, ' ', false, Json::error_handler_t::replace);
+    socket_->send(zmq::buffer(text), zmq::send_flags::dontwait);
+  } else {
+    const std::vector<std::uint8_t> bytes = Json::to_msgpack(reply);
+    socket_->send(zmq::buffer(bytes), zmq::send_flags::dontwait);
+  }
+}
+
+void StepServer::SendError(const std::vector<zmq::message_t>& envelope, const Json& seq, bool json,
+                           const std::string& code, const std::string& message) {
+  ++errors_[code];
+  Json reply{{"op", "error"}, {"code", code}, {"message", message}};
+  if (!seq.is_null()) reply["seq"] = seq;
+  Send(envelope, reply, json);
+}
+
+void StepServer::HandleIncoming() {
+  if (!socket_) return;
+  std::vector<zmq::message_t> parts;
+  while (true) {
+    parts.clear();
+    if (!zmq::recv_multipart(*socket_, std::back_inserter(parts), zmq::recv_flags::dontwait)) {
+      return;
+    }
+    if (parts.size() < 2) continue;  // no identity: nothing to answer
+    Request r;
+    r.now = Clock::now();
+    zmq::message_t payload = std::move(parts.back());
+    parts.pop_back();
+    r.envelope = std::move(parts);  // identity (and the REQ delimiter) echoed back
+    const auto* bytes = static_cast<const std::uint8_t*>(payload.data());
+    r.json = payload.size() > 0 && (bytes[0] == '{' || bytes[0] == ' ' || bytes[0] == '\n');
+    if (payload.size() > options_.max_request_bytes) {
+      SendError(r.envelope, nullptr, r.json, "bad_request",
+                "request of " + std::to_string(payload.size()) + " bytes (limit " +
+                    std::to_string(options_.max_request_bytes) + ")");
+      continue;
+    }
+    r.body = r.json ? Json::parse(bytes, bytes + payload.size(), nullptr, false)
+                    : Json::from_msgpack(bytes, bytes + payload.size(), true, false);
+    if (r.body.is_discarded() || !r.body.is_object()) {
+      SendError(r.envelope, nullptr, r.json, "bad_request",
+                r.json ? "not a JSON object" : "not a msgpack map (or JSON text)");
+      continue;
+    }
+    Dispatch(r);
+  }
+}
+
+void StepServer::Dispatch(Request& r) {
+  const Json seq = r.body.contains("seq") ? r.body["seq"] : Json();
+  try {
+    const auto op_it = r.body.find("op");
+    if (op_it == r.body.end()) Fail("missing_op", "the request has no 'op'");
+    const std::string op = String(*op_it, "op");
+    const OpSpec* spec = nullptr;
+    for (const OpSpec& s : Ops()) {
+      if (op == s.name) spec = &s;
+    }
+    if (!spec) Fail("unknown_op", "no operation '" + op + "' (see 'meta')");
+    if (spec->needs_session) {
+      const auto sid = r.body.find("session_id");
+      if (sid == r.body.end() || !sid->is_string()) {
+        Fail("session_expired", "'" + op + "' needs the session_id from 'hello'");
+      }
+      const auto c = clients_.find(sid->get<std::string>());
+      if (c == clients_.end()) Fail("session_expired", "unknown or expired session; say hello");
+      r.client = &c->second;
+      r.client->last_seen = r.now;
+    }
+    for (const char* field : spec->required) Require(r.body, field);
+    if (spec->needs_driver) {
+      const auto force = r.body.find("force");
+      RequireDriver(*r.client, force != r.body.end() && Bool(*force, "force"), r.now);
+    }
+    Outcome out = (this->*spec->handler)(r);
+    if (out.wait_for == 0) {
+      if (out.on_applied) out.on_applied(out.reply);
+      if (!seq.is_null()) out.reply["seq"] = seq;
+      Send(r.envelope, out.reply, r.json);
+      return;
+    }
+    Pending p;
+    p.envelope = std::move(r.envelope);
+    p.seq = seq;
+    p.json = r.json;
+    p.op = op;
+    p.command = out.wait_for;
+    p.outcome = std::move(out);
+    p.deadline = r.now + options_.step_timeout;
+    pending_.push_back(std::move(p));
+  } catch (const Failure& f) {
+    SendError(r.envelope, seq, r.json, f.code, f.message);
+  } catch (const std::exception& e) {  // a command the engine refused (bad id, size, value)
+    SendError(r.envelope, seq, r.json, "bad_value", e.what());
+  }
+}
+
+void StepServer::WaitForFront(Clock::duration timeout) {
+  if (pending_.empty()) return;
+  (void)session_.engine().WaitForCommand(pending_.front().command, timeout);
+}
+
+void StepServer::Service(Clock::time_point now) {
+  physics::PhysicsEngine& engine = session_.engine();
+  while (!pending_.empty()) {
+    Pending& p = pending_.front();
+    const bool done = engine.last_applied_command() >= p.command;
+    if (!done && now < p.deadline) break;  // commands finish in order: later ones wait too
+    if (!done) {
+      SendError(p.envelope, p.seq, p.json, "step_timeout",
+                "'" + p.op + "' did not take effect within the step timeout");
+    } else {
+      const physics::CommandResult result = engine.WaitForCommand(p.command, Clock::duration(0));
+      if (!result.ok()) {
+        SendError(p.envelope, p.seq, p.json, "bad_value", result.error);
+      } else {
+        try {
+          if (p.outcome.on_applied) p.outcome.on_applied(p.outcome.reply);
+          if (!p.seq.is_null()) p.outcome.reply["seq"] = p.seq;
+          Send(p.envelope, p.outcome.reply, p.json);
+        } catch (const Failure& f) {
+          SendError(p.envelope, p.seq, p.json, f.code, f.message);
+        }
+      }
+    }
+    pending_.pop_front();
+  }
+  // A driver silent for longer than the lease timeout loses the lease.
+  if (!driver_.empty()) {
+    const auto it = clients_.find(driver_);
+    if (it == clients_.end() || now - it->second.last_seen > options_.lease_timeout) {
+      spdlog::info("step server: driver {} lost its lease (silent for more than {} ms)", driver_,
+                   options_.lease_timeout.count());
+      driver_.clear();
+    }
+  }
+}
+
+void StepServer::RequireDriver(Client& c, bool force, Clock::time_point now) {
+  if (driver_ == c.id) return;
+  if (!driver_.empty()) {
+    const auto it = clients_.find(driver_);
+    const bool expired =
+        it == clients_.end() || now - it->second.last_seen > options_.lease_timeout;
+    if (!expired && !force) {
+      Fail("not_driver", "another client (" + driver_ +
+                             ") holds the driver lease; wait, or send force: true to take it");
+    }
+    if (force && !expired) spdlog::warn("step server: {} took the lease from {}", c.id, driver_);
+  }
+  driver_ = c.id;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Observations
+
+Json StepServer::Array(const double* v, std::size_t n, bool binary) const {
+  if (binary) {
+    std::vector<std::uint8_t> bytes(n * sizeof(double));
+    std::memcpy(bytes.data(), v, bytes.size());  // little-endian f64 (x86-64, arm64)
+    return Json::binary(std::move(bytes));
+  }
+  Json a = Json::array();
+  for (std::size_t i = 0; i < n; ++i) a.push_back(v[i]);
+  return a;
+}
+
+Json StepServer::Observation(const physics::StateFrame& f, const std::string& level,
+                             bool binary) const {
+  Json o;
+  o["time"] = f.time;
+  o["step"] = f.step;
+  o["sim_time"] = TimeOf(f.time);
+  const auto wall = std::chrono::system_clock::now().time_since_epoch();
+  o["wall_time"] = TimeOf(std::chrono::duration<double>(wall).count());
+  o["paused"] = f.paused;
+  Json per = Json::object();
+  std::vector<double> tmp;
+  const auto gather = [&](const std::vector<double>& src, const std::vector<int>& adrs) {
+    tmp.clear();
+    for (int a : adrs) tmp.push_back(src[static_cast<std::size_t>(a)]);
+    return Array(tmp.data(), tmp.size(), binary);
+  };
+  for (const ArticulationTopics& t : tables_) {
+    Json a;
+    a["qpos"] = gather(f.qpos, t.qpos_adrs);
+    a["qvel"] = gather(f.qvel, t.dof_adrs);
+    if (level != "minimal") {
+      a["ctrl"] = gather(f.ctrl, t.actuator_ids);
+      a["act"] = gather(f.act, t.act_adrs);
+      Json sensors = Json::object();
+      for (std::size_t i = 0; i < t.sensors.size(); ++i) {
+        const SensorTopicEntry& s = t.sensors[i];
+        sensors[t.sensor_names[i]] =
+            Array(f.sensordata.data() + s.adr, static_cast<std::size_t>(s.dim), binary);
+      }
+      a["sensors"] = std::move(sensors);
+    }
+    if (level == "full") {
+      Json xpos = Json::object(), xquat = Json::object();
+      for (std::size_t i = 0; i < t.body_ids.size(); ++i) {
+        const auto b = static_cast<std::size_t>(t.body_ids[i]);
+        xpos[t.body_names[i]] = Array(f.xpos.data() + 3 * b, 3, binary);
+        xquat[t.body_names[i]] = Array(f.xquat.data() + 4 * b, 4, binary);
+      }
+      a["xpos"] = std::move(xpos);
+      a["xquat"] = std::move(xquat);
+      a["actuator_force"] = gather(f.actuator_force, t.actuator_ids);
+    }
+    per[t.name] = std::move(a);
+  }
+  o["per_articulation"] = std::move(per);
+  o["entities"] = Json::object();
+  return o;
+}
+
+const ArticulationTopics& StepServer::Articulation(const Json& name) const {
+  const std::string n = String(name, "articulation");
+  for (const ArticulationTopics& t : tables_) {
+    if (t.name == n) return t;
+  }
+  Fail("unknown_articulation", "no articulation '" + n + "' in the scene");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Operations
+
+StepServer::Outcome StepServer::Hello(Request& r) {
+  Client c;
+  c.id = NewSessionId(next_client_++);
+  c.last_seen = r.now;
+  if (const auto it = r.body.find("observations"); it != r.body.end()) {
+    c.level = String(*it, "observations");
+    if (c.level != "minimal" && c.level != "standard" && c.level != "full") {
+      Fail("bad_value", "observations must be minimal, standard or full");
+    }
+  }
+  if (const auto it = r.body.find("arrays"); it != r.body.end()) {
+    c.binary_arrays = String(*it, "arrays") == "binary";
+  }
+  if (clients_.size() >= options_.max_clients) {  // forget the longest-silent observer
+    auto oldest = clients_.end();
+    for (auto it = clients_.begin(); it != clients_.end(); ++it) {
+      if (it->first != driver_ &&
+          (oldest == clients_.end() || it->second.last_seen < oldest->second.last_seen)) {
+        oldest = it;
+      }
+    }
+    if (oldest != clients_.end()) clients_.erase(oldest);
+  }
+  const mjModel* m = session_.engine().model();
+  Json arts = Json::array();
+  for (const ArticulationTopics& t : tables_) {
+    Json a;
+    a["name"] = t.name;
+    a["prefix"] = t.name + "_";
+    const world::Articulation* wa = session_.FindArticulation(t.name);
+    const std::string kind = wa ? wa->config.controller.type : "none";
+    a["default_control_mode"] = kind == "none" || kind == "passthrough" ? "raw" : "controller";
+    a["controller"] = Json{{"kind", kind}};
+    Json joints = Json::array();
+    for (std::size_t i = 0; i < t.joints.size(); ++i) {
+      const JointTopicEntry& j = t.joints[i];
+      const int id = j.id;
+      const int width = j.type == mjJNT_FREE ? 7 : j.type == mjJNT_BALL ? 4 : 1;
+      joints.push_back(Json{{"name", t.joint_names[i]},
+                            {"id", id},
+                            {"type", JointType(j.type)},
+                            {"qpos_adr", j.qpos_adr},
+                            {"qpos_width", width},
+                            {"dof_adr", j.dof_adr},
+                            {"dof_width", j.type == mjJNT_FREE   ? 6
+                                          : j.type == mjJNT_BALL ? 3
+                                                                 : 1},
+                            {"limited", m->jnt_limited[id] != 0},
+                            {"range", {m->jnt_range[2 * id], m->jnt_range[2 * id + 1]}}});
+    }
+    a["joints"] = std::move(joints);
+    Json actuators = Json::array();
+    for (std::size_t i = 0; i < t.actuator_ids.size(); ++i) {
+      actuators.push_back(Json{{"name", t.actuator_names[i]},
+                               {"id", t.actuator_ids[i]},
+                               {"ctrlrange", {t.mins[i], t.maxs[i]}}});
+    }
+    a["actuators"] = std::move(actuators);
+    Json sensors = Json::array();
+    for (std::size_t i = 0; i < t.sensors.size(); ++i) {
+      sensors.push_back(
+          Json{{"name", t.sensor_names[i]}, {"id", t.sensors[i].id}, {"dim", t.sensors[i].dim}});
+    }
+    a["sensors"] = std::move(sensors);
+    a["camera_topics"] = Json::array();
+    arts.push_back(std::move(a));
+  }
+  Json capabilities = Json::array();
+  for (const OpSpec& s : Ops()) capabilities.push_back(s.name);
+  for (const char* extra : {"json", "binary_arrays", "lease", "seq", "mode:live", "mode:direct"}) {
+    capabilities.push_back(extra);
+  }
+  Outcome out;
+  out.reply = Json{{"op", "hello_ok"},
+                   {"session_id", c.id},
+                   {"protocol_version", kProtocolVersion},
+                   {"capabilities", std::move(capabilities)},
+                   {"urlab_version", kVersion},
+                   {"mujoco_version", mj_versionString()},
+                   {"mujoco_version_int", mj_version()},
+                   {"mode", mode_},
+                   {"articulations", std::move(arts)},
+                   {"entities", Json::object()},
+                   {"mjb", Json::binary(mjb_)}};
+  if (r.json) out.reply.erase("mjb");  // binary does not travel in JSON text
+  clients_[c.id] = c;
+  return out;
+}
+
+StepServer::Outcome StepServer::Meta(Request&) {
+  Json ops = Json::array();
+  for (const OpSpec& s : Ops()) {
+    Json required = Json::array();
+    for (const char* f : s.required) required.push_back(f);
+    ops.push_back(Json{{"name", s.name},
+                       {"required", std::move(required)},
+                       {"session", s.needs_session},
+                       {"driver", s.needs_driver},
+                       {"replies", s.replies}});
+  }
+  return {Json{{"op", "meta_ok"}, {"protocol_version", kProtocolVersion}, {"operations", ops}}};
+}
+
+StepServer::Outcome StepServer::Bye(Request& r) {
+  if (driver_ == r.client->id) driver_.clear();
+  clients_.erase(r.client->id);
+  return {Json{{"op", "bye_ok"}}};
+}
+
+StepServer::Outcome StepServer::Step(Request& r) {
+  int n = 1;
+  if (const auto it = r.body.find("n_steps"); it != r.body.end()) {
+    const double v = Number(*it, "n_steps");
+    if (v < 1 || v > 100000 || v != std::floor(v)) Fail("bad_value", "n_steps must be 1..100000");
+    n = static_cast<int>(v);
+  }
+  std::string level = r.client->level;
+  if (const auto it = r.body.find("observations"); it != r.body.end()) {
+    level = String(*it, "observations");
+  }
+  // Controls: validate every articulation's entry first, then publish them (all or nothing).
+  std::vector<std::pair<const ArticulationTopics*, std::vector<std::pair<int, double>>>> patches;
+  if (const auto it = r.body.find("per_articulation"); it != r.body.end()) {
+    if (!it->is_object()) Fail("bad_value", "per_articulation must be a map");
+    for (const auto& [name, entry] : it->items()) {
+      const ArticulationTopics& t = Articulation(name);
+      std::vector<std::pair<int, double>> patch;
+      if (const auto c = entry.find("ctrl"); c != entry.end()) {
+        const std::vector<double> v = Numbers(*c, "ctrl");
+        if (v.size() != t.actuator_ids.size()) {
+          Fail("dim_mismatch", name + ": ctrl has " + std::to_string(v.size()) + " values, " +
+                                   std::to_string(t.actuator_ids.size()) + " actuators");
+        }
+        for (std::size_t i = 0; i < v.size(); ++i) patch.emplace_back(static_cast<int>(i), v[i]);
+      }
+      if (const auto c = entry.find("ctrl_map"); c != entry.end()) {
+        if (!c->is_object()) Fail("bad_value", "ctrl_map must be a map of name to value");
+        for (const auto& [actuator, value] : c->items()) {
+          const auto g = t.gain_index.find(actuator);
+          if (g == t.gain_index.end()) {
+            Fail("bad_value", name + ": no actuator or joint '" + actuator + "'");
+          }
+          patch.emplace_back(g->second, Number(value, "ctrl_map"));
+        }
+      }
+      patches.emplace_back(&t, std::move(patch));
+    }
+  }
+  for (auto& [t, patch] : patches) {
+    if (!patch.empty()) t->control->channel(control::ControlSource::kNetwork).Patch(patch);
+  }
+  Outcome out;
+  out.reply = Json{{"op", "step_ok"}};
+  const bool binary = r.client->binary_arrays;
+  out.on_applied = [this, level, binary](Json& reply) {
+    const physics::StateFrame* f = state_->Latest();
+    Json obs = Observation(*f, level, binary);
+    for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
+  };
+  if (mode_ == "direct") out.wait_for = session_.engine().Submit(physics::cmd::Step{n});
+  return out;
+}
+
+StepServer::Outcome StepServer::Reset(Request& r) {
+  physics::PhysicsEngine& engine = session_.engine();
+  const mjModel* m = engine.model();
+  std::uint64_t seq = 0;
+  if (const auto it = r.body.find("keyframe_name"); it != r.body.end() && !it->is_null()) {
+    const std::string key = String(*it, "keyframe_name");
+    const int id = mj_name2id(m, mjOBJ_KEY, key.c_str());
+    if (id < 0) Fail("unknown_keyframe", "no keyframe '" + key + "' (see list_keyframes)");
+    seq = engine.ResetToKeyframe(id);
+  } else {
+    seq = session_.ResetToInitialState();
+    if (seq == 0) seq = engine.Reset();
+  }
+  if (const auto it = r.body.find("per_articulation_qpos"); it != r.body.end()) {
+    if (!it->is_object()) Fail("bad_value", "per_articulation_qpos must be a map");
+    for (const auto& [name, joints] : it->items()) {
+      const ArticulationTopics& t = Articulation(name);
+      if (!joints.is_object()) Fail("bad_value", name + ": a map of joint to value");
+      for (const auto& [joint, value] : joints.items()) {
+        std::size_t i = 0;
+        while (i < t.joint_names.size() && t.joint_names[i] != joint) ++i;
+        if (i == t.joint_names.size()) Fail("bad_value", name + ": no joint '" + joint + "'");
+        const std::vector<double> v =
+            value.is_array() ? Numbers(value, "qpos") : std::vector<double>{Number(value, "qpos")};
+        seq = engine.Submit(physics::cmd::SetQpos{t.joints[i].qpos_adr, v});
+      }
+    }
+  }
+  Outcome out;
+  out.reply = Json{{"op", "reset_ok"}};
+  out.wait_for = seq;
+  const std::string level = r.client->level;
+  const bool binary = r.client->binary_arrays;
+  out.on_applied = [this, level, binary](Json& reply) {
+    Json obs = Observation(*state_->Latest(), level, binary);
+    for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
+  };
+  return out;
+}
+
+StepServer::Outcome StepServer::Forward(Request& r) {
+  Outcome out;
+  out.reply = Json{{"op", "forward_ok"}};
+  out.wait_for = session_.engine().Submit(physics::cmd::Forward{});
+  const std::string level = r.client->level;
+  const bool binary = r.client->binary_arrays;
+  out.on_applied = [this, level, binary](Json& reply) {
+    Json obs = Observation(*state_->Latest(), level, binary);
+    for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
+  };
+  return out;
+}
+
+StepServer::Outcome StepServer::SetMode(Request& r) {
+  const std::string mode = String(r.body["mode"], "mode");
+  if (mode == "puppet") Fail("bad_mode", "puppet mode is not available yet (live or direct)");
+  if (mode != "live" && mode != "direct") Fail("bad_mode", "mode must be live or direct");
+  Outcome out;
+  out.reply = Json{{"op", "set_mode_ok"}, {"previous_mode", mode_}, {"current_mode", mode}};
+  // Direct: the physics thread waits for step requests (paused between them).
+  out.wait_for = session_.engine().Submit(physics::cmd::SetPaused{mode == "direct"});
+  mode_ = mode;
+  return out;
+}
+
+StepServer::Outcome StepServer::SetPaused(Request& r) {
+  const bool paused = Bool(r.body["paused"], "paused");
+  Outcome out;
+  out.reply = Json{{"op", "set_paused_ok"}, {"paused", paused}};
+  out.wait_for = session_.engine().Submit(physics::cmd::SetPaused{paused});
+  return out;
+}
+
+StepServer::Outcome StepServer::SetSimSpeed(Request& r) {
+  const double percent = Number(r.body["percent"], "percent");
+  session_.engine().SetSpeedPercent(static_cast<int>(std::lround(std::clamp(percent, 5.0, 100.0))));
+  return {Json{{"op", "set_sim_speed_ok"}, {"percent", session_.engine().speed_percent()}}};
+}
+
+StepServer::Outcome StepServer::SetControlSource(Request& r) {
+  const std::string name = String(r.body["source"], "source");
+  const auto source = control::ParseControlSource(name);
+  if (!source) Fail("bad_value", "source must be network, ui, input, hold or replay");
+  Json reply{{"op", "set_control_source_ok"}, {"source", name}};
+  if (const auto it = r.body.find("articulation"); it != r.body.end() && !it->is_null()) {
+    const ArticulationTopics& t = Articulation(*it);
+    t.control->SetSourceOverride(*source);
+    reply["articulation"] = t.name;
+  } else {
+    session_.controls().SetGlobalSource(*source);
+    reply["articulation"] = nullptr;
+  }
+  return {reply};
+}
+
+StepServer::Outcome StepServer::SetQpos(Request& r) {
+  const ArticulationTopics& t = Articulation(r.body["articulation"]);
+  const std::vector<double> q = Numbers(r.body["qpos"], "qpos");
+  if (t.qpos_adrs.empty()) Fail("no_joints", t.name + " has no joints");
+  physics::PhysicsEngine& engine = session_.engine();
+  std::uint64_t seq = 0;
+  if (t.free_joint >= 0 && q.size() == 7 && t.qpos_adrs.size() != 7) {
+    seq = engine.Submit(
+        physics::cmd::SetQpos{t.joints[static_cast<std::size_t>(t.free_joint)].qpos_adr, q});
+  } else if (q.size() == t.qpos_adrs.size()) {
+    // One command per contiguous run of addresses (an articulation's are normally one run).
+    std::size_t start = 0;
+    for (std::size_t i = 1; i <= q.size(); ++i) {
+      if (i == q.size() || t.qpos_adrs[i] != t.qpos_adrs[i - 1] + 1) {
+        seq = engine.Submit(physics::cmd::SetQpos{
+            t.qpos_adrs[start], std::vector<double>(q.begin() + static_cast<long>(start),
+                                                    q.begin() + static_cast<long>(i))});
+        start = i;
+      }
+    }
+  } else {
+    Fail("dim_mismatch", t.name + ": qpos needs " + std::to_string(t.qpos_adrs.size()) + " values" +
+                             (t.free_joint >= 0 ? " (or 7 for the free base)" : "") + ", got " +
+                             std::to_string(q.size()));
+  }
+  Outcome out;
+  out.reply = Json{{"op", "set_qpos_ok"}};
+  out.wait_for = seq;
+  const std::string level = r.client->level;
+  const bool binary = r.client->binary_arrays;
+  out.on_applied = [this, level, binary](Json& reply) {
+    Json obs = Observation(*state_->Latest(), level, binary);
+    for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
+  };
+  return out;
+}
+
+namespace {
+int MocapBody(const mjModel* m, const std::string& body) {
+  const int id = mj_name2id(m, mjOBJ_BODY, body.c_str());
+  if (id < 0) Fail("unknown_body", "no body '" + body + "' (full name, with its prefix)");
+  if (m->body_mocapid[id] < 0) Fail("not_mocap_body", "body '" + body + "' is not a mocap body");
+  return m->body_mocapid[id];
+}
+}  // namespace
+
+StepServer::Outcome StepServer::SetMocapPose(Request& r) {
+  const std::string body = String(r.body["body"], "body");
+  const int mocap = MocapBody(session_.engine().model(), body);
+  const physics::StateFrame* f = state_->Latest();
+  physics::cmd::SetMocap c;
+  c.mocap_id = mocap;
+  std::copy_n(f->mocap_pos.begin() + 3 * mocap, 3, c.pos.begin());
+  std::copy_n(f->mocap_quat.begin() + 4 * mocap, 4, c.quat.begin());
+  if (const auto it = r.body.find("pos"); it != r.body.end()) {
+    const std::vector<double> p = Numbers(*it, "pos");
+    if (p.size() != 3) Fail("dim_mismatch", "pos needs 3 values");
+    std::copy(p.begin(), p.end(), c.pos.begin());
+  }
+  if (const auto it = r.body.find("quat"); it != r.body.end()) {
+    const std::vector<double> q = Numbers(*it, "quat");
+    if (q.size() != 4) Fail("dim_mismatch", "quat needs 4 values (w x y z)");
+    std::copy(q.begin(), q.end(), c.quat.begin());
+  }
+  Outcome out;
+  out.reply = Json{{"op", "set_mocap_pose_ok"}, {"body", body}};
+  out.wait_for = session_.engine().Submit(c);
+  out.on_applied = [this, mocap](Json& reply) {
+    const physics::StateFrame* now = state_->Latest();
+    reply["pos"] = Array(now->mocap_pos.data() + 3 * mocap, 3, false);
+    reply["quat"] = Array(now->mocap_quat.data() + 4 * mocap, 4, false);
+  };
+  return out;
+}
+
+StepServer::Outcome StepServer::ReadMocapPose(Request& r) {
+  const std::string body = String(r.body["body"], "body");
+  const int mocap = MocapBody(session_.engine().model(), body);
+  const physics::StateFrame* f = state_->Latest();
+  return {Json{{"op", "read_mocap_pose_ok"},
+               {"body", body},
+               {"pos", Array(f->mocap_pos.data() + 3 * mocap, 3, false)},
+               {"quat", Array(f->mocap_quat.data() + 4 * mocap, 4, false)}}};
+}
+
+StepServer::Outcome StepServer::ListKeyframes(Request&) {
+  const mjModel* m = session_.engine().model();
+  Json keys = Json::array();
+  for (int k = 0; k < m->nkey; ++k) {
+    const char* name = mj_id2name(m, mjOBJ_KEY, k);
+    keys.push_back(name ? name : "");
+  }
+  return {Json{{"op", "list_keyframes_ok"}, {"keyframes", keys}}};
+}
+
+StepServer::Outcome StepServer::SetSimOptions(Request& r) {
+  const Json& options = r.body["options"];
+  if (!options.is_object()) Fail("bad_value", "options must be a map");
+  // Validate everything on this thread; the physics thread only copies values in.
+  struct Change {
+    std::optional<double> timestep, impratio, tolerance, density, viscosity;
+    std::optional<std::array<double, 3>> gravity, wind, magnetic;
+    std::optional<int> iterations, integrator, cone, solver;
+  } ch;
+  const auto vec3 = [](const Json& v, const char* f) {
+    const std::vector<double> x = Numbers(v, f);
+    if (x.size() != 3) Fail("dim_mismatch", std::string(f) + " needs 3 values");
+    return std::array<double, 3>{x[0], x[1], x[2]};
+  };
+  const auto keyword = [](const Json& v, const char* f, std::vector<const char*> names) {
+    const std::string s = String(v, f);
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (s == names[i]) return static_cast<int>(i);
+    }
+    Fail("bad_value", std::string(f) + ": unknown value '" + s + "'");
+  };
+  for (const auto& [key, value] : options.items()) {
+    if (key == "timestep") {
+      ch.timestep = Number(value, "timestep");
+      if (!(*ch.timestep > 0)) Fail("bad_value", "timestep must be > 0");
+    } else if (key == "impratio") {
+      ch.impratio = Number(value, "impratio");
+    } else if (key == "tolerance") {
+      ch.tolerance = Number(value, "tolerance");
+    } else if (key == "density") {
+      ch.density = Number(value, "density");
+    } else if (key == "viscosity") {
+      ch.viscosity = Number(value, "viscosity");
+    } else if (key == "gravity") {
+      ch.gravity = vec3(value, "gravity");
+    } else if (key == "wind") {
+      ch.wind = vec3(value, "wind");
+    } else if (key == "magnetic") {
+      ch.magnetic = vec3(value, "magnetic");
+    } else if (key == "iterations") {
+      const double it = Number(value, "iterations");
+      if (it < 1 || it > 10000) Fail("bad_value", "iterations must be 1..10000");
+      ch.iterations = static_cast<int>(it);
+    } else if (key == "integrator") {
+      ch.integrator = keyword(value, "integrator", {"Euler", "RK4", "implicit"});
+    } else if (key == "cone") {
+      ch.cone = keyword(value, "cone", {"pyramidal", "elliptic"});
+    } else if (key == "solver") {
+      ch.solver = keyword(value, "solver", {"PGS", "CG", "Newton"});
+    } else {
+      Fail("bad_value", "unknown option '" + key + "'");
+    }
+  }
+  auto result = std::make_shared<mjOption>();
+  Outcome out;
+  out.reply = Json{{"op", "set_sim_options_ok"}};
+  out.wait_for = session_.engine().Submit(physics::cmd::SetOptions{
+      [ch, result](mjOption& o) {
+        if (ch.timestep) o.timestep = *ch.timestep;
+        if (ch.impratio) o.impratio = *ch.impratio;
+        if (ch.tolerance) o.tolerance = *ch.tolerance;
+        if (ch.density) o.density = *ch.density;
+        if (ch.viscosity) o.viscosity = *ch.viscosity;
+        if (ch.gravity) std::copy_n(ch.gravity->begin(), 3, o.gravity);
+        if (ch.wind) std::copy_n(ch.wind->begin(), 3, o.wind);
+        if (ch.magnetic) std::copy_n(ch.magnetic->begin(), 3, o.magnetic);
+        if (ch.iterations) o.iterations = *ch.iterations;
+        if (ch.integrator) o.integrator = *ch.integrator;
+        if (ch.cone) o.cone = *ch.cone;
+        if (ch.solver) o.solver = *ch.solver;
+        *result = o;  // read by the I/O thread once the command is finished
+      },
+      "set_sim_options"});
+  out.on_applied = [result](Json& reply) {
+    const mjOption& o = *result;
+    reply["options"] = Json{{"timestep", o.timestep},
+                            {"gravity", {o.gravity[0], o.gravity[1], o.gravity[2]}},
+                            {"wind", {o.wind[0], o.wind[1], o.wind[2]}},
+                            {"magnetic", {o.magnetic[0], o.magnetic[1], o.magnetic[2]}},
+                            {"density", o.density},
+                            {"viscosity", o.viscosity},
+                            {"impratio", o.impratio},
+                            {"tolerance", o.tolerance},
+                            {"iterations", o.iterations},
+                            {"integrator", o.integrator},
+                            {"cone", o.cone},
+                            {"solver", o.solver}};
+  };
+  return out;
+}
+
+StepServer::Outcome StepServer::GetCounters(Request&) {
+  Json errors = Json::object();
+  for (const auto& [code, n] : errors_) errors[code] = n;
+  return {Json{{"op", "get_counters_ok"},
+               {"errors", errors},
+               {"clients", clients_.size()},
+               {"driver", driver_.empty() ? Json() : Json(driver_)},
+               {"mode", mode_}}};
+}
+
+}  // namespace urlab::net

@@ -1,0 +1,148 @@
+#pragma once
+// The step server of protocol.md: request/reply operations on a ROUTER socket (REQ and DEALER
+// clients both work), msgpack or JSON (detected per message; a reply uses the request's
+// encoding), `seq` echoed. Many clients at once: observers read; one driver holds a lease for
+// stepping, mode changes and control (released on `bye`, after `lease_timeout` without a
+// request, or taken over with `force`). A reply that depends on a command is sent only once the
+// physics thread has applied it (and the state frame showing it is published).
+//
+// Threading: the network subsystem's I/O thread only (it owns the socket); built on the main
+// thread in BeginPlay.
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+#include <zmq.hpp>
+
+#include "net/topic_table.h"
+#include "urlab/physics/state_frame.h"
+#include "urlab/world/session.h"
+
+namespace urlab::net {
+
+struct StepServerOptions {
+  std::string endpoint = "tcp://127.0.0.1:5559";
+  std::chrono::milliseconds lease_timeout{5000};
+  std::chrono::milliseconds step_timeout{30000};  // a reply not ready by then: step_timeout
+  std::string mode = "live";                      // initial step mode: live | direct
+  std::size_t max_request_bytes = 1 << 20;
+  std::size_t max_clients = 64;
+};
+
+class StepServer {
+ public:
+  using Clock = std::chrono::steady_clock;
+  using Json = nlohmann::ordered_json;
+
+  StepServer(world::Session& session, const std::vector<ArticulationTopics>& tables,
+             std::shared_ptr<physics::StateSubscription> state, StepServerOptions options);
+
+  // Creates and binds the ROUTER socket; returns the bound endpoint, "" on failure (logged).
+  std::string Bind(zmq::context_t& context);
+  zmq::socket_t* socket() { return socket_ ? &*socket_ : nullptr; }
+  // Reads and answers (or parks) every waiting request.
+  void HandleIncoming();
+  // Sends the replies whose commands took effect; expires leases and overdue replies.
+  void Service(Clock::time_point now);
+  // Blocks up to `timeout` until the oldest parked reply's command took effect (so a lockstep
+  // reply leaves as soon as its window ends); returns at once when nothing is parked.
+  void WaitForFront(Clock::duration timeout);
+  bool has_pending() const { return !pending_.empty(); }
+  // Closes the socket (pending replies get `shutting_down`).
+  void Close();
+
+  // Requests answered with an error, per code (I/O thread).
+  const std::map<std::string, std::uint64_t>& errors() const { return errors_; }
+
+  static constexpr int kProtocolVersion = 1;
+
+ private:
+  struct Client {
+    std::string id;
+    std::string level = "standard";  // observation level: minimal | standard | full
+    bool binary_arrays = false;
+    Clock::time_point last_seen;
+  };
+  struct Request {
+    std::vector<zmq::message_t> envelope;  // routing frames to echo
+    Json body;
+    bool json = false;  // answer in JSON text
+    Client* client = nullptr;
+    Clock::time_point now;
+  };
+  // What an operation handler decided: a reply now, or one once command `seq` took effect.
+  struct Outcome {
+    Json reply;                             // the reply (now), or the reply's fixed fields
+    std::uint64_t wait_for = 0;             // a command to wait for, 0: reply now
+    std::function<void(Json&)> on_applied;  // completes the reply once applied
+  };
+  struct Pending {
+    std::vector<zmq::message_t> envelope;
+    Json seq;
+    bool json = false;
+    std::string op;
+    std::uint64_t command = 0;
+    Outcome outcome;
+    Clock::time_point deadline;
+  };
+  using Handler = Outcome (StepServer::*)(Request&);
+  struct OpSpec {
+    const char* name;
+    Handler handler;
+    bool needs_session;
+    bool needs_driver;
+    std::vector<const char*> required;  // fields
+    const char* replies;                // reply fields, for meta
+  };
+  static const std::vector<OpSpec>& Ops();
+
+  void Dispatch(Request& r);
+  void Send(const std::vector<zmq::message_t>& envelope, const Json& reply, bool json);
+  void SendError(const std::vector<zmq::message_t>& envelope, const Json& seq, bool json,
+                 const std::string& code, const std::string& message);
+  // The lease: throws Failure unless `c` may drive (taking a free or expired lease).
+  void RequireDriver(Client& c, bool force, Clock::time_point now);
+  Json Observation(const physics::StateFrame& f, const std::string& level, bool binary) const;
+  Json Array(const double* v, std::size_t n, bool binary) const;
+  const ArticulationTopics& Articulation(const Json& name) const;
+  std::string Mode() const { return mode_; }
+
+  // Operations.
+  Outcome Hello(Request& r);
+  Outcome Meta(Request& r);
+  Outcome Bye(Request& r);
+  Outcome Step(Request& r);
+  Outcome Reset(Request& r);
+  Outcome Forward(Request& r);
+  Outcome SetMode(Request& r);
+  Outcome SetPaused(Request& r);
+  Outcome SetSimSpeed(Request& r);
+  Outcome SetControlSource(Request& r);
+  Outcome SetQpos(Request& r);
+  Outcome SetMocapPose(Request& r);
+  Outcome ReadMocapPose(Request& r);
+  Outcome ListKeyframes(Request& r);
+  Outcome SetSimOptions(Request& r);
+  Outcome GetCounters(Request& r);
+
+  world::Session& session_;
+  const std::vector<ArticulationTopics>& tables_;
+  std::shared_ptr<physics::StateSubscription> state_;
+  StepServerOptions options_;
+  std::optional<zmq::socket_t> socket_;
+  std::map<std::string, Client> clients_;
+  std::string driver_;  // session id holding the lease, "" when free
+  std::string mode_;
+  std::deque<Pending> pending_;
+  std::map<std::string, std::uint64_t> errors_;
+  std::uint64_t next_client_ = 1;
+  std::vector<std::uint8_t> mjb_;  // the compiled model (mj_saveModel), for hello
+};
+
+}  // namespace urlab::net

@@ -1,0 +1,304 @@
+// The step server, driven by a client written only from protocol.md's tables: raw ZeroMQ REQ
+// and DEALER sockets and msgpack/JSON encoded here with nlohmann (none of the project's client
+// code). Real sockets on loopback with ephemeral ports.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <thread>
+#include <zmq.hpp>
+#include <zmq_addon.hpp>
+
+#include "support/mujoco_test.h"
+#include "support/wait.h"
+#include "urlab/net/network.h"
+#include "urlab/net/wire.h"
+#include "urlab/world/manager.h"
+
+namespace urlab::net {
+namespace {
+
+using namespace std::chrono_literals;
+using Json = nlohmann::json;
+
+constexpr const char* kArmXml = R"(<mujoco model="arm">
+  <option timestep="0.002" gravity="0 0 0"/>
+  <worldbody>
+    <body name="link" pos="0 0 1">
+      <joint name="hinge" type="hinge" axis="0 1 0" damping="0.5"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="1"/>
+    </body>
+    <body name="target" mocap="true" pos="0 0 2">
+      <geom type="sphere" size="0.05" contype="0" conaffinity="0"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor name="motor" joint="hinge"/>
+  </actuator>
+  <sensor>
+    <jointpos name="angle" joint="hinge"/>
+  </sensor>
+  <keyframe>
+    <key name="bent" qpos="0.7"/>
+  </keyframe>
+</mujoco>
+)";
+
+// One REQ client speaking msgpack (or JSON text).
+class Client {
+ public:
+  Client(zmq::context_t& ctx, const std::string& endpoint, bool json = false)
+      : socket_(ctx, zmq::socket_type::req), json_(json) {
+    socket_.set(zmq::sockopt::linger, 0);
+    socket_.set(zmq::sockopt::rcvtimeo, 10000);
+    socket_.connect(endpoint);
+  }
+  Json Call(const Json& request) {
+    if (json_) {
+      socket_.send(zmq::buffer(request.dump()));
+    } else {
+      const std::vector<std::uint8_t> bytes = Json::to_msgpack(request);
+      socket_.send(zmq::buffer(bytes));
+    }
+    zmq::message_t reply;
+    if (!socket_.recv(reply)) return Json{{"op", "timeout"}};
+    const auto* b = static_cast<const std::uint8_t*>(reply.data());
+    return json_ ? Json::parse(b, b + reply.size()) : Json::from_msgpack(b, b + reply.size());
+  }
+  Json CallRaw(const std::string& bytes) {
+    socket_.send(zmq::buffer(bytes));
+    zmq::message_t reply;
+    if (!socket_.recv(reply)) return Json{{"op", "timeout"}};
+    const auto* b = static_cast<const std::uint8_t*>(reply.data());
+    return Json::from_msgpack(b, b + reply.size(), true, false);
+  }
+  // hello, remembering the session.
+  Json Hello(Json extra = Json::object()) {
+    extra["op"] = "hello";
+    Json r = Call(extra);
+    session_ = r.value("session_id", "");
+    return r;
+  }
+  Json Op(const std::string& op, Json fields = Json::object()) {
+    fields["op"] = op;
+    fields["session_id"] = session_;
+    return Call(fields);
+  }
+  const std::string& session() const { return session_; }
+
+ private:
+  zmq::socket_t socket_;
+  bool json_;
+  std::string session_;
+};
+
+class StepServerTest : public urlab::testing::MujocoTest {
+ protected:
+  void SetUp() override {
+    dir_ = urlab::testing::MakeTempDir("step_server");
+    urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml);
+  }
+  void Play(std::chrono::milliseconds lease = 5000ms, const std::string& mode = "live") {
+    NetworkOptions o;
+    o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
+    o.lease_timeout = lease;
+    o.step_mode = mode;
+    net_ = &static_cast<NetworkSubsystem&>(
+        manager_.AddSubsystem(std::make_unique<NetworkSubsystem>(o)));
+    manager_.BeginPlay(world::ParseScene(
+        "control_source: network\narticulations:\n  - {name: arm, mjcf: arm.xml}\n",
+        dir_ + "/scene.yaml"));
+    ASSERT_FALSE(net_->endpoints().rpc.empty());
+  }
+  std::string rpc() const { return net_->endpoints().rpc; }
+
+  std::string dir_;
+  world::Manager manager_;
+  NetworkSubsystem* net_ = nullptr;
+  zmq::context_t ctx_{1};
+};
+
+TEST_F(StepServerTest, HelloDescribesTheSceneAndMetaListsTheOperations) {
+  Play();
+  Client c(ctx_, rpc());
+  const Json h = c.Hello({{"seq", 7}});
+  ASSERT_EQ(h["op"], "hello_ok") << h.dump();
+  EXPECT_EQ(h["seq"], 7);
+  EXPECT_EQ(h["protocol_version"], 1);
+  EXPECT_EQ(h["mujoco_version_int"], mj_version());
+  EXPECT_FALSE(c.session().empty());
+  EXPECT_TRUE(h["mjb"].is_binary());
+  EXPECT_EQ(h["mjb"].get_binary().size(),
+            static_cast<std::size_t>(mj_sizeModel(manager_.session().engine().model())));
+  const Json& arm = h["articulations"][0];
+  EXPECT_EQ(arm["name"], "arm");
+  EXPECT_EQ(arm["prefix"], "arm_");
+  EXPECT_EQ(arm["default_control_mode"], "raw");
+  EXPECT_EQ(arm["joints"][0]["name"], "hinge");
+  EXPECT_EQ(arm["joints"][0]["type"], "hinge");
+  EXPECT_EQ(arm["actuators"][0]["name"], "arm_motor");
+  EXPECT_EQ(arm["sensors"][0]["name"], "angle");
+  const Json meta = c.Call({{"op", "meta"}});
+  ASSERT_EQ(meta["op"], "meta_ok");
+  std::vector<std::string> ops;
+  for (const Json& o : meta["operations"]) ops.push_back(o["name"]);
+  for (const char* op : {"hello", "step", "reset", "set_mode", "set_qpos", "set_mocap_pose",
+                         "read_mocap_pose", "list_keyframes", "set_sim_options", "bye"}) {
+    EXPECT_NE(std::find(ops.begin(), ops.end(), op), ops.end()) << op;
+  }
+}
+
+// Lockstep: in direct mode each step request runs exactly n iterations with the given controls,
+// and the reply shows the state after them; the streaming topics keep publishing.
+TEST_F(StepServerTest, DirectModeStepsExactlyAndTheStreamingTopicsGoOn) {
+  Play();
+  zmq::socket_t sub(ctx_, zmq::socket_type::sub);
+  sub.set(zmq::sockopt::subscribe, "arm/joint/hinge");
+  sub.set(zmq::sockopt::rcvtimeo, 3000);
+  sub.connect(net_->endpoints().state);
+  Client c(ctx_, rpc());
+  c.Hello({{"observations", "full"}});
+  const Json mode = c.Op("set_mode", {{"mode", "direct"}});
+  ASSERT_EQ(mode["op"], "set_mode_ok") << mode.dump();
+  EXPECT_EQ(mode["previous_mode"], "live");
+  EXPECT_EQ(mode["current_mode"], "direct");
+  Json r = c.Op("step", {{"n_steps", 1}});
+  ASSERT_EQ(r["op"], "step_ok") << r.dump();
+  std::uint64_t step = r["step"];
+  double last_qvel = 0;
+  for (int i = 0; i < 20; ++i) {
+    r = c.Op("step",
+             {{"n_steps", 10}, {"seq", i}, {"per_articulation", {{"arm", {{"ctrl", {2.0}}}}}}});
+    ASSERT_EQ(r["op"], "step_ok") << r.dump();
+    EXPECT_EQ(r["seq"], i);
+    EXPECT_EQ(r["step"].get<std::uint64_t>(), step + 10);  // exactly n iterations
+    step = r["step"];
+    EXPECT_NEAR(r["time"].get<double>(), static_cast<double>(step) * 0.002, 1e-9);
+    const Json& arm = r["per_articulation"]["arm"];
+    EXPECT_EQ(arm["ctrl"][0], 2.0);
+    EXPECT_GT(arm["qvel"][0].get<double>(), last_qvel);  // the motor accelerates the hinge
+    last_qvel = arm["qvel"][0];
+    // Sensors are MuJoCo's from the start of the last step (before integration).
+    EXPECT_LT(arm["sensors"]["angle"][0].get<double>(), arm["qpos"][0].get<double>());
+    EXPECT_NEAR(arm["sensors"]["angle"][0].get<double>(), arm["qpos"][0].get<double>(), 0.02);
+    EXPECT_EQ(arm["xpos"]["link"].size(), 3u);
+    EXPECT_EQ(arm["actuator_force"][0], 2.0);
+  }
+  // Paused between requests: no steps without a request.
+  std::this_thread::sleep_for(30ms);
+  EXPECT_EQ(manager_.session().engine().step_count(), step);
+  std::vector<zmq::message_t> parts;  // the topics were published for the stepped states
+  ASSERT_TRUE(zmq::recv_multipart(sub, std::back_inserter(parts)));
+  EXPECT_EQ(parts[1].size(), wire::kJointBytes);
+  // Back to live: the loop runs on its own.
+  ASSERT_EQ(c.Op("set_mode", {{"mode", "live"}})["op"], "set_mode_ok");
+  ASSERT_TRUE(urlab::testing::WaitFor(
+      [&] { return manager_.session().engine().step_count() > step + 20; }));
+}
+
+TEST_F(StepServerTest, ResetQposMocapOptionsAndKeyframesTakeEffectBeforeTheReply) {
+  Play(5000ms, "direct");
+  Client c(ctx_, rpc());
+  c.Hello({{"observations", "minimal"}});
+  const Json keys = c.Op("list_keyframes");
+  EXPECT_EQ(keys["keyframes"], Json::array({"arm_bent"}));
+  Json r = c.Op("reset", {{"keyframe_name", "arm_bent"}});
+  ASSERT_EQ(r["op"], "reset_ok") << r.dump();
+  EXPECT_DOUBLE_EQ(r["per_articulation"]["arm"]["qpos"][0], 0.7);
+  EXPECT_EQ(r["time"], 0.0);
+  EXPECT_FALSE(r["per_articulation"]["arm"].contains("ctrl"));  // minimal
+  r = c.Op("reset", {{"per_articulation_qpos", {{"arm", {{"hinge", -0.25}}}}}});
+  EXPECT_DOUBLE_EQ(r["per_articulation"]["arm"]["qpos"][0], -0.25);
+  r = c.Op("set_qpos", {{"articulation", "arm"}, {"qpos", {0.5}}});
+  ASSERT_EQ(r["op"], "set_qpos_ok") << r.dump();
+  EXPECT_DOUBLE_EQ(r["per_articulation"]["arm"]["qpos"][0], 0.5);
+  r = c.Op("set_mocap_pose", {{"body", "arm_target"}, {"pos", {1, 2, 3}}});
+  ASSERT_EQ(r["op"], "set_mocap_pose_ok") << r.dump();
+  EXPECT_EQ(r["pos"], Json::array({1.0, 2.0, 3.0}));
+  EXPECT_EQ(c.Op("read_mocap_pose", {{"body", "arm_target"}})["pos"], r["pos"]);
+  r = c.Op("set_sim_options", {{"options", {{"timestep", 0.001}, {"integrator", "RK4"}}}});
+  ASSERT_EQ(r["op"], "set_sim_options_ok") << r.dump();
+  EXPECT_EQ(r["options"]["timestep"], 0.001);
+  EXPECT_EQ(r["options"]["integrator"], mjINT_RK4);
+  const double t0 = c.Op("step", {{"n_steps", 4}})["time"];
+  EXPECT_NEAR(c.Op("step", {{"n_steps", 4}})["time"].get<double>() - t0, 0.004, 1e-12);
+  r = c.Op("forward");
+  EXPECT_EQ(r["op"], "forward_ok");
+}
+
+// Errors: each bad request gets its code, seq echoed, nothing applied, the server keeps going.
+TEST_F(StepServerTest, BadRequestsGetTheirErrorCodes) {
+  Play(5000ms, "direct");
+  Client c(ctx_, rpc());
+  EXPECT_EQ(c.CallRaw("\xc1 not msgpack")["code"], "bad_request");
+  EXPECT_EQ(c.Call({{"seq", 1}})["code"], "missing_op");
+  const Json unknown = c.Call({{"op", "teleport"}, {"seq", 2}});
+  EXPECT_EQ(unknown["code"], "unknown_op");
+  EXPECT_EQ(unknown["seq"], 2);
+  EXPECT_EQ(c.Call({{"op", "step"}})["code"], "session_expired");
+  EXPECT_EQ(c.Call({{"op", "step"}, {"session_id", "stale"}})["code"], "session_expired");
+  c.Hello();
+  const std::uint64_t before = manager_.session().engine().step_count();
+  EXPECT_EQ(c.Op("set_mode")["code"], "missing_field");
+  EXPECT_EQ(c.Op("set_mode", {{"mode", "warp"}})["code"], "bad_mode");
+  EXPECT_EQ(c.Op("set_paused", {{"paused", "yes"}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("step", {{"n_steps", 0}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("step", {{"n_steps", -5}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("step", {{"n_steps", 1e12}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("step", {{"per_articulation", {{"leg", {{"ctrl", {1}}}}}}})["code"],
+            "unknown_articulation");
+  EXPECT_EQ(c.Op("step", {{"per_articulation", {{"arm", {{"ctrl", {1, 2}}}}}}})["code"],
+            "dim_mismatch");
+  EXPECT_EQ(c.Op("step", {{"per_articulation", {{"arm", {{"ctrl", {"x"}}}}}}})["code"],
+            "bad_value");
+  EXPECT_EQ(c.Op("step", {{"per_articulation", {{"arm", {{"ctrl_map", {{"nope", 1}}}}}}}})["code"],
+            "bad_value");
+  EXPECT_EQ(c.Op("reset", {{"keyframe_name", "nope"}})["code"], "unknown_keyframe");
+  EXPECT_EQ(c.Op("set_qpos", {{"articulation", "arm"}, {"qpos", {1, 2}}})["code"], "dim_mismatch");
+  EXPECT_EQ(c.Op("set_mocap_pose", {{"body", "arm_link"}})["code"], "not_mocap_body");
+  EXPECT_EQ(c.Op("set_mocap_pose", {{"body", "ghost"}})["code"], "unknown_body");
+  EXPECT_EQ(c.Op("set_sim_options", {{"options", {{"timestep", -1}}}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("set_sim_options", {{"options", {{"warp", 9}}}})["code"], "bad_value");
+  EXPECT_EQ(manager_.session().engine().step_count(), before);  // nothing stepped
+  const Json counters = c.Op("get_counters");
+  EXPECT_GE(counters["errors"]["bad_value"].get<int>(), 7);
+  EXPECT_EQ(c.Op("step")["op"], "step_ok");  // still serving
+}
+
+// Observers read while one driver holds the lease; force takes it over; a silent driver loses
+// it after the lease timeout; JSON text clients work beside msgpack ones; DEALER clients too.
+TEST_F(StepServerTest, OneDriverManyObserversWithLeases) {
+  Play(300ms, "direct");
+  Client a(ctx_, rpc()), b(ctx_, rpc()), observer(ctx_, rpc(), /*json=*/true);
+  a.Hello();
+  b.Hello();
+  const Json hello = observer.Hello();
+  EXPECT_FALSE(hello.contains("mjb"));       // binary does not travel in JSON text
+  ASSERT_EQ(a.Op("step")["op"], "step_ok");  // a takes the lease
+  EXPECT_EQ(b.Op("step")["code"], "not_driver");
+  EXPECT_EQ(observer.Op("list_keyframes")["op"], "list_keyframes_ok");  // observers read
+  EXPECT_EQ(observer.Op("read_mocap_pose", {{"body", "arm_target"}})["op"], "read_mocap_pose_ok");
+  ASSERT_EQ(b.Op("step", {{"force", true}})["op"], "step_ok");  // b takes over
+  EXPECT_EQ(a.Op("step")["code"], "not_driver");
+  std::this_thread::sleep_for(400ms);  // b falls silent past the lease timeout
+  EXPECT_EQ(a.Op("step")["op"], "step_ok");
+  EXPECT_EQ(a.Op("bye")["op"], "bye_ok");  // releases the lease
+  EXPECT_EQ(a.Op("step")["code"], "session_expired");
+  // A DEALER client (no REQ envelope) is answered too.
+  zmq::socket_t dealer(ctx_, zmq::socket_type::dealer);
+  dealer.set(zmq::sockopt::rcvtimeo, 5000);
+  dealer.connect(rpc());
+  const std::vector<std::uint8_t> req =
+      Json::to_msgpack(Json{{"op", "step"}, {"session_id", b.session()}, {"seq", "d1"}});
+  dealer.send(zmq::buffer(req));
+  zmq::message_t reply;
+  ASSERT_TRUE(dealer.recv(reply));
+  const auto* p = static_cast<const std::uint8_t*>(reply.data());
+  const Json r = Json::from_msgpack(p, p + reply.size());
+  EXPECT_EQ(r["op"], "step_ok");
+  EXPECT_EQ(r["seq"], "d1");
+}
+
+}  // namespace
+}  // namespace urlab::net
