@@ -11,6 +11,7 @@
 #include <zmq.hpp>
 #include <zmq_addon.hpp>
 
+#include "net/observation.h"
 #include "net/port_owner.h"
 #include "net/step_server.h"
 #include "net/topic_table.h"
@@ -52,6 +53,7 @@ NetworkOptions NetworkOptionsFromScene(const world::NetworkConfig& config) {
   o.info = config.info;
   o.rpc = config.rpc;
   o.step_mode = config.step_mode;
+  o.full_state = config.full_state;
   return o;
 }
 
@@ -157,6 +159,12 @@ struct NetworkSubsystem::Impl {
                            std::span(f.sensordata.data() + s.adr, static_cast<std::size_t>(s.dim)));
         Send(*pub, s.topic, payload);
       }
+    }
+    if (!options.full_state.empty()) {  // state/full: the step server's observation map
+      const std::vector<std::uint8_t> bytes =
+          Json::to_msgpack(Observation(tables, f, options.full_state, false));
+      Send(*pub, wire::kFullStateTopic,
+           std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
     }
   }
 

@@ -7,13 +7,12 @@
 #include <random>
 #include <zmq_addon.hpp>
 
+#include "net/observation.h"
 #include "urlab/core/version.h"
 
 namespace urlab::net {
 
 namespace {
-
-using Json = StepServer::Json;
 
 // A request refused with a protocol error code.
 struct Failure {
@@ -53,12 +52,6 @@ bool Bool(const Json& v, const char* field) {
 std::string String(const Json& v, const char* field) {
   if (!v.is_string()) Fail("bad_value", std::string("'") + field + "' must be a string");
   return v.get<std::string>();
-}
-
-Json TimeOf(double seconds) {
-  const double sec = std::floor(seconds);
-  return Json{{"sec", static_cast<std::int64_t>(sec)},
-              {"nsec", static_cast<std::int64_t>((seconds - sec) * 1e9)}};
 }
 
 std::string NewSessionId(std::uint64_t n) {
@@ -318,66 +311,6 @@ void StepServer::RequireDriver(Client& c, bool force, Clock::time_point now) {
 // ---------------------------------------------------------------------------------------------
 // Observations
 
-Json StepServer::Array(const double* v, std::size_t n, bool binary) const {
-  if (binary) {
-    std::vector<std::uint8_t> bytes(n * sizeof(double));
-    std::memcpy(bytes.data(), v, bytes.size());  // little-endian f64 (x86-64, arm64)
-    return Json::binary(std::move(bytes));
-  }
-  Json a = Json::array();
-  for (std::size_t i = 0; i < n; ++i) a.push_back(v[i]);
-  return a;
-}
-
-Json StepServer::Observation(const physics::StateFrame& f, const std::string& level,
-                             bool binary) const {
-  Json o;
-  o["time"] = f.time;
-  o["step"] = f.step;
-  o["sim_time"] = TimeOf(f.time);
-  const auto wall = std::chrono::system_clock::now().time_since_epoch();
-  o["wall_time"] = TimeOf(std::chrono::duration<double>(wall).count());
-  o["paused"] = f.paused;
-  Json per = Json::object();
-  std::vector<double> tmp;
-  const auto gather = [&](const std::vector<double>& src, const std::vector<int>& adrs) {
-    tmp.clear();
-    for (int a : adrs) tmp.push_back(src[static_cast<std::size_t>(a)]);
-    return Array(tmp.data(), tmp.size(), binary);
-  };
-  for (const ArticulationTopics& t : tables_) {
-    Json a;
-    a["qpos"] = gather(f.qpos, t.qpos_adrs);
-    a["qvel"] = gather(f.qvel, t.dof_adrs);
-    if (level != "minimal") {
-      a["ctrl"] = gather(f.ctrl, t.actuator_ids);
-      a["act"] = gather(f.act, t.act_adrs);
-      Json sensors = Json::object();
-      for (std::size_t i = 0; i < t.sensors.size(); ++i) {
-        const SensorTopicEntry& s = t.sensors[i];
-        sensors[t.sensor_names[i]] =
-            Array(f.sensordata.data() + s.adr, static_cast<std::size_t>(s.dim), binary);
-      }
-      a["sensors"] = std::move(sensors);
-    }
-    if (level == "full") {
-      Json xpos = Json::object(), xquat = Json::object();
-      for (std::size_t i = 0; i < t.body_ids.size(); ++i) {
-        const auto b = static_cast<std::size_t>(t.body_ids[i]);
-        xpos[t.body_names[i]] = Array(f.xpos.data() + 3 * b, 3, binary);
-        xquat[t.body_names[i]] = Array(f.xquat.data() + 4 * b, 4, binary);
-      }
-      a["xpos"] = std::move(xpos);
-      a["xquat"] = std::move(xquat);
-      a["actuator_force"] = gather(f.actuator_force, t.actuator_ids);
-    }
-    per[t.name] = std::move(a);
-  }
-  o["per_articulation"] = std::move(per);
-  o["entities"] = Json::object();
-  return o;
-}
-
 const ArticulationTopics& StepServer::Articulation(const Json& name) const {
   const std::string n = String(name, "articulation");
   for (const ArticulationTopics& t : tables_) {
@@ -395,7 +328,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
   c.last_seen = r.now;
   if (const auto it = r.body.find("observations"); it != r.body.end()) {
     c.level = String(*it, "observations");
-    if (c.level != "minimal" && c.level != "standard" && c.level != "full") {
+    if (!IsObservationLevel(c.level)) {
       Fail("bad_value", "observations must be minimal, standard or full");
     }
   }
@@ -545,7 +478,7 @@ StepServer::Outcome StepServer::Step(Request& r) {
   const bool binary = r.client->binary_arrays;
   out.on_applied = [this, level, binary](Json& reply) {
     const physics::StateFrame* f = state_->Latest();
-    Json obs = Observation(*f, level, binary);
+    Json obs = Observation(tables_, *f, level, binary);
     for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
   };
   if (mode_ == "direct") out.wait_for = session_.engine().Submit(physics::cmd::Step{n});
@@ -586,7 +519,7 @@ StepServer::Outcome StepServer::Reset(Request& r) {
   const std::string level = r.client->level;
   const bool binary = r.client->binary_arrays;
   out.on_applied = [this, level, binary](Json& reply) {
-    Json obs = Observation(*state_->Latest(), level, binary);
+    Json obs = Observation(tables_, *state_->Latest(), level, binary);
     for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
   };
   return out;
@@ -599,7 +532,7 @@ StepServer::Outcome StepServer::Forward(Request& r) {
   const std::string level = r.client->level;
   const bool binary = r.client->binary_arrays;
   out.on_applied = [this, level, binary](Json& reply) {
-    Json obs = Observation(*state_->Latest(), level, binary);
+    Json obs = Observation(tables_, *state_->Latest(), level, binary);
     for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
   };
   return out;
@@ -678,7 +611,7 @@ StepServer::Outcome StepServer::SetQpos(Request& r) {
   const std::string level = r.client->level;
   const bool binary = r.client->binary_arrays;
   out.on_applied = [this, level, binary](Json& reply) {
-    Json obs = Observation(*state_->Latest(), level, binary);
+    Json obs = Observation(tables_, *state_->Latest(), level, binary);
     for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
   };
   return out;

@@ -108,8 +108,6 @@ class StepServer {
                  const std::string& code, const std::string& message);
   // The lease: throws Failure unless `c` may drive (taking a free or expired lease).
   void RequireDriver(Client& c, bool force, Clock::time_point now);
-  Json Observation(const physics::StateFrame& f, const std::string& level, bool binary) const;
-  Json Array(const double* v, std::size_t n, bool binary) const;
   const ArticulationTopics& Articulation(const Json& name) const;
   std::string Mode() const { return mode_; }
 

@@ -244,12 +244,22 @@ class Parser {
     if (root["control_source"]) s.control_source = Source(root["control_source"]);
     if (const auto n = root["network"]) {
       CheckKeys(n, "network",
-                {"enabled", "state", "control", "info", "rpc", "step_mode", "camera_base_port"});
+                {"enabled", "state", "control", "info", "rpc", "step_mode", "full_state",
+                 "camera_base_port"});
       if (n["enabled"]) s.network.enabled = Bool(n["enabled"], "network.enabled");
       if (n["state"]) s.network.state = String(n["state"], "network.state");
       if (n["control"]) s.network.control = String(n["control"], "network.control");
       if (n["info"]) s.network.info = String(n["info"], "network.info");
       if (n["rpc"]) s.network.rpc = String(n["rpc"], "network.rpc");
+      if (n["full_state"]) {
+        s.network.full_state = String(n["full_state"], "network.full_state");
+        if (s.network.full_state == "none") s.network.full_state.clear();
+        if (!s.network.full_state.empty() && s.network.full_state != "minimal" &&
+            s.network.full_state != "standard" && s.network.full_state != "full") {
+          throw InputError(At(n["full_state"]),
+                           "network.full_state must be minimal, standard, full or none");
+        }
+      }
       if (n["step_mode"]) {
         s.network.step_mode = String(n["step_mode"], "network.step_mode");
         if (s.network.step_mode != "live" && s.network.step_mode != "direct") {

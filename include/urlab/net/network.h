@@ -27,11 +27,13 @@
 namespace urlab::net {
 
 struct NetworkOptions {
-  std::string state = "tcp://*:5555";             // PUB: state topics
-  std::string control = "tcp://127.0.0.1:5556";   // SUB: control and set_gains
-  std::string info = "tcp://*:5557";              // PUB: discovery
-  std::string rpc = "tcp://127.0.0.1:5559";       // ROUTER: the step server ("" : none)
-  std::string step_mode = "live";                 // the step server's initial mode
+  std::string state = "tcp://*:5555";            // PUB: state topics
+  std::string control = "tcp://127.0.0.1:5556";  // SUB: control and set_gains
+  std::string info = "tcp://*:5557";             // PUB: discovery
+  std::string rpc = "tcp://127.0.0.1:5559";      // ROUTER: the step server ("" : none)
+  std::string step_mode = "live";                // the step server's initial mode
+  // Observation level of the state/full topic (minimal, standard, full), "" for none.
+  std::string full_state = "standard";
   std::chrono::milliseconds lease_timeout{5000};  // a silent driver loses its lease
   // Frames the I/O thread may fall behind the physics thread before frames are dropped.
   std::size_t ring_capacity = 4096;

@@ -61,6 +61,7 @@ struct NetworkConfig {
   std::string info = "tcp://*:5557";
   std::string rpc = "tcp://127.0.0.1:5559";  // the step server (request/reply)
   std::string step_mode = "live";            // live | direct (lockstep)
+  std::string full_state = "standard";       // state/full level: minimal|standard|full|none
   std::string camera_base_port = "5558";
 };
 
