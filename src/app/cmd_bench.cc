@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "app/commands.h"
+#include "urlab/net/latency_bench.h"
 #include "urlab/world/controller_factory.h"
 #include "urlab/world/loop_bench.h"
 #include "urlab/world/manager.h"
@@ -45,6 +46,25 @@ int BenchLoop(const BenchLoopArgs& args) {
   return 0;
 }
 
+struct BenchLatencyArgs {
+  std::string scene;
+  int samples = 2000;
+};
+
+int BenchLatency(const BenchLatencyArgs& args) {
+  net::LatencyBenchOptions options;
+  options.samples = args.samples;
+  options.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
+  const net::LatencyBenchResult r =
+      net::RunLatencyBench(world::LoadSceneOrModel(args.scene), options);
+  std::printf(
+      "streaming_ratio=%.3f\nlockstep_ratio=%.3f\nthroughput_n1=%.3f\nthroughput_n10=%.3f\n",
+      r.streaming.p50_us / r.raw_pubsub.p50_us, r.lockstep.p50_us / r.raw_reqrep.p50_us,
+      r.lockstep_rate_n1 / r.bare_rate, r.lockstep_rate_n10 / r.bare_rate);
+  std::fflush(stdout);
+  return 0;
+}
+
 }  // namespace
 
 void RegisterBenchCommand(CLI::App& app, int& exit_code) {
@@ -68,6 +88,21 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
                    "readers polling at 1 kHz and 60 Hz in turn")
       ->check(CLI::Range(0, 16));
   loop->callback([&exit_code] { exit_code = BenchLoop(args); });
+
+  CLI::App* latency = bench->add_subcommand(
+      "latency",
+      "Network latency and lockstep throughput over loopback: control-to-state round trip on the "
+      "streaming topics and step n=1 round trip on the step server (p50/p99), each beside a raw "
+      "ZeroMQ ping-pong of the same kind measured in the same run, and steps per second through "
+      "the step server (n=1, n=10) against a bare mj_step loop. The scene's first articulation "
+      "runs with passthrough control, as fast as possible.");
+  static BenchLatencyArgs latency_args;
+  latency->add_option("SCENE", latency_args.scene, "scene file (.yaml) or MJCF model (.xml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  latency->add_option("--samples", latency_args.samples, "round trips per measurement")
+      ->check(CLI::Range(10, 1000000));
+  latency->callback([&exit_code] { exit_code = BenchLatency(latency_args); });
 }
 
 }  // namespace urlab::app

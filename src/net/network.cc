@@ -29,8 +29,8 @@ constexpr auto kPausedRepublish = std::chrono::milliseconds(100);  // at most 10
 constexpr auto kPausedInfo = std::chrono::seconds(1);
 constexpr auto kDropLogPeriod = std::chrono::seconds(1);
 
-// Discovery cadence: every 50 steps for the first 2500 steps, then every 500.
-bool InfoDue(std::uint64_t step) { return step <= 2500 ? step % 50 == 0 : step % 500 == 0; }
+// Frames the I/O thread may fall behind the physics thread before it skips to the newest.
+constexpr std::size_t kMaxBacklog = 16;
 
 std::string InfoJson(const ArticulationTopics& t) {
   nlohmann::ordered_json j;
@@ -82,7 +82,7 @@ struct NetworkSubsystem::Impl {
   std::atomic<bool> stop{false};
   std::array<std::atomic<std::uint64_t>, wire::kNumDrops> drops{};
   std::atomic<std::uint64_t> controls_applied{0}, gains_applied{0}, steps_published{0},
-      info_published{0};
+      info_published{0}, frames_skipped{0};
 
   // ---- I/O thread only ----
   std::optional<zmq::context_t> context;
@@ -95,6 +95,7 @@ struct NetworkSubsystem::Impl {
   std::vector<wire::GainPatch> gains_scratch;
   std::array<std::uint64_t, wire::kNumDrops> logged_drops{};
   Clock::time_point last_drop_log{}, last_republish{}, last_paused_info{};
+  std::uint64_t next_info_step = 0;  // discovery: every 50 steps for the first 2500, then 500
 
   void Drop(wire::Drop d) { drops[static_cast<std::size_t>(d)].fetch_add(1); }
 
@@ -264,12 +265,44 @@ struct NetworkSubsystem::Impl {
     }
     ready->set_value(bound);
     while (!stop.load(std::memory_order_acquire)) {
+      // 1. Inbound first (controls and requests are what clients wait on).
+      const bool backlog = ring->size() > 0;
+      const bool parked = server && server->has_pending();
+      zmq::pollitem_t items[2];
+      int n = 0;
+      if (sub) items[n++] = {static_cast<void*>(*sub), 0, ZMQ_POLLIN, 0};
+      if (server && server->socket()) {
+        items[n++] = {static_cast<void*>(*server->socket()), 0, ZMQ_POLLIN, 0};
+      }
+      const auto idle = backlog || parked ? std::chrono::milliseconds(0) : kPollInterval;
+      if (n > 0) {
+        zmq::poll(items, static_cast<std::size_t>(n), idle);
+      } else if (idle.count() > 0) {
+        std::this_thread::sleep_for(idle);
+      }
+      DrainControl();
+      if (server) {
+        server->HandleIncoming();
+        // 2. A parked lockstep reply leaves as soon as its window ends.
+        if (server->has_pending()) server->WaitForFront(std::chrono::microseconds(500));
+        server->Service(Clock::now());
+      }
+      // 3. Streaming. Behind by more than kMaxBacklog steps (the physics runs faster than the
+      // topics can be sent), skip to the newest frames: late state is worse than missing state.
+      const std::size_t queued = ring->size();
+      for (std::size_t i = kMaxBacklog; i < queued; ++i) {
+        ring->Pop();
+        frames_skipped.fetch_add(1);
+      }
       bool got = false;
       while (ring->TryPop(&frame)) {
         got = have_frame = true;
         PublishState(frame);
         steps_published.fetch_add(1);
-        if (InfoDue(frame.step) && frame.discontinuity == 0) PublishInfo();
+        if (frame.step >= next_info_step) {
+          PublishInfo();
+          next_info_step = frame.step + (frame.step < 2500 ? 50 : 500);
+        }
       }
       const auto now = Clock::now();
       if (!got && have_frame && frame.paused) {
@@ -281,26 +314,6 @@ struct NetworkSubsystem::Impl {
           PublishInfo();
           last_paused_info = now;
         }
-      }
-      // A parked lockstep reply leaves as soon as its window ends.
-      if (server && server->has_pending()) server->WaitForFront(std::chrono::microseconds(500));
-      zmq::pollitem_t items[2];
-      int n = 0;
-      if (sub) items[n++] = {static_cast<void*>(*sub), 0, ZMQ_POLLIN, 0};
-      if (server && server->socket()) {
-        items[n++] = {static_cast<void*>(*server->socket()), 0, ZMQ_POLLIN, 0};
-      }
-      const bool busy = got || (server && server->has_pending());
-      if (n > 0) {
-        zmq::poll(items, static_cast<std::size_t>(n),
-                  busy ? std::chrono::milliseconds(0) : kPollInterval);
-      } else if (!busy) {
-        std::this_thread::sleep_for(kPollInterval);
-      }
-      DrainControl();
-      if (server) {
-        server->HandleIncoming();
-        server->Service(Clock::now());
       }
       LogDrops(now);
     }
@@ -371,7 +384,7 @@ NetworkCounters NetworkSubsystem::counters() const {
   c.gains_applied = impl_->gains_applied.load();
   c.steps_published = impl_->steps_published.load();
   c.info_published = impl_->info_published.load();
-  c.frames_dropped = impl_->ring ? impl_->ring->dropped() : 0;
+  c.frames_dropped = (impl_->ring ? impl_->ring->dropped() : 0) + impl_->frames_skipped.load();
   return c;
 }
 
