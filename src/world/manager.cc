@@ -3,18 +3,15 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 #include <utility>
 
 #include "urlab/world/controller_factory.h"
+#include "urlab/world/scene_checks.h"
 
 namespace urlab::world {
-
-namespace fs = std::filesystem;
 
 std::atomic<Manager*> Manager::playing_{nullptr};
 
@@ -42,23 +39,9 @@ void Manager::BeginPlay(const SceneConfig& scene) {
 }
 
 void Manager::Build(const SceneConfig& scene) {
-  // Articulation names where one prefix starts another would make prefix binding ambiguous
-  // ("arm_" would also own "arm_left_..."): refuse them with the place to fix.
-  for (const ArticulationConfig& a : scene.articulations) {
-    for (const ArticulationConfig& b : scene.articulations) {
-      if (&a != &b && (b.name + "_").starts_with(a.name + "_")) {
-        throw InputError(b.where, "articulation names '" + a.name + "' and '" + b.name +
-                                      "' overlap (prefix '" + a.name + "_' would also own '" +
-                                      b.name + "_' elements); rename one");
-      }
-    }
-    if (a.hold_keyframe && a.keyframe.empty()) {
-      throw InputError(a.where, a.name + ": hold_keyframe needs an initial 'keyframe'");
-    }
-  }
-
   config_ = scene;
-  compiled_ = BuildScene(scene);
+  // Composes and compiles, then every check `urlab validate` runs (world/scene_checks.h).
+  compiled_ = BuildCheckedScene(scene);
   for (const auto& d : compiled_.diagnostics) spdlog::warn("{}: {}", d.where.str(), d.message);
 
   physics::PhysicsEngine::Options eo;
@@ -356,26 +339,6 @@ std::optional<Pose> Manager::BodyPose(std::string_view articulation, std::string
   if (!a) return std::nullopt;
   const physics::BodyView* v = a->bindings->bodies().Find(body);
   return v ? BodyPose(v->id) : std::nullopt;
-}
-
-// ---------------------------------------------------------------------------------------------
-
-SceneConfig LoadSceneOrModel(const std::string& path) {
-  if (IsSceneFile(path)) return LoadSceneFile(path);
-  if (!fs::exists(path)) throw InputError({path, 0}, "file not found");
-  std::string name = fs::path(path).stem().string();
-  for (char& c : name) {
-    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-  }
-  if (name.empty()) name = "model";
-  SceneConfig scene;
-  scene.path = fs::absolute(path).lexically_normal().string();
-  ArticulationConfig a;
-  a.name = name;
-  a.mjcf = scene.path;
-  a.where = {scene.path, 0};
-  scene.articulations.push_back(std::move(a));
-  return scene;
 }
 
 }  // namespace urlab::world
