@@ -125,15 +125,19 @@ int Run(const RunArgs& args) {
   FlushMujocoWarningCounts();
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();
   const double sim = static_cast<double>(steps) * timestep;
-  std::printf("summary: sim_time=%.3f s steps=%llu wall=%.3f s mean_rtf=%.3f%s%s\n", sim,
+  const std::string how = signal  ? std::string(" (stopped by signal ") + SignalName(signal) + ")"
+                          : fatal ? " (stopped by a MuJoCo error)"
+                                  : "";
+  std::printf("summary: sim_time=%.3f s steps=%llu wall=%.3f s mean_rtf=%.3f%s\n", sim,
               static_cast<unsigned long long>(steps), wall, wall > 0 ? sim / wall : 0.0,
-              signal ? " (stopped by signal " : "", signal ? SignalName(signal) : "");
-  if (signal) std::printf(")\n");
+              how.c_str());
   std::fflush(stdout);
   if (fatal) {
-    std::cerr << "urlab: error: " << args.scene
-              << ": MuJoCo error while running at t=" << fatal->sim_time
-              << " s: " << WithHint(fatal->message)
+    std::string message = fatal->message;
+    constexpr std::string_view kEnginePrefix = "physics loop paused after an error: ";
+    if (message.starts_with(kEnginePrefix)) message.erase(0, kEnginePrefix.size());
+    std::cerr << "urlab: error: " << args.scene << ": at t=" << fatal->sim_time
+              << " s: " << WithHint(message)
               << "\n  (--reset-on-divergence resets and goes on instead)\n";
     return 1;
   }

@@ -12,6 +12,7 @@
 #include "urlab/core/error.h"
 #include "urlab/core/files.h"
 #include "urlab/core/mujoco_handlers.h"
+#include "urlab/core/mujoco_hints.h"
 #include "urlab/core/version.h"
 #include "urlab/physics/model.h"
 
@@ -71,9 +72,16 @@ int main(int argc, char** argv) {
     std::cerr << "urlab: error: " << e.what() << "\n";
     return 1;
   } catch (const urlab::Error& e) {
-    // Our other errors carry their context (MuJoCo compile errors name the element and its
-    // file:line, write errors the output path).
-    std::cerr << "urlab: error: " << e.what() << "\n";
+    // Our other errors mostly carry their context (MuJoCo compile errors name the element and
+    // its file:line); name the input when the message does not start with a place.
+    const std::string what = e.what();
+    const std::string& input = urlab::app::CurrentInput();
+    const bool located = what.find(": ") != std::string::npos &&
+                         (what.starts_with("/") || (!input.empty() && what.starts_with(input)));
+    std::cerr << "urlab: error: " << (located ? "" : where()) << what << "\n";
+    if (const std::string hint = urlab::MujocoHint(what); !hint.empty()) {
+      std::cerr << "  hint: " << hint << "\n";
+    }
     return 1;
   } catch (const std::filesystem::filesystem_error& e) {
     std::cerr << "urlab: error: " << e.path1().string() << ": " << e.code().message() << "\n";

@@ -14,6 +14,9 @@ constexpr HintRow kHints[] = {
     {"Stack overflow",
      "the mjData stack is too small for this model: raise it with `size: {nstack: N}` in the "
      "scene or <size nstack=\"N\"/> in the MJCF (e.g. double what it is now)"},
+    {"could not create mjData",
+     "MuJoCo could not allocate the model's memory: lower size.nstack, njmax or nconmax (in a "
+     "scene they add up over the articulations)"},
     {"Could not allocate mjData stack",
      "size.nstack (or njmax/nconmax) asks for more memory than the machine gives: lower it"},
     {"contact buffer is full",
