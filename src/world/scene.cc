@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "urlab/core/files.h"
@@ -225,15 +226,13 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
   if (sink.has_errors()) return report;
   try {
     CompiledScene compiled = BuildScene(scene);
-    // The per-file warnings were reported above; composition adds its own.
-    std::vector<Diagnostic> compose_warnings;
-    for (const auto& d : compiled.diagnostics) {
-      bool seen = false;
-      for (const auto& e : sink.all())
-        seen |= e.where.str() == d.where.str() && e.message.ends_with(d.message);
-      if (!seen) compose_warnings.push_back(d);
+    // Composition repeats each file's own findings (reported above, labelled); add only its own.
+    for (const Diagnostic& d : compiled.diagnostics) {
+      const bool reported = std::any_of(sink.all().begin(), sink.all().end(), [&](const auto& e) {
+        return e.where.str() == d.where.str() && e.message.ends_with(d.message);
+      });
+      if (!reported) sink.Add(d);
     }
-    sink.Append(compose_warnings);
     CheckCompiledScene(scene, compiled, sink);
     const mjModel* m = compiled.model.get();
     report.sizes = {"nq " + std::to_string(m->nq), "nv " + std::to_string(m->nv),
