@@ -172,7 +172,7 @@ const CLI::Validator kInteger(
       if (used != text.size()) return "'" + text + "' is not an integer";
       return {};
     },
-    "INT");
+    "");
 
 }  // namespace
 
