@@ -8,6 +8,7 @@
 #include "urlab/world/loop_bench.h"
 #include "urlab/world/manager.h"
 #include "urlab/world/scene.h"
+#include "urlab/world/scene_checks.h"
 
 namespace urlab::app {
 
@@ -21,12 +22,14 @@ struct BenchLoopArgs {
 };
 
 int BenchLoop(const BenchLoopArgs& args) {
+  CurrentInput() = args.scene;
   world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
   scene.articulations.resize(1);  // the first articulation only
   scene.save_debug_xml.clear();
   world::ArticulationConfig art = scene.articulations.front();
   if (art.controller.type == "none") art.controller.type = "pd";
-  const world::CompiledScene compiled = world::BuildScene(scene);
+  // Exactly what begin-play builds and checks (world/scene_checks.h).
+  const world::CompiledScene compiled = world::BuildCheckedScene(scene);
 
   world::LoopBenchOptions options;
   options.steps = args.steps;
@@ -77,9 +80,7 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
       "its controller (PD if none), one pre- and one post-step callback, as fast as possible) "
       "divided by a bare mj_step loop on the same model; prints ratio=<value> last.");
   static BenchLoopArgs args;
-  loop->add_option("SCENE", args.scene, "scene file (.yaml) or MJCF model (.xml)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  loop->add_option("SCENE", args.scene, "scene file (.yaml) or MJCF model (.xml)")->required();
   loop->add_option("--steps", args.steps, "steps per trial")->check(CLI::Range(2, 100000000));
   loop->add_option("--trials", args.trials, "trials per loop (best of)")
       ->check(CLI::Range(1, 1000));

@@ -1,3 +1,5 @@
+// `urlab compile` and `urlab validate`: both build a model exactly as `urlab run` does (a single
+// MJCF file is a scene of one articulation, LoadSceneOrModel), with every check begin-play runs.
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -5,10 +7,11 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.h"
-#include "urlab/mjcf/reader.h"
+#include "app/signals.h"
+#include "urlab/core/files.h"
 #include "urlab/mjcf/writer.h"
-#include "urlab/physics/model.h"
 #include "urlab/world/scene.h"
+#include "urlab/world/scene_checks.h"
 
 namespace urlab::app {
 
@@ -37,76 +40,99 @@ std::vector<std::pair<const char*, int>> ModelSizes(const mjModel* m) {
           {"nexclude", m->nexclude}};
 }
 
+struct CompileArgs {
+  std::string file, save_xml, save_mjb;
+  bool json = false;
+};
+
+int Compile(const CompileArgs& args) {
+  CurrentInput() = args.file;
+  const world::SceneConfig scene = world::LoadSceneOrModel(args.file);
+  CheckOutputs({{args.save_xml, "--save-xml"}, {args.save_mjb, "--save-mjb"}},
+               world::SceneInputFiles(scene));
+  // The path `urlab run` takes: compose (a single file as articulation '<stem>'), compile, check.
+  const world::CompiledScene checked = world::BuildCheckedScene(scene);
+  for (const auto& d : checked.diagnostics) spdlog::warn("{}", d.str());
+  if (!args.save_xml.empty() || !args.save_mjb.empty()) {
+    // A single model is exported on its own, without the articulation prefix, so the saved
+    // names are the user's own; a scene is exported as composed.
+    world::CompiledScene own;
+    if (!world::IsSceneFile(args.file)) own = world::BuildModel(args.file);
+    const world::CompiledScene& out = world::IsSceneFile(args.file) ? checked : own;
+    GracefulScope finish_writing;  // a signal now waits until the files are in place
+    if (!args.save_xml.empty()) {
+      mjcf::WriteFile(out.doc, args.save_xml);  // asset paths relative to the output folder
+      spdlog::info("saved {}", args.save_xml);
+    }
+    if (!args.save_mjb.empty()) {
+      WriteFileAtomic(args.save_mjb, world::MjbBytes(out.model.get()));
+      spdlog::info("saved {}", args.save_mjb);
+    }
+  }
+  const auto sizes = ModelSizes(checked.model.get());
+  if (args.json) {
+    nlohmann::ordered_json j;
+    for (const auto& [k, v] : sizes) j[k] = v;
+    std::cout << j.dump() << "\n";
+  } else {
+    for (const auto& [k, v] : sizes) std::cout << k << " " << v << "\n";
+  }
+  return 0;
+}
+
+struct ValidateArgs {
+  std::string file;
+  bool bridge_report = false;
+};
+
+int Validate(const ValidateArgs& args) {
+  CurrentInput() = args.file;
+  const world::ValidationReport r = world::Validate(args.file, args.bridge_report);
+  for (const auto& b : r.bridge) std::cout << "bridge: " << b << "\n";
+  if (args.bridge_report && r.bridge.empty()) {
+    std::cout << "bridge: no changes (MuJoCo 2.2.2 MJCF)\n";
+  }
+  for (const auto& w : r.diagnostics.warnings()) std::cout << "warning: " << w.str() << "\n";
+  for (const auto& e : r.diagnostics.errors()) std::cout << "error: " << e.str() << "\n";
+  if (r.ok()) {
+    std::cout << args.file << ": OK";
+    for (const auto& s : r.sizes) std::cout << ", " << s;
+    std::cout << "\n";
+  } else {
+    std::cout << args.file << ": " << r.diagnostics.error_count() << " problem(s)\n";
+  }
+  return r.ok() ? 0 : 1;
+}
+
 }  // namespace
 
 void RegisterCompileCommand(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "compile",
-      "Import a model (MJCF) or compose a scene (YAML), export it and compile it with MuJoCo "
-      "from an in-memory virtual file system; print the compiled model's sizes.");
-  static std::string file, save_xml, save_mjb;
-  static bool json = false;
-  cmd->add_option("FILE", file, "MJCF model file (.xml) or scene file (.yaml)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_flag("--json", json, "print the sizes as one JSON object");
-  cmd->add_option("--save-xml", save_xml,
-                  "also save the exported MJCF (asset paths relative to its folder; loadable "
-                  "on its own)");
-  cmd->add_option("--save-mjb", save_mjb, "also save the compiled model as MuJoCo binary");
-  cmd->callback([&exit_code] {
-    world::CompiledScene compiled;
-    if (world::IsSceneFile(file)) {
-      compiled = world::BuildScene(world::LoadSceneFile(file));
-    } else {
-      compiled = world::BuildModel(file);
-    }
-    for (const auto& d : compiled.diagnostics) spdlog::warn("{}: {}", d.where.str(), d.message);
-    if (!save_xml.empty()) {
-      mjcf::WriteFile(compiled.doc, save_xml);  // asset paths relative to the output folder
-      spdlog::info("saved {}", save_xml);
-    }
-    if (!save_mjb.empty()) {
-      physics::SaveMjb(compiled.model.get(), save_mjb);
-      spdlog::info("saved {}", save_mjb);
-    }
-    const auto sizes = ModelSizes(compiled.model.get());
-    if (json) {
-      nlohmann::ordered_json j;
-      for (const auto& [k, v] : sizes) j[k] = v;
-      std::cout << j.dump() << "\n";
-    } else {
-      for (const auto& [k, v] : sizes) std::cout << k << " " << v << "\n";
-    }
-    exit_code = 0;
-  });
+      "Build a model (MJCF) or scene (YAML) exactly as `urlab run` does (a single MJCF file is "
+      "composed as a scene of one articulation named after the file), with every check `urlab "
+      "validate` runs, compile it with MuJoCo from an in-memory virtual file system and print "
+      "the compiled model's sizes. Outputs are written atomically and never over an input file.");
+  static CompileArgs args;
+  cmd->add_option("FILE", args.file, "MJCF model file (.xml) or scene file (.yaml)")->required();
+  cmd->add_flag("--json", args.json, "print the sizes as one JSON object");
+  cmd->add_option("--save-xml", args.save_xml,
+                  "also save the exported MJCF (a single model keeps its own names, a scene is "
+                  "saved as composed; asset paths relative to its folder; loadable on its own)");
+  cmd->add_option("--save-mjb", args.save_mjb,
+                  "also save the compiled model as MuJoCo binary (same model as --save-xml)");
+  cmd->callback([&exit_code] { exit_code = Compile(args); });
 
   CLI::App* val = app.add_subcommand(
       "validate",
-      "Check a scene (YAML) or MJCF file without running it: read, compose and compile, and "
-      "report every problem found with its file and line.");
-  static std::string vfile;
-  static bool bridge_report = false;
-  val->add_option("FILE", vfile, "scene (.yaml) or MJCF (.xml) file")
-      ->required()
-      ->check(CLI::ExistingFile);
-  val->add_flag("--bridge-report", bridge_report,
+      "Check a scene (YAML) or MJCF file without running it or writing anything: read, compose "
+      "and compile as `urlab run` does, run every check begin-play runs, and report every "
+      "problem found with its file and line. Exit code 1 when there is any error.");
+  static ValidateArgs vargs;
+  val->add_option("FILE", vargs.file, "scene (.yaml) or MJCF (.xml) file")->required();
+  val->add_flag("--bridge-report", vargs.bridge_report,
                 "list every change the MuJoCo 3.x dialect bridge makes, with file and line");
-  val->callback([&exit_code] {
-    const world::ValidationReport r = world::Validate(vfile, bridge_report);
-    for (const auto& b : r.bridge) std::cout << "bridge: " << b << "\n";
-    if (bridge_report && r.bridge.empty()) std::cout << "bridge: no changes (MuJoCo 2.2.2 MJCF)\n";
-    for (const auto& w : r.warnings) std::cout << "warning: " << w << "\n";
-    for (const auto& e : r.errors) std::cout << "error: " << e << "\n";
-    if (r.errors.empty()) {
-      std::cout << vfile << ": OK";
-      for (const auto& s : r.sizes) std::cout << ", " << s;
-      std::cout << "\n";
-    } else {
-      std::cout << vfile << ": " << r.errors.size() << " problem(s)\n";
-    }
-    exit_code = r.errors.empty() ? 0 : 1;
-  });
+  val->callback([&exit_code] { exit_code = Validate(vargs); });
 }
 
 }  // namespace urlab::app

@@ -3,6 +3,8 @@
 #include <CLI/CLI.hpp>
 
 #include "app/commands.h"
+#include "app/signals.h"
+#include "urlab/core/files.h"
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
 
@@ -16,15 +18,19 @@ void RegisterMjcfCommands(CLI::App& app, int& exit_code) {
       "roundtrip",
       "Import an MJCF file into URLab's document model and export it again. Includes are "
       "flattened; asset paths are written relative to the output file's folder, so the output "
-      "loads from any working directory.");
+      "loads from any working directory. The output is written atomically (missing folders are "
+      "created) and may not be one of the files the model reads.");
   static std::string in, out;
   static bool absolute = false;
-  rt->add_option("IN", in, "MJCF file to read")->required()->check(CLI::ExistingFile);
+  rt->add_option("IN", in, "MJCF file to read")->required();
   rt->add_option("-o,--output", out, "MJCF file to write")->required();
   rt->add_flag("--absolute-paths", absolute, "write absolute asset paths");
   rt->callback([&exit_code] {
+    CurrentInput() = in;
     document::Document doc = mjcf::ReadFile(in);
-    for (const auto& d : doc.diagnostics()) spdlog::warn("{}: {}", d.where.str(), d.message);
+    for (const auto& d : doc.diagnostics()) spdlog::warn("{}", d.str());
+    CheckOutputs({{out, "-o"}}, mjcf::InputFiles(doc));
+    GracefulScope finish_writing;  // a signal now waits until the file is in place
     mjcf::WriteFile(doc, out, absolute);
     spdlog::info("wrote {}", out);
     exit_code = 0;

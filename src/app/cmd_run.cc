@@ -1,16 +1,22 @@
 // `urlab run`: the headless main job. Plays a scene with the Manager, ticking it at ~60 Hz on the
 // main thread, logs the real-time factor and step rate once a second and stops cleanly on
-// Ctrl-C / SIGTERM or after --duration.
+// Ctrl-C / SIGTERM / SIGHUP (exit 128+signal) or after --duration (exit 0). A MuJoCo error while
+// playing stops it with MuJoCo's message and a hint (exit 1) unless --reset-on-divergence.
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
-#include <atomic>
 #include <chrono>
-#include <csignal>
+#include <cmath>
 #include <cstdio>
+#include <iostream>
+#include <optional>
 #include <thread>
 
 #include "app/commands.h"
+#include "app/signals.h"
+#include "urlab/core/mujoco_handlers.h"
+#include "urlab/core/mujoco_hints.h"
 #include "urlab/net/network.h"
 #include "urlab/world/manager.h"
 
@@ -19,12 +25,6 @@ namespace urlab::app {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// Set by the signal handler, polled by the main loop.
-std::atomic<bool> g_stop_requested{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
-
-extern "C" void OnStopSignal(int /*signal*/) { g_stop_requested.store(true); }
 
 constexpr auto kFrame = std::chrono::microseconds(16667);  // ~60 Hz main-thread tick
 constexpr auto kLogPeriod = std::chrono::seconds(1);
@@ -39,35 +39,76 @@ struct RunArgs {
   bool no_network = false;
 };
 
-int Run(const RunArgs& args) {
-  g_stop_requested.store(false);
-  std::signal(SIGINT, OnStopSignal);
-  std::signal(SIGTERM, OnStopSignal);
+// "message" plus MuJoCo's hint on a second line when the hint table has one.
+std::string WithHint(const std::string& message) {
+  const std::string hint = MujocoHint(message);
+  return hint.empty() ? message : message + "\n  hint: " + hint;
+}
 
+int Run(const RunArgs& args) {
+  CurrentInput() = args.scene;
   world::ManagerOptions options;
   options.speed_percent = args.speed;
   options.as_fast_as_possible = args.max_speed;
   options.start_paused = args.paused;
   options.reset_on_divergence = args.reset_on_divergence;
   world::Manager manager(options);
+  // Loading and compiling: a signal ends the process at once (nothing runs, nothing is written).
   const world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
   if (!args.no_network && scene.network.enabled) {
     manager.AddSubsystem(
         std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network)));
   }
   manager.BeginPlay(scene);
+  SetImmediateExit(false);  // playing: a signal stops the loop, which ends cleanly
+  // MuJoCo errors reach us as engine events (delivered inside Tick, on this thread).
+  std::optional<physics::EngineEvent> error;
+  std::uint64_t errors = 0;
+  manager.AddEventListener([&](const physics::EngineEvent& e) {
+    if (e.kind != physics::EngineEventKind::kError) return;
+    ++errors;
+    if (!error) error = e;
+  });
   physics::PhysicsEngine& engine = manager.session().engine();
   const double timestep = engine.model()->opt.timestep;
+  if (args.paused) {
+    spdlog::info("paused: send SIGUSR1 to resume (kill -USR1 {}); it toggles pause", ::getpid());
+  }
 
   const auto start = Clock::now();
   auto next_frame = start;
   auto next_log = start + kLogPeriod;
   auto last_log = start;
+  auto last_error_log = start - kLogPeriod;
+  std::uint64_t errors_logged = 0;
   std::uint64_t last_steps = engine.step_count();
   const std::uint64_t first_steps = last_steps;
-  while (!g_stop_requested.load()) {
+  std::optional<physics::EngineEvent> fatal;
+  while (StopSignal() == 0) {
     manager.Tick();
+    if (TakePauseToggle()) {
+      manager.session().SetPaused(!engine.paused());
+      spdlog::info("{} by SIGUSR1", engine.paused() ? "paused" : "resumed");
+    }
     const auto now = Clock::now();
+    if (error) {
+      if (!args.reset_on_divergence) {
+        fatal = std::move(error);
+        break;
+      }
+      // Auto-reset is on: back to the initial state and on; logged at most once a second.
+      if (now - last_error_log >= kLogPeriod) {
+        spdlog::error("{}; reset to the initial state{}", WithHint(error->message),
+                      errors - errors_logged > 1 ? fmt::format(" ({} errors since the last report)",
+                                                               errors - errors_logged)
+                                                 : "");
+        errors_logged = errors;
+        last_error_log = now;
+      }
+      error.reset();
+      manager.session().ResetToInitialState();
+      manager.session().SetPaused(false);
+    }
     if (now >= next_log) {
       const std::uint64_t steps = engine.step_count();
       const double wall = std::chrono::duration<double>(now - last_log).count();
@@ -85,19 +126,60 @@ int Run(const RunArgs& args) {
     if (next_frame < now) next_frame = now;  // far behind: do not burst
     std::this_thread::sleep_until(next_frame);
   }
-  const bool interrupted = g_stop_requested.load();
+  const int signal = StopSignal();
   const std::uint64_t steps = engine.step_count() - first_steps;
   manager.EndPlay();
+  FlushMujocoWarningCounts();
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();
   const double sim = static_cast<double>(steps) * timestep;
+  const std::string how = signal  ? std::string(" (stopped by signal ") + SignalName(signal) + ")"
+                          : fatal ? " (stopped by a MuJoCo error)"
+                                  : "";
   std::printf("summary: sim_time=%.3f s steps=%llu wall=%.3f s mean_rtf=%.3f%s\n", sim,
               static_cast<unsigned long long>(steps), wall, wall > 0 ? sim / wall : 0.0,
-              interrupted ? " (stopped by signal)" : "");
+              how.c_str());
   std::fflush(stdout);
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
-  return 0;
+  if (fatal) {
+    std::string message = fatal->message;
+    constexpr std::string_view kEnginePrefix = "physics loop paused after an error: ";
+    if (message.starts_with(kEnginePrefix)) message.erase(0, kEnginePrefix.size());
+    std::cerr << "urlab: error: " << args.scene << ": at t=" << fatal->sim_time
+              << " s: " << WithHint(message)
+              << "\n  (--reset-on-divergence resets and goes on instead)\n";
+    return 1;
+  }
+  return signal ? ExitCodeForSignal(signal) : 0;
 }
+
+// A number that must be finite and > 0 (CLI::PositiveNumber lets NaN through).
+const CLI::Validator kFinitePositive(
+    [](std::string& text) -> std::string {
+      double v = 0;
+      std::size_t used = 0;
+      try {
+        v = std::stod(text, &used);
+      } catch (const std::exception&) {
+        return "'" + text + "' is not a number";
+      }
+      if (used != text.size()) return "'" + text + "' is not a number";
+      if (!std::isfinite(v) || v <= 0) return "must be a finite number > 0, not " + text;
+      return {};
+    },
+    "FINITE > 0");
+
+// An integer written as one (CLI11 would otherwise report a fraction as a conversion error).
+const CLI::Validator kInteger(
+    [](std::string& text) -> std::string {
+      std::size_t used = 0;
+      try {
+        (void)std::stoll(text, &used);
+      } catch (const std::exception&) {
+        return "'" + text + "' is not an integer";
+      }
+      if (used != text.size()) return "'" + text + "' is not an integer";
+      return {};
+    },
+    "");
 
 }  // namespace
 
@@ -105,27 +187,31 @@ void RegisterRunCommand(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "run",
       "Play a scene (YAML) or a single MJCF model headless: physics on its own thread, "
-      "controllers, initial keyframes. Logs the real-time factor once a second; Ctrl-C or "
-      "SIGTERM stops it cleanly and prints a summary.");
+      "controllers, initial keyframes. Logs the real-time factor once a second. Ctrl-C, SIGTERM "
+      "or SIGHUP stops it cleanly, prints a summary and exits 128+signal (130, 143, 129); "
+      "--duration ends it with exit 0; during loading a signal exits at once (a second one "
+      "forces a stuck stop). SIGUSR1 toggles pause. A MuJoCo error stops it with MuJoCo's "
+      "message and exit 1 unless --reset-on-divergence.");
   static RunArgs args;
-  cmd->add_option("SCENE", args.scene, "scene file (.yaml) or MJCF model (.xml)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  cmd->add_option("SCENE", args.scene, "scene file (.yaml) or MJCF model (.xml)")->required();
   cmd->add_option("--duration", args.duration,
                   "stop after this many wall-clock seconds (default: run until Ctrl-C)")
-      ->check(CLI::PositiveNumber);
+      ->check(kFinitePositive);
   CLI::Option* speed =
       cmd->add_option("--speed", args.speed, "simulation speed in percent of real time (5-100)")
+          ->check(kInteger)
           ->check(CLI::Range(5, 100));
   CLI::Option* max_speed =
       cmd->add_flag("--max-speed", args.max_speed, "step as fast as possible (no pacing)");
   speed->excludes(max_speed);
-  cmd->add_flag("--paused", args.paused, "start paused");
+  cmd->add_flag("--paused", args.paused,
+                "start paused (SIGUSR1 resumes; so does a step server client's set_paused)");
   cmd->add_flag("--no-network", args.no_network,
-                "no ZeroMQ sockets (by default the state, control and info topics of "
-                "protocol.md are served on the scene's endpoints or the defaults 5555-5557)");
+                "no ZeroMQ sockets (by default the streaming topics and the step server of "
+                "protocol.md are served on the scene's endpoints or the defaults 5555-5557, 5559)");
   cmd->add_flag("--reset-on-divergence", args.reset_on_divergence,
-                "reset to the initial state when the simulation diverges");
+                "reset to the initial state when the simulation diverges or MuJoCo reports an "
+                "error (instead of stopping with exit 1)");
   cmd->callback([&exit_code] { exit_code = Run(args); });
 }
 

@@ -1,6 +1,10 @@
 #pragma once
 // Subcommands of the `urlab` CLI. Each Register* adds its subcommand to the app; the callback
 // runs on the main thread and returns the process exit code through `exit_code`.
+#include <string>
+#include <utility>
+#include <vector>
+
 namespace CLI {
 class App;
 }
@@ -11,5 +15,13 @@ void RegisterMjcfCommands(CLI::App& app, int& exit_code);
 void RegisterCompileCommand(CLI::App& app, int& exit_code);
 void RegisterRunCommand(CLI::App& app, int& exit_code);
 void RegisterBenchCommand(CLI::App& app, int& exit_code);
+
+// The file the running command works on: main() names it when an error arrives without a
+// location of its own. Main thread.
+std::string& CurrentInput();
+
+// Refuses (InputError) an output path that is one of `inputs`; "" outputs are ignored.
+void CheckOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,
+                  const std::vector<std::string>& inputs);
 
 }  // namespace urlab::app

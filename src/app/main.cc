@@ -3,15 +3,37 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <iostream>
+#include <new>
 
 #include "app/commands.h"
+#include "app/signals.h"
 #include "urlab/core/error.h"
+#include "urlab/core/files.h"
 #include "urlab/core/mujoco_handlers.h"
+#include "urlab/core/mujoco_hints.h"
 #include "urlab/core/version.h"
 #include "urlab/physics/model.h"
 
+namespace urlab::app {
+
+std::string& CurrentInput() {
+  static std::string file;
+  return file;
+}
+
+void CheckOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,
+                  const std::vector<std::string>& inputs) {
+  for (const auto& [path, what] : outputs) {
+    if (!path.empty()) RefuseOverwritingInput(path, inputs, what);
+  }
+}
+
+}  // namespace urlab::app
+
 int main(int argc, char** argv) {
+  urlab::app::InstallSignalHandlers();
   urlab::InstallMujocoHandlers();
   // Logs go to stderr so that stdout carries only results (e.g. `compile --json`).
   spdlog::set_default_logger(spdlog::stderr_color_mt("urlab"));
@@ -19,6 +41,10 @@ int main(int argc, char** argv) {
 
   CLI::App app{"URLab: MuJoCo robotics simulation runtime (scenes, control over ZeroMQ, replay)."};
   app.require_subcommand(1);
+  app.footer(
+      "Exit codes: 0 success, 1 bad input or a failed run (the message names the file and "
+      "line), 2 internal error, 105-109 bad command line, 128+N stopped by signal N (130 "
+      "Ctrl-C, 143 SIGTERM, 129 SIGHUP).");
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
@@ -32,15 +58,40 @@ int main(int argc, char** argv) {
   urlab::app::RegisterRunCommand(app, exit_code);
   urlab::app::RegisterBenchCommand(app, exit_code);
 
+  // Every error names a place: its own location, else the path it concerns, else the input the
+  // command was working on.
+  const auto where = [] {
+    const std::string& f = urlab::app::CurrentInput();
+    return f.empty() ? std::string() : f + ": ";
+  };
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
-  } catch (const urlab::Error& e) {
+  } catch (const urlab::InputError& e) {
     std::cerr << "urlab: error: " << e.what() << "\n";
     return 1;
+  } catch (const urlab::Error& e) {
+    // Our other errors mostly carry their context (MuJoCo compile errors name the element and
+    // its file:line); name the input when the message does not start with a place.
+    const std::string what = e.what();
+    const std::string& input = urlab::app::CurrentInput();
+    const bool located = what.find(": ") != std::string::npos &&
+                         (what.starts_with("/") || (!input.empty() && what.starts_with(input)));
+    std::cerr << "urlab: error: " << (located ? "" : where()) << what << "\n";
+    if (const std::string hint = urlab::MujocoHint(what); !hint.empty()) {
+      std::cerr << "  hint: " << hint << "\n";
+    }
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    std::cerr << "urlab: error: " << e.path1().string() << ": " << e.code().message() << "\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "urlab: error: " << where() << "out of memory (is a size field too large?)\n";
+    return 1;
   } catch (const std::exception& e) {
-    std::cerr << "urlab: unexpected error: " << e.what() << "\n";
+    std::cerr << "urlab: error: " << where() << "internal error: " << e.what()
+              << " (please report it)\n";
     return 2;
   }
   return exit_code;

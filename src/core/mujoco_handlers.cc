@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <mutex>
 
+#include "core/warning_limiter.h"
 #include "urlab/core/error.h"
 
 namespace urlab {
@@ -31,6 +32,17 @@ void ErrorHandler(const char* msg) {
   throw MujocoError(std::string("MuJoCo error: ") + (msg ? msg : "(no message)"));
 }
 
+// Repeated warnings (a diverging model warns every step) are logged at most once a second per
+// kind, with the count of those left out; captures still see every one.
+std::mutex& LimiterMutex() {
+  static std::mutex m;
+  return m;
+}
+internal::WarningLimiter& Limiter() {
+  static internal::WarningLimiter limiter;
+  return limiter;
+}
+
 void WarningHandler(const char* msg) { ReportMujocoWarning(msg ? msg : "(no message)"); }
 
 }  // namespace
@@ -44,7 +56,17 @@ void InstallMujocoHandlers() {
 }
 
 void ReportMujocoWarning(const std::string& text) {
-  spdlog::warn("MuJoCo: {}", text);
+  std::uint64_t skipped = 0;
+  bool log = false;
+  {
+    std::lock_guard<std::mutex> lock(LimiterMutex());
+    log = Limiter().Admit(text, internal::WarningLimiter::Clock::now(), &skipped);
+  }
+  if (log && skipped > 0) {
+    spdlog::warn("MuJoCo: {} ({} more like it in the last second, not shown)", text, skipped);
+  } else if (log) {
+    spdlog::warn("MuJoCo: {}", text);
+  }
   std::lock_guard<std::mutex> lock(CapturesMutex());
   for (WarningCapture* c : Captures()) c->Add(text);
 }
@@ -73,6 +95,17 @@ std::vector<std::string> WarningCapture::Take() {
 void WarningCapture::Add(const std::string& text) {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   impl_->warnings.push_back(text);
+}
+
+void FlushMujocoWarningCounts() {
+  std::vector<std::pair<std::string, std::uint64_t>> skipped;
+  {
+    std::lock_guard<std::mutex> lock(LimiterMutex());
+    skipped = Limiter().TakeSkipped();
+  }
+  for (const auto& [text, n] : skipped) {
+    spdlog::warn("MuJoCo: {} more warning(s) like \"{}\" were not shown", n, text);
+  }
 }
 
 void SetLogLevel(const std::string& level) { spdlog::set_level(spdlog::level::from_str(level)); }

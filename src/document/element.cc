@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 
 namespace urlab::document {
 
@@ -71,12 +72,31 @@ std::optional<double> Element::GetReal(std::string_view name) const {
 }
 
 std::optional<std::vector<double>> Element::GetReals(std::string_view name) const {
-  const std::string* text = Get(name);
-  if (!text) return std::nullopt;
-  auto v = ParseReals(*text);
+  const Attribute* a = FindAttr(name);
+  if (!a) return std::nullopt;
+  // The grammar's value count and type are authoritative: nothing indexes a value that the
+  // grammar would refuse, whichever path built the element.
+  if (a->spec && (a->spec->type == ValueType::kReal || a->spec->type == ValueType::kInt)) {
+    const std::string problem = CheckValue(*a->spec, a->value);
+    if (!problem.empty()) {
+      throw InputError(location_,
+                       "<" + tag_ + "> attribute '" + std::string(name) + "': " + problem);
+    }
+  }
+  auto v = ParseReals(a->value);
   if (!v) {
-    throw InputError(location_, tag_ + " attribute '" + std::string(name) + "': '" + *text +
-                                    "' is not a list of numbers");
+    throw InputError(location_, "<" + tag_ + "> attribute '" + std::string(name) + "': '" +
+                                    a->value + "' is not a list of numbers");
+  }
+  return v;
+}
+
+std::optional<std::vector<double>> Element::GetReals(std::string_view name, size_t count) const {
+  auto v = GetReals(name);
+  if (v && v->size() != count) {
+    throw InputError(location_, "<" + tag_ + "> attribute '" + std::string(name) + "': expected " +
+                                    std::to_string(count) + " number(s), got " +
+                                    std::to_string(v->size()));
   }
   return v;
 }
@@ -84,6 +104,11 @@ std::optional<std::vector<double>> Element::GetReals(std::string_view name) cons
 std::optional<int> Element::GetInt(std::string_view name) const {
   auto v = GetReal(name);
   if (!v) return std::nullopt;
+  if (!(*v >= std::numeric_limits<int>::min() && *v <= std::numeric_limits<int>::max()) ||
+      *v != std::floor(*v)) {
+    throw InputError(location_, "<" + tag_ + "> attribute '" + std::string(name) +
+                                    "': " + FormatReal(*v) + " is not an integer in range");
+  }
   return static_cast<int>(*v);
 }
 
@@ -219,6 +244,12 @@ Namespace ReferencedNamespace(const Element& e, const Attribute& a) {
 
 std::string FormatReal(double v) {
   char buf[64];
+  // Whole numbers in plain digits ("5000000", not "5e+06"): MuJoCo reads integer attributes with
+  // strtol, which would stop at the exponent.
+  if (v == std::floor(v) && std::abs(v) < 1e15) {
+    auto [p, ec] = std::to_chars(buf, buf + sizeof(buf), v, std::chars_format::fixed);
+    if (ec == std::errc()) return std::string(buf, p);
+  }
   auto [p, ec] = std::to_chars(buf, buf + sizeof(buf), v);
   if (ec != std::errc()) return std::to_string(v);
   return std::string(buf, p);
@@ -258,20 +289,80 @@ std::optional<std::vector<double>> ParseReals(std::string_view text) {
   return out;
 }
 
+namespace {
+// True when every whitespace-separated token is [+-]digits.
+bool PlainIntegers(std::string_view text) {
+  bool in_token = false, has_digit = false;
+  for (size_t i = 0; i <= text.size(); ++i) {
+    const char c = i < text.size() ? text[i] : ' ';
+    if (IsSpace(c)) {
+      if (in_token && !has_digit) return false;
+      in_token = has_digit = false;
+      continue;
+    }
+    if ((c == '+' || c == '-') && !in_token) {
+      in_token = true;
+      continue;
+    }
+    if (c < '0' || c > '9') return false;
+    in_token = has_digit = true;
+  }
+  return true;
+}
+
+// "6 numbers", "1 integer".
+std::string CountText(int n, const AttributeSpec& spec) {
+  const char* unit = spec.type == ValueType::kInt ? " integer" : " number";
+  return std::to_string(n) + unit + (n == 1 ? "" : "s");
+}
+
+// "> 0 and finite", "-1 to 2147483647".
+std::string RangeText(const AttributeSpec& spec) {
+  const bool finite_max = spec.max_value == std::numeric_limits<double>::max();
+  const std::string lo = (spec.min_exclusive ? "> " : ">= ") + FormatReal(spec.min_value);
+  if (finite_max) return lo + " and finite";
+  return FormatReal(spec.min_value) + (spec.min_exclusive ? " (exclusive)" : "") + " to " +
+         FormatReal(spec.max_value);
+}
+}  // namespace
+
 std::string CheckValue(const AttributeSpec& spec, std::string_view value) {
   switch (spec.type) {
     case ValueType::kReal:
     case ValueType::kInt: {
       auto v = ParseReals(value);
       if (!v) return "'" + std::string(value) + "' is not a list of numbers";
+      for (double x : *v) {
+        if (std::isnan(x)) return "'" + std::string(value) + "' contains NaN";
+      }
       if (spec.type == ValueType::kInt) {
+        // MuJoCo reads ints with strtol: "5e+06" would silently be 5, "0x10" 0. Only plain
+        // decimal digits are integers.
+        if (!PlainIntegers(value)) {
+          return "'" + std::string(value) + "' is not a list of integers (plain decimal digits)";
+        }
         for (double x : *v) {
           if (x != std::floor(x)) return "'" + std::string(value) + "' is not a list of integers";
+          if (x < std::numeric_limits<int>::min() || x > std::numeric_limits<int>::max()) {
+            return "'" + std::string(value) + "' is out of the range of an int";
+          }
         }
       }
-      if (spec.max_count >= 0 && static_cast<int>(v->size()) > spec.max_count) {
-        return "expected at most " + std::to_string(spec.max_count) + " number(s), got " +
-               std::to_string(v->size());
+      if (spec.HasRange()) {
+        for (double x : *v) {
+          const bool low = spec.min_exclusive ? !(x > spec.min_value) : !(x >= spec.min_value);
+          if (low || !(x <= spec.max_value)) {
+            return FormatReal(x) + " is out of range (expected " + RangeText(spec) + ")";
+          }
+        }
+      }
+      const int n = static_cast<int>(v->size());
+      if (spec.max_count >= 0 && n > spec.max_count) {
+        return "expected at most " + CountText(spec.max_count, spec) + ", got " + std::to_string(n);
+      }
+      // MuJoCo refuses an empty value even where any number of values is allowed.
+      if (const int lo = std::max(spec.min_count, 1); n < lo) {
+        return "expected at least " + CountText(lo, spec) + ", got " + std::to_string(n);
       }
       return "";
     }

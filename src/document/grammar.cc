@@ -155,7 +155,8 @@ const ElementSpec* ElementSpec::FindChild(std::string_view t) const {
   return nullptr;
 }
 
-Grammar::Grammar(std::span<const GrammarRow> rows, std::span<const GrammarRow> dialect_rows) {
+Grammar::Grammar(std::span<const GrammarRow> rows, std::span<const GrammarRow> dialect_rows,
+                 std::span<const RangeRow> ranges) {
   // Rows of the main table, then new dialect rows; '+id' dialect rows extend existing ones.
   struct Source {
     const GrammarRow* row;
@@ -222,10 +223,21 @@ Grammar::Grammar(std::span<const GrammarRow> rows, std::span<const GrammarRow> d
   if (elements_.empty() || elements_[0].tag != "mujoco") {
     throw Error("MJCF grammar table: the first row must be <mujoco>");
   }
+  for (const RangeRow& r : ranges) {
+    auto it = index.find(r.id);
+    if (it == index.end()) Bad(r.id, r.attribute, "range row for an unknown row");
+    AttributeSpec* a = FindMutable(elements_[it->second], r.attribute);
+    if (!a || (a->type != ValueType::kReal && a->type != ValueType::kInt)) {
+      Bad(r.id, r.attribute, "range row for an attribute that is not a number");
+    }
+    a->min_value = r.min;
+    a->min_exclusive = r.min_exclusive;
+    a->max_value = r.max;
+  }
 }
 
 const Grammar& Grammar::Get() {
-  static const Grammar grammar(GrammarTable(), DialectGrammarTable());
+  static const Grammar grammar(GrammarTable(), DialectGrammarTable(), ValueRangeTable());
   return grammar;
 }
 

@@ -32,6 +32,8 @@
 // Row ids: the tag for sections, body contents, assets and actuators ("geom", "mesh",
 // "general"); "<parent>.<tag>" where a tag has several contexts or is nested in a section
 // ("default.geom", "composite.geom", "equality.joint", "sensor.touch", "spatial.site").
+#include <limits>
+
 #include "urlab/document/grammar.h"
 
 namespace urlab::document {
@@ -618,5 +620,42 @@ constexpr GrammarRow kRows[] = {
 }  // namespace
 
 std::span<const GrammarRow> GrammarTable() { return kRows; }
+
+namespace {
+constexpr double kMaxReal = std::numeric_limits<double>::max();  // finite: refuses inf
+constexpr double kMaxInt = std::numeric_limits<int>::max();
+// Sizes default to -1 ("as needed"); anything below is meaningless.
+#define URLAB_SIZE_ROW(attr) \
+  { "size", attr, -1, false, kMaxInt }
+constexpr RangeRow kRanges[] = {
+    {"option", "timestep", 0, true, kMaxReal},  // > 0 and finite
+    {"option", "apirate", 0, false, kMaxReal},
+    {"option", "impratio", 0, true, kMaxReal},
+    {"option", "tolerance", 0, false, kMaxReal},
+    {"option", "noslip_tolerance", 0, false, kMaxReal},
+    {"option", "mpr_tolerance", 0, false, kMaxReal},
+    {"option", "density", 0, false, kMaxReal},
+    {"option", "viscosity", 0, false, kMaxReal},
+    {"option", "iterations", 0, false, kMaxInt},
+    {"option", "noslip_iterations", 0, false, kMaxInt},
+    {"option", "mpr_iterations", 0, false, kMaxInt},
+    URLAB_SIZE_ROW("njmax"),
+    URLAB_SIZE_ROW("nconmax"),
+    URLAB_SIZE_ROW("nstack"),
+    URLAB_SIZE_ROW("nuserdata"),
+    URLAB_SIZE_ROW("nkey"),
+    URLAB_SIZE_ROW("nuser_body"),
+    URLAB_SIZE_ROW("nuser_jnt"),
+    URLAB_SIZE_ROW("nuser_geom"),
+    URLAB_SIZE_ROW("nuser_site"),
+    URLAB_SIZE_ROW("nuser_cam"),
+    URLAB_SIZE_ROW("nuser_tendon"),
+    URLAB_SIZE_ROW("nuser_actuator"),
+    URLAB_SIZE_ROW("nuser_sensor"),
+};
+#undef URLAB_SIZE_ROW
+}  // namespace
+
+std::span<const RangeRow> ValueRangeTable() { return kRanges; }
 
 }  // namespace urlab::document

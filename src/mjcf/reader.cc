@@ -10,6 +10,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "urlab/core/files.h"
+
 namespace urlab::mjcf {
 
 namespace fs = std::filesystem;
@@ -22,20 +24,6 @@ using document::FileBases;
 using document::Namespace;
 
 namespace {
-
-std::string ReadWholeFile(const std::string& path, const SourceLocation& referenced_from,
-                          const std::string& what) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) {
-    throw InputError(referenced_from.file.empty() ? SourceLocation{path, 0} : referenced_from,
-                     what + " '" + path + "' not found");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError({path, 0}, "cannot open file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 class Reader {
  public:
@@ -63,21 +51,21 @@ class Reader {
     ConvertAttributes(*top, root, main_path_);
     ConvertChildren(*top, root, main_path_);
     AssignFileBases(doc);
-    if (options_.check_files) ThrowFirst(FindMissingFiles(doc));
+    if (options_.check_files) ThrowFirst(FindMissingFiles, doc);
     if (options_.check_references) {
-      ThrowFirst(FindDuplicateNames(doc));
-      ThrowFirst(FindDanglingReferences(doc));
+      ThrowFirst(FindDuplicateNames, doc);
+      ThrowFirst(FindDanglingReferences, doc);
     }
     return doc;
   }
 
  private:
-  static void ThrowFirst(const std::vector<InputError>& errors) {
-    if (errors.empty()) return;
-    if (errors.size() == 1) throw errors.front();
-    throw InputError(errors.front().where(), errors.front().message() + " (and " +
-                                                 std::to_string(errors.size() - 1) +
-                                                 " more problem(s) of this kind)");
+  // Runs one check into a fresh sink and throws its first error ("(and N more)").
+  template <typename Check>
+  static void ThrowFirst(Check check, const Document& doc) {
+    Diagnostics sink;
+    check(doc, sink, std::string());
+    sink.ThrowIfErrors();
   }
 
   // Parses `text`; returns its single top-level element.
@@ -152,7 +140,7 @@ class Reader {
     fs::path path(name);
     if (path.is_relative()) path = fs::path(model_dir_) / path;
     const std::string shown = path.lexically_normal().string();
-    const std::string text = ReadWholeFile(shown, where, "include file");
+    const std::string text = ReadInputFile(shown, "include file", where);
     const std::string key = fs::weakly_canonical(path).string();
     for (const std::string& open : include_stack_) {
       if (open == key) {
@@ -226,10 +214,9 @@ NameTable CollectNames(const Document& doc, std::vector<std::string>* composite_
 
 }  // namespace
 
-std::vector<InputError> FindDanglingReferences(const Document& doc) {
+void FindDanglingReferences(const Document& doc, Diagnostics& sink, const std::string& label) {
   std::vector<std::string> composite_prefixes;
   const NameTable names = CollectNames(doc, &composite_prefixes);
-  std::vector<InputError> errors;
   doc.root().Visit([&](const Element& e) {
     if (!e.spec()) return;
     for (const document::Attribute& a : e.attributes()) {
@@ -243,53 +230,60 @@ std::vector<InputError> FindDanglingReferences(const Document& doc) {
         maybe_generated = maybe_generated || a.value.compare(0, p.size(), p) == 0;
       }
       if (maybe_generated) continue;
-      errors.emplace_back(e.location(), "<" + e.tag() + "> attribute " + a.name + "=\"" + a.value +
-                                            "\": dangling reference, no " +
-                                            std::string(document::NamespaceName(ns)) + " named '" +
-                                            a.value + "' in this model");
+      sink.Error(e.location(), label + "<" + e.tag() + "> attribute " + a.name + "=\"" + a.value +
+                                   "\": dangling reference, no " +
+                                   std::string(document::NamespaceName(ns)) + " named '" + a.value +
+                                   "' in this model");
     }
   });
-  return errors;
 }
 
-std::vector<InputError> FindDuplicateNames(const Document& doc) {
+void FindDuplicateNames(const Document& doc, Diagnostics& sink, const std::string& label) {
   std::array<std::unordered_map<std::string, const Element*>,
              static_cast<size_t>(Namespace::kCount)>
       seen;
-  std::vector<InputError> errors;
   doc.root().Visit([&](const Element& e) {
     if (!e.spec() || e.spec()->name_space == Namespace::kNone) return;
     const std::string n = e.Name();
     if (n.empty()) return;
     auto [it, fresh] = seen[static_cast<size_t>(e.spec()->name_space)].emplace(n, &e);
     if (!fresh) {
-      errors.emplace_back(
-          e.location(), "duplicate " + std::string(document::NamespaceName(e.spec()->name_space)) +
-                            " name '" + n + "' (first defined at " + it->second->location().str() +
-                            ")");
+      sink.Error(e.location(),
+                 label + "duplicate " + std::string(document::NamespaceName(e.spec()->name_space)) +
+                     " name '" + n + "' (first defined at " + it->second->location().str() + ")");
     }
   });
-  return errors;
 }
 
-std::vector<InputError> FindMissingFiles(const Document& doc) {
-  std::vector<InputError> errors;
+void FindMissingFiles(const Document& doc, Diagnostics& sink, const std::string& label) {
   doc.root().Visit([&](const Element& e) {
     for (const document::Attribute& a : e.attributes()) {
       if (!a.spec || a.spec->type != document::ValueType::kFile) continue;
       const std::optional<std::string> path = e.ResolvedFile(a.name);
       std::error_code ec;
       if (path && !fs::is_regular_file(*path, ec)) {
-        errors.emplace_back(e.location(), "<" + e.tag() + "> " + a.name + " '" + a.value +
-                                              "' not found (looked for " + *path + ")");
+        sink.Error(e.location(), label + "<" + e.tag() + "> " + a.name + " '" + a.value +
+                                     "' not found (looked for " + *path + ")");
       }
     }
   });
-  return errors;
+}
+
+std::vector<std::string> InputFiles(const Document& doc) {
+  std::set<std::string> files;
+  if (!doc.source_path().empty()) files.insert(doc.source_path());
+  doc.root().Visit([&](const Element& e) {
+    if (!e.location().file.empty()) files.insert(e.location().file);  // main file and includes
+    for (const document::Attribute& a : e.attributes()) {
+      if (!a.spec || a.spec->type != document::ValueType::kFile) continue;
+      if (std::optional<std::string> path = e.ResolvedFile(a.name)) files.insert(*path);
+    }
+  });
+  return {files.begin(), files.end()};
 }
 
 Document ReadFile(const std::string& path, const ReadOptions& options) {
-  const std::string text = ReadWholeFile(path, {}, "model file");
+  const std::string text = ReadInputFile(path, "model file");
   Reader reader(options, path);
   return reader.Read(text);
 }

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <optional>
 
+#include "urlab/core/files.h"
+
 namespace urlab::mjcf {
 
 namespace fs = std::filesystem;
@@ -129,15 +131,8 @@ void WriteFile(const Document& doc, const std::string& path, bool absolute_paths
   if (!absolute_paths) {
     options.relative_to = fs::absolute(fs::path(path)).parent_path().lexically_normal().string();
   }
-  const std::string text = WriteString(doc, options);
-  const fs::path parent = fs::absolute(fs::path(path)).parent_path();
-  std::error_code ec;
-  fs::create_directories(parent, ec);
-  std::ofstream f(path, std::ios::binary);
-  if (!f) throw Error(path + ": cannot open for writing");
-  f.write(text.data(), static_cast<std::streamsize>(text.size()));
-  f.close();
-  if (!f) throw Error(path + ": write failed");
+  // Missing folders are created; a temporary file is renamed into place (never a truncated file).
+  WriteFileAtomic(path, WriteString(doc, options));
 }
 
 }  // namespace urlab::mjcf

@@ -16,30 +16,64 @@ std::string ShortName(const mjModel* m, mjtObj type, int id, const std::string& 
   return full.starts_with(prefix) ? std::string(full.substr(prefix.size())) : "";
 }
 
-// Applies the per-joint/actuator gains of `config` over the controller's defaults.
+// True when a gains key names binding `b`'s actuator or the joint it drives (short names).
+bool GainKeyMatches(const mjModel* m, const control::ActuatorBinding& b, const std::string& prefix,
+                    const std::string& key) {
+  return ShortName(m, mjOBJ_ACTUATOR, b.actuator_id, prefix) == key ||
+         ShortName(m, mjOBJ_JOINT, b.joint_id, prefix) == key;
+}
+
+// Applies the per-joint/actuator gains of `config` over the controller's defaults (the keys were
+// checked by CheckController).
 void ApplyJointGains(const ArticulationConfig& config, const control::ArticulationControl& control,
                      const mjModel* m, control::PdController& pd) {
-  const ControllerConfig& c = config.controller;
-  for (const auto& [key, gains] : c.gains) {
-    bool found = false;
+  for (const auto& [key, gains] : config.controller.gains) {
     for (std::size_t i = 0; i < pd.bindings().size(); ++i) {
-      const control::ActuatorBinding& b = pd.bindings()[i];
-      if (ShortName(m, mjOBJ_ACTUATOR, b.actuator_id, control.prefix()) != key &&
-          ShortName(m, mjOBJ_JOINT, b.joint_id, control.prefix()) != key) {
-        continue;
+      if (GainKeyMatches(m, pd.bindings()[i], control.prefix(), key)) {
+        pd.SetGains(static_cast<int>(i), MergeGains(pd.default_gains(), gains));
       }
-      pd.SetGains(static_cast<int>(i), MergeGains(pd.default_gains(), gains));
-      found = true;
-    }
-    if (!found) {
-      throw InputError(c.where, config.name +
-                                    ": controller gains: no actuated joint or actuator '" + key +
-                                    "' in " + config.mjcf);
     }
   }
 }
 
 }  // namespace
+
+void CheckController(const ArticulationConfig& config, const mjModel* m, const std::string& prefix,
+                     Diagnostics& sink) {
+  const ControllerConfig& c = config.controller;
+  if (c.type == "pd" || c.type == "keyframe") {
+    // The actuators a controller binds: the articulation's, by prefix (ArticulationControl).
+    std::vector<control::ActuatorBinding> bindings;
+    for (int id = 0; id < m->nu; ++id) {
+      const char* name = mj_id2name(m, mjOBJ_ACTUATOR, id);
+      if (name && std::string_view(name).starts_with(prefix)) {
+        bindings.push_back(control::MakeActuatorBinding(m, id));
+      }
+    }
+    for (const auto& [key, gains] : c.gains) {
+      bool found = false;
+      for (const control::ActuatorBinding& b : bindings) found |= GainKeyMatches(m, b, prefix, key);
+      if (!found) {
+        sink.Error(c.where, config.name + ": controller gains: no actuated joint or actuator '" +
+                                key + "' in " + config.mjcf);
+      }
+    }
+  } else if (!c.gains.empty()) {
+    sink.Error(c.where, config.name +
+                            ": controller gains apply to pd and keyframe controllers, "
+                            "not '" +
+                            c.type + "'");
+  }
+  if (c.type == "keyframe") {
+    for (const KeyframeStep& step : c.sequence) {
+      // Only this articulation's keyframes (an exact scene name could be another's).
+      if (mj_name2id(m, mjOBJ_KEY, (prefix + step.keyframe).c_str()) < 0) {
+        sink.Error(c.where, config.name + ": controller sequence: keyframe '" + step.keyframe +
+                                "' is not in " + config.mjcf);
+      }
+    }
+  }
+}
 
 control::PdGains MergeGains(const control::PdGains& base, const PdGains& config) {
   control::PdGains g = base;
@@ -51,6 +85,9 @@ control::PdGains MergeGains(const control::PdGains& base, const PdGains& config)
 
 void InstallController(const ArticulationConfig& config, control::ArticulationControl& control,
                        const mjModel* m) {
+  Diagnostics problems;
+  CheckController(config, m, control.prefix(), problems);
+  problems.ThrowIfErrors();
   const ControllerConfig& c = config.controller;
   const control::PdGains defaults = MergeGains(control::PdGains{}, c.defaults);
   if (c.type == "none" || c.type == "passthrough") {
@@ -68,10 +105,6 @@ void InstallController(const ArticulationConfig& config, control::ArticulationCo
     for (const KeyframeStep& step : c.sequence) {
       // Only this articulation's keyframes (an exact scene name could be another's).
       const int key = mj_name2id(m, mjOBJ_KEY, (control.prefix() + step.keyframe).c_str());
-      if (key < 0) {
-        throw InputError(c.where, config.name + ": controller sequence: keyframe '" +
-                                      step.keyframe + "' is not in " + config.mjcf);
-      }
       kf.AddPose(kf.PoseFromModelKey(m, key, step.blend, step.hold));
     }
   } else {

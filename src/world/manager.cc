@@ -3,13 +3,9 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <cctype>
-#include <filesystem>
 #include <utility>
 
 namespace urlab::world {
-
-namespace fs = std::filesystem;
 
 std::atomic<Manager*> Manager::playing_{nullptr};
 
@@ -154,26 +150,6 @@ std::optional<Pose> Manager::BodyPose(std::string_view articulation, std::string
   if (!a) return std::nullopt;
   const physics::BodyView* v = a->bindings->bodies().Find(body);
   return v ? BodyPose(v->id) : std::nullopt;
-}
-
-// ---------------------------------------------------------------------------------------------
-
-SceneConfig LoadSceneOrModel(const std::string& path) {
-  if (IsSceneFile(path)) return LoadSceneFile(path);
-  if (!fs::exists(path)) throw InputError({path, 0}, "file not found");
-  std::string name = fs::path(path).stem().string();
-  for (char& c : name) {
-    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-  }
-  if (name.empty()) name = "model";
-  SceneConfig scene;
-  scene.path = fs::absolute(path).lexically_normal().string();
-  ArticulationConfig a;
-  a.name = name;
-  a.mjcf = scene.path;
-  a.where = {scene.path, 0};
-  scene.articulations.push_back(std::move(a));
-  return scene;
 }
 
 }  // namespace urlab::world

@@ -2,11 +2,14 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <filesystem>
 
+#include "urlab/core/files.h"
 #include "urlab/mjcf/bridge.h"
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
+#include "urlab/world/scene_checks.h"
 
 namespace urlab::world {
 
@@ -91,12 +94,14 @@ void WriteKeyframeValues(document::Document& doc, const mjModel* m) {
   }
 }
 
-void SaveDebug(const document::Document& doc, const mjModel* m, const std::string& folder) {
-  fs::create_directories(folder);
+void SaveDebug(const document::Document& doc, const mjModel* m, const std::string& folder,
+               const std::vector<std::string>& inputs) {
   const std::string xml = (fs::path(folder) / "scene_compiled.xml").string();
   const std::string mjb = (fs::path(folder) / "scene_compiled.mjb").string();
+  RefuseOverwritingInput(xml, inputs, "save_debug_xml");
+  RefuseOverwritingInput(mjb, inputs, "save_debug_xml");
   mjcf::WriteFile(doc, xml);
-  physics::SaveMjb(m, mjb);
+  WriteFileAtomic(mjb, MjbBytes(m));
   spdlog::info("saved {} and {}", xml, mjb);
 }
 
@@ -129,14 +134,9 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   WriteKeyframeValues(composed.doc, out.model.get());
   out.software_sensors = physics::RegisterSoftwareSensors(out.model.get(), software);
   out.bridge_report = std::move(bridge_text);
-  for (const ArticulationConfig& a : scene.articulations) {
-    if (a.keyframe.empty()) continue;
-    const std::string key = a.name + "_" + a.keyframe;
-    if (mj_name2id(out.model.get(), mjOBJ_KEY, key.c_str()) < 0) {
-      throw InputError(a.where, a.name + ": keyframe '" + a.keyframe + "' is not in " + a.mjcf);
-    }
+  if (!scene.save_debug_xml.empty()) {
+    SaveDebug(composed.doc, out.model.get(), scene.save_debug_xml, SceneInputFiles(scene));
   }
-  if (!scene.save_debug_xml.empty()) SaveDebug(composed.doc, out.model.get(), scene.save_debug_xml);
   out.articulations = std::move(composed.articulations);
   out.diagnostics = std::move(composed.diagnostics);
   out.doc = std::move(composed.doc);
@@ -157,39 +157,58 @@ CompiledScene BuildModel(const std::string& mjcf_path) {
   return out;
 }
 
-ValidationReport Validate(const std::string& path, bool bridge_report) {
-  ValidationReport report;
-  std::vector<std::string> mjcf_files;
-  SceneConfig scene;
-  const bool is_scene = IsSceneFile(path);
-  try {
-    if (is_scene) {
-      scene = LoadSceneFile(path);
-      for (const auto& a : scene.articulations) mjcf_files.push_back(a.mjcf);
-    } else {
-      mjcf_files.push_back(path);
-    }
-  } catch (const Error& e) {
-    report.errors.push_back(e.what());
-    return report;
-  }
-  for (size_t i = 0; i < mjcf_files.size(); ++i) {
-    const std::string label = is_scene ? scene.articulations[i].name + ": " : "";
+std::string MjbBytes(const mjModel* m) {
+  const int size = mj_sizeModel(m);
+  std::string bytes(static_cast<size_t>(size), '\0');
+  mj_saveModel(m, nullptr, bytes.data(), size);
+  return bytes;
+}
+
+std::vector<std::string> SceneInputFiles(const SceneConfig& scene) {
+  std::vector<std::string> files;
+  if (!scene.path.empty()) files.push_back(scene.path);
+  for (const ArticulationConfig& a : scene.articulations) {
     mjcf::ReadOptions lenient;
     lenient.check_files = false;
     lenient.check_references = false;
     try {
-      document::Document doc = mjcf::ReadFile(mjcf_files[i], lenient);
-      for (const auto& d : doc.diagnostics()) {
-        report.warnings.push_back(label + d.where.str() + ": " + d.message);
+      for (std::string& f : mjcf::InputFiles(mjcf::ReadFile(a.mjcf, lenient))) {
+        files.push_back(std::move(f));
       }
-      for (auto* finder : {&mjcf::FindDuplicateNames, &mjcf::FindMissingFiles}) {
-        for (const InputError& e : finder(doc)) report.errors.push_back(label + e.what());
-      }
+    } catch (const Error&) {
+      files.push_back(a.mjcf);  // unreadable: at least the file itself
+    }
+  }
+  return files;
+}
+
+ValidationReport Validate(const std::string& path, bool bridge_report) {
+  ValidationReport report;
+  Diagnostics& sink = report.diagnostics;
+  SceneConfig scene;
+  try {
+    scene = LoadSceneOrModel(path);
+  } catch (const InputError& e) {
+    sink.Add(e);
+    return report;
+  }
+  scene.save_debug_xml.clear();  // validate writes nothing
+  // A single MJCF file is a scene of one articulation: its findings carry no label.
+  const bool is_scene = IsSceneFile(path);
+  for (const ArticulationConfig& a : scene.articulations) {
+    const std::string label = is_scene ? a.name + ": " : "";
+    mjcf::ReadOptions lenient;
+    lenient.check_files = false;
+    lenient.check_references = false;
+    try {
+      document::Document doc = mjcf::ReadFile(a.mjcf, lenient);
+      sink.Append(doc.diagnostics(), label);
+      mjcf::FindDuplicateNames(doc, sink, label);
+      mjcf::FindMissingFiles(doc, sink, label);
       mjcf::BridgeOptions list_all;
       list_all.throw_on_refusal = false;
       const mjcf::BridgeReport bridged = mjcf::ApplyBridge(doc, list_all);
-      for (const InputError& e : bridged.Refusals()) report.errors.push_back(label + e.what());
+      for (const InputError& e : bridged.Refusals()) sink.Add(e, label);
       if (bridge_report) {
         for (const mjcf::BridgeChange& c : bridged.changes) {
           report.bridge.push_back(label + c.where.str() + ": " + mjcf::BridgeKindName(c.kind) +
@@ -197,25 +216,32 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
         }
       }
       // References are checked after the bridge (3.x names such as frames are flattened).
-      for (const InputError& e : mjcf::FindDanglingReferences(doc)) {
-        report.errors.push_back(label + e.what());
-      }
-    } catch (const Error& e) {
-      report.errors.push_back(label + e.what());
+      mjcf::FindDanglingReferences(doc, sink, label);
+    } catch (const InputError& e) {
+      sink.Add(e, label);
     }
   }
-  if (!report.errors.empty()) return report;
+  // Checks of the scene itself, then composition and compilation exactly as begin-play does.
+  CheckSceneConfig(scene, sink);
+  if (sink.has_errors()) return report;
   try {
-    CompiledScene compiled = is_scene ? BuildScene(scene) : BuildModel(path);
-    for (const auto& d : compiled.diagnostics) {
-      if (!is_scene) continue;  // already reported per file above
-      report.warnings.push_back(d.where.str() + ": " + d.message);
+    CompiledScene compiled = BuildScene(scene);
+    // Composition repeats each file's own findings (reported above, labelled); add only its own.
+    for (const Diagnostic& d : compiled.diagnostics) {
+      const bool reported = std::any_of(sink.all().begin(), sink.all().end(), [&](const auto& e) {
+        return e.where.str() == d.where.str() && e.message.ends_with(d.message);
+      });
+      if (!reported) sink.Add(d);
     }
+    CheckCompiledScene(scene, compiled, sink);
     const mjModel* m = compiled.model.get();
     report.sizes = {"nq " + std::to_string(m->nq), "nv " + std::to_string(m->nv),
                     "nu " + std::to_string(m->nu), "nbody " + std::to_string(m->nbody)};
+  } catch (const InputError& e) {
+    sink.Add(e);
   } catch (const Error& e) {
-    report.errors.push_back(e.what());
+    // A MuJoCo compile error: its message names the element and file:line itself.
+    sink.Error({}, e.what());
   }
   return report;
 }

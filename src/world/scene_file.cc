@@ -2,12 +2,17 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
+#include "urlab/core/files.h"
+#include "urlab/document/element.h"
+#include "urlab/document/grammar.h"
 #include "urlab/document/orientation.h"
 
 namespace urlab::world {
@@ -17,6 +22,44 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Top-level sections of features that do not exist yet: refused with a clear message instead of
+// "unknown key" (and never silently accepted).
+constexpr std::pair<const char*, const char*> kNotYetSupported[] = {
+    {"props", "props (static objects besides articulations)"},
+    {"terrain", "terrain / heightfields"},
+    {"heightfields", "terrain / heightfields"},
+    {"cameras", "cameras"},
+    {"recording", "recording"},
+    {"replay", "replay"},
+    {"viewer", "the viewer"},
+    {"input", "input devices"},
+    {"debug", "debug drawing"},
+    {"lights", "scene lights"},
+};
+
+// A closed or half-open interval a number must lie in; NaN never does.
+struct Range {
+  double min = -kInf;
+  double max = kInf;
+  bool min_exclusive = false;
+  bool Contains(double v) const {
+    return (min_exclusive ? v > min : v >= min) && v <= max;  // false for NaN
+  }
+  std::string Text() const {
+    if (max == kInf && min == -kInf) return "a number (not NaN)";
+    if (max == kInf) return std::string(min_exclusive ? "> " : ">= ") + document::FormatReal(min);
+    if (max == std::numeric_limits<double>::max()) {
+      return std::string(min_exclusive ? "> " : ">= ") + document::FormatReal(min) + " and finite";
+    }
+    return document::FormatReal(min) + " to " + document::FormatReal(max);
+  }
+};
+constexpr Range kAny{};  // not NaN
+constexpr Range kFinite{-std::numeric_limits<double>::max(), std::numeric_limits<double>::max()};
+constexpr Range kNonNegativeFinite{0, std::numeric_limits<double>::max()};
+constexpr Range kNonNegative{0, kInf};  // inf allowed (e.g. an unlimited torque)
 
 class Parser {
  public:
@@ -28,11 +71,40 @@ class Parser {
     throw InputError(At(n), what);
   }
 
+  // The key of a mapping entry: a plain string, never a list, mapping or null.
+  std::string Key(const YAML::Node& key, const std::string& where) const {
+    if (!key.IsScalar() || key.Tag() == "tag:yaml.org,2002:null" || key.Scalar().empty()) {
+      Fail(key, "keys in " + where + " must be names (strings), not " +
+                    (key.IsMap()        ? "a mapping"
+                     : key.IsSequence() ? "a list"
+                                        : "empty/null"));
+    }
+    return key.Scalar();
+  }
+
+  // Every key of `map` once, as a string (duplicates and non-string keys are errors).
+  std::vector<std::pair<std::string, YAML::Node>> Entries(const YAML::Node& map,
+                                                          const std::string& where) const {
+    if (!map.IsMap()) Fail(map, where + " must be a mapping");
+    std::vector<std::pair<std::string, YAML::Node>> out;
+    std::map<std::string, int> seen;
+    for (const auto& kv : map) {
+      const std::string key = Key(kv.first, where);
+      const int line = kv.first.Mark().line + 1;
+      if (auto [it, fresh] = seen.emplace(key, line); !fresh) {
+        Fail(kv.first, "duplicate key '" + key + "' in " + where + " (first at line " +
+                           std::to_string(it->second) + ")");
+      }
+      out.emplace_back(key, kv.second);
+    }
+    return out;
+  }
+
   void CheckKeys(const YAML::Node& map, const std::string& where,
                  const std::set<std::string>& allowed) const {
-    if (!map.IsMap()) Fail(map, where + " must be a mapping");
+    Entries(map, where);  // keys are strings, each once
     for (const auto& kv : map) {
-      const std::string key = kv.first.as<std::string>();
+      const std::string key = kv.first.Scalar();
       if (!allowed.count(key)) {
         std::string list;
         for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
@@ -51,9 +123,13 @@ class Parser {
     }
   }
 
-  double Number(const YAML::Node& n, const std::string& what) const {
+  double Number(const YAML::Node& n, const std::string& what, const Range& range = kFinite) const {
     if (!n.IsScalar()) Fail(n, what + " must be a number");
-    return As<double>(n, what + " must be a number");
+    const double v = As<double>(n, what + " must be a number");
+    if (!range.Contains(v)) {
+      Fail(n, what + " must be " + range.Text() + ", not " + n.Scalar());
+    }
+    return v;
   }
 
   std::vector<double> Numbers(const YAML::Node& n, const std::string& what, size_t count) const {
@@ -61,8 +137,27 @@ class Parser {
       Fail(n, what + " must be a list of " + std::to_string(count) + " numbers");
     }
     std::vector<double> out;
-    for (const auto& v : n) out.push_back(Number(v, what));
+    for (const auto& v : n) out.push_back(Number(v, what, kFinite));
     return out;
+  }
+
+  // `value` checked as the MJCF attribute `attribute` of grammar context `element` (count, type,
+  // range, keyword), so a bad scene option is reported at its YAML line.
+  void CheckAttribute(const YAML::Node& at, const std::string& element,
+                      const std::string& attribute, const std::string& value,
+                      const std::string& what) const {
+    const document::ElementSpec* spec = document::Grammar::Get().Find(element);
+    const document::AttributeSpec* a = spec ? spec->FindAttribute(attribute) : nullptr;
+    if (!a) {
+      std::string list;
+      if (spec) {
+        for (const auto& x : spec->attributes) list += (list.empty() ? "" : ", ") + x.name;
+      }
+      Fail(at,
+           "unknown " + what + " '" + attribute + "' (MJCF <" + element + "> has: " + list + ")");
+    }
+    const std::string problem = document::CheckValue(*a, value);
+    if (!problem.empty()) Fail(at, what + " " + attribute + ": " + problem);
   }
 
   bool Bool(const YAML::Node& n, const std::string& what) const {
@@ -78,16 +173,19 @@ class Parser {
   std::map<std::string, std::string> Options(const YAML::Node& n, const std::string& where) const {
     if (!n.IsMap()) Fail(n, where + " must be a mapping of MJCF <option> attributes");
     std::map<std::string, std::string> out;
-    for (const auto& kv : n) {
-      const std::string key = kv.first.as<std::string>();
+    for (const auto& [key, value] : Entries(n, where)) {
       if (key == "flag") {
-        if (!kv.second.IsMap()) Fail(kv.second, where + ".flag must be a mapping");
-        for (const auto& f : kv.second) {
-          out["flag." + f.first.as<std::string>()] = Scalar(f.second, where + ".flag");
+        if (!value.IsMap()) Fail(value, where + ".flag must be a mapping");
+        for (const auto& [flag, v] : Entries(value, where + ".flag")) {
+          const std::string text = Scalar(v, where + ".flag." + flag);
+          CheckAttribute(v, "option.flag", flag, text, where + ".flag");
+          out["flag." + flag] = text;
         }
         continue;
       }
-      out[key] = Scalar(kv.second, where + "." + key);
+      const std::string text = Scalar(value, where + "." + key);
+      CheckAttribute(value, "option", key, text, where);
+      out[key] = text;
     }
     return out;
   }
@@ -110,12 +208,19 @@ class Parser {
     Fail(n, "control_source must be 'network' or 'ui', not '" + s + "'");
   }
 
+  // kp, kv: >= 0 and finite; torque_limit: >= 0 (.inf for no limit).
   PdGains Gains(const YAML::Node& n, const std::string& where) const {
     CheckKeys(n, where, {"kp", "kv", "torque_limit"});
+    return GainFields(n, where);
+  }
+
+  PdGains GainFields(const YAML::Node& n, const std::string& where) const {
     PdGains g;
-    if (n["kp"]) g.kp = Number(n["kp"], where + ".kp");
-    if (n["kv"]) g.kv = Number(n["kv"], where + ".kv");
-    if (n["torque_limit"]) g.torque_limit = Number(n["torque_limit"], where + ".torque_limit");
+    if (n["kp"]) g.kp = Number(n["kp"], where + ".kp", kNonNegativeFinite);
+    if (n["kv"]) g.kv = Number(n["kv"], where + ".kv", kNonNegativeFinite);
+    if (n["torque_limit"]) {
+      g.torque_limit = Number(n["torque_limit"], where + ".torque_limit", kNonNegative);
+    }
     return g;
   }
 
@@ -130,13 +235,11 @@ class Parser {
                  "start_delay"});
       if (!n["type"]) Fail(n, "controller needs a type (pd, passthrough, keyframe)");
       c.type = String(n["type"], "controller.type");
-      if (n["kp"]) c.defaults.kp = Number(n["kp"], "controller.kp");
-      if (n["kv"]) c.defaults.kv = Number(n["kv"], "controller.kv");
-      if (n["torque_limit"]) c.defaults.torque_limit = Number(n["torque_limit"], "torque_limit");
+      c.defaults = GainFields(n, "controller");
       if (const auto g = n["gains"]) {
         if (!g.IsMap()) Fail(g, "controller.gains must map joint names to gains");
-        for (const auto& kv : g) {
-          c.gains[kv.first.as<std::string>()] = Gains(kv.second, "controller.gains");
+        for (const auto& [joint, gains] : Entries(g, "controller.gains")) {
+          c.gains[joint] = Gains(gains, "controller.gains." + joint);
         }
       }
       if (const auto s = n["sequence"]) {
@@ -146,15 +249,16 @@ class Parser {
           KeyframeStep k;
           if (!step["keyframe"]) Fail(step, "a sequence entry needs a keyframe");
           k.keyframe = String(step["keyframe"], "keyframe");
-          if (step["hold"]) k.hold = Number(step["hold"], "hold");
-          if (step["blend"]) k.blend = Number(step["blend"], "blend");
-          if (k.hold < 0 || k.blend < 0) Fail(step, "hold and blend must be >= 0");
+          if (step["hold"]) k.hold = Number(step["hold"], "hold", kNonNegativeFinite);
+          if (step["blend"]) k.blend = Number(step["blend"], "blend", kNonNegativeFinite);
           c.sequence.push_back(k);
         }
       }
       if (n["loop"]) c.loop = Bool(n["loop"], "controller.loop");
       if (n["autoplay"]) c.autoplay = Bool(n["autoplay"], "controller.autoplay");
-      if (n["start_delay"]) c.start_delay = Number(n["start_delay"], "controller.start_delay");
+      if (n["start_delay"]) {
+        c.start_delay = Number(n["start_delay"], "controller.start_delay", kNonNegativeFinite);
+      }
     }
     if (c.type != "none" && c.type != "pd" && c.type != "passthrough" && c.type != "keyframe") {
       throw InputError(c.where, "controller type must be none, pd, passthrough or keyframe, not '" +
@@ -178,10 +282,12 @@ class Parser {
       Fail(n["name"], "articulation name '" + a.name + "' must be non-empty without spaces or /");
     }
     if (!n["mjcf"]) Fail(n, a.name + ": an articulation needs an mjcf file");
+    // Relative to the scene file's folder as written (a symlinked folder is not resolved first,
+    // so "../models" means the folder next to the link, as users expect).
     fs::path p(String(n["mjcf"], "mjcf"));
     if (p.is_relative()) p = fs::path(path_).parent_path() / p;
     a.mjcf = fs::absolute(p).lexically_normal().string();
-    if (!fs::exists(a.mjcf)) Fail(n["mjcf"], a.name + ": mjcf file '" + a.mjcf + "' not found");
+    CheckInputFile(a.mjcf, a.name + ": mjcf file", At(n["mjcf"]));
     if (n["pos"]) {
       auto v = Numbers(n["pos"], "pos", 3);
       a.pos = {v[0], v[1], v[2]};
@@ -189,6 +295,8 @@ class Parser {
     int orientations = 0;
     if (n["quat"]) {
       auto v = Numbers(n["quat"], "quat", 4);
+      if (v[0] == 0 && v[1] == 0 && v[2] == 0 && v[3] == 0)
+        Fail(n["quat"], "quat must not be zero");
       a.quat = document::QuatNormalize({v[0], v[1], v[2], v[3]});
       ++orientations;
     }
@@ -220,6 +328,17 @@ class Parser {
     SceneConfig s;
     s.path = path_;
     if (!root || root.IsNull()) throw InputError({path_, 0}, "the scene file is empty");
+    if (root.IsMap()) {
+      for (const auto& kv : root) {
+        if (!kv.first.IsScalar()) continue;  // reported by CheckKeys
+        for (const auto& [key, feature] : kNotYetSupported) {
+          if (kv.first.Scalar() == key) {
+            Fail(kv.first, "'" + std::string(key) + ":' is not supported yet: URLab has no " +
+                               feature + " in scenes so far; remove the section");
+          }
+        }
+      }
+    }
     CheckKeys(root, "the scene",
               {"articulations", "options", "size", "control_source", "network", "save_debug_xml"});
     const YAML::Node arts = root["articulations"];
@@ -236,9 +355,11 @@ class Parser {
     if (root["options"]) s.options = Options(root["options"], "options");
     if (const auto n = root["size"]) {
       CheckKeys(n, "size", {"njmax", "nconmax", "nstack", "nuserdata"});
-      for (const auto& kv : n) {
-        s.size[kv.first.as<std::string>()] =
-            std::to_string(static_cast<long long>(Number(kv.second, "size")));
+      for (const auto& [key, value] : Entries(n, "size")) {
+        if (!value.IsScalar()) Fail(value, "size." + key + " must be an integer");
+        // The grammar's check: an integer within int, -1 ("as needed") or more.
+        CheckAttribute(value, "size", key, value.Scalar(), "size");
+        s.size[key] = value.Scalar();
       }
     }
     if (root["control_source"]) s.control_source = Source(root["control_source"]);
@@ -295,15 +416,38 @@ SceneConfig ParseScene(const std::string& yaml, const std::string& path) {
   } catch (const YAML::ParserException& e) {
     throw InputError({path, e.mark.line + 1}, "malformed YAML: " + e.msg);
   }
-  return Parser(path).Scene(root);
+  try {
+    return Parser(path).Scene(root);
+  } catch (const YAML::Exception& e) {
+    // A conversion the parser did not foresee: still located.
+    throw InputError({path, e.mark.is_null() ? 0 : e.mark.line + 1}, "scene: " + e.msg);
+  }
 }
 
 SceneConfig LoadSceneFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError({path, 0}, "scene file not found");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ParseScene(ss.str(), fs::absolute(path).lexically_normal().string());
+  // Made absolute without resolving symlinks: relative paths inside resolve from the folder the
+  // user named (a symlinked scene folder behaves as the folder it appears to be).
+  const std::string shown = fs::absolute(path).lexically_normal().string();
+  return ParseScene(ReadInputFile(shown, "scene file"), shown);
+}
+
+SceneConfig LoadSceneOrModel(const std::string& path) {
+  if (IsSceneFile(path)) return LoadSceneFile(path);
+  const std::string shown = fs::absolute(path).lexically_normal().string();
+  CheckInputFile(shown, "model file");
+  std::string name = fs::path(path).stem().string();
+  for (char& c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  }
+  if (name.empty()) name = "model";
+  SceneConfig scene;
+  scene.path = shown;
+  ArticulationConfig a;
+  a.name = name;
+  a.mjcf = scene.path;
+  a.where = {scene.path, 0};
+  scene.articulations.push_back(std::move(a));
+  return scene;
 }
 
 bool IsSceneFile(const std::string& path) {

@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "urlab/world/controller_factory.h"
+#include "urlab/world/scene_checks.h"
 
 namespace urlab::world {
 
@@ -27,23 +28,9 @@ Session::~Session() {
 }
 
 void Session::Build(const SceneConfig& scene) {
-  // Articulation names where one prefix starts another would make prefix binding ambiguous
-  // ("arm_" would also own "arm_left_..."): refuse them with the place to fix.
-  for (const ArticulationConfig& a : scene.articulations) {
-    for (const ArticulationConfig& b : scene.articulations) {
-      if (&a != &b && (b.name + "_").starts_with(a.name + "_")) {
-        throw InputError(b.where, "articulation names '" + a.name + "' and '" + b.name +
-                                      "' overlap (prefix '" + a.name + "_' would also own '" +
-                                      b.name + "_' elements); rename one");
-      }
-    }
-    if (a.hold_keyframe && a.keyframe.empty()) {
-      throw InputError(a.where, a.name + ": hold_keyframe needs an initial 'keyframe'");
-    }
-  }
-
   config_ = scene;
-  compiled_ = BuildScene(scene);
+  // Composes and compiles, then every check `urlab validate` runs (world/scene_checks.h).
+  compiled_ = BuildCheckedScene(scene);
   for (const auto& d : compiled_.diagnostics) spdlog::warn("{}: {}", d.where.str(), d.message);
 
   physics::PhysicsEngine::Options eo;

@@ -49,12 +49,20 @@ TEST(CliTest, CompileSavesLoadableXmlAndMjb) {
   const std::string dir = testing::MakeTempDir("cli_save");
   const std::string xml = dir + "/sub/scene_compiled.xml";
   const std::string mjb = dir + "/scene_compiled.mjb";
-  fs::create_directories(dir + "/sub");
+  // A model with a file asset next to it (named explicitly: implicitly named file assets are
+  // prefixed twice by composition until the composer's fix, issue 7 section 1).
+  fs::create_directories(dir + "/assets");
+  fs::copy_file("/usr/share/mujoco/model/mug/mug.obj", dir + "/assets/mug.obj");
+  const std::string model = testing::WriteTextFile(dir, "mug.xml", R"(<mujoco>
+  <asset><mesh name="mug" file="assets/mug.obj"/></asset>
+  <worldbody><body pos="0 0 1"><freejoint/><geom type="mesh" mesh="mug"/></body></worldbody>
+</mujoco>
+)");
   std::string out;
-  ASSERT_EQ(RunCommand(UrlabBinary() + " compile /usr/share/mujoco/model/mug/mug.xml --save-xml " +
-                           xml + " --save-mjb " + mjb,
-                       &out),
-            0)
+  ASSERT_EQ(
+      RunCommand(UrlabBinary() + " compile " + model + " --save-xml " + xml + " --save-mjb " + mjb,
+                 &out),
+      0)
       << out;
   ASSERT_TRUE(fs::exists(xml));
   ASSERT_TRUE(fs::exists(mjb));

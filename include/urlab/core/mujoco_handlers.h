@@ -11,8 +11,14 @@ namespace urlab {
 // Installs the throwing error handler and the logging warning handler. Thread: main, at start-up.
 void InstallMujocoHandlers();
 
-// Routes a MuJoCo warning through URLab's handler: logged and captured. Any thread.
+// Routes a MuJoCo warning through URLab's handler: logged and captured. Any thread. Repeats of
+// one kind of warning (the same text up to its numbers) are logged at most once a second, with
+// the count of those not shown; every WarningCapture still receives each one.
 void ReportMujocoWarning(const std::string& text);
+
+// Logs the counts of warnings not shown since their kind was last logged (at the end of a run).
+// Any thread.
+void FlushMujocoWarningCounts();
 
 // Collects every MuJoCo warning reported while it is alive (from any thread). Captures nest:
 // each live capture sees every warning. Used by the test fixture to fail on unexpected warnings.

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "urlab/core/diagnostics.h"
 #include "urlab/document/element.h"
 
 namespace urlab::document {
@@ -18,13 +19,9 @@ struct CompilerSettings {
   bool autolimits = false;  // 2.2.2 default
 };
 
-// A non-fatal finding of the reader or a later pass (unknown attribute kept, etc.).
-struct Diagnostic {
-  enum class Severity { kNote, kWarning };
-  Severity severity = Severity::kWarning;
-  SourceLocation where;
-  std::string message;
-};
+// A non-fatal finding of the reader or a later pass (unknown attribute kept, etc.): the core
+// diagnostic type (urlab/core/diagnostics.h), so findings move into a Diagnostics sink as they are.
+using Diagnostic = urlab::Diagnostic;
 
 class Document {
  public:

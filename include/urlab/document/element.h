@@ -58,9 +58,13 @@ class Element {
   // The element's name (`name`, or `class` for a default), "" when unnamed.
   std::string Name() const;
 
-  // Typed reads; nullopt when unset; InputError (with location) when the text does not parse.
+  // Typed reads; nullopt when unset; InputError (with the element's file:line) when the text
+  // does not parse or, for an attribute of the grammar, has a value count or type the grammar
+  // refuses (so callers may index up to the grammar's count). GetInt refuses fractions and
+  // values outside int; the second GetReals also requires exactly `count` values.
   std::optional<double> GetReal(std::string_view name) const;
   std::optional<std::vector<double>> GetReals(std::string_view name) const;
+  std::optional<std::vector<double>> GetReals(std::string_view name, size_t count) const;
   std::optional<int> GetInt(std::string_view name) const;
 
   // Writes set the attribute (appending it when new) and mark the element edited. Set() checks
@@ -144,7 +148,8 @@ std::string FormatReal(double v);
 std::string FormatReals(std::span<const double> v);
 // Parses whitespace-separated reals; nullopt when any token is not a number.
 std::optional<std::vector<double>> ParseReals(std::string_view text);
-// Checks `value` against `spec`; returns an error message, or "" when valid.
+// Checks `value` against `spec` (number syntax, no NaN, int range, value count from the grammar,
+// keyword set); returns an error message, or "" when valid.
 std::string CheckValue(const AttributeSpec& spec, std::string_view value);
 
 }  // namespace urlab::document

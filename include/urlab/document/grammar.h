@@ -27,6 +27,7 @@
 //
 // Thread: immutable after first use; any thread may read.
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <string_view>
@@ -86,6 +87,15 @@ struct AttributeSpec {
   std::vector<std::string> keywords;
   bool dialect = false;                       // MuJoCo 3.x only: the bridge must translate it
   std::vector<std::string> dialect_keywords;  // 3.x-only values of a 2.2.2 attribute
+  // Allowed values of a number attribute (every value), from the range table; unbounded unless
+  // a row names the attribute.
+  double min_value = -std::numeric_limits<double>::infinity();
+  double max_value = std::numeric_limits<double>::infinity();
+  bool min_exclusive = false;
+  bool HasRange() const {
+    return min_value != -std::numeric_limits<double>::infinity() ||
+           max_value != std::numeric_limits<double>::infinity();
+  }
 
   bool IsReference() const { return ref != Namespace::kNone || !ref_selector.empty(); }
 };
@@ -101,6 +111,17 @@ struct ElementSpec {
   // nullptr when the element has no such attribute / child.
   const AttributeSpec* FindAttribute(std::string_view name) const;
   const ElementSpec* FindChild(std::string_view tag) const;
+};
+
+// A range row: the values a number attribute of an element context may take (every value of
+// the attribute). Rows are few and deliberate: they refuse input that MuJoCo 2.2.2 accepts but
+// that cannot run (a timestep <= 0) or sizes that cannot be allocated.
+struct RangeRow {
+  const char* id;         // element context ("option", "size")
+  const char* attribute;  // attribute name
+  double min;
+  bool min_exclusive;
+  double max;
 };
 
 // Raw table row, see the file comment. Defined in grammar_table.cc.
@@ -122,8 +143,10 @@ class Grammar {
   const ElementSpec* Find(std::string_view id) const;
   std::span<const ElementSpec> Elements() const { return elements_; }
 
-  // Parses `rows`, then `dialect_rows` (used by Get() and by tests of the mini-language).
-  explicit Grammar(std::span<const GrammarRow> rows, std::span<const GrammarRow> dialect_rows = {});
+  // Parses `rows`, then `dialect_rows`, then applies `ranges` (used by Get() and by tests of the
+  // mini-language).
+  explicit Grammar(std::span<const GrammarRow> rows, std::span<const GrammarRow> dialect_rows = {},
+                   std::span<const RangeRow> ranges = {});
 
  private:
   std::vector<ElementSpec> elements_;
@@ -133,5 +156,7 @@ class Grammar {
 std::span<const GrammarRow> GrammarTable();
 // MuJoCo 3.x additions the dialect bridge handles (src/document/grammar_dialect_table.cc).
 std::span<const GrammarRow> DialectGrammarTable();
+// Value ranges of number attributes (src/document/grammar_table.cc).
+std::span<const RangeRow> ValueRangeTable();
 
 }  // namespace urlab::document

@@ -33,8 +33,9 @@ std::optional<size_t> CompileMessageLine(const std::string& message);
 std::string ExplainCompileMessage(const std::string& message, const LineMap& line_map);
 
 // Writes `doc` to `path` with asset paths relative to the file's folder (so the folder can be
-// moved with its assets' relative layout) or absolute when `absolute_paths`. Throws Error on
-// I/O failure.
+// moved with its assets' relative layout) or absolute when `absolute_paths`. Missing folders are
+// created and the file is written atomically (urlab::WriteFileAtomic): an existing file is
+// replaced whole or not at all. Throws Error on I/O failure.
 void WriteFile(const document::Document& doc, const std::string& path, bool absolute_paths = false);
 
 }  // namespace urlab::mjcf

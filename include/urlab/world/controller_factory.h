@@ -6,6 +6,7 @@
 
 #include "urlab/control/articulation_control.h"
 #include "urlab/control/controllers.h"
+#include "urlab/core/diagnostics.h"
 #include "urlab/world/scene_file.h"
 
 namespace urlab::world {
@@ -13,10 +14,17 @@ namespace urlab::world {
 // control::PdGains with the fields `config` sets replacing those of `base`.
 control::PdGains MergeGains(const control::PdGains& base, const PdGains& config);
 
+// Every problem of `config.controller` against model `m` for the articulation with `prefix`:
+// per-joint gains naming no actuated joint or actuator of the articulation (matched exactly as
+// InstallController matches them), gains on a controller without gains, keyframe steps naming
+// no keyframe of the articulation. Each is an error at the controller's file:line.
+void CheckController(const ArticulationConfig& config, const mjModel* m, const std::string& prefix,
+                     Diagnostics& sink);
+
 // Installs on `control` (bound to model `m`, articulation prefix control.prefix()) the controller
 // `config.controller` describes. Per-joint gains are keyed by joint or actuator short name;
-// keyframe steps name keyframes of the articulation's MJCF. Throws InputError at the
-// controller's file:line for an unknown joint, actuator or keyframe.
+// keyframe steps name keyframes of the articulation's MJCF. Throws the first error of
+// CheckController (InputError at the controller's file:line).
 void InstallController(const ArticulationConfig& config, control::ArticulationControl& control,
                        const mjModel* m);
 

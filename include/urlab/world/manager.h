@@ -99,8 +99,4 @@ class Manager {
   static std::atomic<Manager*> playing_;
 };
 
-// A scene file (.yaml/.yml) or, for convenience, one MJCF file as a scene of one articulation
-// named after the file stem. Throws InputError for a bad file.
-SceneConfig LoadSceneOrModel(const std::string& path);
-
 }  // namespace urlab::world

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "urlab/core/diagnostics.h"
 #include "urlab/document/document.h"
 #include "urlab/mjcf/compose.h"
 #include "urlab/physics/model.h"
@@ -29,20 +30,31 @@ struct CompiledScene {
 // and file:line of the problem.
 CompiledScene BuildScene(const SceneConfig& scene);
 
-// A single MJCF file as a scene of one articulation without a prefix (what `urlab compile FILE`
-// does for an .xml): read, export, compile.
+// A single MJCF file compiled on its own, without a prefix: read, bridge, export, compile. Not a
+// check (LoadSceneOrModel + BuildScene is the path every command checks and runs); `urlab compile
+// FILE.xml --save-xml/--save-mjb` exports this so the saved names are the user's own.
 CompiledScene BuildModel(const std::string& mjcf_path);
 
 // Every problem found in a scene or MJCF file, without stopping at the first (for
-// `urlab validate`): reader errors, duplicate names, dangling references, missing files,
-// diagnostics, and the compile error if the rest was clean.
+// `urlab validate`): the scene file, per MJCF file the reader's checks, duplicate names, missing
+// files, bridge refusals and dangling references, then the scene checks begin-play runs
+// (world/scene_checks.h) and, when all that was clean, composition and compilation exactly as
+// `urlab run` does them (a single MJCF file is a scene of one articulation). Starts nothing and
+// writes no file (a scene's save_debug_xml is ignored).
 struct ValidationReport {
-  std::vector<std::string> errors;
-  std::vector<std::string> warnings;
+  Diagnostics diagnostics;          // errors and warnings, each with file:line
   std::vector<std::string> sizes;   // "nq 28" ... when it compiled
   std::vector<std::string> bridge;  // dialect bridge changes, when asked for
+  bool ok() const { return !diagnostics.has_errors(); }
 };
 // With `bridge_report`, lists every change the MuJoCo 3.x dialect bridge makes (file and line).
 ValidationReport Validate(const std::string& path, bool bridge_report = false);
+
+// Every file a scene reads: the scene file, each articulation's MJCF, its includes and asset
+// files (outputs must never overwrite one of them).
+std::vector<std::string> SceneInputFiles(const SceneConfig& scene);
+
+// A compiled model as MuJoCo binary (.mjb) bytes, e.g. for WriteFileAtomic.
+std::string MjbBytes(const mjModel* m);
 
 }  // namespace urlab::world

@@ -1,8 +1,11 @@
 #pragma once
 // The scene file (the "level"): YAML listing articulations with their MJCF, world transform,
 // options, control source, controller and initial keyframe, plus scene-wide option overrides,
-// network endpoints and the debug-XML switch. Unknown keys and wrong types are InputErrors with
-// file and line. Thread: any (pure parsing).
+// network endpoints and the debug-XML switch. Unknown keys, duplicate keys, keys that are not
+// strings, wrong types and numbers out of range (gains, torque limits, hold/blend times, options
+// checked against the MJCF grammar, size fields) are InputErrors with file and line; sections of
+// features that do not exist yet (props, terrain, cameras, recording...) are refused as "not
+// supported yet". Thread: any (pure parsing).
 #include <array>
 #include <map>
 #include <optional>
@@ -79,6 +82,13 @@ struct SceneConfig {
 SceneConfig LoadSceneFile(const std::string& path);
 // Parses scene YAML held in memory; `path` names it in messages and anchors relative paths.
 SceneConfig ParseScene(const std::string& yaml, const std::string& path);
+
+// The scene every command builds from a path: a scene file (.yaml/.yml), or one MJCF file as a
+// scene of one articulation named after the file stem (non-alphanumerics become '_'), composed
+// with its prefix exactly like an articulation of a scene, so a file that validates is a file
+// that runs. Paths are made absolute without resolving symlinks. Throws InputError for a bad or
+// missing file, a FIFO or device, or a file larger than kMaxTextInputBytes.
+SceneConfig LoadSceneOrModel(const std::string& path);
 
 // True when `path` looks like a scene file (.yaml / .yml).
 bool IsSceneFile(const std::string& path);

@@ -1,0 +1,158 @@
+// Scene files refuse bad input at its file:line: duplicate and non-string keys, numbers out of
+// range, sections of features that do not exist yet, files that are not regular files; relative
+// paths in a symlinked scene folder resolve from the folder the user named.
+#include "urlab/world/scene_file.h"
+
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "mujoco_test.h"
+
+namespace urlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+class SceneFileTest : public testing::MujocoTest {
+ protected:
+  void SetUp() override { dir_ = testing::MakeTempDir("scene_file"); }
+  std::string dir_;
+};
+
+const std::string kArm = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
+
+// "articulations:\n  - name: a\n    mjcf: ARM\n" followed by `extra` (from line 4 on).
+std::string WithArm(const std::string& extra) {
+  return "articulations:\n  - name: a\n    mjcf: " + kArm + "\n" + extra;
+}
+
+TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
+  struct Case {
+    std::string yaml;
+    int line;
+    const char* message;
+  };
+  const Case cases[] = {
+      // duplicate keys (yaml-cpp would keep the first silently)
+      {WithArm("    pos: [0, 0, 1]\n    pos: [0, 0, 2]\n"), 5, "duplicate key 'pos'"},
+      {WithArm("options: {timestep: 0.002, timestep: 0.001}\n"), 4, "duplicate key 'timestep'"},
+      {WithArm("    controller:\n      type: pd\n      gains:\n        shoulder: {kp: 1}\n"
+               "        shoulder: {kp: 2}\n"),
+       8, "duplicate key 'shoulder' in controller.gains (first at line 7)"},
+      // keys that are not strings
+      {WithArm("[1, 2]: x\n"), 4, "keys in the scene must be names"},
+      {WithArm("    ~: 3\n"), 4, "must be names"},
+      {WithArm("options: {? {a: 1} : 2}\n"), 4, "must be names"},
+      // numbers out of range
+      {WithArm("    controller: {type: pd, kp: .nan}\n"), 4, "controller.kp must be >= 0"},
+      {WithArm("    controller: {type: pd, kv: -1}\n"), 4, "controller.kv must be >= 0"},
+      {WithArm("    controller: {type: pd, torque_limit: -5}\n"), 4, "torque_limit must be >= 0"},
+      {WithArm("    controller: {type: pd, torque_limit: .nan}\n"), 4, "torque_limit must be"},
+      {WithArm("    controller: {type: pd, kp: .inf}\n"), 4, "and finite"},
+      {WithArm("    controller: {type: pd, gains: {elbow: {kp: -3}}}\n"), 4, "gains.elbow.kp"},
+      {WithArm("    controller:\n      type: keyframe\n      sequence:\n"
+               "        - {keyframe: raised, blend: -1}\n"),
+       7, "blend must be >= 0"},
+      {WithArm("    pos: [0, .nan, 0]\n"), 4, "pos must be"},
+      {WithArm("    quat: [0, 0, 0, 0]\n"), 4, "quat must not be zero"},
+      {WithArm("options: {timestep: 0}\n"), 4, "timestep: 0 is out of range (expected > 0"},
+      {WithArm("options:\n  timestep: -0.001\n"), 5, "out of range"},
+      {WithArm("options: {timestep: inf}\n"), 4, "out of range"},
+      {WithArm("options: {timestep: .inf}\n"), 4, "not a list of numbers"},
+      {WithArm("options: {timestep: .nan}\n"), 4, "not a list of numbers"},
+      {WithArm("options: {timestepp: 0.001}\n"), 4, "unknown options 'timestepp'"},
+      {WithArm("options: {flag: {gravity: off}}\n"), 4, "invalid keyword 'off'"},
+      {WithArm("size: {nstack: 1e30}\n"), 4, "nstack"},
+      {WithArm("size: {nstack: 99999999999}\n"), 4, "out of the range of an int"},
+      {WithArm("size: {njmax: -2}\n"), 4, "out of range"},
+      {WithArm("size: {nconmax: 1.5}\n"), 4, "integers"},
+      {WithArm("size: {nstack: [1, 2]}\n"), 4, "must be an integer"},
+      // features that do not exist yet
+      {WithArm("props:\n  - {mesh: box.obj}\n"), 4, "'props:' is not supported yet"},
+      {WithArm("terrain: {file: h.png}\n"), 4, "'terrain:' is not supported yet"},
+      {WithArm("cameras: []\n"), 4, "'cameras:' is not supported yet"},
+      {WithArm("recording: {file: r.bin}\n"), 4, "'recording:' is not supported yet"},
+  };
+  for (const Case& c : cases) {
+    try {
+      world::ParseScene(c.yaml, dir_ + "/s.yaml");
+      ADD_FAILURE() << "accepted:\n" << c.yaml;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where().file, dir_ + "/s.yaml") << c.yaml;
+      EXPECT_EQ(e.where().line, c.line) << c.yaml << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST_F(SceneFileTest, GoodValuesStillPass) {
+  const world::SceneConfig s =
+      world::ParseScene(WithArm("    controller: {type: pd, kp: 0, kv: 0, torque_limit: .inf}\n"
+                                "options: {timestep: 0.001, flag: {gravity: disable}}\n"
+                                "size: {nstack: 5000000, njmax: -1}\n"
+                                "network: {enabled: false}\n"),
+                        dir_ + "/s.yaml");
+  EXPECT_EQ(s.size.at("nstack"), "5000000");
+  EXPECT_EQ(s.options.at("timestep"), "0.001");
+  EXPECT_EQ(s.options.at("flag.gravity"), "disable");
+  EXPECT_FALSE(s.network.enabled);  // network: is parsed and used: not refused
+}
+
+TEST_F(SceneFileTest, ScenePathsMustBeRegularFiles) {
+  const std::string fifo = dir_ + "/pipe.yaml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  try {
+    world::LoadSceneFile(fifo);
+    FAIL() << "a FIFO was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("FIFO"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(world::LoadSceneOrModel("/dev/zero"), InputError);
+  EXPECT_THROW(world::LoadSceneOrModel(dir_), InputError);
+  // An articulation's mjcf that is a device: located at the scene's mjcf line.
+  try {
+    world::ParseScene("articulations:\n  - name: a\n    mjcf: /dev/zero\n", dir_ + "/s.yaml");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where().line, 3) << e.what();
+    EXPECT_NE(std::string(e.what()).find("a device"), std::string::npos) << e.what();
+  }
+  // Absurdly large scene files are refused from their size.
+  const std::string big = dir_ + "/big.yaml";
+  std::ofstream(big) << "articulations: []\n";
+  fs::resize_file(big, (64u << 20) + 1);
+  try {
+    world::LoadSceneFile(big);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("larger than"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(SceneFileTest, SymlinkedSceneFolderResolvesFromTheLinksFolder) {
+  // project/models/arm.xml and project/scenes -> elsewhere/scenes (a symlinked folder): the
+  // scene's "../models/arm.xml" means project/models, the folder next to the link.
+  const std::string project = dir_ + "/project";
+  const std::string elsewhere = dir_ + "/elsewhere";
+  fs::create_directories(project + "/models");
+  fs::create_directories(elsewhere + "/scenes");
+  fs::copy_file(kArm, project + "/models/arm.xml");
+  testing::WriteTextFile(elsewhere, "scenes/s.yaml",
+                         "articulations:\n  - {name: a, mjcf: ../models/arm.xml}\n");
+  fs::create_directory_symlink(elsewhere + "/scenes", project + "/scenes");
+  const world::SceneConfig s = world::LoadSceneFile(project + "/scenes/s.yaml");
+  EXPECT_EQ(s.articulations.at(0).mjcf, project + "/models/arm.xml");
+  EXPECT_EQ(s.path, project + "/scenes/s.yaml");
+}
+
+TEST_F(SceneFileTest, ASingleMjcfFileIsASceneOfOneArticulation) {
+  const world::SceneConfig s = world::LoadSceneOrModel(kArm);
+  ASSERT_EQ(s.articulations.size(), 1u);
+  EXPECT_EQ(s.articulations[0].name, "pendulum_arm");
+  EXPECT_EQ(s.articulations[0].mjcf, kArm);
+}
+
+}  // namespace
+}  // namespace urlab
