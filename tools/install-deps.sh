@@ -11,7 +11,7 @@ PACKAGES=(
   libeigen3-dev libzmq3-dev cppzmq-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
-  python3 python3-zmq python3-numpy
+  python3 python3-zmq python3-msgpack python3-numpy
 )
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq

@@ -15,7 +15,7 @@ import time
 
 URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
-from urlab_client import StreamClient  # noqa: E402
+from urlab_client import StreamClient, UrlabEnv, UrlabError  # noqa: E402
 
 
 def fail(message, proc=None):
@@ -75,6 +75,26 @@ articulations:
             assert abs(sensors["shoulder_pos"][0] - q) < 0.05, sensors
             assert len(sensors["tip_pos"]) == 3, sensors
             print(f"shoulder reached {q:.3f}, elbow {e:.3f}; sensors {sorted(sensors)}")
+        # Lockstep through the step server: exact step counts, the PD target reached.
+        env = UrlabEnv("arm", endpoint=endpoints[3], frame_skip=5)
+        obs = env.reset()
+        assert set(obs) >= {"qpos", "qvel", "ctrl", "act", "sensors"}, obs.keys()
+        step0 = None
+        for i in range(300):
+            obs, info = env.step([-0.4, 0.6])
+            if step0 is None:
+                step0 = info["step"]
+            elif info["step"] != step0 + 5 * i:
+                fail(f"lockstep step {i}: step {info['step']}, expected {step0 + 5 * i}", proc)
+        if abs(obs["qpos"][0] + 0.4) > 0.05 or abs(obs["qpos"][1] - 0.6) > 0.05:
+            fail(f"lockstep PD targets not reached: {obs['qpos']}", proc)
+        try:
+            env.client.step(controls={"arm": [1.0]})  # one value for two actuators
+            fail("dim_mismatch not reported", proc)
+        except UrlabError as e:
+            assert e.code == "dim_mismatch", e
+        env.close()
+        print(f"lockstep: 300 requests of 5 steps, qpos {obs['qpos']}")
     finally:
         proc.send_signal(signal.SIGINT)
         try:

@@ -8,9 +8,17 @@ numpy arrays keyed by name, and control by actuator name or id.
     robots = client.discover()              # {"arm": Robot(...)}
     client.send_control("arm", {"shoulder_motor": 0.3})
     state = client.poll()                    # {"arm": {"joint": {...}, "sensor": {...}}}
+
+and the step server (lockstep learning loops):
+
+    from urlab_client import UrlabEnv
+    env = UrlabEnv("arm")                    # tcp://127.0.0.1:5559, direct mode
+    obs = env.reset()
+    obs, info = env.step([0.1, -0.2])
 """
+from urlab_client.step import StepClient, UrlabEnv, UrlabError
 from urlab_client.stream import Robot, StreamClient
 from urlab_client import wire
 
-__all__ = ["Robot", "StreamClient", "wire"]
+__all__ = ["Robot", "StepClient", "StreamClient", "UrlabEnv", "UrlabError", "wire"]
 __version__ = "0.1.0"

@@ -1,0 +1,155 @@
+"""The step server (protocol.md): request/reply over ZeroMQ REQ, msgpack.
+
+    from urlab_client import StepClient
+    with StepClient("tcp://127.0.0.1:5559") as sim:
+        sim.set_mode("direct")                      # lockstep: physics waits for step requests
+        obs = sim.step(n_steps=10, controls={"arm": {"shoulder_motor": 0.3}})
+        print(obs["per_articulation"]["arm"]["qpos"])
+"""
+import itertools
+
+import msgpack
+import numpy as np
+import zmq
+
+
+class UrlabError(RuntimeError):
+    """An error reply: `code` is protocol.md's error code."""
+
+    def __init__(self, code, message):
+        super().__init__(f"{code}: {message}")
+        self.code = code
+        self.message = message
+
+
+def _arrays(value):
+    """Lists of numbers become numpy arrays, recursively (packed f64 bytes too)."""
+    if isinstance(value, dict):
+        return {k: _arrays(v) for k, v in value.items()}
+    if isinstance(value, (bytes, bytearray)):
+        return np.frombuffer(value, dtype="<f8").copy()
+    if isinstance(value, list) and value and all(isinstance(x, (int, float)) for x in value):
+        return np.asarray(value, dtype=float)
+    return value
+
+
+class StepClient:
+    """One session with the step server. Observers read; the first client that steps (or sends
+    force=True) holds the driver lease until bye() or silence past the lease timeout."""
+
+    def __init__(self, endpoint="tcp://127.0.0.1:5559", observations="standard", timeout=10.0,
+                 context=None, binary_arrays=True):
+        self._ctx = context or zmq.Context.instance()
+        self._socket = self._ctx.socket(zmq.REQ)
+        self._socket.setsockopt(zmq.LINGER, 0)
+        self._socket.setsockopt(zmq.RCVTIMEO, int(timeout * 1000))
+        self._socket.connect(endpoint)
+        self._seq = itertools.count(1)
+        self.session_id = None
+        self.info = self.hello(observations=observations,
+                               arrays="binary" if binary_arrays else "list")
+
+    def close(self):
+        if self.session_id:
+            try:
+                self.call("bye")
+            except (UrlabError, zmq.ZMQError):
+                pass
+            self.session_id = None
+        self._socket.close(0)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def call(self, op, **fields):
+        """Sends one request and returns the decoded reply (raises UrlabError on an error)."""
+        request = {"op": op, "seq": next(self._seq), **fields}
+        if self.session_id and op not in ("hello", "meta"):
+            request["session_id"] = self.session_id
+        self._socket.send(msgpack.packb(request, use_bin_type=True))
+        try:
+            reply = msgpack.unpackb(self._socket.recv(), raw=False)
+        except zmq.Again:
+            raise TimeoutError(f"no reply to '{op}' from the step server") from None
+        if reply.get("op") == "error":
+            raise UrlabError(reply.get("code"), reply.get("message", ""))
+        return reply
+
+    def hello(self, **fields):
+        reply = self.call("hello", **fields)
+        self.session_id = reply["session_id"]
+        return reply
+
+    def step(self, n_steps=1, controls=None, observations=None, force=False):
+        """Runs n_steps (direct mode) with controls {articulation: [all values] or {name: v}}."""
+        fields = {"n_steps": n_steps}
+        if controls:
+            per = {}
+            for art, c in controls.items():
+                per[art] = {"ctrl_map": dict(c)} if isinstance(c, dict) else \
+                           {"ctrl": [float(x) for x in c]}
+            fields["per_articulation"] = per
+        if observations:
+            fields["observations"] = observations
+        if force:
+            fields["force"] = True
+        return _arrays(self.call("step", **fields))
+
+    def reset(self, keyframe=None, qpos=None):
+        """Resets to a keyframe (full name) or the scene's initial state; qpos {art: {joint: v}}."""
+        fields = {}
+        if keyframe:
+            fields["keyframe_name"] = keyframe
+        if qpos:
+            fields["per_articulation_qpos"] = qpos
+        return _arrays(self.call("reset", **fields))
+
+    def set_mode(self, mode):
+        return self.call("set_mode", mode=mode)
+
+    def set_paused(self, paused):
+        return self.call("set_paused", paused=paused)
+
+    def list_keyframes(self):
+        return self.call("list_keyframes")["keyframes"]
+
+    def set_qpos(self, articulation, qpos):
+        return _arrays(self.call("set_qpos", articulation=articulation,
+                                 qpos=[float(x) for x in qpos]))
+
+
+class UrlabEnv:
+    """A learning-loop environment over the step server in lockstep (direct) mode.
+
+    reset() returns the observation of one articulation; step(action) applies the action (one
+    value per actuator, in discovery order) for `frame_skip` physics steps and returns
+    (observation, info). Observations are {"qpos", "qvel", "ctrl", "sensors"...} numpy arrays.
+    """
+
+    def __init__(self, articulation, endpoint="tcp://127.0.0.1:5559", frame_skip=1,
+                 keyframe=None):
+        self.client = StepClient(endpoint)
+        self.articulation = articulation
+        self.frame_skip = frame_skip
+        self.keyframe = keyframe
+        arts = {a["name"]: a for a in self.client.info["articulations"]}
+        if articulation not in arts:
+            raise KeyError(f"no articulation '{articulation}' (have {sorted(arts)})")
+        self.actuators = [a["name"] for a in arts[articulation]["actuators"]]
+        self.client.set_mode("direct")
+
+    def reset(self):
+        return self._obs(self.client.reset(keyframe=self.keyframe))
+
+    def step(self, action):
+        reply = self.client.step(self.frame_skip, controls={self.articulation: list(action)})
+        return self._obs(reply), {"time": reply["time"], "step": reply["step"]}
+
+    def close(self):
+        self.client.close()
+
+    def _obs(self, reply):
+        return reply["per_articulation"][self.articulation]
