@@ -70,7 +70,7 @@ int Run(const RunArgs& args) {
     if (!error) error = e;
   });
   physics::PhysicsEngine& engine = manager.session().engine();
-  const double timestep = engine.model()->opt.timestep;
+  double sim_time = 0;  // summed per log period: a client may change the timestep
   if (args.paused) {
     spdlog::info("paused: send SIGUSR1 to resume (kill -USR1 {}); it toggles pause", ::getpid());
   }
@@ -113,8 +113,9 @@ int Run(const RunArgs& args) {
       const std::uint64_t steps = engine.step_count();
       const double wall = std::chrono::duration<double>(now - last_log).count();
       const double rate = static_cast<double>(steps - last_steps) / wall;
-      spdlog::info("sim {:.3f} s  rtf={:.3f}  steps/s={:.0f}{}",
-                   static_cast<double>(steps - first_steps) * timestep, rate * timestep, rate,
+      const double timestep = engine.timestep();
+      sim_time += static_cast<double>(steps - last_steps) * timestep;
+      spdlog::info("sim {:.3f} s  rtf={:.3f}  steps/s={:.0f}{}", sim_time, rate * timestep, rate,
                    engine.paused() ? "  (paused)" : "");
       last_steps = steps;
       last_log = now;
@@ -128,10 +129,11 @@ int Run(const RunArgs& args) {
   }
   const int signal = StopSignal();
   const std::uint64_t steps = engine.step_count() - first_steps;
+  sim_time += static_cast<double>(engine.step_count() - last_steps) * engine.timestep();
   manager.EndPlay();
   FlushMujocoWarningCounts();
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();
-  const double sim = static_cast<double>(steps) * timestep;
+  const double sim = sim_time;
   const std::string how = signal  ? std::string(" (stopped by signal ") + SignalName(signal) + ")"
                           : fatal ? " (stopped by a MuJoCo error)"
                                   : "";

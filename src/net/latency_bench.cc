@@ -180,7 +180,8 @@ LatencyBenchResult RunLatencyBench(world::SceneConfig scene, const LatencyBenchO
   // Distinct values inside the control range, so each one identifies its message.
   const auto value = [&](int i) { return lo + (hi - lo) * (0.25 + 0.5 * ((i % 997) / 997.0)); };
   report(Format("scene %s: articulation '%s', %d actuator(s), timestep %.4f s", scene.path.c_str(),
-                a.name().c_str(), a.control->num_actuators(), m->opt.timestep));
+                a.name().c_str(), a.control->num_actuators(),
+                manager.session().engine().timestep()));
 
   // Streaming: control topic in, state/full out.
   {

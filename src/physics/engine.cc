@@ -85,6 +85,7 @@ PhysicsEngine::PhysicsEngine(ModelPtr model, Options options)
   data_ = MakeData(model_.get());
   mj_forward(model_.get(), data_.get());
   SetSpeedPercent(options.speed_percent);
+  timestep_.store(model_->opt.timestep);
   SetTargetInterval(options.target_interval);
   as_fast_.store(options.as_fast_as_possible);
   reset_on_divergence_.store(options.reset_on_divergence);
@@ -375,7 +376,8 @@ void PhysicsEngine::SetSpeedPercent(int percent) {
 }
 
 void PhysicsEngine::SetTargetInterval(double seconds) {
-  target_interval_.store(seconds > 0 ? seconds : model_->opt.timestep, std::memory_order_relaxed);
+  follow_timestep_.store(!(seconds > 0), std::memory_order_relaxed);
+  target_interval_.store(seconds > 0 ? seconds : timestep(), std::memory_order_relaxed);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -480,6 +482,10 @@ std::uint32_t PhysicsEngine::ApplyCommandLocked(Command& command) {
           if (!(m->opt.timestep > 0) || !std::isfinite(m->opt.timestep)) {
             m->opt = saved;
             throw Error("SetOptions: timestep must be a positive finite number");
+          }
+          timestep_.store(m->opt.timestep, std::memory_order_relaxed);
+          if (follow_timestep_.load(std::memory_order_relaxed)) {
+            target_interval_.store(m->opt.timestep, std::memory_order_relaxed);  // real time
           }
           return kDiscontinuityOptions;
         } else if constexpr (std::is_same_v<T, cmd::SetPaused>) {

@@ -61,7 +61,7 @@ void Manager::BeginPlay(const SceneConfig& scene) {
   }
   const mjModel* m = session_->engine().model();
   spdlog::info("playing {} ({} articulation(s), nq={}, nu={}, timestep={} s{})", scene.path,
-               session_->articulations().size(), m->nq, m->nu, m->opt.timestep,
+               session_->articulations().size(), m->nq, m->nu, session_->engine().timestep(),
                subsystems_.empty() ? "" : fmt::format(", {} subsystem(s)", subsystems_.size()));
 }
 

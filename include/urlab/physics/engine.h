@@ -110,8 +110,12 @@ class PhysicsEngine {
   PhysicsEngine(const PhysicsEngine&) = delete;
   PhysicsEngine& operator=(const PhysicsEngine&) = delete;
 
-  // The model. Sizes and names never change; other fields only under WithLockedData. Any thread.
+  // The model. Sizes and names never change; `opt` changes on the physics thread (SetOptions
+  // commands), so while the loop runs read it under WithLockedData, or use timestep(). Any
+  // thread.
   const mjModel* model() const { return model_.get(); }
+  // The model's current timestep (follows SetOptions). Any thread.
+  double timestep() const { return timestep_.load(std::memory_order_relaxed); }
 
   // Runs `fn` with the step mutex held (blocks for at most one iteration). Any thread except from
   // inside a step callback.
@@ -188,7 +192,7 @@ class PhysicsEngine {
   int speed_percent() const { return speed_percent_.load(std::memory_order_relaxed); }
   void SetAsFastAsPossible(bool on) { as_fast_.store(on, std::memory_order_relaxed); }
   bool as_fast_as_possible() const { return as_fast_.load(std::memory_order_relaxed); }
-  // Wall seconds per step at 100 %; <= 0 selects the model timestep.
+  // Wall seconds per step at 100 %; <= 0 follows the model timestep (also when it changes).
   void SetTargetInterval(double seconds);
   double target_interval() const { return target_interval_.load(std::memory_order_relaxed); }
   void SetResetOnDivergence(bool on) { reset_on_divergence_.store(on, std::memory_order_relaxed); }
@@ -286,6 +290,8 @@ class PhysicsEngine {
   std::atomic<int> speed_percent_{100};
   std::atomic<bool> as_fast_{false};
   std::atomic<double> target_interval_{0};
+  std::atomic<double> timestep_{0};
+  std::atomic<bool> follow_timestep_{true};  // target_interval_ tracks the model timestep
   std::atomic<bool> reset_on_divergence_{false};
   bool log_events_ = true;  // see Options::log_events; set at construction
   double resync_threshold_ = 0.05;
