@@ -1,7 +1,5 @@
 #include "urlab/document/document.h"
 
-#include <filesystem>
-
 namespace urlab::document {
 
 Document::Document(std::string model_name)
@@ -61,8 +59,13 @@ std::string DefinedName(const Element& e) {
     case Namespace::kSkin:
     case Namespace::kHField:
     case Namespace::kTexture:
+      // MuJoCo 2.2.2 (and 3.x): the file name after the last slash or backslash, up to its last '.'
+      // (only `file`; a texture from six cube files has no implicit name).
       if (const std::string* f = e.Get("file")) {
-        return std::filesystem::path(*f).stem().string();
+        const size_t slash = f->find_last_of("/\\");
+        std::string base = slash == std::string::npos ? *f : f->substr(slash + 1);
+        const size_t dot = base.find_last_of('.');
+        return dot == std::string::npos ? base : base.substr(0, dot);
       }
       return n;
     default:

@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "skin_file.h"
 #include "urlab/document/orientation.h"
 
 namespace urlab::mjcf {
@@ -103,15 +104,27 @@ void NameUnnamed(Document& doc) {
   }
 }
 
+// Skins from SKN files name their bone bodies inside the binary file, where the prefix cannot
+// reach: they are written inline (the same data) so that their bones get prefixed.
+void InlineSkinFiles(Document& doc) {
+  for (auto& s : doc.root().children()) {
+    if (s->tag() != "asset") continue;
+    for (auto& a : s->children()) {
+      if (a->tag() == "skin" && a->Has("file")) internal::InlineSkinFile(*a);
+    }
+  }
+}
+
 // Prefixes every defined name and every reference in the articulation.
 void ApplyPrefix(Document& doc, const std::string& prefix) {
   doc.root().Visit([&](Element& e) {
     if (!e.spec()) return;
     const Namespace own = e.spec()->name_space;
-    // Assets named implicitly after their file get that name explicitly, prefixed.
+    // Assets named implicitly after their file get that name explicitly; the loop below
+    // prefixes it like every other name (once).
     if (own != Namespace::kNone && own != Namespace::kClass && e.Name().empty()) {
       const std::string implicit = document::DefinedName(e);
-      if (!implicit.empty()) e.Set("name", prefix + implicit);
+      if (!implicit.empty()) e.Set("name", implicit);
     }
     if (e.tag() == "composite") e.Set("prefix", prefix + e.GetOr("prefix", ""));
     std::vector<std::pair<std::string, std::string>> updates;
@@ -338,14 +351,28 @@ void CollectLayout(const Document& doc, ArticulationLayout& out) {
 }
 
 // Moves the articulation's keys into the layout, leaving placeholder keys (name and time only).
+// A <size nkey> larger than the keys written adds unnamed keys at the reference configuration,
+// as MuJoCo does (named "key{index}" in the scene).
 void ExtractKeyframes(Document& doc, const std::string& prefix, ArticulationLayout& out) {
+  int index = 0;
+  std::unordered_set<std::string> used;
   for (auto& s : doc.root().children()) {
     if (s->tag() != "keyframe") continue;
-    int index = 0;
+    for (auto& k : s->children()) {
+      if (!k->Name().empty()) used.insert(k->Name().substr(prefix.size()));
+    }
+  }
+  auto unnamed = [&](int i) {
+    std::string n = "key" + std::to_string(i);
+    for (int k = 1; used.count(n); ++k) n = "key" + std::to_string(i) + "_" + std::to_string(k);
+    used.insert(n);
+    return n;
+  };
+  for (auto& s : doc.root().children()) {
+    if (s->tag() != "keyframe") continue;
     for (auto& k : s->children()) {
       ArticulationKeyframe key;
-      key.name =
-          k->Name().empty() ? "key" + std::to_string(index) : k->Name().substr(prefix.size());
+      key.name = k->Name().empty() ? unnamed(index) : k->Name().substr(prefix.size());
       ++index;
       key.scene_name = prefix + key.name;
       key.time = k->GetReal("time").value_or(0.0);
@@ -359,6 +386,17 @@ void ExtractKeyframes(Document& doc, const std::string& prefix, ArticulationLayo
       k->Set("name", key.scene_name);
       out.keyframes.push_back(std::move(key));
     }
+  }
+  int nkey = 0;
+  for (const auto& s : doc.root().children()) {
+    if (s->tag() == "size" && s->Has("nkey")) nkey = s->GetInt("nkey").value_or(0);
+  }
+  for (; index < nkey; ++index) {
+    ArticulationKeyframe key;
+    key.name = unnamed(index);
+    key.scene_name = prefix + key.name;
+    doc.Section("keyframe").AddChild("key").Set("name", key.scene_name);
+    out.keyframes.push_back(std::move(key));
   }
 }
 
@@ -395,7 +433,8 @@ constexpr const char* kMergedSections[] = {"custom", "asset",    "worldbody", "c
 
 }  // namespace
 
-ComposeResult Compose(std::vector<ArticulationInput> inputs) {
+ComposeResult Compose(std::vector<ArticulationInput> inputs,
+                      const std::map<std::string, std::string>& overrides) {
   ComposeResult result;
   if (inputs.empty()) throw Error("a scene needs at least one articulation");
   std::unordered_set<std::string> names;
@@ -464,6 +503,7 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs) {
     }
     ConvertAngles(doc, doc.Compiler(), scene_compiler);
     NameUnnamed(doc);
+    InlineSkinFiles(doc);
     ApplyPrefix(doc, prefix);
     std::unique_ptr<Element> defaults = WrapDefaults(doc, prefix);
     ShareIdenticalAssets(doc, defaults.get(), shared_assets);
@@ -494,7 +534,7 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs) {
         auto a = options.find(k), b = scene_options.find(k);
         const std::string mine = a == options.end() ? "(default)" : a->second;
         const std::string theirs = b == scene_options.end() ? "(default)" : b->second;
-        if (mine != theirs) {
+        if (mine != theirs && !overrides.count(k)) {
           result.diagnostics.push_back(
               {Diagnostic::Severity::kWarning,
                {doc.source_path(), 0},
@@ -521,7 +561,8 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs) {
           if (!mine || mine->empty()) continue;
           double v = (*mine)[0];
           if (cur && !cur->empty()) v = additive ? v + (*cur)[0] : std::max(v, (*cur)[0]);
-          size.Set(a.name, document::FormatReal(v));
+          // <size> values are integers: 2.2.2 reads "1e+06" as 1 (an nstack of 1).
+          size.Set(a.name, std::to_string(static_cast<long long>(v)));
         }
       }
     }
@@ -541,9 +582,21 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs) {
     for (const auto& d : doc.diagnostics()) result.diagnostics.push_back(d);
     result.articulations.push_back(std::move(layout));
   }
+  for (const auto& [k, v] : overrides) scene_options[k] = v;
   for (const auto& [k, v] : scene_options) SetOptionAttribute(scene, k, v);
   return result;
 }
+
+namespace {
+
+// MuJoCo 2.2.2 normalizes the quaternions of keyframes when it compiles them; applying
+// mju_normalize4 twice reproduces its values bit for bit (checked on 200 random quaternions).
+void NormalizeLikeCompiler(mjtNum* q) {
+  mju_normalize4(q);
+  mju_normalize4(q);
+}
+
+}  // namespace
 
 void ApplyArticulationKeyframes(const std::vector<ArticulationLayout>& layouts, mjModel* m) {
   for (const ArticulationLayout& art : layouts) {
@@ -572,6 +625,7 @@ void ApplyArticulationKeyframes(const std::vector<ArticulationLayout>& layouts, 
                 document::QuatMul(art.placement.quat, {qpos[3], qpos[4], qpos[5], qpos[6]});
             for (int c = 0; c < 4; ++c) qpos[3 + c] = q[c];
           }
+          if (nq > 1) NormalizeLikeCompiler(qpos + nq - 4);
         }
         mjtNum* qvel = m->key_qvel + static_cast<size_t>(k) * m->nv + m->jnt_dofadr[j];
         if (vi + nv <= key.qvel.size()) {
@@ -612,10 +666,11 @@ void ApplyArticulationKeyframes(const std::vector<ArticulationLayout>& layouts, 
           const document::Quat q = document::QuatMul(
               art.placement.quat, {key.mocap_quat[4 * b], key.mocap_quat[4 * b + 1],
                                    key.mocap_quat[4 * b + 2], key.mocap_quat[4 * b + 3]});
+          mjtNum* mquat = m->key_mquat + static_cast<size_t>(k) * 4 * m->nmocap + 4 * mid;
           for (int c = 0; c < 4; ++c) {
-            m->key_mquat[static_cast<size_t>(k) * 4 * m->nmocap + 4 * mid + c] =
-                art.placement.IsIdentity() ? key.mocap_quat[4 * b + c] : q[c];
+            mquat[c] = art.placement.IsIdentity() ? key.mocap_quat[4 * b + c] : q[c];
           }
+          NormalizeLikeCompiler(mquat);
         }
       }
     }

@@ -124,7 +124,7 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     in.include_world = a.include_world;
     inputs.push_back(std::move(in));
   }
-  mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs));
+  mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs), scene.options);
   // Scene overrides: only the fields set, over whatever the articulations gave.
   for (const auto& [k, v] : scene.options) mjcf::SetOptionAttribute(composed.doc, k, v);
   for (const auto& [k, v] : scene.size) composed.doc.Section("size").Set(k, v);

@@ -690,17 +690,26 @@ TEST_P(DialectCorpusTest, LoadsCompilesAndSimulates) {
   }
 }
 
+// The 3.x dialect corpus and the robot-style corpus (models with their asset folders).
 std::vector<std::string> CorpusFiles() {
   std::vector<std::string> out;
-  for (const auto& e : fs::directory_iterator(URLAB_TEST_DATA_DIR "/mjcf/dialect3x")) {
-    if (e.path().extension() == ".xml") out.push_back(e.path().string());
+  for (const char* dir :
+       {URLAB_TEST_DATA_DIR "/mjcf/dialect3x", URLAB_TEST_DATA_DIR "/mjcf/robots"}) {
+    for (const auto& e : fs::recursive_directory_iterator(dir)) {
+      if (e.path().extension() == ".xml") out.push_back(e.path().string());
+    }
   }
   std::sort(out.begin(), out.end());
   return out;
 }
 
 std::string CorpusName(const ::testing::TestParamInfo<std::string>& p) {
-  return fs::path(p.param).stem().string();
+  std::string n =
+      fs::path(p.param).parent_path().filename().string() + "_" + fs::path(p.param).stem().string();
+  for (char& c : n) {
+    if (!isalnum(static_cast<unsigned char>(c))) c = '_';
+  }
+  return n;
 }
 
 INSTANTIATE_TEST_SUITE_P(Dialect3x, DialectCorpusTest, ::testing::ValuesIn(CorpusFiles()),

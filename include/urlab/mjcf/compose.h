@@ -69,10 +69,13 @@ struct ComposeResult {
   std::vector<document::Diagnostic> diagnostics;  // warnings (e.g. disagreeing timesteps)
 };
 
-// Merges `inputs` (consumed) into one scene document. Throws InputError naming the
+// Merges `inputs` (consumed) into one scene document. `scene_options` (the scene's own <option>
+// overrides, same keys as ArticulationInput::options) are applied last; articulations that
+// disagree on an option the scene sets are not warned about. Throws InputError naming the
 // articulation and element ("g1: <joint 'left_knee'> at file:line: ...") on conflicts that
 // cannot be composed.
-ComposeResult Compose(std::vector<ArticulationInput> inputs);
+ComposeResult Compose(std::vector<ArticulationInput> inputs,
+                      const std::map<std::string, std::string>& scene_options = {});
 
 // Sets one <option> attribute of `doc` ("timestep", ...; "flag.X" for <option><flag X=>),
 // creating the elements as needed.

@@ -1,0 +1,211 @@
+// Composition of file assets named implicitly by their file (how Unitree and MuJoCo Menagerie
+// models name their meshes): the composed scene must name each asset "{prefix}{file stem}" once,
+// and every reference must find it.
+#include "urlab/mjcf/compose.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "mujoco_test.h"
+#include "urlab/mjcf/reader.h"
+#include "urlab/mjcf/writer.h"
+#include "urlab/physics/model.h"
+
+namespace urlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+class ComposeTest : public testing::MujocoTest {
+ protected:
+  void SetUp() override {
+    dir_ = testing::MakeTempDir("compose");
+    // Real asset files of every kind 2.2.2 names after their file.
+    const std::string corpus = testing::TestData("mjcf/corpus/assets");
+    fs::create_directories(dir_ + "/meshes/sub");
+    fs::create_directories(dir_ + "/textures");
+    fs::copy_file(corpus + "/meshes/tetra.stl", dir_ + "/meshes/pelvis.STL");
+    fs::copy_file(corpus + "/meshes/octa.obj", dir_ + "/meshes/sub/foot.v2.obj");
+    // A file whose name holds a backslash (legal on Linux): 2.2.2 names it after the last '\'.
+    fs::copy_file(corpus + "/meshes/wedge.stl", dir_ + "/meshes/win\\knee.stl");
+    fs::copy_file(corpus + "/meshes/strip.skn", dir_ + "/meshes/strip.skn");
+    fs::copy_file(corpus + "/hfields/terrain.png", dir_ + "/meshes/terrain.png");
+    fs::copy_file(corpus + "/textures/checker.png", dir_ + "/textures/checker.png");
+    fs::copy_file(corpus + "/textures/sky.png", dir_ + "/textures/sky.png");
+  }
+
+  // Composes `xml` (written to the temporary folder) as the single articulation `name`.
+  mjcf::ComposeResult ComposeOne(const std::string& xml, const std::string& name = "r") {
+    std::vector<mjcf::ArticulationInput> in(1);
+    in[0].name = name;
+    in[0].doc = mjcf::ReadFile(testing::WriteTextFile(dir_, "robot.xml", xml));
+    return mjcf::Compose(std::move(in));
+  }
+
+  std::string dir_;
+};
+
+// Every kind of implicitly named file asset: MuJoCo 2.2.2 strips the folder at the last '/' or
+// '\' and the extension at the last '.'.
+constexpr const char* kImplicitAssets = R"(<mujoco model="implicit">
+  <compiler meshdir="meshes" texturedir="textures"/>
+  <asset>
+    <mesh file="pelvis.STL"/>
+    <mesh file="sub/foot.v2.obj"/>
+    <mesh file="win\knee.stl"/>
+    <skin file="strip.skn"/>
+    <hfield file="terrain.png" size="1 1 .1 .1"/>
+    <texture type="2d" file="checker.png"/>
+    <texture type="skybox" file="sky.png"/>
+    <material name="paint" texture="checker"/>
+  </asset>
+  <worldbody>
+    <geom type="hfield" hfield="terrain" material="paint"/>
+    <body name="skin_a" pos="0 0 1">
+      <freejoint/>
+      <geom type="mesh" mesh="pelvis"/>
+      <geom type="mesh" mesh="foot.v2" pos="0 0 -.1"/>
+      <geom type="mesh" mesh="knee" pos="0 0 -.2"/>
+      <body name="skin_b" pos=".2 0 0">
+        <joint axis="0 1 0"/>
+        <geom type="box" size=".1 .04 .04"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>)";
+
+TEST_F(ComposeTest, ImplicitFileAssetNamesArePrefixedOnce) {
+  // The same file, loaded by MuJoCo itself, gives the unprefixed names.
+  const std::string path = testing::WriteTextFile(dir_, "plain.xml", kImplicitAssets);
+  physics::ModelPtr plain = physics::LoadXmlFile(path);
+  ASSERT_GE(mj_name2id(plain.get(), mjOBJ_MESH, "pelvis"), 0);
+  ASSERT_GE(mj_name2id(plain.get(), mjOBJ_MESH, "foot.v2"), 0);
+  ASSERT_GE(mj_name2id(plain.get(), mjOBJ_MESH, "knee"), 0);
+
+  mjcf::ComposeResult composed = ComposeOne(kImplicitAssets);
+  const std::string xml = mjcf::WriteString(composed.doc);
+  physics::ModelPtr m = physics::CompileXmlString(xml);
+  for (auto [type, name] : std::vector<std::pair<mjtObj, const char*>>{{mjOBJ_MESH, "r_pelvis"},
+                                                                       {mjOBJ_MESH, "r_foot.v2"},
+                                                                       {mjOBJ_MESH, "r_knee"},
+                                                                       {mjOBJ_SKIN, "r_strip"},
+                                                                       {mjOBJ_HFIELD, "r_terrain"},
+                                                                       {mjOBJ_TEXTURE, "r_checker"},
+                                                                       {mjOBJ_TEXTURE, "r_sky"}}) {
+    EXPECT_GE(mj_name2id(m.get(), type, name), 0) << name << "\n" << xml;
+  }
+  EXPECT_EQ(xml.find("r_r_"), std::string::npos) << xml;
+  // The composed model is the original one under new names.
+  EXPECT_EQ(m->nmesh, plain->nmesh);
+  EXPECT_EQ(m->nskin, plain->nskin);
+  EXPECT_EQ(m->ntex, plain->ntex);
+  EXPECT_EQ(m->nhfield, plain->nhfield);
+  EXPECT_EQ(m->nmeshvert, plain->nmeshvert);
+  // The SKN skin, written inline so that its bones could be prefixed, holds the file's numbers.
+  ASSERT_EQ(m->nskinvert, plain->nskinvert);
+  ASSERT_EQ(m->nskinface, plain->nskinface);
+  ASSERT_EQ(m->nskinbone, plain->nskinbone);
+  ASSERT_EQ(m->nskinbonevert, plain->nskinbonevert);
+  auto same = [](const auto* a, const auto* b, int n) { return std::equal(a, a + n, b); };
+  EXPECT_TRUE(same(m->skin_vert, plain->skin_vert, 3 * m->nskinvert));
+  EXPECT_TRUE(same(m->skin_face, plain->skin_face, 3 * m->nskinface));
+  EXPECT_TRUE(same(m->skin_bonebindpos, plain->skin_bonebindpos, 3 * m->nskinbone));
+  EXPECT_TRUE(same(m->skin_bonebindquat, plain->skin_bonebindquat, 4 * m->nskinbone));
+  EXPECT_TRUE(same(m->skin_bonevertid, plain->skin_bonevertid, m->nskinbonevert));
+  EXPECT_TRUE(same(m->skin_bonevertweight, plain->skin_bonevertweight, m->nskinbonevert));
+  for (int b = 0; b < m->nskinbone; ++b) {
+    const int body = m->skin_bonebodyid[b];
+    EXPECT_EQ(std::string(m->names + m->name_bodyadr[body]),
+              "r_" + std::string(plain->names + plain->name_bodyadr[plain->skin_bonebodyid[b]]));
+  }
+}
+
+// A truncated SKN file is refused with the skin's file and line, as MuJoCo refuses it.
+TEST_F(ComposeTest, TruncatedSkinFileIsAnInputError) {
+  const std::string skn = dir_ + "/meshes/strip.skn";
+  fs::resize_file(skn, fs::file_size(skn) - 4);
+  try {
+    ComposeOne(kImplicitAssets);
+    FAIL() << "composed a truncated skin file";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("robot.xml:7"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("strip.skn"), std::string::npos) << e.what();
+  }
+}
+
+// Two copies of a robot with implicit mesh names share one copy of each mesh, and both copies'
+// geoms find it.
+TEST_F(ComposeTest, TwoCopiesShareImplicitlyNamedMeshes) {
+  const std::string path = testing::WriteTextFile(dir_, "robot.xml", kImplicitAssets);
+  std::vector<mjcf::ArticulationInput> in(2);
+  for (int i = 0; i < 2; ++i) {
+    in[i].name = i ? "b" : "a";
+    in[i].doc = mjcf::ReadFile(path);
+    in[i].placement.pos = {0, 3.0 * i, 0};
+  }
+  mjcf::ComposeResult composed = mjcf::Compose(std::move(in));
+  physics::ModelPtr m = physics::CompileXmlString(mjcf::WriteString(composed.doc));
+  EXPECT_EQ(m->nmesh, 3);
+  EXPECT_EQ(m->nbody, 5);
+  const int mesh = mj_name2id(m.get(), mjOBJ_MESH, "a_pelvis");
+  ASSERT_GE(mesh, 0);
+  int users = 0;
+  for (int g = 0; g < m->ngeom; ++g) {
+    users += m->geom_type[g] == mjGEOM_MESH && m->geom_dataid[g] == mesh;
+  }
+  EXPECT_EQ(users, 2);
+}
+
+// A name given explicitly keeps winning over the file name, and a skybox without a file (which
+// 2.2.2 leaves unnamed) stays unnamed.
+TEST_F(ComposeTest, ExplicitNamesAndUnnamedSkyboxAreUnchanged) {
+  mjcf::ComposeResult composed = ComposeOne(R"(<mujoco>
+  <compiler meshdir="meshes"/>
+  <asset>
+    <mesh name="base" file="pelvis.STL"/>
+    <texture type="skybox" builtin="gradient" width="8" height="8" rgb1="1 1 1" rgb2="0 0 0"/>
+  </asset>
+  <worldbody><body><freejoint/><geom type="mesh" mesh="base"/></body></worldbody>
+</mujoco>)");
+  physics::ModelPtr m = physics::CompileXmlString(mjcf::WriteString(composed.doc));
+  EXPECT_GE(mj_name2id(m.get(), mjOBJ_MESH, "r_base"), 0);
+  ASSERT_EQ(m->ntex, 1);
+  EXPECT_STREQ(m->names + m->name_texadr[0], "");
+}
+
+}  // namespace
+}  // namespace urlab
+
+namespace urlab {
+namespace {
+
+// Articulations that disagree on an option get a warning, unless the scene sets that option.
+TEST_F(ComposeTest, SceneOptionsSettleDisagreements) {
+  auto inputs = [&] {
+    std::vector<mjcf::ArticulationInput> in(2);
+    in[0].name = "a";
+    in[0].doc = mjcf::ReadFile(testing::WriteTextFile(
+        dir_, "a.xml", R"(<mujoco><option timestep="0.001" cone="elliptic"/></mujoco>)"));
+    in[1].name = "b";
+    in[1].doc = mjcf::ReadFile(testing::WriteTextFile(dir_, "b.xml", "<mujoco/>"));
+    return in;
+  };
+  auto warned = [](const mjcf::ComposeResult& r, const std::string& key) {
+    for (const auto& d : r.diagnostics) {
+      if (d.message.find("option " + key + "=") != std::string::npos) return true;
+    }
+    return false;
+  };
+  const mjcf::ComposeResult plain = mjcf::Compose(inputs());
+  EXPECT_TRUE(warned(plain, "timestep"));
+  EXPECT_TRUE(warned(plain, "cone"));
+  const mjcf::ComposeResult settled = mjcf::Compose(inputs(), {{"timestep", "0.004"}});
+  EXPECT_FALSE(warned(settled, "timestep"));
+  EXPECT_TRUE(warned(settled, "cone"));
+  physics::ModelPtr m = physics::CompileXmlString(mjcf::WriteString(settled.doc));
+  EXPECT_EQ(m->opt.timestep, 0.004);
+  EXPECT_EQ(m->opt.cone, mjCONE_ELLIPTIC);
+}
+
+}  // namespace
+}  // namespace urlab
