@@ -63,7 +63,7 @@ int BenchLatency(const BenchLatencyArgs& args) {
   std::printf(
       "streaming_ratio=%.3f\nlockstep_ratio=%.3f\nthroughput_n1=%.3f\nthroughput_n10=%.3f\n",
       r.streaming.p50_us / r.raw_pubsub.p50_us, r.lockstep.p50_us / r.raw_reqrep.p50_us,
-      r.lockstep_rate_n1 / r.bare_rate, r.lockstep_rate_n10 / r.bare_rate);
+      r.throughput_ratio_n1, r.throughput_ratio_n10);
   std::fflush(stdout);
   return 0;
 }

@@ -11,11 +11,13 @@
 #include <zmq.hpp>
 #include <zmq_addon.hpp>
 
+#include "net/msgpack_codec.h"
 #include "net/observation.h"
 #include "net/port_owner.h"
 #include "net/step_server.h"
 #include "net/topic_table.h"
 #include "urlab/control/controllers.h"
+#include "urlab/core/doorbell.h"
 #include "urlab/world/session.h"
 
 namespace urlab::net {
@@ -24,7 +26,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-constexpr auto kPollInterval = std::chrono::milliseconds(1);
+// The longest the I/O thread sleeps with nothing to do (it wakes at once for messages and frames).
+constexpr auto kIdlePeriod = std::chrono::milliseconds(50);
+// How long the I/O thread watches for a parked reply without sleeping.
+constexpr auto kReplySpin = std::chrono::milliseconds(1);
 constexpr auto kPausedRepublish = std::chrono::milliseconds(100);  // at most 10 Hz while paused
 constexpr auto kPausedInfo = std::chrono::seconds(1);
 constexpr auto kDropLogPeriod = std::chrono::seconds(1);
@@ -74,6 +79,7 @@ struct NetworkSubsystem::Impl {
   std::vector<ArticulationTopics> tables;
   std::unordered_map<std::string, Route> routes;  // inbound topic -> articulation and kind
   std::shared_ptr<physics::StateRing> ring;
+  std::shared_ptr<Doorbell> bell = std::make_shared<Doorbell>();  // frames and command results
   std::unique_ptr<StepServer> server;  // built on the main thread, then used by the I/O thread
   std::vector<std::string> info_messages;
   const mjModel* model = nullptr;
@@ -90,6 +96,8 @@ struct NetworkSubsystem::Impl {
   physics::StateFrame frame;  // the newest frame taken from the ring
   bool have_frame = false;
   std::string payload;
+  std::optional<ObsLevel> full_state;  // the state/full level, none: not published
+  MsgpackWriter full_writer;
   std::vector<std::pair<std::int32_t, float>> control_scratch;
   std::vector<std::pair<int, double>> patch_scratch;
   std::vector<wire::GainPatch> gains_scratch;
@@ -161,11 +169,11 @@ struct NetworkSubsystem::Impl {
         Send(*pub, s.topic, payload);
       }
     }
-    if (!options.full_state.empty()) {  // state/full: the step server's observation map
-      const std::vector<std::uint8_t> bytes =
-          Json::to_msgpack(Observation(tables, f, options.full_state, false));
-      Send(*pub, wire::kFullStateTopic,
-           std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    if (full_state) {  // state/full: the step server's observation map, msgpack
+      full_writer.Clear();
+      full_writer.Map(kObservationEntries);
+      WriteObservationEntries(full_writer, tables, f, *full_state, false);
+      Send(*pub, wire::kFullStateTopic, std::string_view(full_writer.data(), full_writer.size()));
     }
   }
 
@@ -251,6 +259,40 @@ struct NetworkSubsystem::Impl {
       spdlog::warn("network: dropped inbound message(s) in the last second: {}", what);
   }
 
+  // Sleeps until a socket has a message, the physics thread published a frame (or finished a
+  // command), or the idle period ends (paused republishing, lease expiry, drop logging).
+  void Sleep() {
+    bell->Arm();
+    // Checked after arming: work that arrived before Arm() is seen here, work after it rings.
+    if (ring->size() > 0 || (server && server->has_ready()) ||
+        stop.load(std::memory_order_acquire)) {
+      bell->Clear();
+      return;
+    }
+    zmq::pollitem_t items[3];
+    int n = 0;
+    items[n++] = {nullptr, bell->fd(), ZMQ_POLLIN, 0};
+    if (sub) items[n++] = {static_cast<void*>(*sub), 0, ZMQ_POLLIN, 0};
+    if (server && server->socket()) {
+      items[n++] = {static_cast<void*>(*server->socket()), 0, ZMQ_POLLIN, 0};
+    }
+    // A parked reply (a lockstep window under way) is due within a few steps: watch for it
+    // without sleeping for a while, since a wake-up from poll costs more than the round trip.
+    if (server && server->has_pending()) {
+      const auto spin_until = Clock::now() + kReplySpin;
+      while (Clock::now() < spin_until) {
+        if (ring->size() > 0 || server->has_ready() ||
+            zmq::poll(items, static_cast<std::size_t>(n), std::chrono::milliseconds(0)) > 0) {
+          bell->Clear();
+          return;
+        }
+        std::this_thread::yield();
+      }
+    }
+    zmq::poll(items, static_cast<std::size_t>(n), kIdlePeriod);
+    bell->Clear();
+  }
+
   void Run(std::promise<Endpoints>* ready) {
     Endpoints bound;
     try {
@@ -266,25 +308,10 @@ struct NetworkSubsystem::Impl {
     ready->set_value(bound);
     while (!stop.load(std::memory_order_acquire)) {
       // 1. Inbound first (controls and requests are what clients wait on).
-      const bool backlog = ring->size() > 0;
-      const bool parked = server && server->has_pending();
-      zmq::pollitem_t items[2];
-      int n = 0;
-      if (sub) items[n++] = {static_cast<void*>(*sub), 0, ZMQ_POLLIN, 0};
-      if (server && server->socket()) {
-        items[n++] = {static_cast<void*>(*server->socket()), 0, ZMQ_POLLIN, 0};
-      }
-      const auto idle = backlog || parked ? std::chrono::milliseconds(0) : kPollInterval;
-      if (n > 0) {
-        zmq::poll(items, static_cast<std::size_t>(n), idle);
-      } else if (idle.count() > 0) {
-        std::this_thread::sleep_for(idle);
-      }
       DrainControl();
       if (server) {
         server->HandleIncoming();
-        // 2. A parked lockstep reply leaves as soon as its window ends.
-        if (server->has_pending()) server->WaitForFront(std::chrono::microseconds(500));
+        // 2. Replies whose commands took effect (a lockstep reply as soon as its window ends).
         server->Service(Clock::now());
       }
       // 3. Streaming. Behind by more than kMaxBacklog steps (the physics runs faster than the
@@ -303,6 +330,8 @@ struct NetworkSubsystem::Impl {
           PublishInfo();
           next_info_step = frame.step + (frame.step < 2500 ? 50 : 500);
         }
+        DrainControl();  // a long backlog must not starve inbound messages
+        if (server) server->HandleIncoming();
       }
       const auto now = Clock::now();
       if (!got && have_frame && frame.paused) {
@@ -316,6 +345,7 @@ struct NetworkSubsystem::Impl {
         }
       }
       LogDrops(now);
+      Sleep();
     }
     LogDrops(Clock::now() + kDropLogPeriod);
     if (server) server->Close();
@@ -332,6 +362,7 @@ NetworkSubsystem::NetworkSubsystem(NetworkOptions options)
 NetworkSubsystem::~NetworkSubsystem() {
   if (impl_ && impl_->thread.joinable()) {
     impl_->stop.store(true);
+    impl_->bell->Ring();
     impl_->thread.join();
   }
 }
@@ -347,7 +378,15 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
     impl_->info_messages.push_back(InfoJson(impl_->tables[i]));
   }
   impl_->frame = physics::StateFrame::SizedFor(impl_->model);
+  if (!options_.full_state.empty()) {
+    impl_->full_state = ParseObservationLevel(options_.full_state);
+    if (!impl_->full_state) {
+      spdlog::warn("network: full_state '{}' is not minimal, standard or full; not published",
+                   options_.full_state);
+    }
+  }
   impl_->ring = session.engine().SubscribeEveryStep("network", options_.ring_capacity);
+  session.engine().AddDoorbell(impl_->bell);
   if (!options_.rpc.empty()) {
     StepServerOptions so;
     so.endpoint = options_.rpc;
@@ -368,6 +407,7 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
 void NetworkSubsystem::EndPlay(world::Session&) {
   if (impl_->thread.joinable()) {
     impl_->stop.store(true, std::memory_order_release);
+    impl_->bell->Ring();
     impl_->thread.join();
   }
   const NetworkCounters c = counters();

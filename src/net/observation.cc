@@ -5,16 +5,144 @@
 
 namespace urlab::net {
 
-Json TimeOf(double seconds) {
+namespace {
+
+// The JSON backend of the observation layout: the same calls as MsgpackWriter, building a tree.
+// Containers announce their size, so each one is closed after its last value.
+class JsonWriter {
+ public:
+  // Fills `root` (an object) with `entries` entries.
+  JsonWriter(Json* root, std::size_t entries) { open_.push_back({root, entries}); }
+
+  void Map(std::size_t entries) { Open(Json::object(), entries); }
+  void Array(std::size_t items) { Open(Json::array(), items); }
+  void Key(std::string_view k) { key_ = k; }
+  void Str(std::string_view s) { Put(Json(std::string(s))); }
+  void Double(double v) { Put(Json(v)); }
+  void Int(std::int64_t v) { Put(Json(v)); }
+  void UInt(std::uint64_t v) { Put(Json(v)); }
+  void Bool(bool v) { Put(Json(v)); }
+  void Doubles(const double* v, std::size_t n, bool binary) { Put(net::Array(v, n, binary)); }
+
+ private:
+  struct Open_ {
+    Json* node;
+    std::size_t remaining;
+  };
+  Json* Put(Json v) {
+    Open_& top = open_.back();
+    Json* slot = top.node->is_object() ? &(*top.node)[key_] : &top.node->emplace_back();
+    *slot = std::move(v);
+    if (--top.remaining == 0) open_.pop_back();
+    return slot;
+  }
+  void Open(Json v, std::size_t n) {
+    Json* slot = Put(std::move(v));
+    if (n > 0) open_.push_back({slot, n});
+  }
+  std::vector<Open_> open_;
+  std::string key_;
+};
+
+template <typename Out>
+void Time(Out& out, double seconds) {
   const double sec = std::floor(seconds);
-  return Json{{"sec", static_cast<std::int64_t>(sec)},
-              {"nsec", static_cast<std::int64_t>((seconds - sec) * 1e9)}};
+  out.Map(2);
+  out.Key("sec");
+  out.Int(static_cast<std::int64_t>(sec));
+  out.Key("nsec");
+  out.Int(static_cast<std::int64_t>((seconds - sec) * 1e9));
+}
+
+template <typename Out>
+void WriteEntries(Out& out, const std::vector<ArticulationTopics>& tables,
+                  const physics::StateFrame& f, ObsLevel level, bool binary) {
+  thread_local std::vector<double> tmp;
+  const auto gather = [&](const std::vector<double>& src, const std::vector<int>& adrs) {
+    tmp.clear();
+    for (int a : adrs) tmp.push_back(src[static_cast<std::size_t>(a)]);
+    out.Doubles(tmp.data(), tmp.size(), binary);
+  };
+  out.Key("time");
+  out.Double(f.time);
+  out.Key("step");
+  out.UInt(f.step);
+  out.Key("sim_time");
+  Time(out, f.time);
+  out.Key("wall_time");
+  const auto wall = std::chrono::system_clock::now().time_since_epoch();
+  Time(out, std::chrono::duration<double>(wall).count());
+  out.Key("paused");
+  out.Bool(f.paused);
+  out.Key("per_articulation");
+  out.Map(tables.size());
+  const std::size_t fields = level == ObsLevel::kMinimal ? 2 : level == ObsLevel::kStandard ? 5 : 8;
+  for (const ArticulationTopics& t : tables) {
+    out.Key(t.name);
+    out.Map(fields);
+    out.Key("qpos");
+    gather(f.qpos, t.qpos_adrs);
+    out.Key("qvel");
+    gather(f.qvel, t.dof_adrs);
+    if (level != ObsLevel::kMinimal) {
+      out.Key("ctrl");
+      gather(f.ctrl, t.actuator_ids);
+      out.Key("act");
+      gather(f.act, t.act_adrs);
+      out.Key("sensors");
+      out.Map(t.sensors.size());
+      for (std::size_t i = 0; i < t.sensors.size(); ++i) {
+        const SensorTopicEntry& s = t.sensors[i];
+        out.Key(t.sensor_names[i]);
+        out.Doubles(f.sensordata.data() + s.adr, static_cast<std::size_t>(s.dim), binary);
+      }
+    }
+    if (level == ObsLevel::kFull) {
+      out.Key("xpos");
+      out.Map(t.body_ids.size());
+      for (std::size_t i = 0; i < t.body_ids.size(); ++i) {
+        out.Key(t.body_names[i]);
+        out.Doubles(f.xpos.data() + 3 * static_cast<std::size_t>(t.body_ids[i]), 3, binary);
+      }
+      out.Key("xquat");
+      out.Map(t.body_ids.size());
+      for (std::size_t i = 0; i < t.body_ids.size(); ++i) {
+        out.Key(t.body_names[i]);
+        out.Doubles(f.xquat.data() + 4 * static_cast<std::size_t>(t.body_ids[i]), 4, binary);
+      }
+      out.Key("actuator_force");
+      gather(f.actuator_force, t.actuator_ids);
+    }
+  }
+  out.Key("entities");
+  out.Map(0);
+}
+
+}  // namespace
+
+std::optional<ObsLevel> ParseObservationLevel(std::string_view level) {
+  if (level == "minimal") return ObsLevel::kMinimal;
+  if (level == "standard") return ObsLevel::kStandard;
+  if (level == "full") return ObsLevel::kFull;
+  return std::nullopt;
+}
+
+bool IsObservationLevel(const std::string& level) {
+  return ParseObservationLevel(level).has_value();
+}
+
+Json TimeOf(double seconds) {
+  Json j = Json::object();
+  JsonWriter w(&j, 1);
+  w.Key("t");
+  Time(w, seconds);
+  return j["t"];
 }
 
 Json Array(const double* v, std::size_t n, bool binary) {
   if (binary) {
     std::vector<std::uint8_t> bytes(n * sizeof(double));
-    std::memcpy(bytes.data(), v, bytes.size());  // little-endian f64 (x86-64, arm64)
+    if (n > 0) std::memcpy(bytes.data(), v, bytes.size());  // little-endian f64 (x86-64, arm64)
     return Json::binary(std::move(bytes));
   }
   Json a = Json::array();
@@ -22,57 +150,22 @@ Json Array(const double* v, std::size_t n, bool binary) {
   return a;
 }
 
-Json Observation(const std::vector<ArticulationTopics>& tables, const physics::StateFrame& f,
-                 const std::string& level, bool binary) {
-  Json o;
-  o["time"] = f.time;
-  o["step"] = f.step;
-  o["sim_time"] = TimeOf(f.time);
-  const auto wall = std::chrono::system_clock::now().time_since_epoch();
-  o["wall_time"] = TimeOf(std::chrono::duration<double>(wall).count());
-  o["paused"] = f.paused;
-  Json per = Json::object();
-  std::vector<double> tmp;
-  const auto gather = [&](const std::vector<double>& src, const std::vector<int>& adrs) {
-    tmp.clear();
-    for (int a : adrs) tmp.push_back(src[static_cast<std::size_t>(a)]);
-    return Array(tmp.data(), tmp.size(), binary);
-  };
-  for (const ArticulationTopics& t : tables) {
-    Json a;
-    a["qpos"] = gather(f.qpos, t.qpos_adrs);
-    a["qvel"] = gather(f.qvel, t.dof_adrs);
-    if (level != "minimal") {
-      a["ctrl"] = gather(f.ctrl, t.actuator_ids);
-      a["act"] = gather(f.act, t.act_adrs);
-      Json sensors = Json::object();
-      for (std::size_t i = 0; i < t.sensors.size(); ++i) {
-        const SensorTopicEntry& s = t.sensors[i];
-        sensors[t.sensor_names[i]] =
-            Array(f.sensordata.data() + s.adr, static_cast<std::size_t>(s.dim), binary);
-      }
-      a["sensors"] = std::move(sensors);
-    }
-    if (level == "full") {
-      Json xpos = Json::object(), xquat = Json::object();
-      for (std::size_t i = 0; i < t.body_ids.size(); ++i) {
-        const auto b = static_cast<std::size_t>(t.body_ids[i]);
-        xpos[t.body_names[i]] = Array(f.xpos.data() + 3 * b, 3, binary);
-        xquat[t.body_names[i]] = Array(f.xquat.data() + 4 * b, 4, binary);
-      }
-      a["xpos"] = std::move(xpos);
-      a["xquat"] = std::move(xquat);
-      a["actuator_force"] = gather(f.actuator_force, t.actuator_ids);
-    }
-    per[t.name] = std::move(a);
-  }
-  o["per_articulation"] = std::move(per);
-  o["entities"] = Json::object();
-  return o;
+void WriteObservationEntries(MsgpackWriter& out, const std::vector<ArticulationTopics>& tables,
+                             const physics::StateFrame& f, ObsLevel level, bool binary) {
+  WriteEntries(out, tables, f, level, binary);
 }
 
-bool IsObservationLevel(const std::string& level) {
-  return level == "minimal" || level == "standard" || level == "full";
+void AddObservation(Json* reply, const std::vector<ArticulationTopics>& tables,
+                    const physics::StateFrame& f, ObsLevel level, bool binary) {
+  JsonWriter w(reply, kObservationEntries);
+  WriteEntries(w, tables, f, level, binary);
+}
+
+Json Observation(const std::vector<ArticulationTopics>& tables, const physics::StateFrame& f,
+                 ObsLevel level, bool binary) {
+  Json o = Json::object();
+  AddObservation(&o, tables, f, level, binary);
+  return o;
 }
 
 }  // namespace urlab::net

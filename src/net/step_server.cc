@@ -148,18 +148,40 @@ void StepServer::Close() {
 // ---------------------------------------------------------------------------------------------
 // Transport
 
-void StepServer::Send(const std::vector<zmq::message_t>& envelope, const Json& reply, bool json) {
+void StepServer::Send(const std::vector<zmq::message_t>& envelope, Json& reply, bool json,
+                      const std::optional<ObsSpec>& observation) {
   if (!socket_) return;
   for (const zmq::message_t& f : envelope) {
     socket_->send(zmq::buffer(f.data(), f.size()), zmq::send_flags::sndmore);
   }
+  const physics::StateFrame* frame = observation ? state_->Latest() : nullptr;
   if (json) {
+    if (frame) AddObservation(&reply, tables_, *frame, observation->level, observation->binary);
     const std::string text = reply.dump(-1, ' ', false, Json::error_handler_t::replace);
     socket_->send(zmq::buffer(text), zmq::send_flags::dontwait);
-  } else {
-    const std::vector<std::uint8_t> bytes = Json::to_msgpack(reply);
-    socket_->send(zmq::buffer(bytes), zmq::send_flags::dontwait);
+    return;
   }
+  // msgpack: the reply's own fields, then the observation written straight from the frame.
+  writer_.Clear();
+  writer_.Map(reply.size() + (frame ? kObservationEntries : 0));
+  for (const auto& [k, v] : reply.items()) {
+    writer_.Key(k);
+    writer_.Value(v);
+  }
+  if (frame) {
+    WriteObservationEntries(writer_, tables_, *frame, observation->level, observation->binary);
+  }
+  socket_->send(zmq::buffer(writer_.data(), writer_.size()), zmq::send_flags::dontwait);
+}
+
+std::optional<StepServer::ObsSpec> StepServer::ObservationFor(const Request& r) const {
+  ObsSpec spec{r.client->level, r.client->binary_arrays};
+  if (const auto it = r.body.find("observations"); it != r.body.end()) {
+    const auto level = ParseObservationLevel(String(*it, "observations"));
+    if (!level) Fail("bad_value", "observations must be minimal, standard or full");
+    spec.level = *level;
+  }
+  return spec;
 }
 
 void StepServer::SendError(const std::vector<zmq::message_t>& envelope, const Json& seq, bool json,
@@ -192,11 +214,17 @@ void StepServer::HandleIncoming() {
                     std::to_string(options_.max_request_bytes) + ")");
       continue;
     }
-    r.body = r.json ? Json::parse(bytes, bytes + payload.size(), nullptr, false)
-                    : Json::from_msgpack(bytes, bytes + payload.size(), true, false);
-    if (r.body.is_discarded() || !r.body.is_object()) {
+    std::string why;
+    if (r.json) {
+      r.body = Json::parse(bytes, bytes + payload.size(), nullptr, false);
+      if (r.body.is_discarded()) why = "not valid JSON";
+    } else if (std::optional<Json> body = DecodeMsgpack(bytes, payload.size(), &why)) {
+      r.body = std::move(*body);
+    }
+    if (why.empty() && !r.body.is_object()) why = "the request is not a map";
+    if (!why.empty()) {
       SendError(r.envelope, nullptr, r.json, "bad_request",
-                r.json ? "not a JSON object" : "not a msgpack map (or JSON text)");
+                std::string(r.json ? "JSON" : "msgpack") + " request refused: " + why);
       continue;
     }
     Dispatch(r);
@@ -233,7 +261,7 @@ void StepServer::Dispatch(Request& r) {
     if (out.wait_for == 0) {
       if (out.on_applied) out.on_applied(out.reply);
       if (!seq.is_null()) out.reply["seq"] = seq;
-      Send(r.envelope, out.reply, r.json);
+      Send(r.envelope, out.reply, r.json, out.observation);
       return;
     }
     Pending p;
@@ -252,9 +280,8 @@ void StepServer::Dispatch(Request& r) {
   }
 }
 
-void StepServer::WaitForFront(Clock::duration timeout) {
-  if (pending_.empty()) return;
-  (void)session_.engine().WaitForCommand(pending_.front().command, timeout);
+bool StepServer::has_ready() const {
+  return !pending_.empty() && session_.engine().last_applied_command() >= pending_.front().command;
 }
 
 void StepServer::Service(Clock::time_point now) {
@@ -274,7 +301,7 @@ void StepServer::Service(Clock::time_point now) {
         try {
           if (p.outcome.on_applied) p.outcome.on_applied(p.outcome.reply);
           if (!p.seq.is_null()) p.outcome.reply["seq"] = p.seq;
-          Send(p.envelope, p.outcome.reply, p.json);
+          Send(p.envelope, p.outcome.reply, p.json, p.outcome.observation);
         } catch (const Failure& f) {
           SendError(p.envelope, p.seq, p.json, f.code, f.message);
         }
@@ -327,10 +354,9 @@ StepServer::Outcome StepServer::Hello(Request& r) {
   c.id = NewSessionId(next_client_++);
   c.last_seen = r.now;
   if (const auto it = r.body.find("observations"); it != r.body.end()) {
-    c.level = String(*it, "observations");
-    if (!IsObservationLevel(c.level)) {
-      Fail("bad_value", "observations must be minimal, standard or full");
-    }
+    const auto level = ParseObservationLevel(String(*it, "observations"));
+    if (!level) Fail("bad_value", "observations must be minimal, standard or full");
+    c.level = *level;
   }
   if (const auto it = r.body.find("arrays"); it != r.body.end()) {
     c.binary_arrays = String(*it, "arrays") == "binary";
@@ -438,10 +464,7 @@ StepServer::Outcome StepServer::Step(Request& r) {
     if (v < 1 || v > 100000 || v != std::floor(v)) Fail("bad_value", "n_steps must be 1..100000");
     n = static_cast<int>(v);
   }
-  std::string level = r.client->level;
-  if (const auto it = r.body.find("observations"); it != r.body.end()) {
-    level = String(*it, "observations");
-  }
+  const std::optional<ObsSpec> observation = ObservationFor(r);
   // Controls: validate every articulation's entry first, then publish them (all or nothing).
   std::vector<std::pair<const ArticulationTopics*, std::vector<std::pair<int, double>>>> patches;
   if (const auto it = r.body.find("per_articulation"); it != r.body.end()) {
@@ -475,12 +498,7 @@ StepServer::Outcome StepServer::Step(Request& r) {
   }
   Outcome out;
   out.reply = Json{{"op", "step_ok"}};
-  const bool binary = r.client->binary_arrays;
-  out.on_applied = [this, level, binary](Json& reply) {
-    const physics::StateFrame* f = state_->Latest();
-    Json obs = Observation(tables_, *f, level, binary);
-    for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
-  };
+  out.observation = observation;
   if (mode_ == "direct") out.wait_for = session_.engine().Submit(physics::cmd::Step{n});
   return out;
 }
@@ -516,12 +534,7 @@ StepServer::Outcome StepServer::Reset(Request& r) {
   Outcome out;
   out.reply = Json{{"op", "reset_ok"}};
   out.wait_for = seq;
-  const std::string level = r.client->level;
-  const bool binary = r.client->binary_arrays;
-  out.on_applied = [this, level, binary](Json& reply) {
-    Json obs = Observation(tables_, *state_->Latest(), level, binary);
-    for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
-  };
+  out.observation = ObservationFor(r);
   return out;
 }
 
@@ -529,12 +542,7 @@ StepServer::Outcome StepServer::Forward(Request& r) {
   Outcome out;
   out.reply = Json{{"op", "forward_ok"}};
   out.wait_for = session_.engine().Submit(physics::cmd::Forward{});
-  const std::string level = r.client->level;
-  const bool binary = r.client->binary_arrays;
-  out.on_applied = [this, level, binary](Json& reply) {
-    Json obs = Observation(tables_, *state_->Latest(), level, binary);
-    for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
-  };
+  out.observation = ObservationFor(r);
   return out;
 }
 
@@ -608,12 +616,7 @@ StepServer::Outcome StepServer::SetQpos(Request& r) {
   Outcome out;
   out.reply = Json{{"op", "set_qpos_ok"}};
   out.wait_for = seq;
-  const std::string level = r.client->level;
-  const bool binary = r.client->binary_arrays;
-  out.on_applied = [this, level, binary](Json& reply) {
-    Json obs = Observation(tables_, *state_->Latest(), level, binary);
-    for (auto& [k, v] : obs.items()) reply[k] = std::move(v);
-  };
+  out.observation = ObservationFor(r);
   return out;
 }
 

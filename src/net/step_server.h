@@ -20,6 +20,8 @@
 #include <vector>
 #include <zmq.hpp>
 
+#include "net/msgpack_codec.h"
+#include "net/observation.h"
 #include "net/topic_table.h"
 #include "urlab/physics/state_frame.h"
 #include "urlab/world/session.h"
@@ -50,10 +52,9 @@ class StepServer {
   void HandleIncoming();
   // Sends the replies whose commands took effect; expires leases and overdue replies.
   void Service(Clock::time_point now);
-  // Blocks up to `timeout` until the oldest parked reply's command took effect (so a lockstep
-  // reply leaves as soon as its window ends); returns at once when nothing is parked.
-  void WaitForFront(Clock::duration timeout);
   bool has_pending() const { return !pending_.empty(); }
+  // True when the oldest parked reply's command took effect (Service would send it).
+  bool has_ready() const;
   // Closes the socket (pending replies get `shutting_down`).
   void Close();
 
@@ -65,7 +66,7 @@ class StepServer {
  private:
   struct Client {
     std::string id;
-    std::string level = "standard";  // observation level: minimal | standard | full
+    ObsLevel level = ObsLevel::kStandard;
     bool binary_arrays = false;
     Clock::time_point last_seen;
   };
@@ -76,11 +77,17 @@ class StepServer {
     Client* client = nullptr;
     Clock::time_point now;
   };
+  // The observation a reply carries (taken from the newest state frame when it is sent).
+  struct ObsSpec {
+    ObsLevel level;
+    bool binary;
+  };
   // What an operation handler decided: a reply now, or one once command `seq` took effect.
   struct Outcome {
     Json reply;                             // the reply (now), or the reply's fixed fields
     std::uint64_t wait_for = 0;             // a command to wait for, 0: reply now
     std::function<void(Json&)> on_applied;  // completes the reply once applied
+    std::optional<ObsSpec> observation;     // appended to the reply when it is sent
   };
   struct Pending {
     std::vector<zmq::message_t> envelope;
@@ -103,7 +110,10 @@ class StepServer {
   static const std::vector<OpSpec>& Ops();
 
   void Dispatch(Request& r);
-  void Send(const std::vector<zmq::message_t>& envelope, const Json& reply, bool json);
+  void Send(const std::vector<zmq::message_t>& envelope, Json& reply, bool json,
+            const std::optional<ObsSpec>& observation = std::nullopt);
+  // The observation of a request's client (its level unless the request names one).
+  std::optional<ObsSpec> ObservationFor(const Request& r) const;
   void SendError(const std::vector<zmq::message_t>& envelope, const Json& seq, bool json,
                  const std::string& code, const std::string& message);
   // The lease: throws Failure unless `c` may drive (taking a free or expired lease).
@@ -141,6 +151,7 @@ class StepServer {
   std::map<std::string, std::uint64_t> errors_;
   std::uint64_t next_client_ = 1;
   std::vector<std::uint8_t> mjb_;  // the compiled model (mj_saveModel), for hello
+  MsgpackWriter writer_;           // reply bytes, reused
 };
 
 }  // namespace urlab::net

@@ -43,6 +43,8 @@ bool AllFinite(const mjtNum* v, std::size_t n) {
 constexpr auto kSpinMargin = std::chrono::microseconds(200);
 // Longest single sleep, so that Stop() is honoured promptly even with long intervals.
 constexpr auto kMaxSleep = std::chrono::milliseconds(20);
+// How long a paused loop waits for the next lockstep request without sleeping.
+constexpr auto kLockstepSpin = std::chrono::microseconds(500);
 
 int FirstBad(const mjtNum* v, int n) {
   for (int i = 0; i < n; ++i) {
@@ -223,6 +225,13 @@ std::shared_ptr<StateRing> PhysicsEngine::SubscribeEveryStep(std::string name,
   if (running()) throw Error("SubscribeEveryStep('" + name + "'): subscribe before Start");
   std::lock_guard<std::mutex> lock(step_mutex_);
   return publisher_.SubscribeEveryStep(std::move(name), capacity);
+}
+
+void PhysicsEngine::AddDoorbell(std::shared_ptr<Doorbell> doorbell) {
+  ThrowIfOnPhysicsThread("AddDoorbell");
+  if (running()) throw Error("AddDoorbell: add it before Start");
+  std::lock_guard<std::mutex> lock(step_mutex_);
+  doorbells_.push_back(std::move(doorbell));
 }
 
 bool PhysicsEngine::Unsubscribe(const void* subscription) {
@@ -583,6 +592,7 @@ void PhysicsEngine::IterateLocked(bool force_step) {
     for (const Hook& h : on_post_step_) h.fn(m, d);
   }
   if (budgeted && --step_budget_ == 0) {  // the step command's last iteration
+    window_ended_ = true;
     AppliedCommand done;
     done.seq = step_seq_;
     done.name = "step";
@@ -706,6 +716,7 @@ void PhysicsEngine::PublishFrameLocked() {
   published_paused_ = meta.paused;
   // Waiters are released only now, so the frame they read next shows their command.
   FinishCommandsLocked();
+  for (const auto& bell : doorbells_) bell->Ring();
 }
 
 void PhysicsEngine::HandleErrorLocked(const std::exception& e) {
@@ -729,6 +740,7 @@ void PhysicsEngine::HandleErrorLocked(const std::exception& e) {
 }
 
 void PhysicsEngine::Loop() {
+  bool window_ended = false;  // a lockstep window ended in the last iteration
   auto next = Clock::now();
   auto window_start = next;
   {
@@ -768,12 +780,24 @@ void PhysicsEngine::Loop() {
         window_start = now;
       }
       stepping = step_budget_ > 0 || !backlog_.empty();
+      window_ended = window_ended_;
+      window_ended_ = false;
     }
     if (stepping || (as_fast_.load(std::memory_order_relaxed) && !paused_now)) {
       next = Clock::now();  // lockstep windows and as-fast-as-possible run without pacing
       continue;
     }
     if (paused_now) {
+      // Lockstep: the next request usually follows within a round trip of the last window, so
+      // wait for it briefly without sleeping (a futex wake-up costs more than the round trip).
+      if (window_ended) {
+        const auto spin_until = Clock::now() + kLockstepSpin;
+        while (!commands_.pending() && paused() && !stop_.load(std::memory_order_relaxed) &&
+               Clock::now() < spin_until) {
+          std::this_thread::yield();
+        }
+        if (commands_.pending() || !paused()) continue;
+      }
       // Paused: sleep until a command arrives (lockstep requests wake the loop at once).
       std::unique_lock<std::mutex> lock(wake_mutex_);
       wake_cv_.wait_for(lock, kMaxSleep, [&] {

@@ -6,6 +6,8 @@
 // - raw PUB/SUB and REQ/REP ping-pong through an echo thread (the floor for each kind);
 // - lockstep throughput (steps per second through the step server, n=1 and n=10) against a bare
 //   mj_step loop on the same model.
+// The machine is shared and noisy, so raw and URLab samples alternate in rounds (the engine
+// paused while a raw floor is sampled) and each throughput ratio is taken within its round.
 // The scene's first articulation is played with passthrough control (so the control shows in
 // the state unchanged), as fast as possible. Thread: main (it runs its own world).
 #include <functional>
@@ -17,7 +19,8 @@ namespace urlab::net {
 
 struct LatencyBenchOptions {
   int samples = 2000;                              // round trips per measurement
-  int throughput_steps = 4000;                     // steps per lockstep throughput measurement
+  int throughput_steps = 20000;                    // steps per throughput measurement (all rounds)
+  int rounds = 5;                                  // alternations of raw/bare and URLab samples
   std::function<void(const std::string&)> report;  // report lines; empty: silent
 };
 
@@ -27,7 +30,8 @@ struct Percentiles {
 
 struct LatencyBenchResult {
   Percentiles streaming, lockstep, raw_pubsub, raw_reqrep;
-  double lockstep_rate_n1 = 0, lockstep_rate_n10 = 0, bare_rate = 0;  // steps per second
+  double lockstep_rate_n1 = 0, lockstep_rate_n10 = 0, bare_rate = 0;  // medians, steps/s
+  double throughput_ratio_n1 = 0, throughput_ratio_n10 = 0;           // median of per-round ratios
 };
 
 LatencyBenchResult RunLatencyBench(world::SceneConfig scene, const LatencyBenchOptions& options);

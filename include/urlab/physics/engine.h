@@ -26,7 +26,9 @@
 //   notifications, divergence and error reports are queued by the physics thread and only
 //   delivered there.
 // - State readers (any number, each on its own thread): their StateSubscription / StateRing
-//   (state_frame.h); they never block the physics thread and never see live mjData.
+//   (state_frame.h); they never block the physics thread and never see live mjData. A reader
+//   that sleeps in poll adds a Doorbell (core/doorbell.h) before Start: the physics thread rings
+//   it after each published frame, once that frame's commands are finished.
 // - A MuJoCo error (urlab::MujocoError from the installed handler) or any exception escaping a
 //   callback is caught, reported as an kError event and pauses the loop; the process continues.
 #include <mujoco/mujoco.h>
@@ -46,6 +48,7 @@
 #include <thread>
 #include <vector>
 
+#include "urlab/core/doorbell.h"
 #include "urlab/physics/commands.h"
 #include "urlab/physics/model.h"
 #include "urlab/physics/state.h"
@@ -152,6 +155,9 @@ class PhysicsEngine {
   std::shared_ptr<StateRing> SubscribeEveryStep(std::string name, std::size_t capacity);
   // Drops a subscription made above; false when unknown.
   bool Unsubscribe(const void* subscription);
+  // Rung on the physics thread after every published frame, once the commands that frame shows
+  // are finished (a reader thread sleeping in poll wakes for new state and command results).
+  void AddDoorbell(std::shared_ptr<Doorbell> doorbell);
 
   // ---- Commands (any thread) ----
   // Queues `command` (applied in submission order at the top of the next iteration; at once when
@@ -250,6 +256,7 @@ class PhysicsEngine {
   std::vector<Hook> post_step_;
   std::vector<Hook> on_post_step_;
   std::vector<std::pair<CallbackId, CommandListener>> command_listeners_;
+  std::vector<std::shared_ptr<Doorbell>> doorbells_;
   StepCallback apply_controls_;
   StepCallback custom_step_;
   ArticulationResolver resolver_;
@@ -265,6 +272,7 @@ class PhysicsEngine {
   std::vector<std::pair<std::uint64_t, std::string>> to_finish_;  // mutex held: applied, to
                                                                   // release after publishing
   int step_budget_ = 0;         // mutex held: iterations left in a step command's window
+  bool window_ended_ = false;   // mutex held: a step command's window ended this iteration
   std::uint64_t step_seq_ = 0;  // mutex held: that step command
   std::mutex wake_mutex_;       // with wake_cv_: a paused loop waits for commands
   std::condition_variable wake_cv_;
