@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "app/commands.h"
+#include "urlab/net/broadcast_bench.h"
 #include "urlab/net/latency_bench.h"
 #include "urlab/world/controller_factory.h"
 #include "urlab/world/loop_bench.h"
@@ -19,10 +20,32 @@ struct BenchLoopArgs {
   int steps = 10000;
   int trials = 15;
   int subscribers = 0;
+  bool network = false;
+  CLI::Option* trials_option = nullptr;
 };
+
+// bench loop --network: the loop with the network subsystem broadcasting against without.
+int BenchLoopNetwork(const BenchLoopArgs& args) {
+  world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
+  scene.articulations.resize(1);  // the first articulation only
+  world::ArticulationConfig& art = scene.articulations.front();
+  if (art.controller.type == "none") art.controller.type = "pd";
+  net::BroadcastBenchOptions options;
+  options.trials = args.trials_option->count() > 0 ? args.trials : 5;
+  options.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
+  std::printf("scene %s: articulation '%s', controller %s; every streaming topic and state/full "
+              "(%s) on every step\n",
+              scene.path.c_str(), art.name.c_str(), art.controller.type.c_str(),
+              options.full_state.c_str());
+  const net::BroadcastBenchResult r = net::RunBroadcastBench(scene, options);
+  std::printf("ratio=%.4f\n", r.ratio);
+  std::fflush(stdout);
+  return 0;
+}
 
 int BenchLoop(const BenchLoopArgs& args) {
   CurrentInput() = args.scene;
+  if (args.network) return BenchLoopNetwork(args);
   world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
   scene.articulations.resize(1);  // the first articulation only
   scene.save_debug_xml.clear();
@@ -82,12 +105,18 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
   static BenchLoopArgs args;
   loop->add_option("SCENE", args.scene, "scene file (.yaml) or MJCF model (.xml)")->required();
   loop->add_option("--steps", args.steps, "steps per trial")->check(CLI::Range(2, 100000000));
-  loop->add_option("--trials", args.trials, "trials per loop (best of)")
-      ->check(CLI::Range(1, 1000));
+  args.trials_option = loop->add_option("--trials", args.trials,
+                                        "trials per loop (best of; with --network: pairs of "
+                                        "trials, median, default 5)")
+                           ->check(CLI::Range(1, 1000));
   loop->add_option("--subscribers", args.subscribers,
                    "state readers attached to the loop: an every-step ring, then newest-frame "
                    "readers polling at 1 kHz and 60 Hz in turn")
       ->check(CLI::Range(0, 16));
+  loop->add_flag("--network", args.network,
+                 "instead: the loop with the network subsystem publishing every streaming topic "
+                 "and state/full on every step to a subscriber on loopback, against the loop "
+                 "without it (alternating 1 s trials); prints ratio=<with/without> last");
   loop->callback([&exit_code] { exit_code = BenchLoop(args); });
 
   CLI::App* latency = bench->add_subcommand(

@@ -2,6 +2,10 @@
 
 #include <spdlog/spdlog.h>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <future>
 #include <nlohmann/json.hpp>
@@ -295,6 +299,13 @@ struct NetworkSubsystem::Impl {
 
   void Run(std::promise<Endpoints>* ready) {
     Endpoints bound;
+    // Under contention the physics thread comes first: this thread (and ZeroMQ's I/O thread,
+    // created below, which inherits it) runs at a lower priority. Late state is dropped anyway.
+    if (options.io_nice > 0) {
+      errno = 0;
+      const int now = getpriority(PRIO_PROCESS, static_cast<id_t>(gettid()));
+      if (errno == 0) setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), now + options.io_nice);
+    }
     try {
       context.emplace(1);
       bound.state = Bind(&pub, zmq::socket_type::pub, "state", options.state);

@@ -34,7 +34,10 @@ struct NetworkOptions {
   std::string step_mode = "live";                // the step server's initial mode
   // Observation level of the state/full topic (minimal, standard, full), "" for none.
   std::string full_state = "standard";
-  std::chrono::milliseconds lease_timeout{5000};  // a silent driver loses its lease
+  std::chrono::milliseconds lease_timeout{5000};
+  // Added to the nice value of the I/O thread (and ZeroMQ's own I/O thread), so that under CPU
+  // contention the physics thread keeps its rate; 0 leaves them as they are.
+  int io_nice = 5;  // a silent driver loses its lease
   // Frames the I/O thread may fall behind the physics thread before frames are dropped.
   std::size_t ring_capacity = 4096;
 };
