@@ -329,6 +329,13 @@ class Bridge {
       return Vec3{fp[0] + r[0], fp[1] + r[1], fp[2] + r[2]};
     };
     const std::string& t = c.tag();
+    // 3.x turns a fromto into pos/quat in the frame's own coordinates, then composes the frame's
+    // rotation: the roll about the segment follows the frame. Transforming the two points would
+    // let 2.2.2 choose another roll (wrong for fromto boxes and ellipsoids), so under a rotation
+    // the fromto is written as that pos/quat/size first.
+    if ((t == "geom" || t == "site") && rotated && Resolve(c, "fromto")) {
+      document::NormalizeFromTo(doc_, c);
+    }
     if ((t == "geom" || t == "site") && Resolve(c, "fromto")) {
       auto v = ResolveReals(c, "fromto");
       if (v->size() != 6) throw InputError(c.location(), "fromto needs 6 numbers");
@@ -739,6 +746,20 @@ class Bridge {
     return (*r)[0];
   }
 
+  // Whether a 3.x attribute of a position/intvelocity actuator is set (on it or its classes).
+  bool DialectSet(const Element& e, std::string_view name) {
+    const std::string* v = Resolve(e, name);
+    bool dialect = false;
+    if (v) {
+      doc_.root().Visit([&](const Element& x) {
+        for (const Attribute& at : x.attributes()) {
+          if (&at.value == v) dialect = IsDialect(at);
+        }
+      });
+    }
+    return dialect;
+  }
+
   void PositionShortcuts() {
     const double dt = doc_.FindSection("option") && doc_.FindSection("option")->Get("timestep")
                           ? *doc_.FindSection("option")->GetReal("timestep")
@@ -749,25 +770,32 @@ class Bridge {
     for (Element* a : Find({"position", "intvelocity"})) {
       if (!a->parent() || a->parent()->tag() != "actuator") continue;
       const bool position = a->tag() == "position";
-      // kv and dampratio fill the same slot (biasprm[2]): the most specific setter wins.
+      // kv and dampratio fill the same slot (biasprm[2]): the most specific setter wins, whatever
+      // its value (an explicit kv="0" overrides a class's dampratio, as in 3.x). Both on one
+      // element (or one default template) is an error in 3.x.
       double kv = DialectReal(*a, "kv");
       double ratio = DialectReal(*a, "dampratio");
-      if (kv != 0 && ratio != 0) {
+      bool both = false;
+      if (DialectSet(*a, "kv") && DialectSet(*a, "dampratio")) {
         const int dk = SetterDepth(*a, Resolve(*a, "kv"));
         const int dr = SetterDepth(*a, Resolve(*a, "dampratio"));
         if (dk > dr) ratio = 0;
         if (dr > dk) kv = 0;
+        both = dk == dr;
       }
       const double tau = position ? DialectReal(*a, "timeconst") : 0;
       const double inherit = DialectReal(*a, "inheritrange");
       for (const char* n : {"kv", "dampratio", "timeconst", "inheritrange"}) UnsetDialect(*a, n);
+      if (both) {
+        Note(Kind::kRefused, *a,
+             Tag(*a) +
+                 " kv and dampratio set together (MuJoCo 3.x refuses this too: \"kv and "
+                 "dampratio cannot both be defined\")");
+        continue;
+      }
       if (kv == 0 && ratio == 0 && tau == 0 && inherit == 0) continue;
       if (kv < 0 || ratio < 0 || tau < 0 || inherit < 0) {
         Note(Kind::kRefused, *a, Tag(*a) + " kv/dampratio/timeconst/inheritrange must be >= 0");
-        continue;
-      }
-      if (kv != 0 && ratio != 0) {
-        Note(Kind::kRefused, *a, Tag(*a) + " kv and dampratio are exclusive (MuJoCo 3.x too)");
         continue;
       }
       if (inherit > 0) {
@@ -837,6 +865,11 @@ class Bridge {
     }
     for (Element* d : FindDefaults({"position", "intvelocity", "general", "motor", "velocity",
                                     "cylinder", "muscle", "adhesion", "damper"})) {
+      if (DialectSet(*d, "kv") && DialectSet(*d, "dampratio") && d->Has("kv") &&
+          d->Has("dampratio")) {
+        Note(Kind::kRefused, *d,
+             "default " + Tag(*d) + " kv and dampratio set together (MuJoCo 3.x refuses this too)");
+      }
       std::vector<std::string> gone;
       for (const char* n : {"kv", "dampratio", "timeconst", "inheritrange"}) {
         if (UnsetDialect(*d, n)) gone.push_back(n);
@@ -925,11 +958,25 @@ class Bridge {
         }
       }
       if (const std::string* v = o->Get("actuatorgroupdisable")) {
-        if (AllZero(ParseReals(*v).value_or(std::vector<double>{1}))) {
-          Note(Kind::kDropped, *o, "option actuatorgroupdisable=\"0\": no group disabled");
+        // A list of group numbers (not a mask): "0" disables group 0, every actuator's default.
+        const std::string text = *v;
+        const std::vector<double> groups = ParseReals(text).value_or(std::vector<double>{});
+        std::vector<std::string> hit;
+        for (Element* a : Find({"general", "motor", "position", "velocity", "cylinder", "muscle",
+                                "adhesion", "intvelocity", "damper"})) {
+          if (!a->parent() || a->parent()->tag() != "actuator") continue;
+          const double g = ResolveReal(*a, "group", 0);
+          if (std::find(groups.begin(), groups.end(), g) != groups.end()) {
+            hit.push_back(a->Name().empty() ? Tag(*a) : a->Name());
+          }
+        }
+        if (hit.empty()) {
+          Note(Kind::kDropped, *o,
+               "option actuatorgroupdisable=\"" + text + "\": no actuator is in these groups");
         } else {
           Note(Kind::kRefused, *o,
-               "option actuatorgroupdisable disables actuator groups, which 2.2.2 cannot do");
+               "option actuatorgroupdisable=\"" + text + "\" disables actuator group(s) of " +
+                   Join(hit, ", ") + ", which 2.2.2 cannot do");
         }
         o->Unset("actuatorgroupdisable");
       }
@@ -1018,46 +1065,61 @@ class Bridge {
   }
 
   // ---- mesh inertia ----
+  // MuJoCo 3.x (since 3.0.1) takes a mesh's mass from its volume; 2.2.2's default
+  // (exactmeshinertia false) from the volume of the mesh's equivalent inertia box, which differs
+  // even for a convex mesh (a wedge weighs 2/sqrt(3) of its mass). 3.x's per-mesh modes: legacy
+  // (the default; tetrahedra from the mesh centre: exact for convex meshes, overcounts others),
+  // convex (the hull), exact, shell. 2.2.2's exactmeshinertia="true" is the exact volume: equal
+  // to all of them for convex meshes, and to "exact" always.
   void MeshInertia() {
-    std::map<std::string, std::vector<Element*>> modes;
-    for (Element* m : Find({"mesh"})) {
-      if (const std::string* v = m->Get("inertia")) modes[*v].push_back(m);
-    }
-    for (Element* d : FindDefaults({"mesh"})) {
-      if (const std::string* v = d->Get("inertia")) modes[*v].push_back(d);
-    }
-    if (modes.empty()) return;
-    bool exact_global = false;
-    if (modes.count("exact") && modes.size() == 1) {
-      bool set = false;
-      for (const auto& c : doc_.root().children()) {
-        set = set || (c->tag() == "compiler" && c->Has("exactmeshinertia"));
+    std::vector<Element*> meshes = Find({"mesh"});
+    int maybe_nonconvex = 0;  // legacy/convex meshes read from files (inline vertices: a hull)
+    for (Element* m : meshes) {
+      const std::string* v = Resolve(*m, "inertia");
+      const std::string mode = v ? *v : "legacy";
+      if (mode == "shell") {
+        Note(Kind::kRefused, *m,
+             Tag(*m) +
+                 " inertia=\"shell\": set shellinertia on the geoms that use this mesh "
+                 "instead (the bridge does not know which bodies infer inertia)");
+      } else if (mode != "exact" && m->Has("file")) {
+        ++maybe_nonconvex;
       }
-      if (!set) {
-        FirstCompiler().Set("exactmeshinertia", "true");
-        exact_global = true;
-      }
-    }
-    for (auto& [mode, elems] : modes) {
-      for (Element* m : elems) {
-        if (mode == "legacy") {
-          Note(Kind::kTranslated, *m,
-               Tag(*m) + " inertia=\"legacy\" is 2.2.2's default mesh inertia");
-        } else if (mode == "exact" && exact_global) {
-          Note(Kind::kTranslated, *m,
-               Tag(*m) + " inertia=\"exact\" -> compiler exactmeshinertia=\"true\"");
-        } else if (mode == "shell") {
-          Note(Kind::kRefused, *m,
-               Tag(*m) +
-                   " inertia=\"shell\": set shellinertia on the geoms that use this mesh "
-                   "instead (the bridge does not know which bodies infer inertia)");
-        } else {
-          Note(Kind::kApproximated, *m,
-               Tag(*m) + " inertia=\"" + mode +
-                   "\": computed with 2.2.2's legacy algorithm (identical for convex meshes)");
-        }
+      if (m->Get("inertia")) {
+        Note(Kind::kTranslated, *m,
+             Tag(*m) + " inertia=\"" + mode + "\": see the compiler's exactmeshinertia entry");
         m->Unset("inertia");
       }
+    }
+    for (Element* d : FindDefaults({"mesh"})) {
+      if (d->Unset("inertia")) {
+        Note(Kind::kTranslated, *d, "default " + Tag(*d) + " inertia resolved into each mesh");
+      }
+    }
+    if (meshes.empty()) return;
+    std::string before;
+    bool set = false;
+    for (const auto& c : doc_.root().children()) {
+      if (c->tag() != "compiler" || !c->Has("exactmeshinertia")) continue;
+      before = *c->Get("exactmeshinertia");
+      c->Set("exactmeshinertia", "true");
+      set = true;
+    }
+    if (!set) FirstCompiler().Set("exactmeshinertia", "true");
+    if (before == "true") return;
+    std::string what =
+        "compiler exactmeshinertia=\"true\" written" +
+        (before.empty() ? std::string() : " (was \"" + before + "\", 3.0-3.1's legacy volume)") +
+        ": MuJoCo 3.x computes mesh masses from the mesh volume, 2.2.2's default from its "
+        "inertia box";
+    if (maybe_nonconvex == 0) {
+      Note(Kind::kTranslated, *doc_.root().FirstChild("compiler"), what);
+    } else {
+      Note(Kind::kApproximated, *doc_.root().FirstChild("compiler"),
+           what + "; exact for convex meshes, but " + std::to_string(maybe_nonconvex) +
+               " mesh file(s) with inertia legacy/convex may be non-convex, where 3.x's legacy "
+               "algorithm overcounts the volume (convex: takes the hull's) and 2.2.2's exact one "
+               "does not");
     }
   }
 

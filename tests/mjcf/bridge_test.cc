@@ -560,6 +560,78 @@ TEST_F(BridgeTest, InheritRangeCopiesTheTargetRange) {
   EXPECT_NEAR(m->actuator_actrange[5], 1.1, 1e-12);
 }
 
+// Found by tests/mjcf/reference3x_test.cc: the most specific kv/dampratio wins whatever its value
+// (kv="0" overrides a class's dampratio); both on one element is a 3.x error.
+TEST_F(BridgeTest, KvAndDampratioFollowTheMostSpecificSetterAndAreExclusive) {
+  Bridged b = Load(R"(<mujoco>
+  <default><default class="servo"><position kp="10" dampratio="1"/></default></default>
+  <worldbody>
+    <body><joint name="j" type="slide" axis="1 0 0"/><geom type="box" size="0.1 0.1 0.1"/></body>
+  </worldbody>
+  <actuator><position name="p" class="servo" joint="j" kv="0"/></actuator>
+</mujoco>)");
+  EXPECT_EQ(b.model->actuator_biasprm[2], 0);
+  const mjcf::BridgeReport both = ReportOf(R"(<mujoco>
+  <worldbody>
+    <body><joint name="j" type="slide" axis="1 0 0"/><geom type="box" size="0.1 0.1 0.1"/></body>
+  </worldbody>
+  <actuator><position joint="j" kp="10" kv="2" dampratio="0"/></actuator>
+</mujoco>)");
+  EXPECT_TRUE(Mentions(both, Kind::kRefused, "kv and dampratio set together"));
+}
+
+// 3.x (since 3.0.1) weighs a mesh by its volume; 2.2.2's default by its inertia box.
+TEST_F(BridgeTest, MeshMassIsTheMeshVolumeAs3xComputesIt) {
+  Bridged b = Load(R"(<mujoco>
+  <asset>
+    <mesh name="wedge" inertia="legacy"
+          vertex="0 0 0  0.06 0 0  0 0.06 0  0 0 0.06  0.06 0.06 0  0.06 0 0.06"/>
+  </asset>
+  <worldbody><body name="b"><freejoint/><geom type="mesh" mesh="wedge"/></body></worldbody>
+</mujoco>)");
+  // a triangular prism: 0.5 * 0.06^3 m^3 at 1000 kg/m^3 (2.2.2's default gives 2/sqrt(3) of it)
+  EXPECT_NEAR(b.model->body_mass[1], 0.108, 1e-8);
+  EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "exactmeshinertia"));
+}
+
+// actuatorgroupdisable lists group numbers: "0" disables every actuator of the default group.
+TEST_F(BridgeTest, ActuatorGroupDisableIsAListOfGroups) {
+  const std::string model = R"(<mujoco>
+  <option actuatorgroupdisable="GROUPS"/>
+  <worldbody><body><joint name="j"/><geom size="0.1"/></body></worldbody>
+  <actuator><motor name="m" joint="j"/></actuator>
+</mujoco>)";
+  auto with = [&](const std::string& groups) {
+    std::string xml = model;
+    xml.replace(xml.find("GROUPS"), 6, groups);
+    return ReportOf(xml);
+  };
+  EXPECT_TRUE(Mentions(with("0"), Kind::kRefused, "actuatorgroupdisable=\"0\" disables"));
+  EXPECT_TRUE(Mentions(with("2 3"), Kind::kDropped, "no actuator is in these groups"));
+}
+
+// A fromto box in a rotated frame keeps the roll 3.x gives it (the frame's), not 2.2.2's choice.
+TEST_F(BridgeTest, FromtoInARotatedFrameKeepsTheFramesRoll) {
+  Bridged b = Load(R"(<mujoco>
+  <worldbody>
+    <frame euler="0 0 90">
+      <geom name="g" type="box" fromto="0 0 0 1 0 0" size="0.1 0.2"/>
+    </frame>
+  </worldbody>
+</mujoco>)");
+  const mjModel* m = b.model.get();
+  // 3.x: quat = frame (90 deg about z) * z2quat(-x), pos at the rotated midpoint, half-length 0.5
+  double local[4], expected[4];
+  const double dir[3] = {-1, 0, 0};
+  mju_quatZ2Vec(local, dir);
+  const double frame[4] = {std::cos(kPi / 4), 0, 0, std::sin(kPi / 4)};
+  mju_mulQuat(expected, frame, local);
+  const int g = Id(m, mjOBJ_GEOM, "g");
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(m->geom_quat[4 * g + i], expected[i], 1e-9) << i;
+  EXPECT_NEAR(m->geom_pos[3 * g + 1], 0.5, 1e-12);
+  EXPECT_NEAR(m->geom_size[3 * g + 2], 0.5, 1e-12);
+}
+
 TEST_F(BridgeTest, ActuatorArmatureAndDampingMoveToTheJoint) {
   Bridged b = Load(R"(<mujoco>
   <worldbody>
