@@ -95,20 +95,35 @@ void ArticulationControl::HoldKeyframe(std::string_view name) {
   HoldKeyframe(key);
 }
 
-void ArticulationControl::HoldKeyframe(int key) {
+std::vector<double> ArticulationControl::PoseTargets(int key) const {
   const mjModel* m = model_;
-  if (key < 0 || key >= m->nkey) {
-    throw Error("HoldKeyframe: keyframe id " + std::to_string(key) + " out of range");
-  }
   const bool positions = controller_->TargetsArePositions();
-  std::vector<double> pose(actuator_ids_.size());
+  std::vector<double> pose(actuator_ids_.size(), 0.0);
   for (std::size_t i = 0; i < actuator_ids_.size(); ++i) {
     const ActuatorBinding b = MakeActuatorBinding(m, actuator_ids_[i]);
-    pose[i] = m->key_ctrl[key * m->nu + b.actuator_id];
-    if (positions && b.has_joint()) pose[i] = m->key_qpos[key * m->nq + b.qpos_adr];
+    if (key >= 0) pose[i] = m->key_ctrl[key * m->nu + b.actuator_id];
+    if (positions && b.has_joint()) {
+      pose[i] = key >= 0 ? m->key_qpos[key * m->nq + b.qpos_adr] : m->qpos0[b.qpos_adr];
+    }
   }
-  channel(ControlSource::kHold).Publish(pose);  // the whole pose first, then the switch
+  return pose;
+}
+
+void ArticulationControl::HoldKeyframe(int key) {
+  if (key < 0 || key >= model_->nkey) {
+    throw Error("HoldKeyframe: keyframe id " + std::to_string(key) + " out of range");
+  }
+  channel(ControlSource::kHold).Publish(PoseTargets(key));  // the whole pose, then the switch
   holding_.store(true, std::memory_order_release);
+}
+
+void ArticulationControl::SeedTargets(int key) {
+  if (key >= model_->nkey) throw Error("SeedTargets: keyframe id out of range");
+  const std::vector<double> pose = PoseTargets(key);
+  for (const ControlSource s :
+       {ControlSource::kNetwork, ControlSource::kUi, ControlSource::kInput}) {
+    channel(s).Publish(pose);
+  }
 }
 
 void ArticulationControl::ApplyControls(const mjModel* m, mjData* d, ControlSource global) {

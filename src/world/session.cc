@@ -79,6 +79,7 @@ void Session::Build(const SceneConfig& scene) {
   // Initial keyframes (applied now: the thread is not running), then holds.
   QueueInitialReset(/*full=*/false);
   for (Articulation& a : articulations_) {
+    a.control->SeedTargets(a.initial_key);
     if (a.config.hold_keyframe) a.control->HoldKeyframe(a.initial_key);
   }
   engine_->DrainEvents();  // the initial reset is not news

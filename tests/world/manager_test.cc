@@ -221,13 +221,22 @@ TEST_F(ManagerTest, HoldKeyframeKeepsThePose) {
   Manager m(Fast());
   const std::string pd = "    controller: {type: pd, kp: 1000, kv: 50}\n";
   m.BeginPlay(TwoArms(pd + "    keyframe: up\n    hold_keyframe: true\n",
-                      pd + "    keyframe: up\n"));  // b: PD towards its targets (0)
+                      pd + "    keyframe: up\n"));  // b: PD towards its own source's targets
   EXPECT_TRUE(m.session().articulations()[0].control->holding());
   EXPECT_FALSE(m.session().articulations()[1].control->holding());
   TickSteps(m, 1500);                          // 3 s
   EXPECT_NEAR(Qpos(m, "a_hinge"), 0.7, 5e-3);  // gravity sag of a PD servo: ~1.4 Nm / kp
   EXPECT_NEAR(Qvel(m, "a_hinge"), 0.0, 1e-3);
-  EXPECT_NEAR(Qpos(m, "b_hinge"), 0.0, 5e-3);  // not held: went to its target
+  // b's sources start at its initial pose (nothing sent yet: it keeps it, not chasing zeros).
+  EXPECT_NEAR(Qpos(m, "b_hinge"), 0.7, 5e-3);
+  // A target sent to b moves it; a, holding its keyframe, ignores one sent to it.
+  const auto& arts = m.session().articulations();
+  for (const auto& art : arts) {
+    ASSERT_TRUE(art.control->SetTarget(m.session().controls().global_source(), 0, 0.0));
+  }
+  TickSteps(m, 1500);
+  EXPECT_NEAR(Qpos(m, "b_hinge"), 0.0, 5e-3);
+  EXPECT_NEAR(Qpos(m, "a_hinge"), 0.7, 5e-3);
 }
 
 TEST_F(ManagerTest, PdHeldJointSettlesAtItsTarget) {

@@ -24,6 +24,12 @@ class Robot:
             if full.startswith(prefix):
                 self._ids[full[len(prefix):]] = aid
 
+    @property
+    def actuator_names_short(self):
+        """Actuator names as written in the robot's own MJCF (without the "{robot}_" prefix)."""
+        prefix = self.name + "_"
+        return [n[len(prefix):] if n.startswith(prefix) else n for n in self.actuator_names]
+
     def actuator_id(self, name_or_id):
         """The global id of an actuator given by short name, full name or id."""
         if isinstance(name_or_id, int):

@@ -79,6 +79,10 @@ class ArticulationControl {
   // until StopHold. Any thread. Throws Error for a bad key.
   void HoldKeyframe(int key);
   void HoldKeyframe(std::string_view name);
+  // Starts every source but hold and replay at the pose of keyframe `key` (-1: the model's
+  // reference configuration qpos0, zero controls), so that a robot whose source has sent
+  // nothing yet keeps its initial pose instead of chasing zero targets. Any thread.
+  void SeedTargets(int key);
   void StopHold() { holding_.store(false, std::memory_order_release); }
   bool holding() const { return holding_.load(std::memory_order_acquire); }
 
@@ -94,6 +98,9 @@ class ArticulationControl {
   int FindKeyframe(const mjModel* m, std::string_view name) const;
 
  private:
+  // Targets that hold keyframe `key` (-1: qpos0): joint positions or the keyframe's ctrl.
+  std::vector<double> PoseTargets(int key) const;
+
   std::string prefix_;
   const mjModel* model_;
   std::vector<int> actuator_ids_;
