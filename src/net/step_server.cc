@@ -8,6 +8,7 @@
 #include <zmq_addon.hpp>
 
 #include "net/observation.h"
+#include "urlab/control/controllers.h"
 #include "urlab/core/version.h"
 
 namespace urlab::net {
@@ -103,6 +104,18 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
       {"list_keyframes", &StepServer::ListKeyframes, true, false, {}, "keyframes"},
       {"set_sim_options", &StepServer::SetSimOptions, true, true, {"options"}, "options"},
       {"get_counters", &StepServer::GetCounters, true, false, {}, "errors, clients, driver"},
+      {"set_twist",
+       &StepServer::SetTwist,
+       true,
+       true,
+       {"articulation"},
+       "articulation, linear, angular"},
+      {"configure_controller",
+       &StepServer::ConfigureController,
+       true,
+       true,
+       {"articulation", "params"},
+       "articulation, kind, params"},
   };
   return ops;
 }
@@ -467,6 +480,7 @@ StepServer::Outcome StepServer::Step(Request& r) {
   const std::optional<ObsSpec> observation = ObservationFor(r);
   // Controls: validate every articulation's entry first, then publish them (all or nothing).
   std::vector<std::pair<const ArticulationTopics*, std::vector<std::pair<int, double>>>> patches;
+  std::vector<physics::cmd::ApplyForce> forces;
   if (const auto it = r.body.find("per_articulation"); it != r.body.end()) {
     if (!it->is_object()) Fail("bad_value", "per_articulation must be a map");
     for (const auto& [name, entry] : it->items()) {
@@ -490,12 +504,36 @@ StepServer::Outcome StepServer::Step(Request& r) {
           patch.emplace_back(g->second, Number(value, "ctrl_map"));
         }
       }
+      if (const auto x = entry.find("xfrc_applied"); x != entry.end()) {
+        if (!x->is_object()) Fail("bad_value", "xfrc_applied must be a map of body to 6 values");
+        for (const auto& [body, wrench] : x->items()) {
+          std::size_t i = 0;
+          while (i < t.body_names.size() && t.body_names[i] != body &&
+                 t.name + "_" + t.body_names[i] != body) {
+            ++i;
+          }
+          if (i == t.body_names.size()) {
+            Fail("unknown_body", name + ": no body '" + body + "' in this articulation");
+          }
+          const std::vector<double> w = Numbers(wrench, "xfrc_applied");
+          if (w.size() != 6) {
+            Fail("dim_mismatch", name + ": xfrc_applied needs 6 values (force, torque)");
+          }
+          physics::cmd::ApplyForce f;
+          f.body = t.body_ids[i];
+          std::copy_n(w.begin(), 3, f.force.begin());
+          std::copy_n(w.begin() + 3, 3, f.torque.begin());
+          f.steps = n;  // for the whole window, cleared after it
+          forces.push_back(f);
+        }
+      }
       patches.emplace_back(&t, std::move(patch));
     }
   }
   for (auto& [t, patch] : patches) {
     if (!patch.empty()) t->control->channel(control::ControlSource::kNetwork).Patch(patch);
   }
+  for (const physics::cmd::ApplyForce& f : forces) session_.engine().Submit(f);
   Outcome out;
   out.reply = Json{{"op", "step_ok"}};
   out.observation = observation;
@@ -777,6 +815,71 @@ StepServer::Outcome StepServer::GetCounters(Request&) {
                {"clients", clients_.size()},
                {"driver", driver_.empty() ? Json() : Json(driver_)},
                {"mode", mode_}}};
+}
+
+StepServer::Outcome StepServer::SetTwist(Request& r) {
+  const ArticulationTopics& t = Articulation(r.body["articulation"]);
+  // No controller of this runtime follows a body twist yet (the description's twist controller
+  // belongs to the input subsystem): refused as protocol.md says, nothing is changed.
+  Fail("no_twist_controller", t.name + " has no twist controller");
+}
+
+StepServer::Outcome StepServer::ConfigureController(Request& r) {
+  const ArticulationTopics& t = Articulation(r.body["articulation"]);
+  const Json& params = r.body["params"];
+  if (!params.is_object()) Fail("controller_schema_violation", "params must be a map");
+  auto* pd = dynamic_cast<control::PdController*>(t.control->controller());
+  if (!pd) {
+    Fail("no_controller", t.name + " has no configurable controller (PD gains only)");
+  }
+  // Schema: {"kp"|"kv"|"torque_limit": number (every actuator)} and/or
+  // {"gains": {actuator or joint name: {"kp", "kv", "torque_limit"}}}. Validated whole first.
+  const auto gain_value = [](const Json& v, const std::string& what) {
+    if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() < 0) {
+      Fail("controller_schema_violation", what + " must be a finite number >= 0");
+    }
+    return v.get<double>();
+  };
+  const auto patch = [&](control::PdGains g, const Json& fields, const std::string& where) {
+    for (const auto& [k, v] : fields.items()) {
+      if (k == "kp") {
+        g.kp = gain_value(v, where + "kp");
+      } else if (k == "kv") {
+        g.kv = gain_value(v, where + "kv");
+      } else if (k == "torque_limit") {
+        g.torque_limit = gain_value(v, where + "torque_limit");
+      } else if (k != "gains" || !where.empty()) {
+        Fail("controller_schema_violation", "unknown parameter '" + where + k + "'");
+      }
+    }
+    return g;
+  };
+  const int n = static_cast<int>(t.actuator_ids.size());
+  std::vector<control::PdGains> next(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) next[static_cast<std::size_t>(i)] = patch(pd->gains(i), params, "");
+  if (const auto g = params.find("gains"); g != params.end()) {
+    if (!g->is_object()) Fail("controller_schema_violation", "gains must be a map of name to map");
+    for (const auto& [name, fields] : g->items()) {
+      const auto it = t.gain_index.find(name);
+      if (it == t.gain_index.end()) {
+        Fail("controller_schema_violation", t.name + ": no actuator or joint '" + name + "'");
+      }
+      if (!fields.is_object()) Fail("controller_schema_violation", name + ": a map of gains");
+      auto& slot = next[static_cast<std::size_t>(it->second)];
+      slot = patch(slot, fields, name + ".");
+    }
+  }
+  for (int i = 0; i < n; ++i) pd->SetGains(i, next[static_cast<std::size_t>(i)]);
+  Json gains = Json::object();
+  for (int i = 0; i < n; ++i) {
+    const control::PdGains g = pd->gains(i);
+    gains[t.actuator_names[static_cast<std::size_t>(i)]] =
+        Json{{"kp", g.kp}, {"kv", g.kv}, {"torque_limit", g.torque_limit}};
+  }
+  return {Json{{"op", "configure_controller_ok"},
+               {"articulation", t.name},
+               {"kind", "pd"},
+               {"params", Json{{"gains", std::move(gains)}}}}};
 }
 
 }  // namespace urlab::net

@@ -138,6 +138,8 @@ class StepServer {
   Outcome ListKeyframes(Request& r);
   Outcome SetSimOptions(Request& r);
   Outcome GetCounters(Request& r);
+  Outcome SetTwist(Request& r);
+  Outcome ConfigureController(Request& r);
 
   world::Session& session_;
   const std::vector<ArticulationTopics>& tables_;

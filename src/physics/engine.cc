@@ -287,6 +287,7 @@ void PhysicsEngine::ValidateCommand(const Command& command) const {
           if (mju_norm(c.quat.data(), 4) < 1e-12) throw Error("SetMocap: zero quaternion");
         } else if constexpr (std::is_same_v<T, cmd::ApplyForce>) {
           range("ApplyForce", c.body, 1, m->nbody);
+          if (c.steps < 1) throw Error("ApplyForce: steps must be at least 1");
           finite("ApplyForce", c.force.data(), 3);
           finite("ApplyForce", c.torque.data(), 3);
         } else if constexpr (std::is_same_v<T, cmd::SetOptions>) {
@@ -581,7 +582,7 @@ void PhysicsEngine::IterateLocked(bool force_step) {
     } else {
       mj_step(m, d);
     }
-    RemoveOneShotForcesLocked();  // they act for one step only
+    RemoveOneShotForcesLocked(/*all=*/false);  // each acts for its number of steps only
     step_count_.fetch_add(1, std::memory_order_relaxed);
     if (d->time > time_before) sim_advanced_ += d->time - time_before;
     ++window_steps_;
@@ -692,7 +693,7 @@ void PhysicsEngine::CheckDivergenceLocked(double time_before) {
   }
 }
 
-void PhysicsEngine::RemoveOneShotForcesLocked() {
+void PhysicsEngine::RemoveOneShotForcesLocked(bool all) {
   if (one_shot_added_) {
     for (const cmd::ApplyForce& f : one_shot_) {
       mju_subFrom3(data_->xfrc_applied + 6 * f.body, f.force.data());
@@ -700,7 +701,12 @@ void PhysicsEngine::RemoveOneShotForcesLocked() {
     }
   }
   one_shot_added_ = false;
-  one_shot_.clear();
+  if (all) {
+    one_shot_.clear();
+    return;
+  }
+  for (cmd::ApplyForce& f : one_shot_) --f.steps;
+  std::erase_if(one_shot_, [](const cmd::ApplyForce& f) { return f.steps <= 0; });
 }
 
 void PhysicsEngine::PublishFrameLocked() {
@@ -723,7 +729,7 @@ void PhysicsEngine::HandleErrorLocked(const std::exception& e) {
   // An error thrown out of MuJoCo leaves its stack pointer where it was; nothing of ours is on
   // the mjData stack between iterations, so it is safe to release it all.
   data_->pstack = 0;
-  RemoveOneShotForcesLocked();  // a step that threw keeps no one-shot force (added or not)
+  RemoveOneShotForcesLocked(/*all=*/true);  // a step that threw keeps no one-shot force
   paused_.store(true, std::memory_order_release);
   error_latched_.store(true, std::memory_order_release);
   if (step_budget_ > 0) {  // the step window ends here, failed

@@ -99,16 +99,18 @@ class StepServerTest : public urlab::testing::MujocoTest {
     dir_ = urlab::testing::MakeTempDir("step_server");
     urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml);
   }
-  void Play(std::chrono::milliseconds lease = 5000ms, const std::string& mode = "live") {
+  void Play(std::chrono::milliseconds lease = 5000ms, const std::string& mode = "live",
+            const std::string& controller = "") {
     NetworkOptions o;
     o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
     o.lease_timeout = lease;
     o.step_mode = mode;
     net_ = &static_cast<NetworkSubsystem&>(
         manager_.AddSubsystem(std::make_unique<NetworkSubsystem>(o)));
-    manager_.BeginPlay(world::ParseScene(
-        "control_source: network\narticulations:\n  - {name: arm, mjcf: arm.xml}\n",
-        dir_ + "/scene.yaml"));
+    manager_.BeginPlay(
+        world::ParseScene("control_source: network\narticulations:\n  - {name: arm, mjcf: arm.xml" +
+                              controller + "}\n",
+                          dir_ + "/scene.yaml"));
     ASSERT_FALSE(net_->endpoints().rpc.empty());
   }
   std::string rpc() const { return net_->endpoints().rpc; }
@@ -298,6 +300,67 @@ TEST_F(StepServerTest, OneDriverManyObserversWithLeases) {
   const Json r = Json::from_msgpack(p, p + reply.size());
   EXPECT_EQ(r["op"], "step_ok");
   EXPECT_EQ(r["seq"], "d1");
+}
+
+// xfrc_applied acts for exactly the step window it came with; bad bodies and sizes are refused
+// before anything is applied.
+TEST_F(StepServerTest, XfrcAppliedActsForItsWindowOnly) {
+  Play(5000ms, "direct");
+  Client c(ctx_, rpc());
+  c.Hello();
+  const auto push = [](Json wrench) {
+    return Json{{"arm", {{"xfrc_applied", {{"link", std::move(wrench)}}}}}};
+  };
+  EXPECT_EQ(c.Op("step", {{"per_articulation", push({0, 0, 0, 0, 1})}})["code"], "dim_mismatch");
+  EXPECT_EQ(
+      c.Op("step", {{"per_articulation",
+                     {{"arm", {{"xfrc_applied", {{"ghost", {0, 0, 0, 0, 1, 0}}}}}}}}})["code"],
+      "unknown_body");
+  EXPECT_EQ(c.Op("step", {{"per_articulation", push({0, 0, 0, 0, "x", 0})}})["code"], "bad_value");
+  const Json before = c.Op("step");
+  ASSERT_EQ(before["op"], "step_ok");
+  EXPECT_EQ(before["per_articulation"]["arm"]["qvel"][0], 0.0);  // nothing was applied
+  // A torque about the hinge axis for 10 steps spins the link up ...
+  const Json pushed =
+      c.Op("step", {{"n_steps", 10}, {"per_articulation", push({0, 0, 0, 0, 1, 0})}});
+  ASSERT_EQ(pushed["op"], "step_ok");
+  const double spun = pushed["per_articulation"]["arm"]["qvel"][0];
+  EXPECT_GT(spun, 0.01);
+  // ... and then it is gone: only the joint damping acts (the speed decays, never grows).
+  const Json after = c.Op("step", {{"n_steps", 10}});
+  const double coasting = after["per_articulation"]["arm"]["qvel"][0];
+  EXPECT_LT(coasting, spun);
+  EXPECT_GT(coasting, 0.0);
+}
+
+TEST_F(StepServerTest, ConfigureControllerPatchesGainsAndEchoesThemAll) {
+  Play(5000ms, "live", ", controller: {type: pd, kp: 10, kv: 1}");
+  Client c(ctx_, rpc());
+  c.Hello();
+  const Json r = c.Op(
+      "configure_controller",
+      {{"articulation", "arm"}, {"params", {{"kv", 3}, {"gains", {{"hinge", {{"kp", 50}}}}}}}});
+  ASSERT_EQ(r["op"], "configure_controller_ok") << r.dump();
+  EXPECT_EQ(r["kind"], "pd");
+  const Json& g = r["params"]["gains"]["arm_motor"];
+  EXPECT_EQ(g["kp"], 50.0);
+  EXPECT_EQ(g["kv"], 3.0);
+  // Refused as a whole: nothing of a bad patch is applied.
+  EXPECT_EQ(c.Op("configure_controller",
+                 {{"articulation", "arm"}, {"params", {{"kv", 7}, {"kq", 1}}}})["code"],
+            "controller_schema_violation");
+  EXPECT_EQ(
+      c.Op("configure_controller",
+           {{"articulation", "arm"}, {"params", {{"gains", {{"ghost", {{"kp", 1}}}}}}}})["code"],
+      "controller_schema_violation");
+  EXPECT_EQ(
+      c.Op("configure_controller", {{"articulation", "arm"}, {"params", {{"kp", -1}}}})["code"],
+      "controller_schema_violation");
+  const Json same =
+      c.Op("configure_controller", {{"articulation", "arm"}, {"params", Json::object()}});
+  EXPECT_EQ(same["params"]["gains"]["arm_motor"]["kv"], 3.0);
+  EXPECT_EQ(c.Op("set_twist", {{"articulation", "arm"}})["code"], "no_twist_controller");
+  EXPECT_EQ(c.Op("set_twist", {{"articulation", "leg"}})["code"], "unknown_articulation");
 }
 
 }  // namespace

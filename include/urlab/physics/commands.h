@@ -63,12 +63,13 @@ struct SetMocap {
   std::array<mjtNum, 3> pos{};
   std::array<mjtNum, 4> quat{1, 0, 0, 0};
 };
-// Adds a wrench at a body's centre of mass (world frame, xfrc_applied layout) for the next step
-// only: it is removed again after that step.
+// Adds a wrench at a body's centre of mass (world frame, xfrc_applied layout) for the next
+// `steps` steps only: it is removed again after the last of them (and at a reset or restore).
 struct ApplyForce {
   int body = -1;
   std::array<mjtNum, 3> force{};
   std::array<mjtNum, 3> torque{};
+  int steps = 1;
 };
 // Changes physics options (timestep, gravity, integrator, ...); `label` names it in events.
 struct SetOptions {

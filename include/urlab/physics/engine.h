@@ -239,7 +239,9 @@ class PhysicsEngine {
   void ValidateCommand(const Command& command) const;
   void CheckDivergenceLocked(double time_before);
   void PublishFrameLocked();
-  void RemoveOneShotForcesLocked();
+  // Takes the one-shot forces out of xfrc_applied; drops those whose steps ran out (all: every
+  // one).
+  void RemoveOneShotForcesLocked(bool all);
   void HandleErrorLocked(const std::exception& e);
   void QueueEvent(EngineEvent event);
   void ThrowIfOnPhysicsThread(const char* what) const;
