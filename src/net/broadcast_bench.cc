@@ -10,6 +10,7 @@
 #include <thread>
 #include <zmq.hpp>
 
+#include "net/bench_util.h"
 #include "urlab/core/error.h"
 #include "urlab/net/network.h"
 #include "urlab/world/manager.h"
@@ -18,22 +19,12 @@ namespace urlab::net {
 
 namespace {
 
+using bench::Format;
+using bench::Median;
 using Clock = std::chrono::steady_clock;
 
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
-
-template <typename... Args>
-std::string Format(const char* fmt, Args... args) {
-  char buf[256];
-  std::snprintf(buf, sizeof(buf), fmt, args...);
-  return buf;
-}
-
 struct Trial {
-  double rate = 0;           // physics steps per second
+  double rate = 0;  // physics steps per second
   double messages_per_step = 0;
 };
 
@@ -116,9 +107,10 @@ BroadcastBenchResult RunBroadcastBench(world::SceneConfig scene,
     r.bare_rates.push_back(bare.rate);
     r.network_rates.push_back(net.rate);
     messages.push_back(net.messages_per_step);
-    report(Format("trial %d: loop %.0f steps/s, with network %.0f steps/s (%.1f messages per "
-                  "step received), ratio %.3f",
-                  i + 1, bare.rate, net.rate, net.messages_per_step, net.rate / bare.rate));
+    report(
+        Format("trial %d: loop %.0f steps/s, with network %.0f steps/s (%.1f messages per "
+               "step received), ratio %.3f",
+               i + 1, bare.rate, net.rate, net.messages_per_step, net.rate / bare.rate));
   }
   r.messages_per_step = Median(messages);
   r.ratio = Median(r.network_rates) / Median(r.bare_rates);

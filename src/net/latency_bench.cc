@@ -11,6 +11,7 @@
 #include <zmq.hpp>
 #include <zmq_addon.hpp>
 
+#include "net/bench_util.h"
 #include "net/msgpack_codec.h"
 #include "urlab/core/error.h"
 #include "urlab/net/network.h"
@@ -22,6 +23,8 @@ namespace urlab::net {
 
 namespace {
 
+using bench::Format;
+using bench::Median;
 using Clock = std::chrono::steady_clock;
 
 Percentiles Summarize(std::vector<double> us) {
@@ -59,13 +62,6 @@ std::optional<double> FirstCtrl(const zmq::message_t& m, const std::string& art)
 }
 
 double Micros(Clock::duration d) { return std::chrono::duration<double, std::micro>(d).count(); }
-
-template <typename... Args>
-std::string Format(const char* fmt, Args... args) {
-  char buf[256];
-  std::snprintf(buf, sizeof(buf), fmt, args...);
-  return buf;
-}
 
 // Raw ZeroMQ floors: an echo thread answers each ping (same payload size as a control message).
 // Kept alive through the whole run so raw and server samples can alternate.
@@ -155,11 +151,6 @@ double BareRate(const mjModel* m, mjData* d, int steps) {
   const auto t0 = Clock::now();
   for (int i = 0; i < steps; ++i) mj_step(m, d);
   return steps / std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
 }
 
 class RpcClient {

@@ -1,7 +1,6 @@
 #include "urlab/net/network.h"
 
 #include <spdlog/spdlog.h>
-
 #include <sys/resource.h>
 #include <unistd.h>
 
