@@ -9,14 +9,16 @@
 // placeholder "@@@@@@@@@@@@@@@@@@@@" in the input becomes that session id (also 20 bytes, so a
 // msgpack string keeps its length), so that inputs reach the operations that need a session
 // and the driver lease. Between inputs the state, the options and the pause are reset and the
-// server is rebuilt (clients, lease, mode start afresh). URLAB_FUZZ_VERBOSE=1 prints each reply
-// (to read what a reproducer got).
+// the harness ends every session and sets live mode again (clients, lease and mode start afresh;
+// one server and one client serve the whole run). URLAB_FUZZ_VERBOSE=1 prints each reply (to read
+// what a reproducer got).
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -40,7 +42,21 @@ struct Fixture {
       session->engine().SubscribeState("fuzz_step_request");
   mjOption options = session->engine().model()->opt;  // as built, restored for each input
   zmq::context_t context{1};
-  std::uint64_t endpoints = 0;
+  // One server and one client for the whole run (sockets closed per input would be freed later
+  // by ZeroMQ's reaper thread, which makes every input look like a leak to libFuzzer).
+  std::unique_ptr<urlab::net::StepServer> server;
+  std::optional<zmq::socket_t> client;
+
+  Fixture() {
+    urlab::net::StepServerOptions o;
+    o.endpoint = "inproc://urlab-fuzz-step";
+    server = std::make_unique<urlab::net::StepServer>(*session, tables, state, o);
+    if (server->Bind(context).empty()) __builtin_trap();
+    client.emplace(context, zmq::socket_type::dealer);
+    client->set(zmq::sockopt::linger, 0);
+    client->set(zmq::sockopt::rcvtimeo, 1000);
+    client->connect(o.endpoint);
+  }
 };
 
 Fixture& F() {
@@ -90,10 +106,30 @@ void CheckReply(const std::vector<std::string>& frames, bool json) {
   }
 }
 
+std::string Bytes(const Json& j) {
+  const std::vector<std::uint8_t> b = Json::to_msgpack(j);
+  return std::string(b.begin(), b.end());
+}
+
+Json Decode(const std::string& frame, bool json) {
+  const auto* b = reinterpret_cast<const std::uint8_t*>(frame.data());
+  return json ? Json::parse(b, b + frame.size(), nullptr, false)
+              : Json::from_msgpack(b, b + frame.size(), true, false);
+}
+
 }  // namespace
+
+// The fixture is built before the first input (its allocations are not the input's).
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  (void)F();
+  return 0;
+}
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   Fixture& f = F();
+  if (std::getenv("URLAB_FUZZ_VERBOSE")) std::fprintf(stderr, "input of %zu bytes\n", size);
+  urlab::net::StepServer& server = *f.server;
+  zmq::socket_t& client = *f.client;
   urlab::physics::PhysicsEngine& engine = f.session->engine();
   // A fresh start: options as built, running, every articulation in its initial keyframe.
   const mjOption saved = f.options;
@@ -102,23 +138,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   (void)engine.Submit(urlab::physics::cmd::SetPaused{false});
   (void)f.session->ResetToInitialState();
 
-  urlab::net::StepServerOptions options;
-  // A new name each time: a closed socket's inproc name is released asynchronously.
-  options.endpoint = "inproc://urlab-fuzz-step-" + std::to_string(f.endpoints++);
-  urlab::net::StepServer server(*f.session, f.tables, f.state, options);
-  if (server.Bind(f.context).empty()) __builtin_trap();
-  zmq::socket_t client(f.context, zmq::socket_type::dealer);
-  client.set(zmq::sockopt::linger, 0);
-  client.set(zmq::sockopt::rcvtimeo, 1000);
-  client.connect(options.endpoint);
-
-  const std::vector<std::uint8_t> hello = Json::to_msgpack(Json{{"op", "hello"}});
-  const std::vector<std::string> hello_reply = Exchange(
-      server, client, std::string_view(reinterpret_cast<const char*>(hello.data()), hello.size()));
-  CheckReply(hello_reply, false);
-  const auto* hb = reinterpret_cast<const std::uint8_t*>(hello_reply[0].data());
-  const std::string id =
-      Json::from_msgpack(hb, hb + hello_reply[0].size()).value("session_id", std::string());
+  const std::vector<std::string> hello = Exchange(server, client, Bytes({{"op", "hello"}}));
+  CheckReply(hello, false);
+  const std::string id = Decode(hello[0], false).value("session_id", std::string());
   if (id.size() != kPlaceholder.size()) __builtin_trap();
 
   std::string request(reinterpret_cast<const char*>(data), size);
@@ -126,21 +148,32 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
        at = request.find(kPlaceholder, at + id.size())) {
     request.replace(at, kPlaceholder.size(), id);
   }
+  const bool json = IsJsonRequest(request);
   const std::vector<std::string> reply = Exchange(server, client, request);
   if (std::getenv("URLAB_FUZZ_VERBOSE") && reply.size() == 1) {  // to read a reproducer's reply
-    const auto* rb = reinterpret_cast<const std::uint8_t*>(reply[0].data());
-    const Json r = IsJsonRequest(request)
-                       ? Json::parse(rb, rb + reply[0].size(), nullptr, false)
-                       : Json::from_msgpack(rb, rb + reply[0].size(), true, false);
     std::fprintf(stderr, "reply: %s\n",
-                 r.dump(-1, ' ', false, Json::error_handler_t::replace).substr(0, 300).c_str());
+                 Decode(reply[0], json)
+                     .dump(-1, ' ', false, Json::error_handler_t::replace)
+                     .substr(0, 300)
+                     .c_str());
   }
-  CheckReply(reply, IsJsonRequest(request));
+  CheckReply(reply, json);
   // Exactly one reply: nothing else arrives after serving once more.
   server.HandleIncoming();
   server.Service(urlab::net::StepServer::Clock::now());
   zmq::message_t extra;
   if (client.recv(extra, zmq::recv_flags::dontwait)) __builtin_trap();
-  server.Close();
+
+  // Back to no clients and live mode for the next input: the harness's session sets the mode
+  // (taking the lease) and says bye, and so does a session the input opened with hello.
+  (void)Exchange(
+      server, client,
+      Bytes({{"op", "set_mode"}, {"session_id", id}, {"mode", "live"}, {"force", true}}));
+  (void)Exchange(server, client, Bytes({{"op", "bye"}, {"session_id", id}}));
+  const Json r = Decode(reply[0], json);
+  if (r.value("op", "") == "hello_ok" && r.contains("session_id")) {
+    (void)Exchange(server, client, Bytes({{"op", "bye"}, {"session_id", r["session_id"]}}));
+  }
+  (void)engine.DrainEvents();  // nobody else delivers them (a leak to libFuzzer otherwise)
   return 0;
 }
