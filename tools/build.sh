@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Configures and builds URLab into ./build (or $URLAB_BUILD_DIR). Extra args go to cmake.
+# Configures and builds URLab into ./build (or $URLAB_BUILD_DIR), through ccache when present.
+# Extra args go to cmake.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR="${URLAB_BUILD_DIR:-build}"
 GEN=()
 if command -v ninja >/dev/null 2>&1; then GEN=(-G Ninja); fi
+if command -v ccache >/dev/null 2>&1; then GEN+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
   cmake -S . -B "$BUILD_DIR" "${GEN[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@"
 else

@@ -1,17 +1,71 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer target for the MJCF reader with clang and runs it for a bounded time.
-# Usage: tools/fuzz.sh [SECONDS=60]. Seeds: the test corpus and Debian's sample models.
+# Builds the libFuzzer targets with clang (every library instrumented, ASan + UBSan) into
+# build-fuzz (or $URLAB_FUZZ_BUILD_DIR) and runs each for a bounded time on a fresh copy of its
+# seed corpus (fuzz/corpus/<target>; the MJCF reader also gets Debian's sample models).
+# Usage: tools/fuzz.sh [SECONDS=60] [TARGET...]
+#   targets: fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request (default: all)
+# Exits non-zero when a target crashes (or leaks, or times out on one input), printing the
+# reproducer's path; rerun one with: build-fuzz/fuzz/<target> <reproducer>.
+# Run corpora, logs and reproducers stay under the build folder (not in git).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_TO_RUN="${1:-60}"
-BUILD_DIR=build-fuzz
+shift || true
+ALL=(fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request)
+TARGETS=("$@")
+if [ ${#TARGETS[@]} -eq 0 ]; then TARGETS=("${ALL[@]}"); fi
+for t in "${TARGETS[@]}"; do
+  case " ${ALL[*]} " in *" $t "*) ;; *) echo "fuzz.sh: unknown target '$t' (${ALL[*]})" >&2; exit 2;; esac
+done
+BUILD_DIR="${URLAB_FUZZ_BUILD_DIR:-build-fuzz}"
+GEN=()
+if command -v ninja >/dev/null 2>&1; then GEN=(-G Ninja); fi
+LAUNCHER=()
+if command -v ccache >/dev/null 2>&1; then LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
-  CC=clang CXX=clang++ cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DURLAB_BUILD_FUZZ=ON -DURLAB_BUILD_TESTS=OFF -DURLAB_BUILD_BENCH=OFF >/dev/null
+  CC=clang CXX=clang++ cmake -S . -B "$BUILD_DIR" "${GEN[@]}" "${LAUNCHER[@]}" \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_BUILD_FUZZ=ON -DURLAB_BUILD_TESTS=OFF \
+    -DURLAB_BUILD_BENCH=OFF >/dev/null
 fi
-cmake --build "$BUILD_DIR" --target fuzz_mjcf_reader -j"$(nproc)"
-mkdir -p fuzz/corpus-run
-cp -n tests/data/mjcf/corpus/*.xml tests/data/mjcf/broken/*.xml fuzz/corpus-run/ 2>/dev/null || true
-cp -n /usr/share/mujoco/model/*/*.xml fuzz/corpus-run/ 2>/dev/null || true
-"$BUILD_DIR/fuzz/fuzz_mjcf_reader" -max_total_time="$SECONDS_TO_RUN" -max_len=65536 \
-  -timeout=10 -rss_limit_mb=4096 fuzz/corpus-run
+cmake --build "$BUILD_DIR" --target "${TARGETS[@]}" -j"${URLAB_JOBS:-$(nproc)}"
+
+max_len() {
+  case "$1" in
+    fuzz_net_control) echo 4096 ;;
+    fuzz_step_request) echo 8192 ;;
+    *) echo 65536 ;;
+  esac
+}
+
+status=0
+SUMMARY=()
+for t in "${TARGETS[@]}"; do
+  work="$BUILD_DIR/fuzz-run/$t"
+  rm -rf "$work"
+  mkdir -p "$work/corpus" "$work/artifacts"
+  cp fuzz/corpus/"$t"/* "$work/corpus/"
+  if [ "$t" = fuzz_mjcf_reader ]; then
+    cp /usr/share/mujoco/model/*/*.xml "$work/corpus/" 2>/dev/null || true
+  fi
+  echo "== fuzz $t for ${SECONDS_TO_RUN} s (seeds: $(ls "$work/corpus" | wc -l))"
+  set +e
+  "$BUILD_DIR/fuzz/$t" -max_total_time="$SECONDS_TO_RUN" -max_len="$(max_len "$t")" \
+    -timeout=20 -rss_limit_mb=4096 -print_final_stats=1 \
+    -artifact_prefix="$work/artifacts/" "$work/corpus" >"$work/log" 2>&1
+  rc=$?
+  set -e
+  cov=$(grep -oE 'cov: [0-9]+ ft: [0-9]+' "$work/log" | tail -1)
+  runs=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$work/log" | grep -oE '[0-9]+$' || true)
+  if [ $rc -ne 0 ]; then
+    status=1
+    grep -E 'ERROR|SUMMARY|runtime error|Test unit written' "$work/log" | head -20 || true
+    repro=$(grep -oE 'Test unit written to [^ ]+' "$work/log" | tail -1 | sed 's/Test unit written to //')
+    echo "fuzz: $t FAILED (exit $rc); reproducer: ${repro:-none} (log: $work/log)"
+    SUMMARY+=("$t: FAILED, ${cov:-no coverage line}; reproducer ${repro:-none}")
+  else
+    SUMMARY+=("$t: ok, ${cov:-?} after ${runs:-?} runs")
+  fi
+done
+echo "== fuzz summary (${SECONDS_TO_RUN} s each)"
+for s in "${SUMMARY[@]}"; do echo "  $s"; done
+exit $status

@@ -10,7 +10,7 @@ PACKAGES=(
   libtinyxml2-dev libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   libeigen3-dev libzmq3-dev cppzmq-dev libmsgpack-cxx-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev ccache
   python3 python3-zmq python3-msgpack python3-numpy
 )
 export DEBIAN_FRONTEND=noninteractive

@@ -1,23 +1,138 @@
 #!/usr/bin/env bash
-# The test command: installs dependencies, builds, and runs the whole test suite with ctest,
-# then the threaded tests (physics, control, world) again under ThreadSanitizer.
-# Set URLAB_SKIP_TSAN=1 to skip the ThreadSanitizer stage.
+# The test command (CI runs it): installs dependencies, builds, runs the whole test suite with
+# ctest, then more stages, each printing its wall time, and a table of them at the end:
+#   main        RelWithDebInfo build (GCC) + every test (ctest)
+#   tsan        ThreadSanitizer: the physics, control, world, net and client tests
+#   asan        AddressSanitizer + UndefinedBehaviorSanitizer: the mjcf, document, world tests
+#   release     Release build with GCC (-O3), warnings as errors, no tests
+#   clang       clang build of everything (tests, benchmarks, examples) + the fast unit tests
+#   install     cmake --install of the release build, examples/find_package built against it
+#   fuzz        every libFuzzer target for URLAB_FUZZ_SECONDS (default 60) s (tools/fuzz.sh)
+# Build folders: $URLAB_BUILD_DIR (default build) and beside it ${URLAB_BUILD_DIR}-tsan, -asan,
+# -release, -clang, -fuzz. ccache is used when present. Skip stages with
+# URLAB_SKIP_STAGES="tsan asan ..." (URLAB_SKIP_TSAN=1 still skips tsan).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/install-deps.sh
-tools/build.sh
 BUILD_DIR="${URLAB_BUILD_DIR:-build}"
-ctest --test-dir "$BUILD_DIR" --output-on-failure -j"$(nproc)" --timeout 900
-if [ "${URLAB_SKIP_TSAN:-0}" != "1" ]; then
-  echo "== ThreadSanitizer: physics, control and world tests"
-  TSAN_DIR="${BUILD_DIR}-tsan"
-  GEN=()
-  if command -v ninja >/dev/null 2>&1; then GEN=(-G Ninja); fi
-  cmake -S . -B "$TSAN_DIR" "${GEN[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_SANITIZE=thread \
-    -DURLAB_BUILD_BENCH=OFF >/dev/null
-  cmake --build "$TSAN_DIR" --target urlab_tests_physics urlab_tests_control urlab_tests_world \
-    -j"$(nproc)"
-  TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
-    ctest --test-dir "$TSAN_DIR" -L 'physics|control|world' --output-on-failure -j"$(nproc)" \
-    --timeout 900
-fi
+export URLAB_BUILD_DIR="$BUILD_DIR"
+JOBS="${URLAB_JOBS:-$(nproc)}"
+SKIP=" ${URLAB_SKIP_STAGES:-} "
+if [ "${URLAB_SKIP_TSAN:-0}" = "1" ]; then SKIP="$SKIP tsan "; fi
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
+GEN=()
+if command -v ninja >/dev/null 2>&1; then GEN=(-G Ninja); fi
+LAUNCHER=()
+if command -v ccache >/dev/null 2>&1; then LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+
+TIMINGS=()
+TOTAL_START=$(date +%s)
+summary() {
+  local rc=$?
+  echo "== stage timings"
+  printf '  %-10s %6s  %s\n' stage seconds result
+  for t in "${TIMINGS[@]}"; do printf '  %s\n' "$t"; done
+  printf '  %-10s %6s\n' total "$(($(date +%s) - TOTAL_START))"
+  return $rc
+}
+trap summary EXIT
+# stage NAME COMMAND...: runs COMMAND, prints "== stage NAME: N s" and records it.
+stage() {
+  local name=$1
+  shift
+  if [[ "$SKIP" == *" $name "* ]]; then
+    TIMINGS+=("$(printf '%-10s %6s  %s' "$name" - skipped)")
+    return 0
+  fi
+  echo "== stage $name: start"
+  local start rc
+  start=$(date +%s)
+  # A subshell outside any `||`, so that `set -e` holds inside the stage's commands.
+  set +e
+  (
+    set -e
+    "$@"
+  )
+  rc=$?
+  set -e
+  local took=$(($(date +%s) - start))
+  echo "== stage $name: $took s"
+  TIMINGS+=("$(printf '%-10s %6s  %s' "$name" "$took" "$([ $rc -eq 0 ] && echo ok || echo "FAILED ($rc)")")")
+  return $rc
+}
+configure() {  # configure DIR [cmake args...] (once; later runs keep the cache)
+  local dir=$1
+  shift
+  if [ ! -f "$dir/CMakeCache.txt" ]; then
+    cmake -S . -B "$dir" "${GEN[@]}" "${LAUNCHER[@]}" "$@" >/dev/null
+  fi
+}
+
+main_stage() {
+  tools/build.sh
+  if [ -f tools/install-mujoco-js.sh ]; then
+    bash tools/install-mujoco-js.sh build/mujoco-js ||
+      echo "mujoco-js not installed: the 3.x reference test will skip"
+  fi
+  ctest --test-dir "$BUILD_DIR" --output-on-failure -j"$JOBS" --timeout 900
+}
+
+tsan_stage() {
+  local dir="${BUILD_DIR}-tsan"
+  configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_SANITIZE=thread -DURLAB_BUILD_BENCH=OFF
+  # The net tests include the Python client's end-to-end test, which runs the urlab binary.
+  cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_physics urlab_tests_control \
+    urlab_tests_world urlab_tests_net urlab_tests_client
+  TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/tsan.supp" \
+    ctest --test-dir "$dir" -L 'physics|control|world|net|client' --output-on-failure \
+    -j"$JOBS" --timeout 900
+}
+
+asan_stage() {
+  local dir="${BUILD_DIR}-asan"
+  configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_SANITIZE=address,undefined \
+    -DURLAB_BUILD_BENCH=OFF
+  cmake --build "$dir" -j"$JOBS" --target urlab_tests_mjcf urlab_tests_document urlab_tests_world
+  ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1" \
+    ctest --test-dir "$dir" -L 'mjcf|document|world' --output-on-failure -j"$JOBS" --timeout 900
+}
+
+release_stage() {
+  local dir="${BUILD_DIR}-release"
+  configure "$dir" -DCMAKE_BUILD_TYPE=Release -DURLAB_BUILD_TESTS=OFF -DURLAB_BUILD_BENCH=OFF
+  cmake --build "$dir" -j"$JOBS"
+}
+
+clang_stage() {
+  local dir="${BUILD_DIR}-clang"
+  CC=clang CXX=clang++ configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo
+  cmake --build "$dir" -j"$JOBS"
+  ctest --test-dir "$dir" -L 'core|document|control' --output-on-failure -j"$JOBS" --timeout 900
+}
+
+install_stage() {
+  local dir="${BUILD_DIR}-release" prefix example
+  prefix=$(mktemp -d)
+  example=$(mktemp -d)
+  cmake --install "$dir" --prefix "$prefix" >/dev/null
+  echo "installed into $prefix: $(find "$prefix" -type f | wc -l) files"
+  cmake -S examples/find_package -B "$example" "${GEN[@]}" -DCMAKE_BUILD_TYPE=Release \
+    -DCMAKE_PREFIX_PATH="$prefix" "${LAUNCHER[@]}" >/dev/null
+  cmake --build "$example" -j"$JOBS"
+  "$example/urlab_find_package_example" examples/models/pendulum_arm.xml
+  "$prefix/bin/urlab" --version
+  rm -rf "$prefix" "$example"
+}
+
+fuzz_stage() {
+  URLAB_FUZZ_BUILD_DIR="${BUILD_DIR}-fuzz" URLAB_JOBS="$JOBS" \
+    tools/fuzz.sh "${URLAB_FUZZ_SECONDS:-60}"
+}
+
+stage main main_stage
+stage tsan tsan_stage
+stage asan asan_stage
+stage release release_stage
+stage clang clang_stage
+stage install install_stage
+stage fuzz fuzz_stage

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/gcc_workarounds.h"
+
 namespace urlab {
 
 namespace fs = std::filesystem;
@@ -95,7 +97,10 @@ void WriteFileAtomic(const std::string& path, std::string_view bytes,
   fs::create_directories(folder, ec);
   if (ec) WriteFailed(path, "cannot create folder " + folder.string() + ": " + ec.message());
 
+  // -O3: a false -Wrestrict inside std::string's operator+ (GCC PR 105329 / 105651).
+  URLAB_GCC_IGNORE("-Wrestrict")
   std::string temp = (folder / ("." + target.filename().string() + ".urlab-tmp-XXXXXX")).string();
+  URLAB_GCC_RESTORE
   const int fd = ::mkstemp(temp.data());
   if (fd < 0)
     WriteFailed(path, std::string("cannot create a temporary file: ") + std::strerror(errno));

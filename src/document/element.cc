@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <limits>
 
+#include "core/gcc_workarounds.h"
+
 namespace urlab::document {
 
 namespace fs = std::filesystem;
@@ -326,6 +328,8 @@ std::string RangeText(const AttributeSpec& spec) {
 }
 }  // namespace
 
+// -O3: a false -Wrestrict inside std::string's operator+ (GCC PR 105329 / 105651).
+URLAB_GCC_IGNORE("-Wrestrict")
 std::string CheckValue(const AttributeSpec& spec, std::string_view value) {
   switch (spec.type) {
     case ValueType::kReal:
@@ -380,5 +384,6 @@ std::string CheckValue(const AttributeSpec& spec, std::string_view value) {
   }
   return "";
 }
+URLAB_GCC_RESTORE
 
 }  // namespace urlab::document

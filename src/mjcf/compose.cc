@@ -487,11 +487,14 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs,
         }
       }
       if (mine != first) {
-        result.diagnostics.push_back(
-            {Diagnostic::Severity::kWarning,
-             {doc.source_path(), 0},
-             in.name + ": its <compiler> settings differ from the first articulation's ('" +
-                 inputs[0].name + "'), whose settings the scene uses"});
+        // Built as a named value: a braced temporary here makes GCC 12 at -O3 report a false
+        // -Wmaybe-uninitialized on its strings.
+        Diagnostic d;
+        d.severity = Diagnostic::Severity::kWarning;
+        d.where = {doc.source_path(), 0};
+        d.message = in.name + ": its <compiler> settings differ from the first articulation's ('" +
+                    inputs[0].name + "'), whose settings the scene uses";
+        result.diagnostics.push_back(std::move(d));
       }
     }
     if (!in.include_world) {
@@ -535,12 +538,13 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs,
         const std::string mine = a == options.end() ? "(default)" : a->second;
         const std::string theirs = b == scene_options.end() ? "(default)" : b->second;
         if (mine != theirs && !overrides.count(k)) {
-          result.diagnostics.push_back(
-              {Diagnostic::Severity::kWarning,
-               {doc.source_path(), 0},
-               in.name + ": option " + k + "=" + mine + " differs from the scene's " + theirs +
-                   " (taken from the first articulation, '" + inputs[0].name +
-                   "'; set it in the scene's options to choose)"});
+          Diagnostic d;  // a named value, as above
+          d.severity = Diagnostic::Severity::kWarning;
+          d.where = {doc.source_path(), 0};
+          d.message = in.name + ": option " + k + "=" + mine + " differs from the scene's " +
+                      theirs + " (taken from the first articulation, '" + inputs[0].name +
+                      "'; set it in the scene's options to choose)";
+          result.diagnostics.push_back(std::move(d));
         }
       }
     }

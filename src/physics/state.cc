@@ -6,6 +6,8 @@
 #include <limits>
 #include <type_traits>
 
+#include "core/gcc_workarounds.h"
+
 namespace urlab::physics {
 
 static_assert(std::is_same_v<mjtNum, double>, "URLab expects MuJoCo built with double mjtNum");
@@ -60,7 +62,10 @@ void Copy(const mjtNum* src, std::int64_t n, std::vector<mjtNum>* dst) {
 
 void Put(std::vector<std::uint8_t>* out, const void* p, std::size_t n) {
   const auto* b = static_cast<const std::uint8_t*>(p);
+  // -O3: a false -Wstringop-overflow for bytes inserted into reserve()d storage (GCC PR 107852).
+  URLAB_GCC_IGNORE("-Wstringop-overflow")
   out->insert(out->end(), b, b + n);
+  URLAB_GCC_RESTORE
 }
 
 class Reader {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "core/gcc_workarounds.h"
 #include "urlab/core/error.h"
 
 namespace urlab::physics {
@@ -33,7 +34,10 @@ std::string DiscontinuityString(std::uint32_t flags) {
                 {kDiscontinuityOptions, "options"}};
   std::string s;
   for (const auto& n : kNames) {
+    // -O3: a false -Wrestrict inside std::string's operator+ (GCC PR 105329 / 105651).
+    URLAB_GCC_IGNORE("-Wrestrict")
     if (flags & n.flag) s += (s.empty() ? "" : "|") + std::string(n.name);
+    URLAB_GCC_RESTORE
   }
   return s;
 }

@@ -56,7 +56,6 @@ struct Range {
     return document::FormatReal(min) + " to " + document::FormatReal(max);
   }
 };
-constexpr Range kAny{};  // not NaN
 constexpr Range kFinite{-std::numeric_limits<double>::max(), std::numeric_limits<double>::max()};
 constexpr Range kNonNegativeFinite{0, std::numeric_limits<double>::max()};
 constexpr Range kNonNegative{0, kInf};  // inf allowed (e.g. an unlimited torque)

@@ -1,0 +1,30 @@
+# `cmake --install BUILD --prefix P`: the urlab binary, the module libraries, the public headers
+# (with the generated version.h) and a CMake package, so that another project can write
+#   find_package(urlab REQUIRED)
+#   target_link_libraries(app PRIVATE urlab::world urlab::client)
+# (see examples/find_package). The libraries are static: their private dependencies travel in
+# the exported link interface as $<LINK_ONLY:...>, so urlabConfig.cmake finds those too.
+include(CMakePackageConfigHelpers)
+
+get_property(urlab_modules GLOBAL PROPERTY URLAB_MODULES)
+set_target_properties(urlab PROPERTIES EXPORT_NAME urlab)
+install(TARGETS ${urlab_modules} urlab
+        EXPORT urlabTargets
+        RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/urlab DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
+        FILES_MATCHING PATTERN "*.h")
+install(FILES ${PROJECT_BINARY_DIR}/generated/urlab/core/version.h
+        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/urlab/core)
+
+set(URLAB_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/urlab)
+install(EXPORT urlabTargets NAMESPACE urlab:: DESTINATION ${URLAB_CMAKE_DIR})
+configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/urlabConfig.cmake.in
+                              ${PROJECT_BINARY_DIR}/urlabConfig.cmake
+                              INSTALL_DESTINATION ${URLAB_CMAKE_DIR})
+# 0.x: a minor version may break the API.
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/urlabConfigVersion.cmake
+                                 COMPATIBILITY SameMinorVersion)
+install(FILES ${PROJECT_BINARY_DIR}/urlabConfig.cmake ${PROJECT_BINARY_DIR}/urlabConfigVersion.cmake
+        DESTINATION ${URLAB_CMAKE_DIR})
