@@ -33,10 +33,11 @@ int BenchLoopNetwork(const BenchLoopArgs& args) {
   net::BroadcastBenchOptions options;
   options.trials = args.trials_option->count() > 0 ? args.trials : 5;
   options.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
-  std::printf("scene %s: articulation '%s', controller %s; every streaming topic and state/full "
-              "(%s) on every step\n",
-              scene.path.c_str(), art.name.c_str(), art.controller.type.c_str(),
-              options.full_state.c_str());
+  std::printf(
+      "scene %s: articulation '%s', controller %s; every streaming topic and state/full "
+      "(%s) on every step\n",
+      scene.path.c_str(), art.name.c_str(), art.controller.type.c_str(),
+      options.full_state.c_str());
   const net::BroadcastBenchResult r = net::RunBroadcastBench(scene, options);
   std::printf("ratio=%.4f\n", r.ratio);
   std::fflush(stdout);

@@ -3,6 +3,8 @@
 #include <chrono>
 #include <cstring>
 
+#include "core/gcc_workarounds.h"
+
 namespace urlab::net {
 
 namespace {
@@ -16,7 +18,11 @@ class JsonWriter {
 
   void Map(std::size_t entries) { Open(Json::object(), entries); }
   void Array(std::size_t items) { Open(Json::array(), items); }
-  void Key(std::string_view k) { key_ = k; }
+  void Key(std::string_view k) {
+    URLAB_GCC_IGNORE("-Wrestrict")  // GCC PR 105329: std::string assign at -O3
+    key_ = k;
+    URLAB_GCC_RESTORE
+  }
   void Str(std::string_view s) { Put(Json(std::string(s))); }
   void Double(double v) { Put(Json(v)); }
   void Int(std::int64_t v) { Put(Json(v)); }

@@ -14,8 +14,8 @@
 namespace urlab::net {
 
 struct BroadcastBenchOptions {
-  int trials = 5;           // trials per configuration
-  double seconds = 1.0;     // measured time per trial (after a short warm-up)
+  int trials = 5;                       // trials per configuration
+  double seconds = 1.0;                 // measured time per trial (after a short warm-up)
   std::string full_state = "standard";  // the state/full level broadcast
   int subscriber_nice = 10;             // the subscriber thread's nice value (0: unchanged)
   std::function<void(const std::string&)> report;  // report lines; empty: silent
