@@ -54,12 +54,12 @@ for t in "${TARGETS[@]}"; do
     -artifact_prefix="$work/artifacts/" "$work/corpus" >"$work/log" 2>&1
   rc=$?
   set -e
-  cov=$(grep -oE 'cov: [0-9]+ ft: [0-9]+' "$work/log" | tail -1)
+  cov=$(grep -oE 'cov: [0-9]+ ft: [0-9]+' "$work/log" | tail -1 || true)
   runs=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$work/log" | grep -oE '[0-9]+$' || true)
   if [ $rc -ne 0 ]; then
     status=1
     grep -E 'ERROR|SUMMARY|runtime error|Test unit written' "$work/log" | head -20 || true
-    repro=$(grep -oE 'Test unit written to [^ ]+' "$work/log" | tail -1 | sed 's/Test unit written to //')
+    repro=$(grep -oE 'Test unit written to [^ ]+' "$work/log" | tail -1 | sed 's/Test unit written to //' || true)
     echo "fuzz: $t FAILED (exit $rc); reproducer: ${repro:-none} (log: $work/log)"
     SUMMARY+=("$t: FAILED, ${cov:-no coverage line}; reproducer ${repro:-none}")
   else
