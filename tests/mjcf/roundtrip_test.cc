@@ -3,6 +3,7 @@
 // whose 1000-step zero-control trajectory is bit-identical to the original's.
 #include <filesystem>
 
+#include "model_files.h"
 #include "mujoco_test.h"
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
@@ -15,18 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 
 std::vector<std::string> ModelFiles() {
-  std::vector<std::string> out;
-  for (const char* dir : {"/usr/share/mujoco/model", URLAB_TEST_DATA_DIR "/mjcf/corpus"}) {
-    if (!fs::is_directory(dir)) continue;
-    for (const auto& e : fs::recursive_directory_iterator(dir)) {
-      if (e.path().extension() != ".xml") continue;
-      // The corpus keeps files that are only meant to be included under parts/.
-      if (e.path().string().find("/parts/") != std::string::npos) continue;
-      out.push_back(e.path().string());
-    }
-  }
-  std::sort(out.begin(), out.end());
-  return out;
+  return testing::ModelFilesIn({"/usr/share/mujoco/model", URLAB_TEST_DATA_DIR "/mjcf/corpus"});
 }
 
 class RoundTripTest : public testing::MujocoTest,
@@ -65,16 +55,8 @@ TEST_P(RoundTripTest, BitIdenticalTrajectoryFromAnotherDirectory) {
   EXPECT_EQ(physics::CompareTrajectories(original.get(), reloaded.get(), 1000), "") << path;
 }
 
-std::string TestName(const ::testing::TestParamInfo<std::string>& info) {
-  std::string n = fs::path(info.param).parent_path().filename().string() + "_" +
-                  fs::path(info.param).stem().string();
-  for (char& c : n) {
-    if (!isalnum(static_cast<unsigned char>(c))) c = '_';
-  }
-  return n + "_" + std::to_string(info.index);
-}
-
-INSTANTIATE_TEST_SUITE_P(AllModels, RoundTripTest, ::testing::ValuesIn(ModelFiles()), TestName);
+INSTANTIATE_TEST_SUITE_P(AllModels, RoundTripTest, ::testing::ValuesIn(ModelFiles()),
+                         testing::ModelTestName);
 
 }  // namespace
 }  // namespace urlab

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <optional>
 
+#include "model_files.h"
 #include "mujoco_test.h"
 #include "urlab/physics/trajectory_compare.h"
 #include "urlab/world/scene.h"
@@ -26,20 +27,9 @@ constexpr Refusal kRefused[] = {
 };
 
 std::vector<std::string> ModelFiles() {
-  std::vector<std::string> out;
-  for (const std::string& dir :
-       {std::string("/usr/share/mujoco/model"), testing::TestData("mjcf/corpus"),
-        testing::TestData("mjcf/dialect3x"), testing::TestData("mjcf/robots")}) {
-    if (!fs::is_directory(dir)) continue;
-    for (const auto& e : fs::recursive_directory_iterator(dir)) {
-      if (e.path().extension() != ".xml") continue;
-      // Files only meant to be included.
-      if (e.path().string().find("/parts/") != std::string::npos) continue;
-      out.push_back(e.path().string());
-    }
-  }
-  std::sort(out.begin(), out.end());
-  return out;
+  return testing::ModelFilesIn({"/usr/share/mujoco/model", testing::TestData("mjcf/corpus"),
+                                testing::TestData("mjcf/dialect3x"),
+                                testing::TestData("mjcf/robots")});
 }
 
 world::SceneConfig OneArticulation(const std::string& path) {
@@ -112,16 +102,8 @@ TEST_P(PrefixedModelTest, ComposedAsArticulationRunsLikeTheFileAlone) {
   EXPECT_EQ(TakeWarnings().size(), 0u);
 }
 
-std::string TestName(const ::testing::TestParamInfo<std::string>& info) {
-  std::string n = fs::path(info.param).parent_path().filename().string() + "_" +
-                  fs::path(info.param).stem().string();
-  for (char& c : n) {
-    if (!isalnum(static_cast<unsigned char>(c))) c = '_';
-  }
-  return n + "_" + std::to_string(info.index);
-}
-
-INSTANTIATE_TEST_SUITE_P(AllModels, PrefixedModelTest, ::testing::ValuesIn(ModelFiles()), TestName);
+INSTANTIATE_TEST_SUITE_P(AllModels, PrefixedModelTest, ::testing::ValuesIn(ModelFiles()),
+                         testing::ModelTestName);
 
 }  // namespace
 }  // namespace urlab
