@@ -17,13 +17,11 @@ class JsonWriter {
   JsonWriter(Json* root, std::size_t entries) { open_.push_back({root, entries}); }
 
   void Map(std::size_t entries) { Open(Json::object(), entries); }
-  void Array(std::size_t items) { Open(Json::array(), items); }
   void Key(std::string_view k) {
     URLAB_GCC_IGNORE("-Wrestrict")  // GCC PR 105329: std::string assign at -O3
     key_ = k;
     URLAB_GCC_RESTORE
   }
-  void Str(std::string_view s) { Put(Json(std::string(s))); }
   void Double(double v) { Put(Json(v)); }
   void Int(std::int64_t v) { Put(Json(v)); }
   void UInt(std::uint64_t v) { Put(Json(v)); }
@@ -37,7 +35,7 @@ class JsonWriter {
   };
   Json* Put(Json v) {
     Open_& top = open_.back();
-    Json* slot = top.node->is_object() ? &(*top.node)[key_] : &top.node->emplace_back();
+    Json* slot = &(*top.node)[key_];  // containers are maps (arrays travel whole)
     *slot = std::move(v);
     if (--top.remaining == 0) open_.pop_back();
     return slot;
