@@ -88,6 +88,7 @@ class Writer {
  private:
   std::string FilePath(const Element& e, std::string_view name) const {
     const std::string resolved = *e.ResolvedFile(name);
+    if (options_.file_name) return options_.file_name(resolved);
     if (options_.relative_to.empty()) return resolved;
     const fs::path rel = fs::path(resolved).lexically_relative(options_.relative_to);
     return rel.empty() ? resolved : rel.string();

@@ -7,6 +7,9 @@
 #include <random>
 #include <zmq_addon.hpp>
 
+#include "net/base64.h"
+#include "net/contacts.h"
+#include "net/model_assets.h"
 #include "net/observation.h"
 #include "urlab/control/controllers.h"
 #include "urlab/core/version.h"
@@ -102,6 +105,12 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
       {"set_mocap_pose", &StepServer::SetMocapPose, true, true, {"body"}, "body, pos, quat"},
       {"read_mocap_pose", &StepServer::ReadMocapPose, true, false, {"body"}, "body, pos, quat"},
       {"list_keyframes", &StepServer::ListKeyframes, true, false, {}, "keyframes"},
+      {"get_contacts",
+       &StepServer::GetContacts,
+       true,
+       false,
+       {},
+       "contacts, count, matched, truncated, time"},
       {"set_sim_options", &StepServer::SetSimOptions, true, true, {"options"}, "options"},
       {"get_counters", &StepServer::GetCounters, true, false, {}, "errors, clients, driver"},
       {"set_twist",
@@ -170,6 +179,7 @@ void StepServer::Send(const std::vector<zmq::message_t>& envelope, Json& reply, 
   const physics::StateFrame* frame = observation ? state_->Latest() : nullptr;
   if (json) {
     if (frame) AddObservation(&reply, tables_, *frame, observation->level, observation->binary);
+    BinaryToBase64(reply);  // bytes travel as <field>_base64 in JSON text
     const std::string text = reply.dump(-1, ' ', false, Json::error_handler_t::replace);
     socket_->send(zmq::buffer(text), zmq::send_flags::dontwait);
     return;
@@ -326,11 +336,25 @@ void StepServer::Service(Clock::time_point now) {
   if (!driver_.empty()) {
     const auto it = clients_.find(driver_);
     if (it == clients_.end() || now - it->second.last_seen > options_.lease_timeout) {
-      spdlog::info("step server: driver {} lost its lease (silent for more than {} ms)", driver_,
-                   options_.lease_timeout.count());
-      driver_.clear();
+      ReleaseLease("silent for more than " + std::to_string(options_.lease_timeout.count()) +
+                   " ms");
     }
   }
+}
+
+void StepServer::ReleaseLease(const std::string& why) {
+  const std::string initial = options_.mode == "direct" ? "direct" : "live";
+  if (mode_ != initial) {
+    // Nobody drives the lockstep any more: back to the scene's mode (a paused simulation left
+    // behind by a crashed learning loop would look hung).
+    session_.engine().Submit(physics::cmd::SetPaused{initial != "live"});
+    spdlog::info("step server: driver {} left ({}); {} mode -> {} mode", driver_, why, mode_,
+                 initial);
+    mode_ = initial;
+  } else {
+    spdlog::info("step server: driver {} left ({})", driver_, why);
+  }
+  driver_.clear();
 }
 
 void StepServer::RequireDriver(Client& c, bool force, Clock::time_point now) {
@@ -430,7 +454,8 @@ StepServer::Outcome StepServer::Hello(Request& r) {
   }
   Json capabilities = Json::array();
   for (const OpSpec& s : Ops()) capabilities.push_back(s.name);
-  for (const char* extra : {"json", "binary_arrays", "lease", "seq", "mode:live", "mode:direct"}) {
+  for (const char* extra : {"json", "binary_arrays", "lease", "seq", "mode:live", "mode:direct",
+                            "mode:puppet", "include_assets"}) {
     capabilities.push_back(extra);
   }
   Outcome out;
@@ -445,7 +470,24 @@ StepServer::Outcome StepServer::Hello(Request& r) {
                    {"articulations", std::move(arts)},
                    {"entities", Json::object()},
                    {"mjb", Json::binary(mjb_)}};
-  if (r.json) out.reply.erase("mjb");  // binary does not travel in JSON text
+  if (const auto it = r.body.find("include_assets");
+      it != r.body.end() && Bool(*it, "include_assets")) {
+    if (!assets_) {
+      try {
+        assets_ = FlattenAssets(session_.scene().doc);
+      } catch (const std::exception& e) {
+        Fail("path_not_readable", std::string("include_assets: ") + e.what());
+      }
+      spdlog::info("step server: model with {} asset file(s), {} bytes, ready for include_assets",
+                   assets_->assets.size(), assets_->bytes);
+    }
+    out.reply["mjcf_compiled"] = assets_->xml;
+    Json files = Json::object();
+    for (const auto& [name, bytes] : assets_->assets) {
+      files[name] = Json::binary(std::vector<std::uint8_t>(bytes.begin(), bytes.end()));
+    }
+    out.reply["vfs_assets"] = std::move(files);
+  }
   clients_[c.id] = c;
   return out;
 }
@@ -465,12 +507,13 @@ StepServer::Outcome StepServer::Meta(Request&) {
 }
 
 StepServer::Outcome StepServer::Bye(Request& r) {
-  if (driver_ == r.client->id) driver_.clear();
+  if (driver_ == r.client->id) ReleaseLease("bye");
   clients_.erase(r.client->id);
   return {Json{{"op", "bye_ok"}}};
 }
 
 StepServer::Outcome StepServer::Step(Request& r) {
+  if (mode_ == "puppet") return PuppetStep(r);
   int n = 1;
   if (const auto it = r.body.find("n_steps"); it != r.body.end()) {
     const double v = Number(*it, "n_steps");
@@ -586,12 +629,14 @@ StepServer::Outcome StepServer::Forward(Request& r) {
 
 StepServer::Outcome StepServer::SetMode(Request& r) {
   const std::string mode = String(r.body["mode"], "mode");
-  if (mode == "puppet") Fail("bad_mode", "puppet mode is not available yet (live or direct)");
-  if (mode != "live" && mode != "direct") Fail("bad_mode", "mode must be live or direct");
+  if (mode != "live" && mode != "direct" && mode != "puppet") {
+    Fail("bad_mode", "mode must be live, direct or puppet");
+  }
   Outcome out;
   out.reply = Json{{"op", "set_mode_ok"}, {"previous_mode", mode_}, {"current_mode", mode}};
-  // Direct: the physics thread waits for step requests (paused between them).
-  out.wait_for = session_.engine().Submit(physics::cmd::SetPaused{mode == "direct"});
+  // Direct: the physics thread waits for step requests (paused between them). Puppet: it never
+  // steps; each step request writes the client's state and runs mj_forward.
+  out.wait_for = session_.engine().Submit(physics::cmd::SetPaused{mode != "live"});
   mode_ = mode;
   return out;
 }
@@ -803,6 +848,126 @@ StepServer::Outcome StepServer::SetSimOptions(Request& r) {
                             {"integrator", o.integrator},
                             {"cone", o.cone},
                             {"solver", o.solver}};
+  };
+  return out;
+}
+
+namespace {
+
+// `values` written at `adrs` (one address per value) as runs of consecutive addresses.
+std::vector<physics::cmd::SetState::Run> Runs(const std::vector<int>& adrs,
+                                              const std::vector<double>& values) {
+  std::vector<physics::cmd::SetState::Run> runs;
+  for (std::size_t i = 0; i < adrs.size(); ++i) {
+    if (runs.empty() || adrs[i] != runs.back().adr + static_cast<int>(runs.back().values.size())) {
+      runs.push_back({adrs[i], {}});
+    }
+    runs.back().values.push_back(values[i]);
+  }
+  return runs;
+}
+
+void Append(std::vector<physics::cmd::SetState::Run>* to,
+            std::vector<physics::cmd::SetState::Run> runs) {
+  for (auto& run : runs) to->push_back(std::move(run));
+}
+
+}  // namespace
+
+StepServer::Outcome StepServer::PuppetStep(Request& r) {
+  if (const auto it = r.body.find("n_steps"); it != r.body.end() && Number(*it, "n_steps") != 1) {
+    Fail("bad_value", "puppet mode does not step: n_steps must be 1 or absent");
+  }
+  const mjModel* m = session_.engine().model();
+  physics::cmd::SetState state;
+  // Whole-model vectors: exactly nq, nv, nu values.
+  const auto whole = [&](const char* field, int size,
+                         std::vector<physics::cmd::SetState::Run>* to) {
+    const auto it = r.body.find(field);
+    if (it == r.body.end()) return;
+    std::vector<double> v = Numbers(*it, field);
+    if (v.size() != static_cast<std::size_t>(size)) {
+      Fail("dim_mismatch", std::string(field) + " has " + std::to_string(v.size()) +
+                               " values, the model has " + std::to_string(size));
+    }
+    if (size > 0) to->push_back({0, std::move(v)});
+  };
+  whole("qpos", m->nq, &state.qpos);
+  whole("qvel", m->nv, &state.qvel);
+  whole("ctrl", m->nu, &state.ctrl);
+  // Per articulation: its own qpos / qvel (joint order) and ctrl (actuator order).
+  if (const auto it = r.body.find("per_articulation"); it != r.body.end()) {
+    if (!it->is_object()) Fail("bad_value", "per_articulation must be a map");
+    for (const auto& [name, entry] : it->items()) {
+      const ArticulationTopics& t = Articulation(name);
+      if (!entry.is_object()) Fail("bad_value", name + ": a map of qpos, qvel, ctrl");
+      const auto part = [&](const char* field, const std::vector<int>& adrs,
+                            std::vector<physics::cmd::SetState::Run>* to) {
+        const auto f = entry.find(field);
+        if (f == entry.end()) return;
+        const std::vector<double> v = Numbers(*f, field);
+        if (v.size() != adrs.size()) {
+          Fail("dim_mismatch", name + ": " + field + " has " + std::to_string(v.size()) +
+                                   " values, the articulation has " + std::to_string(adrs.size()));
+        }
+        Append(to, Runs(adrs, v));
+      };
+      part("qpos", t.qpos_adrs, &state.qpos);
+      part("qvel", t.dof_adrs, &state.qvel);
+      part("ctrl", t.actuator_ids, &state.ctrl);
+    }
+  }
+  if (const auto it = r.body.find("time"); it != r.body.end()) state.time = Number(*it, "time");
+  if (state.qpos.empty() && state.qvel.empty() && state.ctrl.empty() && !state.time) {
+    Fail("missing_field",
+         "a puppet step needs qpos, qvel, ctrl or time (whole model or "
+         "per_articulation)");
+  }
+  Outcome out;
+  out.reply = Json{{"op", "step_ok"}};
+  out.observation = ObservationFor(r);
+  out.wait_for = session_.engine().Submit(std::move(state));
+  return out;
+}
+
+StepServer::Outcome StepServer::GetContacts(Request& r) {
+  const mjModel* m = session_.engine().model();
+  int max_contacts = 64;
+  if (const auto it = r.body.find("max_contacts"); it != r.body.end()) {
+    const double v = Number(*it, "max_contacts");
+    if (v < 0 || v > 100000 || v != std::floor(v))
+      Fail("bad_value", "max_contacts must be 0..100000");
+    max_contacts = static_cast<int>(v);
+  }
+  ContactFilter filter;
+  if (const auto it = r.body.find("filter"); it != r.body.end() && !it->is_null()) {
+    if (!it->is_object()) Fail("bad_value", "filter must be a map (body1, body2, geom1, geom2)");
+    for (const auto& [key, value] : it->items()) {
+      const std::string name = String(value, "filter");
+      if (key == "body1" || key == "body2") {
+        const int id = mj_name2id(m, mjOBJ_BODY, name.c_str());
+        if (id < 0) Fail("unknown_body", "no body '" + name + "' (full name, with its prefix)");
+        (key == "body1" ? filter.body1 : filter.body2) = id;
+      } else if (key == "geom1" || key == "geom2") {
+        const int id = mj_name2id(m, mjOBJ_GEOM, name.c_str());
+        if (id < 0) Fail("bad_value", "no geom '" + name + "' (full name, with its prefix)");
+        (key == "geom1" ? filter.geom1 : filter.geom2) = id;
+      } else {
+        Fail("bad_value", "filter: unknown key '" + key + "' (body1, body2, geom1, geom2)");
+      }
+    }
+  }
+  auto list = std::make_shared<ContactList>();
+  Outcome out;
+  out.reply = Json{{"op", "get_contacts_ok"}};
+  out.wait_for = session_.engine().Submit(
+      physics::cmd::Inspect{[filter, max_contacts, list](const mjModel* model, const mjData* d) {
+                              CollectContacts(model, d, filter, max_contacts, list.get());
+                            },
+                            "get_contacts"});
+  out.on_applied = [m, list](Json& reply) {  // read once the command is finished
+    Json fields = ContactsReply(m, *list);
+    for (auto& [k, v] : fields.items()) reply[k] = std::move(v);
   };
   return out;
 }

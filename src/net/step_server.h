@@ -20,6 +20,7 @@
 #include <vector>
 #include <zmq.hpp>
 
+#include "net/model_assets.h"
 #include "net/msgpack_codec.h"
 #include "net/observation.h"
 #include "net/topic_table.h"
@@ -118,6 +119,8 @@ class StepServer {
                  const std::string& code, const std::string& message);
   // The lease: throws Failure unless `c` may drive (taking a free or expired lease).
   void RequireDriver(Client& c, bool force, Clock::time_point now);
+  // Frees the lease; a lockstep or puppet mode the driver chose goes back to the initial mode.
+  void ReleaseLease(const std::string& why);
   const ArticulationTopics& Articulation(const Json& name) const;
   std::string Mode() const { return mode_; }
 
@@ -126,6 +129,7 @@ class StepServer {
   Outcome Meta(Request& r);
   Outcome Bye(Request& r);
   Outcome Step(Request& r);
+  Outcome PuppetStep(Request& r);
   Outcome Reset(Request& r);
   Outcome Forward(Request& r);
   Outcome SetMode(Request& r);
@@ -136,6 +140,7 @@ class StepServer {
   Outcome SetMocapPose(Request& r);
   Outcome ReadMocapPose(Request& r);
   Outcome ListKeyframes(Request& r);
+  Outcome GetContacts(Request& r);
   Outcome SetSimOptions(Request& r);
   Outcome GetCounters(Request& r);
   Outcome SetTwist(Request& r);
@@ -152,8 +157,9 @@ class StepServer {
   std::deque<Pending> pending_;
   std::map<std::string, std::uint64_t> errors_;
   std::uint64_t next_client_ = 1;
-  std::vector<std::uint8_t> mjb_;  // the compiled model (mj_saveModel), for hello
-  MsgpackWriter writer_;           // reply bytes, reused
+  std::vector<std::uint8_t> mjb_;          // the compiled model (mj_saveModel), for hello
+  std::optional<ModelWithAssets> assets_;  // for hello's include_assets, built on first use
+  MsgpackWriter writer_;                   // reply bytes, reused
 };
 
 }  // namespace urlab::net

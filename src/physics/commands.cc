@@ -4,8 +4,9 @@ namespace urlab::physics {
 
 const char* CommandName(const Command& c) {
   static constexpr const char* kNames[] = {
-      "reset",     "reset_keyframe", "reset_custom", "restore",    "set_qpos", "set_qvel",
-      "set_mocap", "apply_force",    "set_options",  "set_paused", "step", "forward"};
+      "reset",    "reset_keyframe", "reset_custom", "restore",     "set_qpos",
+      "set_qvel", "set_mocap",      "apply_force",  "set_options", "set_paused",
+      "step",     "forward",        "set_state",    "inspect"};
   static_assert(std::size(kNames) == std::variant_size_v<Command>);
   return kNames[c.index()];
 }

@@ -292,6 +292,22 @@ void PhysicsEngine::ValidateCommand(const Command& command) const {
           finite("ApplyForce", c.torque.data(), 3);
         } else if constexpr (std::is_same_v<T, cmd::SetOptions>) {
           if (!c.fn) throw Error("SetOptions: empty function");
+        } else if constexpr (std::is_same_v<T, cmd::Inspect>) {
+          if (!c.fn) throw Error("Inspect: empty function");
+        } else if constexpr (std::is_same_v<T, cmd::SetState>) {
+          for (const auto& run : c.qpos) {
+            range("SetState qpos", run.adr, run.values.size(), m->nq);
+            finite("SetState qpos", run.values.data(), run.values.size());
+          }
+          for (const auto& run : c.qvel) {
+            range("SetState qvel", run.adr, run.values.size(), m->nv);
+            finite("SetState qvel", run.values.data(), run.values.size());
+          }
+          for (const auto& run : c.ctrl) {
+            range("SetState ctrl", run.adr, run.values.size(), m->nu);
+            finite("SetState ctrl", run.values.data(), run.values.size());
+          }
+          if (c.time && !std::isfinite(*c.time)) throw Error("SetState: non-finite time");
         } else if constexpr (std::is_same_v<T, cmd::Step>) {
           if (c.n < 1 || c.n > 10'000'000) {
             throw Error("Step: n must be 1..10000000 (got " + std::to_string(c.n) + ")");
@@ -504,6 +520,19 @@ std::uint32_t PhysicsEngine::ApplyCommandLocked(Command& command) {
         } else if constexpr (std::is_same_v<T, cmd::Forward>) {
           mj_forward(m, d);
           return kNoDiscontinuity;
+        } else if constexpr (std::is_same_v<T, cmd::SetState>) {
+          for (const auto& run : c.qpos)
+            std::copy(run.values.begin(), run.values.end(), d->qpos + run.adr);
+          for (const auto& run : c.qvel)
+            std::copy(run.values.begin(), run.values.end(), d->qvel + run.adr);
+          for (const auto& run : c.ctrl)
+            std::copy(run.values.begin(), run.values.end(), d->ctrl + run.adr);
+          if (c.time) d->time = *c.time;
+          mj_forward(m, d);
+          return kDiscontinuitySetState;
+        } else if constexpr (std::is_same_v<T, cmd::Inspect>) {
+          c.fn(m, d);
+          return kNoDiscontinuity;
         } else {
           static_assert(std::is_same_v<T, cmd::Step>);  // handled by ApplyPendingLocked
           return kNoDiscontinuity;
@@ -564,9 +593,11 @@ void PhysicsEngine::IterateLocked(bool force_step) {
   IteratingScope scope(this);
   const bool applied = ApplyPendingLocked();
   for (const Hook& h : pre_step_) h.fn(m, d);
-  if (apply_controls_) apply_controls_(m, d);
   const bool budgeted = step_budget_ > 0;
   const bool step = force_step || budgeted || !paused_.load(std::memory_order_acquire);
+  // Controls are written for a step only: while paused d->ctrl keeps what a command wrote (a
+  // puppet client's ctrl, a restored state's).
+  if (apply_controls_ && step) apply_controls_(m, d);
   if (step) {
     const double time_before = d->time;
     for (const WatchedWarning& w : kWatched) {

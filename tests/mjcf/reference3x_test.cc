@@ -529,7 +529,10 @@ json Dump222(const mjModel* m, mjData* d) {
 
   // Actuation probe (see dump3x.mjs).
   if (m->nu > 0) {
-    for (const auto& [label, side] : {std::pair<const char*, int>{"hi", 1}, {"lo", 0}}) {
+    for (const auto& probe : {std::pair<const char*, int>{"hi", 1}, {"lo", 0}}) {
+      // Plain copies: clang 14 cannot capture structured bindings in the lambdas below.
+      const char* label = probe.first;
+      const int side = probe.second;
       mj_resetData(m, d);
       for (int a = 0; a < m->nu; ++a) {
         d->ctrl[a] =
@@ -556,9 +559,10 @@ json Dump222(const mjModel* m, mjData* d) {
   // Zero-control trajectories (see dump3x.mjs): without contacts, then the full physics.
   mjModel* mm = const_cast<mjModel*>(m);  // the flag is restored below
   const int flags = m->opt.disableflags;
-  for (const auto& [cat, off] :
+  for (const auto& run :
        {std::pair<std::string, int>{"trajectory", mjDSBL_CONTACT}, {"contact_trajectory", 0}}) {
-    mm->opt.disableflags = flags | off;
+    const std::string& cat = run.first;  // a plain reference: see the probe loop above
+    mm->opt.disableflags = flags | run.second;
     mj_resetData(m, d);
     mj_forward(m, d);
     for (int s = 1; s <= kSteps; ++s) {

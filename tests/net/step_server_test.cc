@@ -100,7 +100,7 @@ class StepServerTest : public urlab::testing::MujocoTest {
     urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml);
   }
   void Play(std::chrono::milliseconds lease = 5000ms, const std::string& mode = "live",
-            const std::string& controller = "") {
+            const std::string& controller = "", const std::string& mjcf = "arm.xml") {
     NetworkOptions o;
     o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
     o.lease_timeout = lease;
@@ -108,7 +108,7 @@ class StepServerTest : public urlab::testing::MujocoTest {
     net_ = &static_cast<NetworkSubsystem&>(
         manager_.AddSubsystem(std::make_unique<NetworkSubsystem>(o)));
     manager_.BeginPlay(
-        world::ParseScene("control_source: network\narticulations:\n  - {name: arm, mjcf: arm.xml" +
+        world::ParseScene("control_source: network\narticulations:\n  - {name: arm, mjcf: " + mjcf +
                               controller + "}\n",
                           dir_ + "/scene.yaml"));
     ASSERT_FALSE(net_->endpoints().rpc.empty());
@@ -276,7 +276,10 @@ TEST_F(StepServerTest, OneDriverManyObserversWithLeases) {
   a.Hello();
   b.Hello();
   const Json hello = observer.Hello();
-  EXPECT_FALSE(hello.contains("mjb"));       // binary does not travel in JSON text
+  EXPECT_FALSE(hello.contains("mjb"));  // bytes travel as base64 text in JSON
+  const std::size_t mjb =
+      static_cast<std::size_t>(mj_sizeModel(manager_.session().engine().model()));
+  EXPECT_EQ(hello["mjb_base64"].get<std::string>().size(), (mjb + 2) / 3 * 4);
   ASSERT_EQ(a.Op("step")["op"], "step_ok");  // a takes the lease
   EXPECT_EQ(b.Op("step")["code"], "not_driver");
   EXPECT_EQ(observer.Op("list_keyframes")["op"], "list_keyframes_ok");  // observers read
@@ -361,6 +364,190 @@ TEST_F(StepServerTest, ConfigureControllerPatchesGainsAndEchoesThemAll) {
   EXPECT_EQ(same["params"]["gains"]["arm_motor"]["kv"], 3.0);
   EXPECT_EQ(c.Op("set_twist", {{"articulation", "arm"}})["code"], "no_twist_controller");
   EXPECT_EQ(c.Op("set_twist", {{"articulation", "leg"}})["code"], "unknown_articulation");
+}
+
+// Puppet mode: the client owns the state; each step writes it and runs mj_forward, the physics
+// thread never steps on its own; wrong lengths are refused whole; the driver leaving returns the
+// server to its initial mode.
+TEST_F(StepServerTest, PuppetModeWritesTheClientsStateAndNeverSteps) {
+  Play();
+  Client c(ctx_, rpc());
+  c.Hello({{"observations", "full"}});
+  const Json mode = c.Op("set_mode", {{"mode", "puppet"}});
+  ASSERT_EQ(mode["op"], "set_mode_ok") << mode.dump();
+  EXPECT_EQ(mode["current_mode"], "puppet");
+  const std::uint64_t steps = manager_.session().engine().step_count();
+  Json r = c.Op("step", {{"qpos", {0.3}}, {"qvel", {1.5}}, {"ctrl", {0.7}}, {"time", 4.0}});
+  ASSERT_EQ(r["op"], "step_ok") << r.dump();
+  EXPECT_EQ(r["time"], 4.0);
+  const Json& arm = r["per_articulation"]["arm"];
+  EXPECT_EQ(arm["qpos"][0], 0.3);
+  EXPECT_EQ(arm["qvel"][0], 1.5);
+  EXPECT_EQ(arm["ctrl"][0], 0.7);
+  EXPECT_EQ(arm["actuator_force"][0], 0.7);             // mj_forward ran with that control
+  EXPECT_NEAR(arm["sensors"]["angle"][0], 0.3, 1e-12);  // and the sensors see that pose
+  EXPECT_NEAR(arm["xpos"]["link"][2], 1.0, 1e-12);      // the hinge is at the body origin
+  r = c.Op("step", {{"per_articulation", {{"arm", {{"qpos", {-0.4}}, {"qvel", {0}}}}}}});
+  ASSERT_EQ(r["op"], "step_ok") << r.dump();
+  EXPECT_EQ(r["per_articulation"]["arm"]["qpos"][0], -0.4);
+  EXPECT_EQ(r["per_articulation"]["arm"]["qvel"][0], 0.0);
+  // Refused whole: nothing of a bad request is written.
+  EXPECT_EQ(c.Op("step", {{"qpos", {1.0, 2.0}}})["code"], "dim_mismatch");
+  EXPECT_EQ(c.Op("step", {{"qpos", {1.0}}, {"qvel", {1.0, 2.0}}})["code"], "dim_mismatch");
+  EXPECT_EQ(c.Op("step", {{"per_articulation", {{"arm", {{"ctrl", {1, 2}}}}}}})["code"],
+            "dim_mismatch");
+  EXPECT_EQ(c.Op("step", {{"qpos", {std::nan("")}}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("step", {{"qpos", {1.0}}, {"n_steps", 5}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("step")["code"], "missing_field");
+  std::this_thread::sleep_for(30ms);
+  r = c.Op("forward");
+  EXPECT_EQ(r["per_articulation"]["arm"]["qpos"][0], -0.4);
+  EXPECT_EQ(manager_.session().engine().step_count(), steps);  // never stepped
+  // The driver says bye: back to live, the loop runs again.
+  ASSERT_EQ(c.Op("bye")["op"], "bye_ok");
+  Client other(ctx_, rpc());
+  EXPECT_EQ(other.Hello()["mode"], "live");
+  ASSERT_TRUE(urlab::testing::WaitFor(
+      [&] { return manager_.session().engine().step_count() > steps + 10; }));
+}
+
+// A driver that disappears in direct mode loses its lease and the simulation runs live again.
+TEST_F(StepServerTest, ASilentDriversLockstepEndsWithItsLease) {
+  Play(200ms);
+  Client c(ctx_, rpc());
+  c.Hello();
+  ASSERT_EQ(c.Op("set_mode", {{"mode", "direct"}})["op"], "set_mode_ok");
+  const std::uint64_t steps = c.Op("step")["step"];
+  std::this_thread::sleep_for(50ms);
+  EXPECT_EQ(manager_.session().engine().step_count(), steps);  // waiting for requests
+  ASSERT_TRUE(urlab::testing::WaitFor(
+      [&] { return manager_.session().engine().step_count() > steps + 10; }));
+  Client other(ctx_, rpc());
+  EXPECT_EQ(other.Hello()["mode"], "live");
+}
+
+constexpr const char* kBoxXml = R"(<mujoco model="box">
+  <option timestep="0.002"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="2 2 0.1"/>
+    <body name="box" pos="0 0 0.2">
+      <freejoint name="root"/>
+      <geom name="shell" type="box" size="0.1 0.1 0.1" mass="2"/>
+    </body>
+    <body name="ball" pos="1 0 0.2">
+      <freejoint name="ball_root"/>
+      <geom name="ball_geom" type="sphere" size="0.05" mass="0.5"/>
+    </body>
+  </worldbody>
+</mujoco>
+)";
+
+TEST_F(StepServerTest, GetContactsListsForcesWithFilterAndLimit) {
+  urlab::testing::WriteTextFile(dir_, "box.xml", kBoxXml);
+  Play(5000ms, "direct", "", "box.xml");
+  Client c(ctx_, rpc());
+  c.Hello();
+  ASSERT_EQ(c.Op("step", {{"n_steps", 500}})["op"], "step_ok");  // 1 s: both at rest
+  Json r = c.Op("get_contacts");
+  ASSERT_EQ(r["op"], "get_contacts_ok") << r.dump();
+  EXPECT_EQ(r["truncated"], false);
+  EXPECT_EQ(r["count"], r["matched"]);
+  ASSERT_EQ(r["contacts"].size(), r["count"].get<std::size_t>());
+  double box_normal = 0, ball_normal = 0;
+  for (const Json& k : r["contacts"]) {
+    EXPECT_EQ(k["geom1"], "arm_floor");  // the plane comes first in MuJoCo's pairs
+    EXPECT_EQ(k["body1"], "world");
+    EXPECT_EQ(k["normal"], Json::array({k["frame"][0], k["frame"][1], k["frame"][2]}));
+    EXPECT_NEAR(k["normal"][2].get<double>(), 1.0, 1e-9);
+    EXPECT_LT(std::abs(k["dist"].get<double>()), 1e-2);
+    ASSERT_EQ(k["force"].size(), 6u);
+    (k["body2"] == "arm_box" ? box_normal : ball_normal) += k["force"][0].get<double>();
+  }
+  // At rest the normal forces carry the weights (2 kg and 0.5 kg).
+  EXPECT_NEAR(box_normal, 2 * 9.81, 0.2);
+  EXPECT_NEAR(ball_normal, 0.5 * 9.81, 0.05);
+  // Filter: only the ball's contact, whichever side is named.
+  r = c.Op("get_contacts", {{"filter", {{"body1", "arm_ball"}}}});
+  ASSERT_EQ(r["count"], 1) << r.dump();
+  EXPECT_EQ(r["contacts"][0]["geom2"], "arm_ball_geom");
+  r = c.Op("get_contacts", {{"filter", {{"geom1", "arm_shell"}, {"geom2", "arm_floor"}}}});
+  EXPECT_GE(r["count"].get<int>(), 1);
+  for (const Json& k : r["contacts"]) EXPECT_EQ(k["geom2"], "arm_shell");
+  // Limit: the rest are counted and flagged.
+  r = c.Op("get_contacts", {{"max_contacts", 1}});
+  EXPECT_EQ(r["count"], 1);
+  EXPECT_GT(r["matched"].get<int>(), 1);
+  EXPECT_EQ(r["truncated"], true);
+  EXPECT_EQ(c.Op("get_contacts", {{"filter", {{"body1", "ghost"}}}})["code"], "unknown_body");
+  EXPECT_EQ(c.Op("get_contacts", {{"filter", {{"geom1", "ghost"}}}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("get_contacts", {{"filter", {{"site", "x"}}}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("get_contacts", {{"max_contacts", -1}})["code"], "bad_value");
+  // An observer may ask too.
+  Client observer(ctx_, rpc());
+  observer.Hello();
+  EXPECT_EQ(observer.Op("get_contacts")["op"], "get_contacts_ok");
+}
+
+// Binary STL of a tetrahedron (4 triangles).
+std::string TetrahedronStl() {
+  const float v[4][3] = {{0, 0, 0}, {0.1f, 0, 0}, {0, 0.1f, 0}, {0, 0, 0.1f}};
+  const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  std::string out(80, ' ');
+  const std::uint32_t n = 4;
+  out.append(reinterpret_cast<const char*>(&n), 4);
+  for (const auto& f : faces) {
+    const float normal[3] = {0, 0, 0};
+    out.append(reinterpret_cast<const char*>(normal), 12);
+    for (int k : f) out.append(reinterpret_cast<const char*>(v[k]), 12);
+    out.append(2, '\0');
+  }
+  return out;
+}
+
+// hello with include_assets: the composed model with bare asset names and the files' bytes,
+// enough to compile the same model in an empty folder elsewhere.
+TEST_F(StepServerTest, HelloIncludeAssetsShipsAModelThatCompilesElsewhere) {
+  urlab::testing::WriteTextFile(dir_, "meshes/tet.stl", TetrahedronStl());
+  urlab::testing::WriteTextFile(dir_, "tet.xml", R"(<mujoco model="tet">
+  <compiler meshdir="meshes"/>
+  <asset><mesh name="tet" file="tet.stl"/></asset>
+  <worldbody>
+    <body name="piece" pos="0 0 1">
+      <joint name="slide" type="slide" axis="0 0 1"/>
+      <geom type="mesh" mesh="tet" density="1000"/>
+    </body>
+  </worldbody>
+</mujoco>
+)");
+  Play(5000ms, "live", "", "tet.xml");
+  Client c(ctx_, rpc());
+  const Json h = c.Hello({{"include_assets", true}});
+  ASSERT_EQ(h["op"], "hello_ok") << h.dump().substr(0, 300);
+  const std::string xml = h["mjcf_compiled"];
+  EXPECT_NE(xml.find("file=\"tet.stl\""), std::string::npos) << xml;
+  EXPECT_EQ(xml.find(dir_), std::string::npos);  // no path of this machine
+  ASSERT_TRUE(h["vfs_assets"]["tet.stl"].is_binary());
+  const auto& bytes = h["vfs_assets"]["tet.stl"].get_binary();
+  EXPECT_EQ(std::string(bytes.begin(), bytes.end()), TetrahedronStl());
+  // Elsewhere: an empty folder with the XML and the files under their bare names.
+  const std::string there = urlab::testing::MakeTempDir("include_assets");
+  urlab::testing::WriteTextFile(there, "model.xml", xml);
+  urlab::testing::WriteTextFile(there, "tet.stl", std::string(bytes.begin(), bytes.end()));
+  char error[1000] = "";
+  mjModel* m = mj_loadXML((there + "/model.xml").c_str(), nullptr, error, sizeof error);
+  ASSERT_NE(m, nullptr) << error;
+  const mjModel* here = manager_.session().engine().model();
+  EXPECT_EQ(m->nmesh, here->nmesh);
+  EXPECT_EQ(m->nmeshvert, here->nmeshvert);
+  EXPECT_EQ(m->nq, here->nq);
+  EXPECT_DOUBLE_EQ(m->body_mass[1], here->body_mass[1]);
+  mj_deleteModel(m);
+  // JSON sessions get the same files as base64 text.
+  Client text(ctx_, rpc(), /*json=*/true);
+  const Json t = text.Hello({{"include_assets", true}});
+  EXPECT_EQ(t["vfs_assets_base64"]["tet.stl"].get<std::string>().size(),
+            (bytes.size() + 2) / 3 * 4);
+  EXPECT_EQ(t["mjcf_compiled"], xml);
 }
 
 }  // namespace

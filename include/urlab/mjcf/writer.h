@@ -4,6 +4,7 @@
 // reader; asset file paths are written resolved (absolute, or relative to a chosen folder) and
 // the <compiler> meshdir/texturedir/strippath attributes they consumed are left out, so the
 // output loads from any working directory. Thread: any.
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -15,6 +16,10 @@ namespace urlab::mjcf {
 struct WriteOptions {
   // Folder that asset paths are written relative to; empty writes absolute paths.
   std::string relative_to;
+  // When set, every asset path is written as file_name(resolved absolute path) instead (e.g. a
+  // bare name for a model shipped with its assets in a virtual file system); relative_to is then
+  // not used.
+  std::function<std::string(const std::string& resolved)> file_name;
 };
 
 // For each output line (index 0 = line 1), the element that starts on it (nullptr for closing

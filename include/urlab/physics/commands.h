@@ -20,6 +20,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -80,6 +81,22 @@ struct SetOptions {
 struct SetPaused {
   bool paused = true;
 };
+// Writes the given pieces of the state (each a run of values at an address of qpos, qvel or
+// ctrl) and, when given, the time, then mj_forward: the client owns the state (puppet mode).
+struct SetState {
+  struct Run {
+    int adr = 0;
+    std::vector<mjtNum> values;
+  };
+  std::vector<Run> qpos, qvel, ctrl;
+  std::optional<double> time;
+};
+// Runs `fn` with the current model and state, read only: a query that needs more than a state
+// frame carries (e.g. the contact list with forces). `label` names it in events.
+struct Inspect {
+  std::function<void(const mjModel*, const mjData*)> fn;
+  std::string label;
+};
 // mj_forward: recomputes the derived quantities from the current state (no discontinuity).
 struct Forward {};
 // Runs exactly `n` full iterations (controls, step, post-step work) even while paused, without
@@ -90,9 +107,10 @@ struct Step {
 };
 }  // namespace cmd
 
-using Command = std::variant<cmd::Reset, cmd::ResetKeyframe, cmd::ResetCustom, cmd::Restore,
-                             cmd::SetQpos, cmd::SetQvel, cmd::SetMocap, cmd::ApplyForce,
-                             cmd::SetOptions, cmd::SetPaused, cmd::Step, cmd::Forward>;
+using Command =
+    std::variant<cmd::Reset, cmd::ResetKeyframe, cmd::ResetCustom, cmd::Restore, cmd::SetQpos,
+                 cmd::SetQvel, cmd::SetMocap, cmd::ApplyForce, cmd::SetOptions, cmd::SetPaused,
+                 cmd::Step, cmd::Forward, cmd::SetState, cmd::Inspect>;
 
 // Short name of a command's kind ("reset", "restore", "set_qpos", ...).
 const char* CommandName(const Command& c);

@@ -138,7 +138,8 @@ class PhysicsEngine {
   CallbackId AddOnPostStep(StepCallback fn);
   // Removes a callback added by any of the three functions above; false if unknown.
   bool RemoveCallback(CallbackId id);
-  // The control layer's hook writing d->ctrl; empty function clears it.
+  // The control layer's hook writing d->ctrl before each step (not on paused iterations that do
+  // not step); empty function clears it.
   void SetApplyControlsHook(StepCallback fn);
   // Replaces mj_step while set (replay playback); empty function clears it.
   void SetCustomStepHandler(StepCallback fn);
