@@ -15,7 +15,7 @@ import time
 
 URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
-from urlab_client import StreamClient, UrlabEnv, UrlabError  # noqa: E402
+from urlab_client import StepClient, StreamClient, UrlabEnv, UrlabError  # noqa: E402
 
 
 def fail(message, proc=None):
@@ -95,6 +95,31 @@ articulations:
             assert e.code == "dim_mismatch", e
         env.close()
         print(f"lockstep: 300 requests of 5 steps, qpos {obs['qpos']}")
+        # Puppet mode, contacts and the model with its assets.
+        with StepClient(endpoints[3]) as c:
+            c.set_mode("puppet")
+            r = c.puppet(per_articulation={"arm": {"qpos": [0.2, -0.1], "qvel": [0, 0]}})
+            got = r["per_articulation"]["arm"]["qpos"]
+            if abs(got[0] - 0.2) > 1e-12 or abs(got[1] + 0.1) > 1e-12:
+                fail(f"puppet qpos not written: {got}", proc)
+            try:
+                c.puppet(per_articulation={"arm": {"qpos": [0.2]}})
+                fail("puppet dim_mismatch not reported", proc)
+            except UrlabError as e:
+                assert e.code == "dim_mismatch", e
+            contacts = c.get_contacts(max_contacts=8)
+            assert contacts["count"] == len(contacts["contacts"]), contacts
+            folder = tempfile.mkdtemp(prefix="urlab_assets_")
+            path = c.model_with_assets(folder)
+            with open(path) as f:
+                text = f.read()
+            if "<mujoco" not in text or tmp in text:
+                fail(f"model_with_assets wrote {path} without a self-contained model", proc)
+            print(f"puppet qpos {list(got)}, {contacts['count']} contact(s), "
+                  f"model with {len(os.listdir(folder)) - 1} asset file(s)")
+        with StepClient(endpoints[3]) as c:  # the puppeteer left: live again
+            if c.info["mode"] != "live":
+                fail(f"mode after the driver left: {c.info['mode']}", proc)
     finally:
         proc.send_signal(signal.SIGINT)
         try:

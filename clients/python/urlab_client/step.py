@@ -120,6 +120,64 @@ class StepClient:
         return _arrays(self.call("set_qpos", articulation=articulation,
                                  qpos=[float(x) for x in qpos]))
 
+    def forward(self):
+        return _arrays(self.call("forward"))
+
+    def puppet(self, qpos=None, qvel=None, ctrl=None, time=None, per_articulation=None):
+        """Puppet mode (set_mode("puppet") first): writes the whole model's qpos/qvel/ctrl (or
+        per articulation {art: {"qpos", "qvel", "ctrl"}}) and time, runs mj_forward, returns the
+        observation."""
+        fields = {}
+        for name, v in (("qpos", qpos), ("qvel", qvel), ("ctrl", ctrl)):
+            if v is not None:
+                fields[name] = [float(x) for x in v]
+        if time is not None:
+            fields["time"] = float(time)
+        if per_articulation:
+            fields["per_articulation"] = {
+                art: {k: [float(x) for x in v] for k, v in parts.items()}
+                for art, parts in per_articulation.items()}
+        return _arrays(self.call("step", **fields))
+
+    def get_contacts(self, max_contacts=64, **filter):
+        """Active contacts (force in the contact frame); filter by body1/body2/geom1/geom2."""
+        fields = {"max_contacts": max_contacts}
+        if filter:
+            fields["filter"] = filter
+        return self.call("get_contacts", **fields)
+
+    def set_sim_options(self, **options):
+        return self.call("set_sim_options", options=options)["options"]
+
+    def configure_controller(self, articulation, **params):
+        return self.call("configure_controller", articulation=articulation, params=params)
+
+    def set_mocap_pose(self, body, pos=None, quat=None):
+        fields = {"body": body}
+        if pos is not None:
+            fields["pos"] = [float(x) for x in pos]
+        if quat is not None:
+            fields["quat"] = [float(x) for x in quat]
+        return self.call("set_mocap_pose", **fields)
+
+    def model_with_assets(self, folder):
+        """Writes the server's composed model and its asset files into `folder` (which must
+        exist); returns the model file's path, loadable with MuJoCo there."""
+        import os
+        reply = self.call("hello", include_assets=True)
+        mine, self.session_id = self.session_id, reply["session_id"]
+        try:
+            self.call("bye")  # that extra session is not needed
+        finally:
+            self.session_id = mine
+        for name, data in reply["vfs_assets"].items():
+            with open(os.path.join(folder, name), "wb") as f:
+                f.write(data)
+        path = os.path.join(folder, "model.xml")
+        with open(path, "w") as f:
+            f.write(reply["mjcf_compiled"])
+        return path
+
 
 class UrlabEnv:
     """A learning-loop environment over the step server in lockstep (direct) mode.
