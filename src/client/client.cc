@@ -275,4 +275,37 @@ Observation StepClient::Reset(const std::string& keyframe) {
   return ToObservation(impl_->Request(std::move(request)));
 }
 
+Observation StepClient::Puppet(const std::map<std::string, PuppetState>& per_articulation,
+                               std::optional<double> time) {
+  Json request{{"op", "step"}};
+  for (const auto& [art, state] : per_articulation) {
+    Json entry = Json::object();
+    if (!state.qpos.empty()) entry["qpos"] = state.qpos;
+    if (!state.qvel.empty()) entry["qvel"] = state.qvel;
+    if (!state.ctrl.empty()) entry["ctrl"] = state.ctrl;
+    request["per_articulation"][art] = std::move(entry);
+  }
+  if (time) request["time"] = *time;
+  return ToObservation(impl_->Request(std::move(request)));
+}
+
+std::vector<Contact> StepClient::Contacts(int max_contacts, bool* truncated) {
+  const Json reply = impl_->Request(Json{{"op", "get_contacts"}, {"max_contacts", max_contacts}});
+  std::vector<Contact> out;
+  for (const Json& c : reply.at("contacts")) {
+    Contact k;
+    k.geom1 = c.at("geom1");
+    k.geom2 = c.at("geom2");
+    k.body1 = c.at("body1");
+    k.body2 = c.at("body2");
+    k.pos = c.at("pos").get<std::array<double, 3>>();
+    k.normal = c.at("normal").get<std::array<double, 3>>();
+    k.dist = c.at("dist");
+    k.force = c.at("force").get<std::array<double, 6>>();
+    out.push_back(std::move(k));
+  }
+  if (truncated) *truncated = reply.at("truncated").get<bool>();
+  return out;
+}
+
 }  // namespace urlab::client

@@ -89,5 +89,21 @@ TEST_F(ClientTest, LockstepThroughTheStepServer) {
   EXPECT_THROW(c.Call("set_mode", R"({"mode": "warp"})"), StepError);
 }
 
+TEST_F(ClientTest, PuppetAndContacts) {
+  StepClient c(endpoints_.rpc, "full");
+  c.SetMode("puppet");
+  Observation o = c.Puppet({{"arm", {{0.25, -0.5}, {0.0, 0.0}, {}}}}, 2.5);
+  EXPECT_EQ(o.time, 2.5);
+  EXPECT_EQ(o.per_articulation.at("arm").qpos, (std::vector<double>{0.25, -0.5}));
+  EXPECT_THROW(c.Puppet({{"arm", {{0.25}, {}, {}}}}), StepError);  // one value for two joints
+  o = c.Puppet({{"arm", {{}, {}, {0.1, 0.2}}}});
+  EXPECT_EQ(o.per_articulation.at("arm").qpos[1], -0.5);  // left as it was
+  EXPECT_EQ(o.per_articulation.at("arm").ctrl, (std::vector<double>{0.1, 0.2}));
+  bool truncated = true;
+  const std::vector<Contact> contacts = c.Contacts(64, &truncated);
+  EXPECT_FALSE(truncated);
+  for (const Contact& k : contacts) EXPECT_FALSE(k.geom1.empty());
+}
+
 }  // namespace
 }  // namespace urlab::client

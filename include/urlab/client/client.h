@@ -6,6 +6,7 @@
 // encoding stay inside the library.
 //
 // Threading: each client object is used by one thread at a time (it owns ZeroMQ sockets).
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <map>
@@ -92,6 +93,20 @@ struct Observation {
   std::map<std::string, ArticulationObservation> per_articulation;
 };
 
+// Puppet mode input for one articulation (joint and actuator order of discovery); an empty
+// vector leaves that part of the state as it is.
+struct PuppetState {
+  std::vector<double> qpos, qvel, ctrl;
+};
+
+// One active contact (get_contacts); force in the contact frame (normal first).
+struct Contact {
+  std::string geom1, geom2, body1, body2;
+  std::array<double, 3> pos{}, normal{};
+  double dist = 0;
+  std::array<double, 6> force{};
+};
+
 class StepClient {
  public:
   // Connects and says hello (observation level minimal, standard or full).
@@ -108,12 +123,17 @@ class StepClient {
   // Any operation: `fields` is a JSON object text; returns the reply as JSON text. Throws
   // StepError for an error reply, std::runtime_error when no reply comes in time.
   std::string Call(const std::string& op, const std::string& fields = "{}");
-  void SetMode(const std::string& mode);  // live | direct
+  void SetMode(const std::string& mode);  // live | direct | puppet
   // n steps with controls {articulation: one value per actuator}.
   Observation Step(int n_steps = 1,
                    const std::map<std::string, std::vector<double>>& controls = {});
   // To a keyframe (full name) or, with none, the scene's initial state.
   Observation Reset(const std::string& keyframe = "");
+  // Puppet mode (SetMode("puppet") first): writes the given state, runs mj_forward.
+  Observation Puppet(const std::map<std::string, PuppetState>& per_articulation,
+                     std::optional<double> time = std::nullopt);
+  // The active contacts (at most max_contacts; *truncated says whether more exist).
+  std::vector<Contact> Contacts(int max_contacts = 64, bool* truncated = nullptr);
 
  private:
   struct Impl;
