@@ -898,7 +898,10 @@ StepServer::Outcome StepServer::PuppetStep(Request& r) {
   // Per articulation: its own qpos / qvel (joint order) and ctrl (actuator order).
   if (const auto it = r.body.find("per_articulation"); it != r.body.end()) {
     if (!it->is_object()) Fail("bad_value", "per_articulation must be a map");
-    for (const auto& [name, entry] : it->items()) {
+    for (const auto& item : it->items()) {
+      // Plain names: clang 14 cannot capture structured bindings in the lambda below.
+      const std::string& name = item.key();
+      const Json& entry = item.value();
       const ArticulationTopics& t = Articulation(name);
       if (!entry.is_object()) Fail("bad_value", name + ": a map of qpos, qvel, ctrl");
       const auto part = [&](const char* field, const std::vector<int>& adrs,
