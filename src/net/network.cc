@@ -9,6 +9,7 @@
 #include <future>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <thread>
 #include <unordered_map>
 #include <zmq.hpp>
@@ -96,6 +97,12 @@ struct NetworkSubsystem::Impl {
   // ---- I/O thread only ----
   std::optional<zmq::context_t> context;
   std::optional<zmq::socket_t> pub, sub, info;
+  // The state socket is an XPUB (SUB clients see a PUB), so the topic prefixes subscribers ask
+  // for are known here and a topic nobody wants is not even encoded.
+  std::set<std::string> prefixes;
+  bool wanted_dirty = true;
+  std::vector<std::vector<char>> joint_wanted, sensor_wanted;  // per articulation, per topic
+  bool full_wanted = false;
   physics::StateFrame frame;  // the newest frame taken from the ring
   bool have_frame = false;
   std::string payload;
@@ -117,7 +124,9 @@ struct NetworkSubsystem::Impl {
     if (endpoint.empty()) return "";
     zmq::socket_t s(*context, type);
     s.set(zmq::sockopt::linger, 0);
-    if (type == zmq::socket_type::pub) s.set(zmq::sockopt::sndhwm, 10000);
+    if (type == zmq::socket_type::pub || type == zmq::socket_type::xpub) {
+      s.set(zmq::sockopt::sndhwm, 10000);
+    }
     try {
       s.bind(endpoint);
     } catch (const zmq::error_t& e) {
@@ -144,10 +153,54 @@ struct NetworkSubsystem::Impl {
     s.send(zmq::buffer(body), zmq::send_flags::dontwait);
   }
 
+  // Subscription changes on the state socket: 1 + prefix subscribes, 0 + prefix unsubscribes
+  // (ZeroMQ passes on the first subscription to a prefix and the last unsubscription only).
+  void DrainSubscriptions() {
+    if (!pub) return;
+    zmq::message_t m;
+    while (pub->recv(m, zmq::recv_flags::dontwait)) {
+      if (m.size() == 0) continue;
+      const auto* b = static_cast<const char*>(m.data());
+      const std::string prefix(b + 1, m.size() - 1);
+      if (b[0] == 1) {
+        prefixes.insert(prefix);
+      } else if (b[0] == 0) {
+        prefixes.erase(prefix);
+      }
+      wanted_dirty = true;
+    }
+  }
+
+  bool Wanted(std::string_view topic) const {
+    for (const std::string& p : prefixes) {
+      if (topic.starts_with(p)) return true;
+    }
+    return false;
+  }
+
+  void UpdateWanted() {
+    if (!wanted_dirty) return;
+    wanted_dirty = false;
+    joint_wanted.assign(tables.size(), {});
+    sensor_wanted.assign(tables.size(), {});
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      for (const JointTopicEntry& j : tables[i].joints) joint_wanted[i].push_back(Wanted(j.topic));
+      for (const SensorTopicEntry& x : tables[i].sensors) {
+        sensor_wanted[i].push_back(Wanted(x.topic));
+      }
+    }
+    full_wanted = Wanted(wire::kFullStateTopic);
+  }
+
   void PublishState(const physics::StateFrame& f) {
     if (!pub) return;
-    for (const ArticulationTopics& t : tables) {
-      for (const JointTopicEntry& j : t.joints) {
+    DrainSubscriptions();
+    UpdateWanted();
+    for (std::size_t ti = 0; ti < tables.size(); ++ti) {
+      const ArticulationTopics& t = tables[ti];
+      for (std::size_t ji = 0; ji < t.joints.size(); ++ji) {
+        if (!joint_wanted[ti][ji]) continue;
+        const JointTopicEntry& j = t.joints[ji];
         payload.clear();
         const double* q = f.qpos.data() + j.qpos_adr;
         const double* v = f.qvel.data() + j.dof_adr;
@@ -165,14 +218,16 @@ struct NetworkSubsystem::Impl {
         }
         Send(*pub, j.topic, payload);
       }
-      for (const SensorTopicEntry& s : t.sensors) {
+      for (std::size_t si = 0; si < t.sensors.size(); ++si) {
+        if (!sensor_wanted[ti][si]) continue;
+        const SensorTopicEntry& s = t.sensors[si];
         payload.clear();
         wire::AppendSensor(&payload, s.id,
                            std::span(f.sensordata.data() + s.adr, static_cast<std::size_t>(s.dim)));
         Send(*pub, s.topic, payload);
       }
     }
-    if (full_state) {  // state/full: the step server's observation map, msgpack
+    if (full_state && full_wanted) {  // state/full: the step server's observation map, msgpack
       full_writer.Clear();
       full_writer.Map(kObservationEntries);
       WriteObservationEntries(full_writer, tables, f, *full_state, false);
@@ -272,9 +327,10 @@ struct NetworkSubsystem::Impl {
       bell->Clear();
       return;
     }
-    zmq::pollitem_t items[3];
+    zmq::pollitem_t items[4];
     int n = 0;
     items[n++] = {nullptr, bell->fd(), ZMQ_POLLIN, 0};
+    if (pub) items[n++] = {static_cast<void*>(*pub), 0, ZMQ_POLLIN, 0};  // subscriptions
     if (sub) items[n++] = {static_cast<void*>(*sub), 0, ZMQ_POLLIN, 0};
     if (server && server->socket()) {
       items[n++] = {static_cast<void*>(*server->socket()), 0, ZMQ_POLLIN, 0};
@@ -307,7 +363,7 @@ struct NetworkSubsystem::Impl {
     }
     try {
       context.emplace(1);
-      bound.state = Bind(&pub, zmq::socket_type::pub, "state", options.state);
+      bound.state = Bind(&pub, zmq::socket_type::xpub, "state", options.state);
       bound.control = Bind(&sub, zmq::socket_type::sub, "control", options.control);
       bound.info = Bind(&info, zmq::socket_type::pub, "info", options.info);
       if (sub) sub->set(zmq::sockopt::subscribe, "");
@@ -319,6 +375,7 @@ struct NetworkSubsystem::Impl {
     while (!stop.load(std::memory_order_acquire)) {
       // 1. Inbound first (controls and requests are what clients wait on).
       DrainControl();
+      DrainSubscriptions();
       if (server) {
         server->HandleIncoming();
         // 2. Replies whose commands took effect (a lockstep reply as soon as its window ends).

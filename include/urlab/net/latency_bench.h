@@ -32,6 +32,9 @@ struct LatencyBenchResult {
   Percentiles streaming, lockstep, raw_pubsub, raw_reqrep;
   double lockstep_rate_n1 = 0, lockstep_rate_n10 = 0, bare_rate = 0;  // medians, steps/s
   double throughput_ratio_n1 = 0, throughput_ratio_n10 = 0;           // median of per-round ratios
+  // The best ratio any lockstep server could reach over this transport: n bare steps plus one
+  // raw REQ/REP round trip (p50) per request, against n bare steps.
+  double ceiling_n1 = 0, ceiling_n10 = 0;
 };
 
 LatencyBenchResult RunLatencyBench(world::SceneConfig scene, const LatencyBenchOptions& options);
