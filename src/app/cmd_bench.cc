@@ -86,9 +86,10 @@ int BenchLatency(const BenchLatencyArgs& args) {
       net::RunLatencyBench(world::LoadSceneOrModel(args.scene), options);
   std::printf(
       "streaming_ratio=%.3f\nlockstep_ratio=%.3f\nthroughput_n1=%.3f\nthroughput_n10=%.3f\n"
-      "ceiling_n1=%.3f\nceiling_n10=%.3f\n",
+      "ceiling_n1=%.3f\nceiling_n10=%.3f\npipelined_n1=%.3f\npipelined_n10=%.3f\n",
       r.streaming.p50_us / r.raw_pubsub.p50_us, r.lockstep.p50_us / r.raw_reqrep.p50_us,
-      r.throughput_ratio_n1, r.throughput_ratio_n10, r.ceiling_n1, r.ceiling_n10);
+      r.throughput_ratio_n1, r.throughput_ratio_n10, r.ceiling_n1, r.ceiling_n10,
+      r.pipelined_ratio_n1, r.pipelined_ratio_n10);
   std::fflush(stdout);
   return 0;
 }

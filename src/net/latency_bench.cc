@@ -61,6 +61,8 @@ std::optional<double> FirstCtrl(const zmq::message_t& m, const std::string& art)
   }
 }
 
+constexpr int kPipelineWindow = 4;  // requests a pipelining client keeps in flight
+
 double Micros(Clock::duration d) { return std::chrono::duration<double, std::micro>(d).count(); }
 
 // Raw ZeroMQ floors: an echo thread answers each ping (same payload size as a control message).
@@ -171,6 +173,7 @@ class RpcClient {
   // A step in the throughput loop: the reply is only checked (a learning loop reads what it
   // needs; decoding every number into a tree would measure this client, not the server).
   void Step(const Json& request) { (void)Exchange(request); }
+  const std::string& session() const { return session_; }
 
  private:
   msgpack::object_handle Exchange(Json request) {
@@ -198,6 +201,37 @@ class RpcClient {
   MsgpackWriter writer_;
   zmq::message_t reply_;
 };
+
+// A DEALER client keeping `window` step requests in flight (of the same session as a REQ
+// client): measures what the server can process, not one round trip per step.
+double PipelinedRate(zmq::context_t& ctx, const std::string& endpoint, const std::string& session,
+                     int n, int requests, int window) {
+  zmq::socket_t dealer(ctx, zmq::socket_type::dealer);
+  dealer.set(zmq::sockopt::rcvtimeo, 10000);
+  dealer.set(zmq::sockopt::linger, 0);
+  dealer.connect(endpoint);
+  MsgpackWriter writer;
+  writer.Value(Json{{"op", "step"}, {"n_steps", n}, {"session_id", session}});
+  const auto t0 = Clock::now();
+  int sent = 0, received = 0;
+  zmq::message_t reply;
+  while (received < requests) {
+    while (sent < requests && sent - received < window) {
+      dealer.send(zmq::buffer(writer.data(), writer.size()));
+      ++sent;
+    }
+    if (!dealer.recv(reply)) throw Error("bench latency: the step server did not answer");
+    const msgpack::object_handle h =
+        msgpack::unpack(static_cast<const char*>(reply.data()), reply.size());
+    const msgpack::object* op = Field(h.get(), "op");
+    if (!op || op->type != msgpack::type::STR ||
+        std::string_view(op->via.str.ptr, op->via.str.size) != "step_ok") {
+      throw Error("bench latency: a pipelined step was refused");
+    }
+    ++received;
+  }
+  return requests * n / std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 }  // namespace
 
@@ -324,7 +358,7 @@ LatencyBenchResult RunLatencyBench(world::SceneConfig scene, const LatencyBenchO
   // Throughput: bare mj_step, then n=1, then n=10, round by round; each ratio is taken within
   // its round and the median ratio reported.
   {
-    std::vector<double> bare, n1, n10, ratio1, ratio10;
+    std::vector<double> bare, n1, n10, ratio1, ratio10, piped1, piped10;
     const int steps = std::max(10, options.throughput_steps / options.rounds);
     for (int round = 0; round < options.rounds; ++round) {
       bare.push_back(BareRate(bare_model.get(), bare_data.get(), steps));
@@ -336,8 +370,13 @@ LatencyBenchResult RunLatencyBench(world::SceneConfig scene, const LatencyBenchO
         const double rate = requests * n / std::chrono::duration<double>(Clock::now() - t0).count();
         (n == 1 ? n1 : n10).push_back(rate);
         (n == 1 ? ratio1 : ratio10).push_back(rate / bare.back());
+        const double piped =
+            PipelinedRate(ctx, net.endpoints().rpc, client.session(), n, requests, kPipelineWindow);
+        (n == 1 ? piped1 : piped10).push_back(piped / bare.back());
       }
     }
+    r.pipelined_ratio_n1 = Median(piped1);
+    r.pipelined_ratio_n10 = Median(piped10);
     r.bare_rate = Median(bare);
     r.lockstep_rate_n1 = Median(n1);
     r.lockstep_rate_n10 = Median(n10);
@@ -367,6 +406,10 @@ LatencyBenchResult RunLatencyBench(world::SceneConfig scene, const LatencyBenchO
       Format("lockstep throughput n=10     %9.0f steps/s (median ratio %.3f of bare; the raw "
              "round trip caps any server at %.3f)",
              r.lockstep_rate_n10, r.throughput_ratio_n10, r.ceiling_n10));
+  report(
+      Format("server capacity (%d step requests in flight): n=1 ratio %.3f, n=10 ratio %.3f "
+             "of bare",
+             kPipelineWindow, r.pipelined_ratio_n1, r.pipelined_ratio_n10));
   return r;
 }
 

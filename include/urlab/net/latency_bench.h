@@ -35,6 +35,9 @@ struct LatencyBenchResult {
   // The best ratio any lockstep server could reach over this transport: n bare steps plus one
   // raw REQ/REP round trip (p50) per request, against n bare steps.
   double ceiling_n1 = 0, ceiling_n10 = 0;
+  // Steps per second when a client keeps several step requests in flight (a DEALER socket):
+  // what the server processes, without a round trip per request; median ratio to bare.
+  double pipelined_ratio_n1 = 0, pipelined_ratio_n10 = 0;
 };
 
 LatencyBenchResult RunLatencyBench(world::SceneConfig scene, const LatencyBenchOptions& options);
