@@ -66,21 +66,25 @@ constexpr int kPipelineWindow = 4;  // requests a pipelining client keeps in fli
 double Micros(Clock::duration d) { return std::chrono::duration<double, std::micro>(d).count(); }
 
 // Raw ZeroMQ floors: an echo thread answers each ping (same payload size as a control message).
-// Kept alive through the whole run so raw and server samples can alternate.
+// Kept alive through the whole run so raw and server samples can alternate. The echo side has
+// its own ZeroMQ context (its own I/O thread), as a server in another process would, and as the
+// network subsystem has: both ends sharing one I/O thread would be a shorter path than any
+// client and server can have.
 class RawPubSubEcho {
  public:
   explicit RawPubSubEcho(zmq::context_t& ctx)
-      : out_(ctx, zmq::socket_type::pub), in_(ctx, zmq::socket_type::sub) {
+      : echo_ctx_(1), out_(ctx, zmq::socket_type::pub), in_(ctx, zmq::socket_type::sub) {
     out_.bind("tcp://127.0.0.1:*");
     in_.bind("tcp://127.0.0.1:*");
     in_.set(zmq::sockopt::subscribe, "");
     in_.set(zmq::sockopt::rcvtimeo, 1000);
     const std::string to_echo = out_.get(zmq::sockopt::last_endpoint);
     const std::string from_echo = in_.get(zmq::sockopt::last_endpoint);
-    echo_ = std::thread([this, &ctx, to_echo, from_echo] {
-      zmq::socket_t sub(ctx, zmq::socket_type::sub), pub(ctx, zmq::socket_type::pub);
+    echo_ = std::thread([this, to_echo, from_echo] {
+      zmq::socket_t sub(echo_ctx_, zmq::socket_type::sub), pub(echo_ctx_, zmq::socket_type::pub);
       sub.set(zmq::sockopt::subscribe, "");
       sub.set(zmq::sockopt::rcvtimeo, 100);
+      pub.set(zmq::sockopt::linger, 0);
       sub.connect(to_echo);
       pub.connect(from_echo);
       std::vector<zmq::message_t> parts;
@@ -107,6 +111,7 @@ class RawPubSubEcho {
   }
 
  private:
+  zmq::context_t echo_ctx_;  // first: outlives the sockets
   zmq::socket_t out_, in_;
   std::atomic<bool> stop_{false};
   std::thread echo_;
@@ -116,7 +121,8 @@ class RawPubSubEcho {
 class RawReqRepEcho {
  public:
   explicit RawReqRepEcho(zmq::context_t& ctx)
-      : req_(ctx, zmq::socket_type::req), rep_(ctx, zmq::socket_type::rep) {
+      : echo_ctx_(1), req_(ctx, zmq::socket_type::req), rep_(echo_ctx_, zmq::socket_type::rep) {
+    rep_.set(zmq::sockopt::linger, 0);
     rep_.bind("tcp://127.0.0.1:*");
     rep_.set(zmq::sockopt::rcvtimeo, 100);
     echo_ = std::thread([this] {
@@ -142,6 +148,7 @@ class RawReqRepEcho {
   }
 
  private:
+  zmq::context_t echo_ctx_;  // first: outlives the sockets
   zmq::socket_t req_, rep_;  // rep_ is used by the echo thread only (after construction)
   std::atomic<bool> stop_{false};
   std::thread echo_;

@@ -37,7 +37,7 @@ struct NetworkOptions {
   std::chrono::milliseconds lease_timeout{5000};
   // Added to the nice value of the I/O thread (and ZeroMQ's own I/O thread), so that under CPU
   // contention the physics thread keeps its rate; 0 leaves them as they are.
-  int io_nice = 10;
+  int io_nice = 5;
   // Frames the I/O thread may fall behind the physics thread before frames are dropped.
   std::size_t ring_capacity = 4096;
 };
