@@ -1,6 +1,7 @@
 #include "urlab/physics/engine.h"
 
 #include <gtest/gtest.h>
+#include <poll.h>
 
 #include <atomic>
 #include <chrono>
@@ -11,6 +12,7 @@
 #include "physics/test_models.h"
 #include "support/mujoco_test.h"
 #include "support/wait.h"
+#include "urlab/core/doorbell.h"
 
 namespace urlab::physics {
 namespace {
@@ -438,6 +440,49 @@ TEST_F(EngineTest, StressCommandsFromOtherThreads) {
   EXPECT_GT(events, 0);
   engine.SetPaused(false);
   engine.StepSync(10);  // still healthy
+}
+
+// Running as fast as possible, rings are coalesced, but a consumer that sleeps until the doorbell
+// still sees every frame promptly, and the last frame before a pause always rings.
+TEST_F(EngineTest, DoorbellWakesTheConsumerForEveryFrameEvenWhenCoalesced) {
+  PhysicsEngine::Options o;
+  o.as_fast_as_possible = true;
+  PhysicsEngine engine(CompileXmlString(kArmXml), o);
+  const auto ring = engine.SubscribeEveryStep("test", 1 << 16);
+  const auto bell = std::make_shared<Doorbell>();
+  engine.AddDoorbell(bell);
+  engine.Start();
+  StateFrame f = StateFrame::SizedFor(engine.model());
+  std::uint64_t taken = 0, last_step = 0;
+  int wakes = 0;
+  const auto sleep_until_rung = [&] {
+    bell->Arm();
+    if (ring->size() > 0) {
+      bell->Clear();
+      return true;
+    }
+    pollfd p{bell->fd(), POLLIN, 0};
+    const bool rung = poll(&p, 1, 2000) == 1;
+    bell->Clear();
+    ++wakes;
+    return rung;
+  };
+  while (taken < 2000) {
+    ASSERT_TRUE(sleep_until_rung()) << "no ring for 2 s with frames flowing";
+    while (ring->TryPop(&f)) {
+      ++taken;
+      last_step = f.step;
+    }
+  }
+  engine.Submit(cmd::SetPaused{true});
+  // After the pause: the consumer is woken until it holds the paused frame.
+  while (!f.paused) {
+    ASSERT_TRUE(sleep_until_rung()) << "the paused frame never rang";
+    while (ring->TryPop(&f)) last_step = f.step;
+  }
+  EXPECT_EQ(last_step, engine.step_count());
+  EXPECT_EQ(ring->dropped(), 0u);
+  engine.Stop();
 }
 
 }  // namespace

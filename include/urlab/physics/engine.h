@@ -156,8 +156,10 @@ class PhysicsEngine {
   std::shared_ptr<StateRing> SubscribeEveryStep(std::string name, std::size_t capacity);
   // Drops a subscription made above; false when unknown.
   bool Unsubscribe(const void* subscription);
-  // Rung on the physics thread after every published frame, once the commands that frame shows
-  // are finished (a reader thread sleeping in poll wakes for new state and command results).
+  // Rung on the physics thread after a published frame, once the commands that frame shows are
+  // finished (a reader thread sleeping in poll wakes for new state and command results). Every
+  // frame rings, except while running as fast as possible, where frames with nothing else due
+  // ring at most every 50 µs and the last one always rings before the loop waits or pauses.
   void AddDoorbell(std::shared_ptr<Doorbell> doorbell);
 
   // ---- Commands (any thread) ----
@@ -239,7 +241,12 @@ class PhysicsEngine {
   std::uint32_t ApplyCommandLocked(Command& command);
   void ValidateCommand(const Command& command) const;
   void CheckDivergenceLocked(double time_before);
-  void PublishFrameLocked();
+  // Publishes a state frame and rings the doorbells. With `may_coalesce` (a free-running
+  // iteration as fast as possible) the ring is skipped when the last one was less than
+  // kRingCoalesce ago and nothing else is due (finished commands, a pause): the consumers then
+  // take several frames per wake-up, and the loop rings before it would idle.
+  void PublishFrameLocked(bool may_coalesce = false);
+  void RingDoorbellsLocked();
   // Takes the one-shot forces out of xfrc_applied; drops those whose steps ran out (all: every
   // one).
   void RemoveOneShotForcesLocked(bool all);
@@ -284,7 +291,9 @@ class PhysicsEngine {
   std::uint32_t pending_discontinuity_ = 0;  // mutex held: since the last published frame
   std::uint64_t epoch_ = 0;                  // mutex held: discontinuities so far
   std::uint64_t frames_ = 0;                 // mutex held: frames published
-  bool published_paused_ = false;            // mutex held: pause state of the last frame
+  std::chrono::steady_clock::time_point last_ring_{};  // mutex held: last doorbell ring
+  bool unrung_ = false;            // mutex held: a frame was published without a ring
+  bool published_paused_ = false;  // mutex held: pause state of the last frame
 
   // Events for the main thread.
   std::mutex events_mutex_;
