@@ -2,7 +2,7 @@
 # The test command (CI runs it): installs dependencies, builds, runs the whole test suite with
 # ctest, then more stages, each printing its wall time, and a table of them at the end:
 #   main        RelWithDebInfo build (GCC) + every test (ctest)
-#   tsan        ThreadSanitizer: the physics, control, world, net and client tests
+#   tsan        ThreadSanitizer: the core, physics, control, world, net and client tests
 #   asan        AddressSanitizer + UndefinedBehaviorSanitizer: the mjcf, document, world tests
 #   release     Release build with GCC (-O3), warnings as errors, no tests
 #   clang       clang build of everything (tests, benchmarks, examples) + the fast unit tests
@@ -81,10 +81,10 @@ tsan_stage() {
   local dir="${BUILD_DIR}-tsan"
   configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_SANITIZE=thread -DURLAB_BUILD_BENCH=OFF
   # The net tests include the Python client's end-to-end test, which runs the urlab binary.
-  cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_physics urlab_tests_control \
-    urlab_tests_world urlab_tests_net urlab_tests_client
+  cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_core urlab_tests_physics \
+    urlab_tests_control urlab_tests_world urlab_tests_net urlab_tests_client
   TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/tsan.supp" \
-    ctest --test-dir "$dir" -L 'physics|control|world|net|client' --output-on-failure \
+    ctest --test-dir "$dir" -L 'core|physics|control|world|net|client' --output-on-failure \
     -j"$JOBS" --timeout 900
 }
 
