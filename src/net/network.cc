@@ -1,5 +1,6 @@
 #include "urlab/net/network.h"
 
+#include <pthread.h>
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -464,7 +465,10 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
   }
   std::promise<Endpoints> ready;
   std::future<Endpoints> bound = ready.get_future();
-  impl_->thread = std::thread([this, &ready] { impl_->Run(&ready); });
+  impl_->thread = std::thread([this, &ready] {
+    pthread_setname_np(pthread_self(), "urlab-net");  // for top -H, perf, gdb
+    impl_->Run(&ready);
+  });
   bound_ = bound.get();
   const auto shown = [](const std::string& e) { return e.empty() ? std::string("(none)") : e; };
   spdlog::info("network: state {} | control {} | info {} | rpc {}", shown(bound_.state),

@@ -1,5 +1,6 @@
 #include "urlab/physics/engine.h"
 
+#include <pthread.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -112,7 +113,10 @@ void PhysicsEngine::Start() {
   if (running_.load()) throw Error("PhysicsEngine::Start: the physics thread is already running");
   stop_.store(false);
   running_.store(true, std::memory_order_release);
-  thread_ = std::thread([this] { Loop(); });
+  thread_ = std::thread([this] {
+    pthread_setname_np(pthread_self(), "urlab-physics");  // for top -H, perf, gdb
+    Loop();
+  });
 }
 
 void PhysicsEngine::Stop() {
