@@ -93,7 +93,7 @@ struct NetworkSubsystem::Impl {
   std::atomic<bool> stop{false};
   std::array<std::atomic<std::uint64_t>, wire::kNumDrops> drops{};
   std::atomic<std::uint64_t> controls_applied{0}, gains_applied{0}, steps_published{0},
-      info_published{0}, frames_skipped{0};
+      info_published{0}, frames_skipped{0}, state_messages{0};
 
   // ---- I/O thread only ----
   std::optional<zmq::context_t> context;
@@ -152,6 +152,11 @@ struct NetworkSubsystem::Impl {
     // Non-blocking: a PUB socket drops at its high-water mark instead of blocking.
     s.send(zmq::buffer(topic), zmq::send_flags::sndmore | zmq::send_flags::dontwait);
     s.send(zmq::buffer(body), zmq::send_flags::dontwait);
+  }
+
+  void SendState(std::string_view topic, std::string_view body) {
+    Send(*pub, topic, body);
+    state_messages.fetch_add(1, std::memory_order_relaxed);
   }
 
   // Subscription changes on the state socket: 1 + prefix subscribes, 0 + prefix unsubscribes
@@ -217,7 +222,7 @@ struct NetworkSubsystem::Impl {
             wire::AppendJoint(&payload, j.id, *q, *v, *a);
             break;
         }
-        Send(*pub, j.topic, payload);
+        SendState(j.topic, payload);
       }
       for (std::size_t si = 0; si < t.sensors.size(); ++si) {
         if (!sensor_wanted[ti][si]) continue;
@@ -225,14 +230,14 @@ struct NetworkSubsystem::Impl {
         payload.clear();
         wire::AppendSensor(&payload, s.id,
                            std::span(f.sensordata.data() + s.adr, static_cast<std::size_t>(s.dim)));
-        Send(*pub, s.topic, payload);
+        SendState(s.topic, payload);
       }
     }
     if (full_state && full_wanted) {  // state/full: the step server's observation map, msgpack
       full_writer.Clear();
       full_writer.Map(kObservationEntries);
       WriteObservationEntries(full_writer, tables, f, *full_state, false);
-      Send(*pub, wire::kFullStateTopic, std::string_view(full_writer.data(), full_writer.size()));
+      SendState(wire::kFullStateTopic, std::string_view(full_writer.data(), full_writer.size()));
     }
   }
 
@@ -495,6 +500,7 @@ NetworkCounters NetworkSubsystem::counters() const {
   c.gains_applied = impl_->gains_applied.load();
   c.steps_published = impl_->steps_published.load();
   c.info_published = impl_->info_published.load();
+  c.state_messages = impl_->state_messages.load();
   c.frames_dropped = (impl_->ring ? impl_->ring->dropped() : 0) + impl_->frames_skipped.load();
   return c;
 }

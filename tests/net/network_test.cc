@@ -168,6 +168,33 @@ TEST_F(NetworkTest, StateTopicsCarryEveryJointKindAndSensors) {
   EXPECT_EQ(quat->sensor_id, mj_name2id(m, mjOBJ_SENSOR, "a_wrist_quat"));
 }
 
+// The state socket knows what subscribers asked for: a topic nobody wants is not sent at all.
+TEST_F(NetworkTest, OnlySubscribedTopicsAreSent) {
+  Play();
+  // Sent per published step, measured over about 100 steps once subscriptions settled.
+  const auto per_step = [&] {
+    std::this_thread::sleep_for(300ms);  // the subscription change reaches the server
+    const NetworkCounters before = net_->counters();
+    EXPECT_TRUE(urlab::testing::WaitFor(
+        [&] { return net_->counters().steps_published >= before.steps_published + 100; }));
+    const NetworkCounters after = net_->counters();
+    return static_cast<double>(after.state_messages - before.state_messages) /
+           static_cast<double>(after.steps_published - before.steps_published);
+  };
+  const double everything = per_step();
+  EXPECT_GE(everything, 10.0);  // two robots: joints, bases, sensors, state/full
+  state_.set(zmq::sockopt::unsubscribe, "");
+  state_.set(zmq::sockopt::subscribe, "a/joint/hinge");
+  EXPECT_NEAR(per_step(), 1.0, 0.05);
+  EXPECT_FALSE(Receive("a/joint/hinge").empty());
+  state_.set(zmq::sockopt::unsubscribe, "a/joint/hinge");
+  EXPECT_NEAR(per_step(), 0.0, 0.05);
+  state_.set(zmq::sockopt::subscribe, "a/");  // a prefix: every topic of robot a
+  const double robot_a = per_step();
+  EXPECT_GT(robot_a, 2.0);
+  EXPECT_LT(robot_a, everything);
+}
+
 TEST_F(NetworkTest, ControlIsAppliedWholeAndOnlyToItsOwnRobot) {
   Play();
   const int a0 = Actuator("a_hinge_motor"), a1 = Actuator("a_spare");

@@ -53,6 +53,8 @@ struct NetworkCounters {
   std::uint64_t steps_published = 0;                   // physics steps whose state went out
   std::uint64_t frames_dropped = 0;  // steps the I/O thread could not keep up with
   std::uint64_t info_published = 0;  // discovery messages
+  // State topic messages sent (topics no subscriber asked for are not sent, nor encoded).
+  std::uint64_t state_messages = 0;
   std::uint64_t total_drops() const;
 };
 
