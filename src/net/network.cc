@@ -16,6 +16,7 @@
 #include <zmq.hpp>
 #include <zmq_addon.hpp>
 
+#include "core/spin_wait.h"
 #include "net/msgpack_codec.h"
 #include "net/observation.h"
 #include "net/port_owner.h"
@@ -104,6 +105,7 @@ struct NetworkSubsystem::Impl {
   bool wanted_dirty = true;
   std::vector<std::vector<char>> joint_wanted, sensor_wanted;  // per articulation, per topic
   bool full_wanted = false;
+  SpinWait spin;              // for parked replies (gives up under CPU contention)
   physics::StateFrame frame;  // the newest frame taken from the ring
   bool have_frame = false;
   std::string payload;
@@ -344,14 +346,12 @@ struct NetworkSubsystem::Impl {
     // A parked reply (a lockstep window under way) is due within a few steps: watch for it
     // without sleeping for a while, since a wake-up from poll costs more than the round trip.
     if (server && server->has_pending()) {
-      const auto spin_until = Clock::now() + kReplySpin;
-      while (Clock::now() < spin_until) {
-        if (ring->size() > 0 || server->has_ready() ||
-            zmq::poll(items, static_cast<std::size_t>(n), std::chrono::milliseconds(0)) > 0) {
-          bell->Clear();
-          return;
-        }
-        std::this_thread::yield();
+      if (spin.Spin(kReplySpin, [&] {
+            return ring->size() > 0 || server->has_ready() ||
+                   zmq::poll(items, static_cast<std::size_t>(n), std::chrono::milliseconds(0)) > 0;
+          })) {
+        bell->Clear();
+        return;
       }
     }
     zmq::poll(items, static_cast<std::size_t>(n), kIdlePeriod);

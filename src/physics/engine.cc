@@ -10,6 +10,7 @@
 #include <type_traits>
 #include <variant>
 
+#include "core/spin_wait.h"
 #include "urlab/core/error.h"
 
 namespace urlab::physics {
@@ -798,6 +799,7 @@ void PhysicsEngine::HandleErrorLocked(const std::exception& e) {
 
 void PhysicsEngine::Loop() {
   bool window_ended = false;  // a lockstep window ended in the last iteration
+  SpinWait spin;              // for the next lockstep request (gives up under CPU contention)
   auto next = Clock::now();
   auto window_start = next;
   {
@@ -852,11 +854,9 @@ void PhysicsEngine::Loop() {
       // Lockstep: the next request usually follows within a round trip of the last window, so
       // wait for it briefly without sleeping (a futex wake-up costs more than the round trip).
       if (window_ended) {
-        const auto spin_until = Clock::now() + kLockstepSpin;
-        while (!commands_.pending() && paused() && !stop_.load(std::memory_order_relaxed) &&
-               Clock::now() < spin_until) {
-          std::this_thread::yield();
-        }
+        spin.Spin(kLockstepSpin, [&] {
+          return commands_.pending() || !paused() || stop_.load(std::memory_order_relaxed);
+        });
         if (commands_.pending() || !paused()) continue;
       }
       // Paused: sleep until a command arrives (lockstep requests wake the loop at once).
