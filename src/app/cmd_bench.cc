@@ -126,9 +126,12 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
       "latency",
       "Network latency and lockstep throughput over loopback: control-to-state round trip on the "
       "streaming topics and step n=1 round trip on the step server (p50/p99), each beside a raw "
-      "ZeroMQ ping-pong of the same kind measured in the same run, and steps per second through "
-      "the step server (n=1, n=10) against a bare mj_step loop. The scene's first articulation "
-      "runs with passthrough control, as fast as possible.");
+      "ZeroMQ ping-pong of the same kind measured in the same run (the echo in its own ZeroMQ "
+      "context, like another process), and steps per second through the step server (n=1, "
+      "n=10) against a bare mj_step loop: with one request in flight (a learning loop; printed "
+      "beside the ceiling the raw round trip sets) and with 4 in flight (the server's capacity). "
+      "The scene's first articulation runs with passthrough control, as fast as possible. The "
+      "last lines are key=value ratios for scripts.");
   static BenchLatencyArgs latency_args;
   latency->add_option("SCENE", latency_args.scene, "scene file (.yaml) or MJCF model (.xml)")
       ->required()
