@@ -1,0 +1,54 @@
+#pragma once
+// Reading the fields of a step-server request (a JSON tree decoded from msgpack or JSON text):
+// each reader refuses a missing or mistyped field with the protocol's error code, as a Failure
+// that the server turns into an error reply. Thread: any (pure).
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "net/msgpack_codec.h"
+
+namespace urlab::net::request {
+
+// A request refused with a protocol error code.
+struct Failure {
+  std::string code, message;
+};
+
+[[noreturn]] inline void Fail(std::string code, std::string message) {
+  throw Failure{std::move(code), std::move(message)};
+}
+
+inline const Json& Require(const Json& body, const char* field) {
+  const auto it = body.find(field);
+  if (it == body.end()) Fail("missing_field", std::string("'") + field + "' is required");
+  return *it;
+}
+
+inline double Number(const Json& v, const char* field) {
+  if (!v.is_number()) Fail("bad_value", std::string("'") + field + "' must be a number");
+  const double x = v.get<double>();
+  if (!std::isfinite(x)) Fail("bad_value", std::string("'") + field + "' must be finite");
+  return x;
+}
+
+inline std::vector<double> Numbers(const Json& v, const char* field) {
+  if (!v.is_array()) Fail("bad_value", std::string("'") + field + "' must be an array");
+  std::vector<double> out;
+  out.reserve(v.size());
+  for (const Json& x : v) out.push_back(Number(x, field));
+  return out;
+}
+
+inline bool Bool(const Json& v, const char* field) {
+  if (!v.is_boolean()) Fail("bad_value", std::string("'") + field + "' must be true or false");
+  return v.get<bool>();
+}
+
+inline std::string String(const Json& v, const char* field) {
+  if (!v.is_string()) Fail("bad_value", std::string("'") + field + "' must be a string");
+  return v.get<std::string>();
+}
+
+}  // namespace urlab::net::request
