@@ -1,6 +1,7 @@
 #include "net/base64.h"
 
 #include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -37,12 +38,19 @@ Json Encoded(const Json& bytes) {
   return Base64Encode(b.data(), b.size());
 }
 
-bool AllBinary(const Json& v) {
-  if (!v.is_object() || v.empty()) return false;
+// Maps whose values are bytes (file contents; per-name vectors with binary arrays): the map
+// itself is renamed, even when empty, so a key never depends on what a reply holds. Any other
+// map is a structure (e.g. an articulation's observation) whose own fields are renamed.
+bool IsBytesMap(const std::string& key, const Json& v) {
+  static constexpr const char* kBytesMaps[] = {"vfs_assets", "sensors", "xpos", "xquat"};
+  if (!v.is_object()) return false;
+  bool named = false;
+  for (const char* k : kBytesMaps) named = named || key == k;
+  if (!named) return false;
   for (const auto& item : v) {
-    if (!item.is_binary()) return false;
+    if (!item.is_binary()) return false;  // (sensors as lists of numbers: not bytes)
   }
-  return true;
+  return key == "vfs_assets" || !v.empty();
 }
 
 }  // namespace
@@ -61,7 +69,7 @@ void BinaryToBase64(Json& v) {
   if (!v.is_object()) return;
   bool any = false;
   for (const auto& [key, value] : v.items()) {
-    if (value.is_binary() || AllBinary(value)) any = true;
+    if (value.is_binary() || IsBytesMap(key, value)) any = true;
   }
   if (!any) {
     for (auto& item : v) BinaryToBase64(item);
@@ -72,7 +80,7 @@ void BinaryToBase64(Json& v) {
   for (auto& [key, value] : v.items()) {
     if (value.is_binary()) {
       out[key + "_base64"] = Encoded(value);
-    } else if (AllBinary(value)) {
+    } else if (IsBytesMap(key, value)) {
       Json encoded = Json::object();
       for (auto& [name, bytes] : value.items()) encoded[name] = Encoded(bytes);
       out[key + "_base64"] = std::move(encoded);

@@ -251,6 +251,7 @@ void StepServer::Dispatch(Request& r) {
     }
     Pending p;
     p.envelope = std::move(r.envelope);
+    if (r.client) p.client = r.client->id;
     p.seq = seq;
     p.json = r.json;
     p.op = op;
@@ -287,6 +288,10 @@ void StepServer::Service(Clock::time_point now) {
           if (p.outcome.on_applied) p.outcome.on_applied(p.outcome.reply);
           if (!p.seq.is_null()) p.outcome.reply["seq"] = p.seq;
           Send(p.envelope, p.outcome.reply, p.json, p.outcome.observation);
+          // Waiting for a long step is not silence: the lease runs from the reply.
+          if (const auto c = clients_.find(p.client); c != clients_.end()) {
+            c->second.last_seen = std::max(c->second.last_seen, now);
+          }
         } catch (const Failure& f) {
           SendError(p.envelope, p.seq, p.json, f.code, f.message);
         }
@@ -295,13 +300,17 @@ void StepServer::Service(Clock::time_point now) {
     pending_.pop_front();
   }
   // A driver silent for longer than the lease timeout loses the lease.
-  if (!driver_.empty()) {
-    const auto it = clients_.find(driver_);
-    if (it == clients_.end() || now - it->second.last_seen > options_.lease_timeout) {
-      ReleaseLease("silent for more than " + std::to_string(options_.lease_timeout.count()) +
-                   " ms");
-    }
+  if (!driver_.empty() && LeaseExpired(driver_, now)) {
+    ReleaseLease("silent for more than " + std::to_string(options_.lease_timeout.count()) + " ms");
   }
+}
+
+bool StepServer::LeaseExpired(const std::string& id, Clock::time_point now) const {
+  for (const Pending& p : pending_) {
+    if (p.client == id) return false;  // waiting for its reply
+  }
+  const auto it = clients_.find(id);
+  return it == clients_.end() || now - it->second.last_seen > options_.lease_timeout;
 }
 
 void StepServer::ReleaseLease(const std::string& why) {
@@ -322,14 +331,17 @@ void StepServer::ReleaseLease(const std::string& why) {
 void StepServer::RequireDriver(Client& c, bool force, Clock::time_point now) {
   if (driver_ == c.id) return;
   if (!driver_.empty()) {
-    const auto it = clients_.find(driver_);
-    const bool expired =
-        it == clients_.end() || now - it->second.last_seen > options_.lease_timeout;
+    const bool expired = LeaseExpired(driver_, now);
     if (!expired && !force) {
       Fail("not_driver", "another client (" + driver_ +
                              ") holds the driver lease; wait, or send force: true to take it");
     }
-    if (force && !expired) spdlog::warn("step server: {} took the lease from {}", c.id, driver_);
+    if (expired) {
+      ReleaseLease("silent for more than " + std::to_string(options_.lease_timeout.count()) +
+                   " ms");  // as if Service had seen it first: the mode it chose ends
+    } else {
+      spdlog::warn("step server: {} took the lease from {}", c.id, driver_);
+    }
   }
   driver_ = c.id;
 }
@@ -442,6 +454,9 @@ StepServer::Outcome StepServer::Hello(Request& r) {
       }
       spdlog::info("step server: model with {} asset file(s), {} bytes, ready for include_assets",
                    assets_->assets.size(), assets_->bytes);
+      // Reading the files held this thread: nobody's lease runs out for that.
+      const auto now = Clock::now();
+      for (auto& [id, client] : clients_) client.last_seen = std::max(client.last_seen, now);
     }
     out.reply["mjcf_compiled"] = assets_->xml;
     Json files = Json::object();
@@ -476,6 +491,13 @@ StepServer::Outcome StepServer::Bye(Request& r) {
 
 StepServer::Outcome StepServer::Step(Request& r) {
   if (mode_ == "puppet") return PuppetStep(r);
+  // State fields belong to puppet mode; silently ignoring them would hide a mode mix-up.
+  for (const char* field : {"qpos", "qvel", "time"}) {
+    if (r.body.contains(field)) {
+      Fail("bad_mode",
+           std::string("'") + field + "' in a step is for puppet mode; the mode is " + mode_);
+    }
+  }
   int n = 1;
   if (const auto it = r.body.find("n_steps"); it != r.body.end()) {
     const double v = Number(*it, "n_steps");
@@ -490,6 +512,11 @@ StepServer::Outcome StepServer::Step(Request& r) {
     if (!it->is_object()) Fail("bad_value", "per_articulation must be a map");
     for (const auto& [name, entry] : it->items()) {
       const ArticulationTopics& t = Articulation(name);
+      if (!entry.is_object()) Fail("bad_value", name + ": a map of ctrl, ctrl_map, xfrc_applied");
+      if (entry.contains("qpos") || entry.contains("qvel")) {
+        Fail("bad_mode",
+             name + ": qpos and qvel in a step are for puppet mode; the mode is " + mode_);
+      }
       std::vector<std::pair<int, double>> patch;
       if (const auto c = entry.find("ctrl"); c != entry.end()) {
         const std::vector<double> v = Numbers(*c, "ctrl");
@@ -717,6 +744,12 @@ StepServer::Outcome StepServer::PuppetStep(Request& r) {
       const Json& entry = item.value();
       const ArticulationTopics& t = Articulation(name);
       if (!entry.is_object()) Fail("bad_value", name + ": a map of qpos, qvel, ctrl");
+      for (const auto& field : entry.items()) {
+        if (field.key() != "qpos" && field.key() != "qvel" && field.key() != "ctrl") {
+          Fail("bad_value",
+               name + ": '" + field.key() + "' is not taken in puppet mode (qpos, qvel, ctrl)");
+        }
+      }
       const auto part = [&](const char* field, const std::vector<int>& adrs,
                             std::vector<physics::cmd::SetState::Run>* to) {
         const auto f = entry.find(field);

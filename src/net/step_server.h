@@ -92,6 +92,7 @@ class StepServer {
   };
   struct Pending {
     std::vector<zmq::message_t> envelope;
+    std::string client;  // session id (a driver waiting for its reply keeps its lease)
     Json seq;
     bool json = false;
     std::string op;
@@ -119,6 +120,8 @@ class StepServer {
                  const std::string& code, const std::string& message);
   // The lease: throws Failure unless `c` may drive (taking a free or expired lease).
   void RequireDriver(Client& c, bool force, Clock::time_point now);
+  // True when `id` is silent past the lease timeout and has no reply waiting.
+  bool LeaseExpired(const std::string& id, Clock::time_point now) const;
   // Frees the lease; a lockstep or puppet mode the driver chose goes back to the initial mode.
   void ReleaseLease(const std::string& why);
   const ArticulationTopics& Articulation(const Json& name) const;

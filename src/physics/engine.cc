@@ -596,7 +596,7 @@ void PhysicsEngine::FinishCommandsLocked() {
   to_finish_.clear();
 }
 
-void PhysicsEngine::IterateLocked(bool force_step) {
+void PhysicsEngine::IterateLocked(bool force_step, bool from_loop) {
   const mjModel* m = model_.get();
   mjData* d = data_.get();
   IteratingScope scope(this);
@@ -641,7 +641,7 @@ void PhysicsEngine::IterateLocked(bool force_step) {
     to_finish_.emplace_back(step_seq_, std::string());
   }
   if (step || applied || !to_finish_.empty() || published_paused_ != paused()) {
-    PublishFrameLocked(/*may_coalesce=*/step && !budgeted &&
+    PublishFrameLocked(/*may_coalesce=*/from_loop && step && !budgeted &&
                        as_fast_.load(std::memory_order_relaxed));
   }
 }
@@ -824,7 +824,7 @@ void PhysicsEngine::Loop() {
           }
           if (changed || published_paused_ != paused()) PublishFrameLocked();
         } else {
-          IterateLocked(/*force_step=*/false);
+          IterateLocked(/*force_step=*/false, /*from_loop=*/true);
         }
       } catch (const std::exception& e) {
         HandleErrorLocked(e);

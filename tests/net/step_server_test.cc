@@ -398,11 +398,18 @@ TEST_F(StepServerTest, PuppetModeWritesTheClientsStateAndNeverSteps) {
             "dim_mismatch");
   EXPECT_EQ(c.Op("step", {{"qpos", {std::nan("")}}})["code"], "bad_value");
   EXPECT_EQ(c.Op("step", {{"qpos", {1.0}}, {"n_steps", 5}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("step", {{"per_articulation", {{"arm", {{"ctrl_map", {{"motor", 1}}}}}}}})["code"],
+            "bad_value");  // not a puppet field: refused, not ignored
   EXPECT_EQ(c.Op("step")["code"], "missing_field");
   std::this_thread::sleep_for(30ms);
   r = c.Op("forward");
   EXPECT_EQ(r["per_articulation"]["arm"]["qpos"][0], -0.4);
   EXPECT_EQ(manager_.session().engine().step_count(), steps);  // never stepped
+  // Back in live mode, state fields are refused (not silently ignored).
+  ASSERT_EQ(c.Op("set_mode", {{"mode", "live"}})["op"], "set_mode_ok");
+  EXPECT_EQ(c.Op("step", {{"qpos", {0.1}}})["code"], "bad_mode");
+  EXPECT_EQ(c.Op("step", {{"per_articulation", {{"arm", {{"qvel", {0.1}}}}}}})["code"], "bad_mode");
+  ASSERT_EQ(c.Op("set_mode", {{"mode", "puppet"}})["op"], "set_mode_ok");
   // The driver says bye: back to live, the loop runs again.
   ASSERT_EQ(c.Op("bye")["op"], "bye_ok");
   Client other(ctx_, rpc());
@@ -548,6 +555,42 @@ TEST_F(StepServerTest, HelloIncludeAssetsShipsAModelThatCompilesElsewhere) {
   EXPECT_EQ(t["vfs_assets_base64"]["tet.stl"].get<std::string>().size(),
             (bytes.size() + 2) / 3 * 4);
   EXPECT_EQ(t["mjcf_compiled"], xml);
+}
+
+// A driver waiting for a step longer than the lease timeout keeps its lease (and its mode).
+TEST_F(StepServerTest, ALongStepDoesNotCostTheDriverItsLease) {
+  Play(200ms, "live", "", "/usr/share/mujoco/model/humanoid/humanoid.xml");
+  Client c(ctx_, rpc());
+  c.Hello({{"observations", "minimal"}});
+  ASSERT_EQ(c.Op("set_mode", {{"mode", "direct"}})["op"], "set_mode_ok");
+  const auto t0 = std::chrono::steady_clock::now();
+  const Json r = c.Op("step", {{"n_steps", 20000}});
+  ASSERT_EQ(r["op"], "step_ok") << r.dump();
+  const auto took = std::chrono::steady_clock::now() - t0;
+  const Json counters = c.Op("get_counters");
+  if (took > 300ms) {  // (on a very fast machine the step may be shorter than the lease)
+    EXPECT_EQ(counters["mode"], "direct");
+    EXPECT_EQ(counters["driver"], c.session());
+  }
+  EXPECT_EQ(c.Op("step")["op"], "step_ok");
+}
+
+// JSON with binary arrays: vectors become <field>_base64; the structure's keys stay as they are.
+TEST_F(StepServerTest, JsonBinaryArraysTravelAsBase64Fields) {
+  Play(5000ms, "direct");
+  Client c(ctx_, rpc(), /*json=*/true);
+  c.Hello({{"arrays", "binary"}});
+  for (const char* level : {"minimal", "standard", "full"}) {
+    const Json r = c.Op("step", {{"observations", level}});
+    ASSERT_EQ(r["op"], "step_ok") << r.dump();
+    ASSERT_TRUE(r["per_articulation"].contains("arm")) << level << ": " << r.dump();
+    const Json& arm = r["per_articulation"]["arm"];
+    EXPECT_EQ(arm["qpos_base64"].get<std::string>().size(), 12u) << level;  // 8 bytes
+    EXPECT_FALSE(arm.contains("qpos")) << level;
+    if (std::string(level) != "minimal") {
+      EXPECT_TRUE(arm["sensors_base64"].contains("angle")) << level << ": " << arm.dump();
+    }
+  }
 }
 
 }  // namespace

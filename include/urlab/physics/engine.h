@@ -232,7 +232,9 @@ class PhysicsEngine {
 
   void Loop();
   // One iteration, step mutex held by the caller. Throws what the step or callbacks throw.
-  void IterateLocked(bool force_step);
+  // `from_loop`: the physics thread's own loop, which rings a coalesced frame before it waits
+  // (see PublishFrameLocked); every other caller rings each frame.
+  void IterateLocked(bool force_step, bool from_loop = false);
   // Applies queued commands in order up to the first step command (which starts a step window);
   // true when any was taken. Their waiters are released by the next PublishFrameLocked.
   bool ApplyPendingLocked();
