@@ -28,6 +28,9 @@ std::string NewSessionId(std::uint64_t n) {
   return buf;
 }
 
+// Values of qpos a joint of MuJoCo type `t` holds.
+int QposWidth(int t) { return t == mjJNT_FREE ? 7 : t == mjJNT_BALL ? 4 : 1; }
+
 const char* JointType(int t) {
   switch (t) {
     case mjJNT_FREE:
@@ -39,6 +42,24 @@ const char* JointType(int t) {
     default:
       return "hinge";
   }
+}
+
+// `values` written at `adrs` (one address per value) as runs of consecutive addresses.
+std::vector<physics::cmd::SetState::Run> Runs(const std::vector<int>& adrs,
+                                              const std::vector<double>& values) {
+  std::vector<physics::cmd::SetState::Run> runs;
+  for (std::size_t i = 0; i < adrs.size(); ++i) {
+    if (runs.empty() || adrs[i] != runs.back().adr + static_cast<int>(runs.back().values.size())) {
+      runs.push_back({adrs[i], {}});
+    }
+    runs.back().values.push_back(values[i]);
+  }
+  return runs;
+}
+
+void Append(std::vector<physics::cmd::SetState::Run>* to,
+            std::vector<physics::cmd::SetState::Run> runs) {
+  for (auto& run : runs) to->push_back(std::move(run));
 }
 
 }  // namespace
@@ -396,7 +417,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
     for (std::size_t i = 0; i < t.joints.size(); ++i) {
       const JointTopicEntry& j = t.joints[i];
       const int id = j.id;
-      const int width = j.type == mjJNT_FREE ? 7 : j.type == mjJNT_BALL ? 4 : 1;
+      const int width = QposWidth(j.type);
       joints.push_back(Json{{"name", t.joint_names[i]},
                             {"id", id},
                             {"type", JointType(j.type)},
@@ -576,16 +597,14 @@ StepServer::Outcome StepServer::Step(Request& r) {
 StepServer::Outcome StepServer::Reset(Request& r) {
   physics::PhysicsEngine& engine = session_.engine();
   const mjModel* m = engine.model();
-  std::uint64_t seq = 0;
+  // Everything is checked before anything is submitted: a bad request resets nothing.
+  int key = -1;
   if (const auto it = r.body.find("keyframe_name"); it != r.body.end() && !it->is_null()) {
-    const std::string key = String(*it, "keyframe_name");
-    const int id = mj_name2id(m, mjOBJ_KEY, key.c_str());
-    if (id < 0) Fail("unknown_keyframe", "no keyframe '" + key + "' (see list_keyframes)");
-    seq = engine.ResetToKeyframe(id);
-  } else {
-    seq = session_.ResetToInitialState();
-    if (seq == 0) seq = engine.Reset();
+    const std::string name = String(*it, "keyframe_name");
+    key = mj_name2id(m, mjOBJ_KEY, name.c_str());
+    if (key < 0) Fail("unknown_keyframe", "no keyframe '" + name + "' (see list_keyframes)");
   }
+  physics::cmd::SetState joints_after;  // per_articulation_qpos, written after the reset
   if (const auto it = r.body.find("per_articulation_qpos"); it != r.body.end()) {
     if (!it->is_object()) Fail("bad_value", "per_articulation_qpos must be a map");
     for (const auto& [name, joints] : it->items()) {
@@ -595,12 +614,25 @@ StepServer::Outcome StepServer::Reset(Request& r) {
         std::size_t i = 0;
         while (i < t.joint_names.size() && t.joint_names[i] != joint) ++i;
         if (i == t.joint_names.size()) Fail("bad_value", name + ": no joint '" + joint + "'");
-        const std::vector<double> v =
+        std::vector<double> v =
             value.is_array() ? Numbers(value, "qpos") : std::vector<double>{Number(value, "qpos")};
-        seq = engine.Submit(physics::cmd::SetQpos{t.joints[i].qpos_adr, v});
+        const int width = QposWidth(t.joints[i].type);
+        if (v.size() != static_cast<std::size_t>(width)) {
+          Fail("dim_mismatch", name + ": joint '" + joint + "' takes " + std::to_string(width) +
+                                   " qpos value(s), got " + std::to_string(v.size()));
+        }
+        joints_after.qpos.push_back({t.joints[i].qpos_adr, std::move(v)});
       }
     }
   }
+  std::uint64_t seq = 0;
+  if (key >= 0) {
+    seq = engine.ResetToKeyframe(key);
+  } else {
+    seq = session_.ResetToInitialState();
+    if (seq == 0) seq = engine.Reset();
+  }
+  if (!joints_after.qpos.empty()) seq = engine.Submit(std::move(joints_after));
   Outcome out;
   out.reply = Json{{"op", "reset_ok"}};
   out.wait_for = seq;
@@ -664,55 +696,23 @@ StepServer::Outcome StepServer::SetQpos(Request& r) {
   const ArticulationTopics& t = Articulation(r.body["articulation"]);
   const std::vector<double> q = Numbers(r.body["qpos"], "qpos");
   if (t.qpos_adrs.empty()) Fail("no_joints", t.name + " has no joints");
-  physics::PhysicsEngine& engine = session_.engine();
-  std::uint64_t seq = 0;
+  physics::cmd::SetState state;
   if (t.free_joint >= 0 && q.size() == 7 && t.qpos_adrs.size() != 7) {
-    seq = engine.Submit(
-        physics::cmd::SetQpos{t.joints[static_cast<std::size_t>(t.free_joint)].qpos_adr, q});
+    state.qpos.push_back({t.joints[static_cast<std::size_t>(t.free_joint)].qpos_adr, q});
   } else if (q.size() == t.qpos_adrs.size()) {
-    // One command per contiguous run of addresses (an articulation's are normally one run).
-    std::size_t start = 0;
-    for (std::size_t i = 1; i <= q.size(); ++i) {
-      if (i == q.size() || t.qpos_adrs[i] != t.qpos_adrs[i - 1] + 1) {
-        seq = engine.Submit(physics::cmd::SetQpos{
-            t.qpos_adrs[start], std::vector<double>(q.begin() + static_cast<long>(start),
-                                                    q.begin() + static_cast<long>(i))});
-        start = i;
-      }
-    }
+    state.qpos = Runs(t.qpos_adrs, q);  // one command, whatever the addresses' layout
   } else {
     Fail("dim_mismatch", t.name + ": qpos needs " + std::to_string(t.qpos_adrs.size()) + " values" +
                              (t.free_joint >= 0 ? " (or 7 for the free base)" : "") + ", got " +
                              std::to_string(q.size()));
   }
+  const std::uint64_t seq = session_.engine().Submit(std::move(state));
   Outcome out;
   out.reply = Json{{"op", "set_qpos_ok"}};
   out.wait_for = seq;
   out.observation = ObservationFor(r);
   return out;
 }
-
-namespace {
-
-// `values` written at `adrs` (one address per value) as runs of consecutive addresses.
-std::vector<physics::cmd::SetState::Run> Runs(const std::vector<int>& adrs,
-                                              const std::vector<double>& values) {
-  std::vector<physics::cmd::SetState::Run> runs;
-  for (std::size_t i = 0; i < adrs.size(); ++i) {
-    if (runs.empty() || adrs[i] != runs.back().adr + static_cast<int>(runs.back().values.size())) {
-      runs.push_back({adrs[i], {}});
-    }
-    runs.back().values.push_back(values[i]);
-  }
-  return runs;
-}
-
-void Append(std::vector<physics::cmd::SetState::Run>* to,
-            std::vector<physics::cmd::SetState::Run> runs) {
-  for (auto& run : runs) to->push_back(std::move(run));
-}
-
-}  // namespace
 
 StepServer::Outcome StepServer::PuppetStep(Request& r) {
   if (const auto it = r.body.find("n_steps"); it != r.body.end() && Number(*it, "n_steps") != 1) {

@@ -227,6 +227,14 @@ TEST_F(StepServerTest, ResetQposMocapOptionsAndKeyframesTakeEffectBeforeTheReply
   EXPECT_NEAR(c.Op("step", {{"n_steps", 4}})["time"].get<double>() - t0, 0.004, 1e-12);
   r = c.Op("forward");
   EXPECT_EQ(r["op"], "forward_ok");
+  // A reset refused for its joint values resets nothing.
+  const double t_before = r["time"];
+  EXPECT_GT(t_before, 0.0);
+  EXPECT_EQ(c.Op("reset", {{"per_articulation_qpos", {{"arm", {{"ghost", 1}}}}}})["code"],
+            "bad_value");
+  EXPECT_EQ(c.Op("reset", {{"per_articulation_qpos", {{"arm", {{"hinge", {1, 2}}}}}}})["code"],
+            "dim_mismatch");
+  EXPECT_EQ(c.Op("forward")["time"], t_before);
 }
 
 // Errors: each bad request gets its code, seq echoed, nothing applied, the server keeps going.
