@@ -202,8 +202,7 @@ struct NetworkSubsystem::Impl {
 
   void PublishState(const physics::StateFrame& f) {
     if (!pub) return;
-    DrainSubscriptions();
-    UpdateWanted();
+    UpdateWanted();  // (subscriptions are drained once per turn of Run, not per frame)
     for (std::size_t ti = 0; ti < tables.size(); ++ti) {
       const ArticulationTopics& t = tables[ti];
       for (std::size_t ji = 0; ji < t.joints.size(); ++ji) {

@@ -304,18 +304,15 @@ void PhysicsEngine::ValidateCommand(const Command& command) const {
         } else if constexpr (std::is_same_v<T, cmd::Inspect>) {
           if (!c.fn) throw Error("Inspect: empty function");
         } else if constexpr (std::is_same_v<T, cmd::SetState>) {
-          for (const auto& run : c.qpos) {
-            range("SetState qpos", run.adr, run.values.size(), m->nq);
-            finite("SetState qpos", run.values.data(), run.values.size());
-          }
-          for (const auto& run : c.qvel) {
-            range("SetState qvel", run.adr, run.values.size(), m->nv);
-            finite("SetState qvel", run.values.data(), run.values.size());
-          }
-          for (const auto& run : c.ctrl) {
-            range("SetState ctrl", run.adr, run.values.size(), m->nu);
-            finite("SetState ctrl", run.values.data(), run.values.size());
-          }
+          const auto runs = [&](const char* what, const auto& rs, int size) {
+            for (const auto& run : rs) {
+              range(what, run.adr, run.values.size(), size);
+              finite(what, run.values.data(), run.values.size());
+            }
+          };
+          runs("SetState qpos", c.qpos, m->nq);
+          runs("SetState qvel", c.qvel, m->nv);
+          runs("SetState ctrl", c.ctrl, m->nu);
           if (c.time && !std::isfinite(*c.time)) throw Error("SetState: non-finite time");
         } else if constexpr (std::is_same_v<T, cmd::Step>) {
           if (c.n < 1 || c.n > 10'000'000) {
