@@ -5,7 +5,7 @@
 #   tsan        ThreadSanitizer: the core, physics, control, world, net and client tests
 #   asan        AddressSanitizer + UndefinedBehaviorSanitizer: the mjcf, document, world tests
 #   release     Release build with GCC (-O3), warnings as errors, no tests
-#   clang       clang build of everything (tests, benchmarks, examples) + the fast unit tests
+#   clang       clang Debug build of everything (tests, benchmarks, examples) + the fast unit tests
 #   install     cmake --install of the release build, examples/find_package built against it
 #   fuzz        every libFuzzer target for URLAB_FUZZ_SECONDS (default 60) s (tools/fuzz.sh)
 # Build folders: $URLAB_BUILD_DIR (default build) and beside it ${URLAB_BUILD_DIR}-tsan, -asan,
@@ -103,9 +103,9 @@ release_stage() {
   cmake --build "$dir" -j"$JOBS"
 }
 
-clang_stage() {
+clang_stage() {  # also the Debug build of CI (GCC builds RelWithDebInfo and Release)
   local dir="${BUILD_DIR}-clang"
-  CC=clang CXX=clang++ configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo
+  CC=clang CXX=clang++ configure "$dir" -DCMAKE_BUILD_TYPE=Debug
   cmake --build "$dir" -j"$JOBS"
   ctest --test-dir "$dir" -L 'core|document|control' --output-on-failure -j"$JOBS" --timeout 900
 }
