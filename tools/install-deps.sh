@@ -8,7 +8,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libmujoco-dev libmujoco-samples libqhull-dev
   libtinyxml2-dev libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
-  libeigen3-dev libzmq3-dev cppzmq-dev libmsgpack-cxx-dev
+  libeigen3-dev libzmq3-dev cppzmq-dev libmsgpack-cxx-dev libzstd-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev ccache
   python3 python3-zmq python3-msgpack python3-numpy
