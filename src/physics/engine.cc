@@ -609,11 +609,23 @@ void PhysicsEngine::IterateLocked(bool force_step, bool from_loop) {
     for (const WatchedWarning& w : kWatched) {
       d->warning[w.warning].lastinfo = -1;  // sentinel: MuJoCo sets it on a warning
     }
+    one_shot_saved_.clear();
     for (const cmd::ApplyForce& f : one_shot_) {
+      const bool saved = std::any_of(one_shot_saved_.begin(), one_shot_saved_.end(),
+                                     [&](const auto& row) { return row.first == f.body; });
+      if (!saved) {
+        std::array<mjtNum, 6> row;
+        std::copy_n(d->xfrc_applied + 6 * f.body, 6, row.begin());
+        one_shot_saved_.emplace_back(f.body, row);
+      }
       mju_addTo3(d->xfrc_applied + 6 * f.body, f.force.data());
       mju_addTo3(d->xfrc_applied + 6 * f.body + 3, f.torque.data());
     }
     one_shot_added_ = !one_shot_.empty();
+    if (one_shot_added_) {  // the frame reports what this step used
+      stepped_xfrc_.assign(d->xfrc_applied, d->xfrc_applied + 6 * m->nbody);
+      stepped_xfrc_valid_ = true;
+    }
     if (custom_step_) {
       custom_step_(m, d);
     } else {
@@ -637,6 +649,7 @@ void PhysicsEngine::IterateLocked(bool force_step, bool from_loop) {
     for (const auto& [id, fn] : command_listeners_) fn(done, m, d);
     to_finish_.emplace_back(step_seq_, std::string());
   }
+  last_iteration_stepped_ = step;
   if (step || applied || !to_finish_.empty() || published_paused_ != paused()) {
     PublishFrameLocked(/*may_coalesce=*/from_loop && step && !budgeted &&
                        as_fast_.load(std::memory_order_relaxed));
@@ -733,10 +746,10 @@ void PhysicsEngine::CheckDivergenceLocked(double time_before) {
 
 void PhysicsEngine::RemoveOneShotForcesLocked(bool all) {
   if (one_shot_added_) {
-    for (const cmd::ApplyForce& f : one_shot_) {
-      mju_subFrom3(data_->xfrc_applied + 6 * f.body, f.force.data());
-      mju_subFrom3(data_->xfrc_applied + 6 * f.body + 3, f.torque.data());
+    for (const auto& [body, row] : one_shot_saved_) {
+      std::copy(row.begin(), row.end(), data_->xfrc_applied + 6 * body);
     }
+    one_shot_saved_.clear();
   }
   one_shot_added_ = false;
   if (all) {
@@ -761,7 +774,12 @@ void PhysicsEngine::PublishFrameLocked(bool may_coalesce) {
   meta.discontinuity = pending_discontinuity_;
   meta.epoch = epoch_;
   meta.paused = paused();
+  meta.stepped = last_iteration_stepped_;
+  meta.xfrc_applied =
+      stepped_xfrc_valid_ && last_iteration_stepped_ ? stepped_xfrc_.data() : nullptr;
   publisher_.Publish(model_.get(), data_.get(), meta);
+  stepped_xfrc_valid_ = false;
+  last_iteration_stepped_ = false;
   pending_discontinuity_ = 0;
   published_paused_ = meta.paused;
   // Waiters are released only now, so the frame they read next shows their command.

@@ -20,6 +20,7 @@ void ApplyMeta(StateFrame* f, const FrameMeta& meta) {
   f->discontinuity = meta.discontinuity;
   f->epoch = meta.epoch;
   f->paused = meta.paused;
+  f->stepped = meta.stepped;
 }
 
 }  // namespace
@@ -56,10 +57,12 @@ StateFrame StateFrame::SizedFor(const mjModel* m) {
   f.xquat = z(4 * m->nbody);
   f.mocap_pos = z(3 * m->nmocap);
   f.mocap_quat = z(4 * m->nmocap);
+  f.qfrc_applied = z(m->nv);
+  f.xfrc_applied = z(6 * m->nbody);
   return f;
 }
 
-void StateFrame::CopyFrom(const mjModel* m, const mjData* d) {
+void StateFrame::CopyFrom(const mjModel* m, const mjData* d, const mjtNum* xfrc) {
   time = d->time;
   ncon = d->ncon;
   CopyArray(&qpos, d->qpos, m->nq);
@@ -73,6 +76,8 @@ void StateFrame::CopyFrom(const mjModel* m, const mjData* d) {
   CopyArray(&xquat, d->xquat, 4 * m->nbody);
   CopyArray(&mocap_pos, d->mocap_pos, 3 * m->nmocap);
   CopyArray(&mocap_quat, d->mocap_quat, 4 * m->nmocap);
+  CopyArray(&qfrc_applied, d->qfrc_applied, m->nv);
+  CopyArray(&xfrc_applied, xfrc ? xfrc : d->xfrc_applied, 6 * m->nbody);
 }
 
 StateSubscription::StateSubscription(std::string name, const mjModel* m)
@@ -110,7 +115,7 @@ int StatePublisher::num_subscribers() const {
 void StatePublisher::PublishTo(StateSubscription& s, const mjModel* m, const mjData* d,
                                const FrameMeta& meta) {
   StateFrame& f = s.buffer_.Back();
-  f.CopyFrom(m, d);
+  f.CopyFrom(m, d, meta.xfrc_applied);
   ApplyMeta(&f, meta);
   s.buffer_.Publish();
 }
@@ -118,8 +123,9 @@ void StatePublisher::PublishTo(StateSubscription& s, const mjModel* m, const mjD
 void StatePublisher::Publish(const mjModel* m, const mjData* d, const FrameMeta& meta) {
   for (const auto& s : latest_) PublishTo(*s, m, d, meta);
   for (const auto& r : rings_) {
+    if (!r->active()) continue;
     if (StateFrame* f = r->ring_.BeginPush()) {
-      f->CopyFrom(m, d);
+      f->CopyFrom(m, d, meta.xfrc_applied);
       ApplyMeta(f, meta);
       r->ring_.CommitPush();
     }

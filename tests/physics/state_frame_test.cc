@@ -58,6 +58,43 @@ TEST_F(StateFrameTest, FrameHoldsTheWholeStateOfAStep) {
   EXPECT_EQ(f->time, 0.0);
 }
 
+// A frame names the forces its step used (one-shot forces included), so a recorder can
+// re-simulate the run; the persistent xfrc_applied is put back bit for bit after the step.
+TEST_F(StateFrameTest, FrameReportsTheAppliedForcesOfItsStep) {
+  PhysicsEngine engine(CompileXmlString(kArmXml));
+  const auto ring = engine.SubscribeEveryStep("recorder", 16);
+  const int box = mj_name2id(engine.model(), mjOBJ_BODY, "box");
+  const double persistent = 0.1;  // not exactly representable: x + f - f would not give it back
+  engine.WithLockedData([&](mjModel*, mjData* d) {
+    d->xfrc_applied[6 * box + 1] = persistent;
+    d->qfrc_applied[0] = 0.25;
+  });
+  engine.Submit(cmd::ApplyForce{box, {2.0, 0.3, 0}, {0, 0, 0}});
+  engine.StepSync(2);
+  StateFrame f;
+  ASSERT_TRUE(ring->TryPop(&f));  // the command's own frame (no step)
+  EXPECT_FALSE(f.stepped);
+  ASSERT_TRUE(ring->TryPop(&f));
+  EXPECT_TRUE(f.stepped);
+  EXPECT_EQ(f.xfrc_applied[6 * box], 2.0);
+  EXPECT_EQ(f.xfrc_applied[6 * box + 1], persistent + 0.3);
+  EXPECT_EQ(f.qfrc_applied[0], 0.25);
+  ASSERT_TRUE(ring->TryPop(&f));
+  EXPECT_TRUE(f.stepped);
+  EXPECT_EQ(f.xfrc_applied[6 * box], 0.0);  // one step only
+  EXPECT_EQ(f.xfrc_applied[6 * box + 1], persistent);
+  engine.WithLockedData(
+      [&](mjModel*, mjData* d) { EXPECT_EQ(d->xfrc_applied[6 * box + 1], persistent); });
+  // An inactive ring is skipped: nothing copied, nothing dropped.
+  ring->SetActive(false);
+  engine.StepSync(20);
+  EXPECT_EQ(ring->size(), 0u);
+  EXPECT_EQ(ring->dropped(), 0u);
+  ring->SetActive(true);
+  engine.StepSync(1);
+  EXPECT_EQ(ring->size(), 1u);
+}
+
 TEST_F(StateFrameTest, SubscribingWhileRunningIsRefused) {
   PhysicsEngine engine(CompileXmlString(kArmXml));
   engine.Start();

@@ -288,11 +288,18 @@ class PhysicsEngine {
   std::uint64_t step_seq_ = 0;  // mutex held: that step command
   std::mutex wake_mutex_;       // with wake_cv_: a paused loop waits for commands
   std::condition_variable wake_cv_;
-  std::vector<cmd::ApplyForce> one_shot_;    // mutex held: forces for the next step
-  bool one_shot_added_ = false;              // mutex held: one_shot_ is in xfrc_applied now
-  std::uint32_t pending_discontinuity_ = 0;  // mutex held: since the last published frame
-  std::uint64_t epoch_ = 0;                  // mutex held: discontinuities so far
-  std::uint64_t frames_ = 0;                 // mutex held: frames published
+  std::vector<cmd::ApplyForce> one_shot_;  // mutex held: forces for the next step
+  bool one_shot_added_ = false;            // mutex held: one_shot_ is in xfrc_applied now
+  // mutex held: the xfrc_applied rows the one-shot forces changed, as they were before (put back
+  // exactly, not by subtraction), and the whole xfrc_applied the last step used when it had
+  // one-shot forces (the published frame reports it).
+  std::vector<std::pair<int, std::array<mjtNum, 6>>> one_shot_saved_;
+  std::vector<mjtNum> stepped_xfrc_;
+  bool stepped_xfrc_valid_ = false;
+  bool last_iteration_stepped_ = false;                // mutex held: for the frame being published
+  std::uint32_t pending_discontinuity_ = 0;            // mutex held: since the last published frame
+  std::uint64_t epoch_ = 0;                            // mutex held: discontinuities so far
+  std::uint64_t frames_ = 0;                           // mutex held: frames published
   std::chrono::steady_clock::time_point last_ring_{};  // mutex held: last doorbell ring
   bool unrung_ = false;            // mutex held: a frame was published without a ring
   bool published_paused_ = false;  // mutex held: pause state of the last frame

@@ -15,6 +15,7 @@
 //   the counters.
 #include <mujoco/mujoco.h>
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -47,16 +48,23 @@ struct StateFrame {
   std::uint32_t discontinuity = 0;  // Discontinuity flags since the previous published frame
   std::uint64_t epoch = 0;  // discontinuities so far: a reader that skipped frames compares it
   bool paused = false;
+  bool stepped = false;  // a physics step produced this frame (else commands or a pause did)
   int ncon = 0;
   std::vector<mjtNum> qpos, qvel, act, ctrl, qacc, sensordata;
-  std::vector<mjtNum> actuator_force;          // per actuator
+  std::vector<mjtNum> actuator_force;         // per actuator
   std::vector<mjtNum> xpos, xquat;            // 3 / 4 per body
   std::vector<mjtNum> mocap_pos, mocap_quat;  // 3 / 4 per mocap body
+  // The applied forces the step behind this frame used (one-shot forces included; when the
+  // frame did not step, the current ones): with ctrl and the mocap poses, every input of
+  // mj_step besides the state, so a recorder can re-simulate a run exactly.
+  std::vector<mjtNum> qfrc_applied;  // nv
+  std::vector<mjtNum> xfrc_applied;  // 6 per body
 
   // A frame with every array sized for `m` (zeros).
   static StateFrame SizedFor(const mjModel* m);
-  // Copies everything from `d` except the bookkeeping fields (no allocation when sized).
-  void CopyFrom(const mjModel* m, const mjData* d);
+  // Copies everything from `d` except the bookkeeping fields (no allocation when sized);
+  // `xfrc_applied`, when given, replaces d->xfrc_applied (6 * nbody values).
+  void CopyFrom(const mjModel* m, const mjData* d, const mjtNum* xfrc_applied = nullptr);
 };
 
 // The bookkeeping of one publication.
@@ -67,6 +75,8 @@ struct FrameMeta {
   std::uint32_t discontinuity = 0;
   std::uint64_t epoch = 0;
   bool paused = false;
+  bool stepped = false;
+  const mjtNum* xfrc_applied = nullptr;  // the step's xfrc_applied when it differs from d's
 };
 
 // Latest-frame subscription: one consumer thread reads the newest frame.
@@ -101,11 +111,17 @@ class StateRing {
   std::size_t size() const { return ring_.size(); }
   std::size_t capacity() const { return ring_.capacity(); }
   std::uint64_t dropped() const { return ring_.dropped(); }
+  // Any thread: an inactive ring is skipped by the publisher (nothing copied, nothing counted),
+  // so a reader that only sometimes needs every step (an idle recorder) costs nothing meanwhile.
+  // Rings start active.
+  void SetActive(bool active) { active_.store(active, std::memory_order_release); }
+  bool active() const { return active_.load(std::memory_order_acquire); }
 
  private:
   friend class StatePublisher;
   std::string name_;
   SpscRing<StateFrame> ring_;
+  std::atomic<bool> active_{true};
 };
 
 // The physics thread's side: fills every subscription.
