@@ -175,6 +175,11 @@ void ApplyState(const mjModel* m, mjData* d, const PhysicsState& state) {
 void RestoreState(const mjModel* m, mjData* d, const PhysicsState& state) {
   ApplyState(m, d, state);
   mj_forward(m, d);
+  // mj_forward normalises the quaternions in qpos in place; the next mj_step does that itself,
+  // and normalising twice is not the identity in the last bit.
+  if (!state.qpos.empty()) {
+    std::memcpy(d->qpos, state.qpos.data(), state.qpos.size() * sizeof(mjtNum));
+  }
   if (!state.qacc_warmstart.empty()) {
     std::memcpy(d->qacc_warmstart, state.qacc_warmstart.data(),
                 state.qacc_warmstart.size() * sizeof(mjtNum));

@@ -76,9 +76,10 @@ PhysicsState CaptureState(const mjModel* m, const mjData* d);
 void ApplyState(const mjModel* m, mjData* d, const PhysicsState& state);
 
 // ApplyState, then mj_forward so that every derived quantity (poses, contacts, sensors) matches
-// the state, then writes qacc_warmstart back: in MuJoCo 2.2.2 mj_forward overwrites the warm
-// start with the new qacc, which would make the next mj_step differ in the last bits from the
-// original continuation. Throws StateError like ApplyState.
+// the state, then writes qpos and qacc_warmstart back: in MuJoCo 2.2.2 mj_forward normalises the
+// quaternions in qpos in place and overwrites the warm start with the new qacc, either of which
+// would make the next mj_step differ in the last bits from the original continuation. Throws
+// StateError like ApplyState.
 void RestoreState(const mjModel* m, mjData* d, const PhysicsState& state);
 
 // Serialised format, little-endian: magic "URLS", u32 version, u32 header size, the layout

@@ -1,0 +1,108 @@
+#pragma once
+// The byte layout of recording files (see include/urlab/replay/recording.h): the file header,
+// chunk headers, the header chunk's payload and the records of data chunks. Internal to the
+// replay module. Pure functions and small stateful codecs; one thread each.
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "urlab/physics/state_frame.h"
+#include "urlab/replay/recording.h"
+
+namespace urlab::replay::format {
+
+inline constexpr char kFileMagic[8] = {'U', 'R', 'L', 'A', 'B', 'R', 'E', 'C'};
+inline constexpr std::size_t kFileHeaderSize = 16;
+inline constexpr std::uint32_t kChunkMagic = 0x4b4e4843;  // "CHNK"
+inline constexpr std::size_t kChunkHeaderSize = 80;
+inline constexpr std::size_t kChunkCrcBytes = 72;  // the header bytes the CRC covers
+// A chunk payload larger than this is damage, not data (a recorder flushes far smaller ones;
+// the header chunk holds the model, which may be large).
+inline constexpr std::uint64_t kMaxChunkBytes = 1ull << 31;
+
+enum class ChunkKind : std::uint32_t { kHeader = 1, kData = 2, kEnd = 3 };
+enum class Codec : std::uint32_t { kStored = 0, kZstd = 1 };
+
+struct ChunkHeader {
+  ChunkKind kind = ChunkKind::kData;
+  std::uint32_t number = 0;
+  Codec codec = Codec::kStored;
+  std::uint64_t stored_size = 0;
+  std::uint64_t raw_size = 0;
+  std::uint32_t crc = 0;  // of the header's other bytes and the stored payload
+  std::uint64_t first_step = 0, last_step = 0;
+  double first_time = 0, last_time = 0;
+  std::uint32_t frames = 0;
+  std::uint32_t flags = 0;  // kStartsWithState
+};
+inline constexpr std::uint32_t kStartsWithState = 1;
+
+std::string FileHeader();
+// Throws RecordingError (kNotARecording / kVersion) naming `path`.
+void CheckFileHeader(std::span<const std::uint8_t> bytes, const std::string& path);
+
+// The 64 header bytes, CRC computed over them and `stored` payload.
+std::string EncodeChunk(ChunkHeader header, std::string_view stored);
+// Parses a chunk header (false when its magic is wrong); the CRC is checked separately.
+bool DecodeChunkHeader(std::span<const std::uint8_t> bytes, ChunkHeader* out);
+std::uint32_t ChunkCrc(std::span<const std::uint8_t> header_bytes, std::string_view stored);
+
+// zstd at `level`, or the bytes themselves for kStored.
+std::string Compress(std::string_view raw, Codec codec, int level = 3);
+// Throws std::runtime_error with zstd's reason when the bytes do not decompress to `raw_size`.
+std::string Decompress(std::string_view stored, Codec codec, std::uint64_t raw_size);
+
+// The header chunk's payload: u64 length + JSON, u64 length + MJCF, u64 length + MJB.
+std::string EncodeInfo(const RecordingInfo& info);
+// Throws std::runtime_error naming the field at fault.
+RecordingInfo DecodeInfo(std::string_view payload);
+
+// Encodes records into one chunk's raw payload. Array fields of a frame are stored XORed with
+// the previous frame's bits (zstd then compresses the mostly-zero bytes well); mocap poses and
+// applied forces only when they changed (absent: as before; at the start of a chunk: zero
+// forces, and the mocap poses always written).
+class ChunkEncoder {
+ public:
+  ChunkEncoder(const ModelTables& tables, bool sensordata);
+  void Add(const physics::StateFrame& frame);
+  void Add(const Frame& frame);
+  void Add(const StateRecord& state);
+  void Add(const Marker& marker);
+  void Add(const OptionsRecord& options);
+  void Add(const Gap& gap);
+  // The payload so far and the header fields that describe it; Reset() starts a new chunk.
+  const std::string& bytes() const { return out_; }
+  std::uint32_t frames() const { return frames_; }
+  bool empty() const { return out_.empty(); }
+  bool starts_with_state() const { return starts_with_state_; }
+  std::uint64_t first_step() const { return first_step_; }
+  std::uint64_t last_step() const { return last_step_; }
+  double first_time() const { return first_time_; }
+  double last_time() const { return last_time_; }
+  void Reset();
+
+ private:
+  void Begin(std::uint8_t type);
+  void End();
+  void PutXor(const std::vector<double>& now, std::vector<double>* prev);
+
+  ModelTables tables_;
+  bool sensordata_;
+  physics::StateFrame scratch_;  // Add(Frame) goes through the StateFrame path
+  std::string out_;
+  std::size_t record_start_ = 0;
+  std::uint32_t frames_ = 0;
+  bool starts_with_state_ = false;
+  std::uint64_t first_step_ = 0, last_step_ = 0;
+  double first_time_ = 0, last_time_ = 0;
+  bool have_prev_ = false;
+  std::vector<double> qpos_, qvel_, act_, ctrl_, sensordata_prev_;
+  std::vector<double> mocap_pos_, mocap_quat_, qfrc_, xfrc_;
+};
+
+// Decodes one chunk's raw payload. Throws std::runtime_error saying which record is bad.
+std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& tables, bool sensordata);
+
+}  // namespace urlab::replay::format

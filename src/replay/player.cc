@@ -1,0 +1,494 @@
+#include "urlab/replay/player.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <cstring>
+#include <mutex>
+
+namespace urlab::replay {
+
+namespace {
+
+using Reason = RecordingError::Reason;
+
+bool SameBits(const double* a, const std::vector<double>& b) {
+  return b.empty() || std::memcmp(a, b.data(), b.size() * sizeof(double)) == 0;
+}
+
+// The first element whose bits differ, -1 when none.
+int FirstDifference(const double* a, const std::vector<double>& b) {
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    if (std::memcmp(a + i, &b[i], sizeof(double)) != 0) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+std::string JointAt(const ModelTables& t, int index, bool qpos) {
+  for (const JointEntry& j : t.joints) {
+    const int adr = qpos ? j.qposadr : j.dofadr;
+    const int n = qpos ? j.nq : j.nv;
+    if (index >= adr && index < adr + n) {
+      return n == 1 ? j.name : fmt::format("{}[{}]", j.name, index - adr);
+    }
+  }
+  return {};
+}
+
+void Copy(const std::vector<double>& from, double* to) {
+  if (!from.empty()) std::memcpy(to, from.data(), from.size() * sizeof(double));
+}
+
+// Writes a frame's inputs (what mj_step reads besides the state).
+void ApplyInputs(const Frame& f, mjData* d) {
+  Copy(f.ctrl, d->ctrl);
+  Copy(f.mocap_pos, d->mocap_pos);
+  Copy(f.mocap_quat, d->mocap_quat);
+  Copy(f.qfrc_applied, d->qfrc_applied);
+  Copy(f.xfrc_applied, d->xfrc_applied);
+}
+
+// Compares the state after a re-simulated step with the recorded frame; fills `r` on the first
+// difference.
+bool Matches(const ModelTables& t, const Frame& f, const mjData* d, ResimReport* r) {
+  const struct {
+    const char* field;
+    const double* now;
+    const std::vector<double>* rec;
+    bool qpos;
+  } fields[] = {{"qpos", d->qpos, &f.qpos, true},
+                {"qvel", d->qvel, &f.qvel, false},
+                {"act", d->act, &f.act, false}};
+  if (std::memcmp(&d->time, &f.time, sizeof(double)) != 0) {
+    r->field = "time";
+    r->index = 0;
+    r->recorded = f.time;
+    r->simulated = d->time;
+    return false;
+  }
+  for (const auto& x : fields) {
+    if (SameBits(x.now, *x.rec)) continue;
+    const int i = FirstDifference(x.now, *x.rec);
+    r->field = x.field;
+    r->index = i;
+    r->recorded = (*x.rec)[static_cast<std::size_t>(i)];
+    r->simulated = x.now[i];
+    r->element = std::string(x.field) == "act" ? std::string()
+                                               : JointAt(t, i, std::string(x.field) == "qpos");
+    return false;
+  }
+  return true;
+}
+
+void ApplyOptions(const OptionsRecord& o, mjOption* opt) {
+  std::memcpy(opt, o.option.data(), sizeof(mjOption));
+}
+
+}  // namespace
+
+std::string ResimReport::str() const {
+  if (identical) {
+    return fmt::format("re-simulation identical: {} of {} steps bit for bit{}", steps_checked,
+                       frames, stopped.empty() ? "" : " (" + stopped + ")");
+  }
+  if (diverged) {
+    return fmt::format(
+        "re-simulation DIVERGED at step {} (frame {}, t={:.6f} s): {}[{}]{} recorded {:.17g}, "
+        "re-simulated {:.17g} ({} steps matched before it)",
+        divergent_step, divergent_index, divergent_time, field, index,
+        element.empty() ? "" : " (" + element + ")", recorded, simulated, steps_checked);
+  }
+  return fmt::format("re-simulation stopped after {} steps: {}", steps_checked, stopped);
+}
+
+physics::ModelPtr LoadRecordedModel(const RecordingReader& reader) {
+  const std::string& mjb = reader.info().mjb;
+  if (mjb.empty()) {
+    throw RecordingError(Reason::kCorrupt, reader.path(), "the recording holds no model");
+  }
+  auto vfs = std::make_unique<mjVFS>();
+  mj_defaultVFS(vfs.get());
+  constexpr const char* kName = "recorded.mjb";
+  if (mj_makeEmptyFileVFS(vfs.get(), kName, static_cast<int>(mjb.size())) != 0) {
+    mj_deleteVFS(vfs.get());
+    throw RecordingError(Reason::kCorrupt, reader.path(), "the recorded model does not fit");
+  }
+  const int i = mj_findFileVFS(vfs.get(), kName);
+  std::memcpy(vfs->filedata[i], mjb.data(), mjb.size());
+  mjModel* m = nullptr;
+  std::string error;
+  try {
+    m = mj_loadModel(kName, vfs.get());
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  mj_deleteVFS(vfs.get());
+  if (!m) {
+    throw RecordingError(
+        Reason::kCorrupt, reader.path(),
+        "MuJoCo cannot load the recorded model" + (error.empty() ? std::string() : ": " + error));
+  }
+  physics::ModelPtr model(m);
+  if (ModelHash(m) != reader.info().model_hash) {
+    throw RecordingError(Reason::kCorrupt, reader.path(),
+                         "the recorded model does not match the header's model hash");
+  }
+  return model;
+}
+
+void CheckSameModel(const RecordingReader& reader, const mjModel* m) {
+  const std::uint64_t h = ModelHash(m);
+  if (h != reader.info().model_hash) {
+    throw RecordingError(
+        Reason::kWrongModel, reader.path(),
+        fmt::format("recorded with another model (recording model hash {}, this model {}): "
+                    "play it without --scene to use the model it carries",
+                    HashText(reader.info().model_hash), HashText(h)));
+  }
+}
+
+ResimReport Resimulate(const RecordingReader& reader, const mjModel* given,
+                       const ResimOptions& options) {
+  physics::ModelPtr owned;
+  if (given) {
+    CheckSameModel(reader, given);
+    owned.reset(mj_copyModel(nullptr, given));
+  } else {
+    owned = LoadRecordedModel(reader);
+  }
+  mjModel* m = owned.get();
+  physics::DataPtr data(mj_makeData(m));
+  mjData* d = data.get();
+  const ModelTables& t = reader.info().tables;
+  ResimReport r;
+  r.frames = reader.frame_count();
+  bool have_state = false;
+  bool need_state = false;  // after a gap or an uncaptured jump: wait for the next keyframe
+  std::uint64_t index = 0;
+  for (std::size_t c = 0; c < reader.chunks().size(); ++c) {
+    for (Record& rec : reader.ReadChunk(c)) {
+      if (auto* s = std::get_if<StateRecord>(&rec)) {
+        if (!have_state || need_state || s->jump != 0) {
+          physics::RestoreState(m, d, s->state);
+          have_state = true;
+          need_state = false;
+        }
+      } else if (auto* o = std::get_if<OptionsRecord>(&rec)) {
+        ApplyOptions(*o, &m->opt);
+      } else if (auto* mk = std::get_if<Marker>(&rec)) {
+        if (mk->text.find("not captured") != std::string::npos) {
+          need_state = true;
+          if (r.stopped.empty()) {
+            r.stopped = fmt::format(
+                "a jump the recorder could not capture at step {} was "
+                "skipped to the next keyframe",
+                mk->step);
+          }
+        }
+      } else if (auto* g = std::get_if<Gap>(&rec)) {
+        need_state = true;
+        if (r.stopped.empty()) {
+          r.stopped = fmt::format("{} frames were lost after step {}; resumed at the next keyframe",
+                                  g->dropped, g->after_step);
+        }
+      } else if (auto* f = std::get_if<Frame>(&rec)) {
+        if (have_state && !need_state) {
+          ApplyInputs(*f, d);
+          mj_step(m, d);
+          if (!Matches(t, *f, d, &r)) {
+            r.diverged = true;
+            r.divergent_step = f->step;
+            r.divergent_index = index;
+            r.divergent_time = f->time;
+            if (options.stop_at_first_divergence) return r;
+          } else {
+            ++r.steps_checked;
+          }
+        }
+        ++index;
+        if (options.progress && options.progress_every && index % options.progress_every == 0) {
+          options.progress(index, r.frames);
+        }
+      }
+    }
+  }
+  r.identical = !r.diverged && r.steps_checked > 0;
+  return r;
+}
+
+// ---- Player ----
+
+struct Player::Impl {
+  physics::PhysicsEngine& engine;
+  const RecordingReader& reader;
+  ModelTables tables;
+
+  mutable std::mutex mutex;  // the controls and the status
+  PlayerOptions options;
+  bool playing = false;
+  std::optional<double> seek_time;
+  std::optional<std::uint64_t> seek_step;
+  PlayerStatus status;
+
+  // Physics thread only.
+  std::size_t chunk = 0;
+  std::vector<Record> records;
+  std::size_t next = 0;  // next record in `records`
+  bool loaded = false;
+  double clock = 0;            // playback position, recorded seconds since the start
+  double shown_pos = 0;        // position of the frame shown
+  double last_frame_time = 0;  // recorded time of the last frame consumed
+  bool have_last = false;
+  bool jumped = false;  // a marker since the last frame
+  std::uint64_t frame_index = 0;
+  bool have_state = false;
+  bool options_pending = false;  // NextFrame stopped for an options command to apply
+
+  Impl(physics::PhysicsEngine& e, const RecordingReader& r) : engine(e), reader(r) {}
+
+  void Load(std::size_t c) {
+    chunk = c;
+    records = reader.ReadChunk(c);
+    next = 0;
+    loaded = true;
+  }
+  // The next frame (applying states and options on the way in resimulate mode); nullptr at the
+  // end of the recording.
+  const Frame* NextFrame(const mjModel* m, mjData* d, bool resim);
+  void Rewind(std::size_t c);
+  void Step(const mjModel* m, mjData* d);
+};
+
+void Player::Impl::Rewind(std::size_t c) {
+  Load(c);
+  have_last = false;
+  have_state = false;
+  frame_index = 0;
+  for (std::size_t i = 0; i < c; ++i) frame_index += reader.chunks()[i].frames;
+}
+
+const Frame* Player::Impl::NextFrame(const mjModel* m, mjData* d, bool resim) {
+  while (true) {
+    if (!loaded) Load(0);
+    if (next >= records.size()) {
+      if (chunk + 1 >= reader.chunks().size()) return nullptr;
+      Load(chunk + 1);
+      continue;
+    }
+    Record& rec = records[next++];
+    if (auto* f = std::get_if<Frame>(&rec)) return f;
+    if (auto* s = std::get_if<StateRecord>(&rec)) {
+      if (resim && (!have_state || s->jump != 0)) {
+        physics::RestoreState(m, d, s->state);
+        have_state = true;
+      }
+    } else if (auto* o = std::get_if<OptionsRecord>(&rec)) {
+      // Options belong to the engine: queued, applied before the next iteration's step.
+      if (resim && std::memcmp(&m->opt, o->option.data(), sizeof(mjOption)) != 0) {
+        mjOption opt;
+        std::memcpy(&opt, o->option.data(), sizeof(mjOption));
+        engine.Submit(
+            physics::cmd::SetOptions{[opt](mjOption& o2) { o2 = opt; }, "recorded options"});
+        options_pending = true;  // the next step must wait for them
+        return nullptr;
+      }
+    } else if (std::holds_alternative<Marker>(rec) || std::holds_alternative<Gap>(rec)) {
+      jumped = true;
+      if (std::holds_alternative<Gap>(rec)) have_state = false;
+    }
+  }
+}
+
+void Player::Impl::Step(const mjModel* m, mjData* d) {
+  PlayerOptions opt;
+  bool play = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    opt = options;
+    play = playing;
+    if (seek_time || seek_step) {
+      const std::size_t c = seek_time ? reader.ChunkAt(*seek_time) : [&] {
+        std::size_t best = 0;
+        for (std::size_t i = 0; i < reader.chunks().size(); ++i) {
+          if (reader.chunks()[i].frames && reader.chunks()[i].first_step <= *seek_step) best = i;
+        }
+        return best;
+      }();
+      Rewind(c);
+      // Skip (re-simulating silently in dynamic mode) to the target frame.
+      const bool resim = opt.mode == PlayMode::kResimulate;
+      while (true) {
+        const std::size_t save_next = next;
+        const std::size_t save_chunk = chunk;
+        const Frame* f = NextFrame(m, d, resim);
+        if (!f && options_pending) {
+          options_pending = false;  // applied before the next iteration; seeking goes on there
+          continue;
+        }
+        if (!f) break;
+        if ((seek_time && f->time >= *seek_time) || (seek_step && f->step >= *seek_step)) {
+          if (chunk == save_chunk) {
+            next = save_next;  // show it next
+          }
+          break;
+        }
+        if (resim && have_state) {
+          ApplyInputs(*f, d);
+          mj_step(m, d);
+        }
+        ++frame_index;
+      }
+      clock = shown_pos;
+      seek_time.reset();
+      seek_step.reset();
+      status.finished = false;
+    }
+  }
+  if (!play) return;
+  const bool resim = opt.mode == PlayMode::kResimulate;
+  // How many recorded frames this iteration shows: the playback clock advances by speed times
+  // the engine's step; frames are taken while the next one is due.
+  const double dt = tables.timestep > 0 ? tables.timestep : m->opt.timestep;
+  const double target = clock;
+  clock += opt.speed * m->opt.timestep;
+  const Frame* shown = nullptr;
+  while (!have_last || shown_pos + dt <= target + 1e-9) {
+    const Frame* f = NextFrame(m, d, resim);
+    if (!f && options_pending) {  // this iteration ends; the options apply before the next
+      options_pending = false;
+      clock = target;
+      break;
+    }
+    if (!f) {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (opt.loop) {
+        Rewind(0);
+        clock = opt.speed * m->opt.timestep;
+        shown_pos = 0;
+        ++status.loops;
+        if (status.loops > 1 && !shown) break;  // an empty recording
+        continue;
+      }
+      status.finished = true;
+      playing = false;
+      break;
+    }
+    // Position on the recorded time axis (a jump, e.g. a reset back to t=0, counts one step).
+    if (have_last) {
+      const double delta = f->time - last_frame_time;
+      shown_pos += (!jumped && delta > 0) ? delta : dt;
+    }
+    jumped = false;
+    last_frame_time = f->time;
+    have_last = true;
+    if (resim && have_state) {
+      ApplyInputs(*f, d);
+      mj_step(m, d);
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!status.resim.diverged) {
+        if (Matches(tables, *f, d, &status.resim)) {
+          ++status.resim.steps_checked;
+        } else {
+          status.resim.diverged = true;
+          status.resim.divergent_step = f->step;
+          status.resim.divergent_index = frame_index;
+          status.resim.divergent_time = f->time;
+        }
+      }
+    }
+    shown = f;
+    ++frame_index;
+  }
+  if (!shown) return;
+  if (!resim) {
+    Copy(shown->qpos, d->qpos);
+    Copy(shown->qvel, d->qvel);
+    Copy(shown->act, d->act);
+    ApplyInputs(*shown, d);
+    d->time = shown->time;
+    mj_forward(m, d);
+    Copy(shown->qpos, d->qpos);  // mj_forward normalised the quaternions in place
+  }
+  std::lock_guard<std::mutex> lock(mutex);
+  status.time = shown->time;
+  status.step = shown->step;
+  status.frame = frame_index - 1;
+}
+
+Player::Player(physics::PhysicsEngine& engine, const RecordingReader& reader, PlayerOptions options)
+    : impl_(std::make_unique<Impl>(engine, reader)) {
+  CheckSameModel(reader, engine.model());
+  if (!(options.speed > 0) || !std::isfinite(options.speed)) {
+    throw Error("playback speed must be a finite number > 0");
+  }
+  impl_->tables = reader.info().tables;
+  impl_->options = options;
+  impl_->playing = !options.start_paused;
+  impl_->status.frames = reader.frame_count();
+  impl_->status.speed = options.speed;
+  impl_->status.loop = options.loop;
+  Impl* impl = impl_.get();
+  engine.SetCustomStepHandler([impl](const mjModel* m, mjData* d) {
+    try {
+      impl->Step(m, d);
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(impl->mutex);
+      impl->status.error = e.what();
+      impl->playing = false;
+    }
+  });
+}
+
+Player::~Player() { impl_->engine.SetCustomStepHandler({}); }
+
+void Player::Play() {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  if (impl_->status.finished) {
+    impl_->seek_step = 0;
+    impl_->status.finished = false;
+  }
+  impl_->playing = true;
+}
+
+void Player::Pause() {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->playing = false;
+}
+
+void Player::SetSpeed(double speed) {
+  if (!(speed > 0) || !std::isfinite(speed)) {
+    throw Error("playback speed must be a finite number > 0");
+  }
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->options.speed = speed;
+  impl_->status.speed = speed;
+}
+
+void Player::SetLoop(bool loop) {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->options.loop = loop;
+  impl_->status.loop = loop;
+}
+
+void Player::SeekTime(double t) {
+  if (!std::isfinite(t)) throw Error("seek time must be finite");
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->seek_time = t;
+  impl_->seek_step.reset();
+}
+
+void Player::SeekStep(std::uint64_t step) {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->seek_step = step;
+  impl_->seek_time.reset();
+}
+
+PlayerStatus Player::status() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  PlayerStatus s = impl_->status;
+  s.playing = impl_->playing;
+  return s;
+}
+
+}  // namespace urlab::replay

@@ -1,0 +1,264 @@
+#include "urlab/replay/recording.h"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "replay/format.h"
+#include "replay/io.h"
+#include "urlab/core/files.h"
+
+namespace urlab::replay {
+
+namespace fs = std::filesystem;
+using Reason = RecordingError::Reason;
+
+std::uint64_t ModelHash(const mjModel* m) {
+  const int size = mj_sizeModel(m);
+  std::string bytes(static_cast<std::size_t>(size), '\0');
+  mj_saveModel(m, nullptr, bytes.data(), size);
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+std::string HashText(std::uint64_t hash) { return fmt::format("{:016x}", hash); }
+
+RecordingReader::RecordingReader(RecordingReader&&) noexcept = default;
+RecordingReader& RecordingReader::operator=(RecordingReader&&) noexcept = default;
+RecordingReader::~RecordingReader() = default;
+
+namespace {
+
+std::string ChunkName(std::uint32_t number, std::uint64_t offset) {
+  return fmt::format("chunk {} (at byte {})", number, offset);
+}
+
+}  // namespace
+
+RecordingReader RecordingReader::Open(const std::string& path, Options options) {
+  RecordingReader r;
+  r.path_ = path;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    throw RecordingError(Reason::kNotARecording, path,
+                         fs::exists(path, ec) ? "not a regular file" : "no such file");
+  }
+  InputFile file(path);
+  r.file_size_ = file.size();
+  const std::string head =
+      file.Read(0, std::min<std::uint64_t>(format::kFileHeaderSize, r.file_size_));
+  format::CheckFileHeader(
+      std::span(reinterpret_cast<const std::uint8_t*>(head.data()), head.size()), path);
+
+  // A structural problem ends the readable prefix: thrown, or kept in problem_.
+  const auto stop = [&](Reason reason, const std::string& message) {
+    if (!options.allow_partial) throw RecordingError(reason, path, message);
+    r.problem_ = message;
+  };
+
+  std::uint64_t offset = format::kFileHeaderSize;
+  std::uint32_t number = 0;
+  while (true) {
+    if (offset == r.file_size_) {
+      if (number == 0) {
+        throw RecordingError(Reason::kTruncated, path, "the file ends before its header chunk");
+      }
+      stop(Reason::kUnfinished,
+           fmt::format("unfinished recording: no end chunk after {} data chunk(s) (the recorder "
+                       "was stopped without finishing; the chunks written are readable)",
+                       r.chunks_.size()));
+      break;
+    }
+    const std::string name = ChunkName(number, offset);
+    if (r.file_size_ - offset < format::kChunkHeaderSize) {
+      stop(Reason::kTruncated, name + ": the file ends inside its chunk header");
+      break;
+    }
+    const std::string hb = file.Read(offset, format::kChunkHeaderSize);
+    format::ChunkHeader h;
+    if (!format::DecodeChunkHeader(
+            std::span(reinterpret_cast<const std::uint8_t*>(hb.data()), hb.size()), &h)) {
+      stop(Reason::kCorrupt, name +
+                                 ": no chunk magic number (damaged data, or a damaged "
+                                 "length in the chunk before it)");
+      break;
+    }
+    if (h.number != number) {
+      stop(Reason::kCorrupt, fmt::format("{}: numbered {} (damaged)", name, h.number));
+      break;
+    }
+    if (h.stored_size > format::kMaxChunkBytes ||
+        h.stored_size > r.file_size_ - offset - format::kChunkHeaderSize) {
+      stop(Reason::kTruncated,
+           fmt::format("{}: the file ends inside the chunk ({} payload bytes declared, {} "
+                       "present)",
+                       name, h.stored_size, r.file_size_ - offset - format::kChunkHeaderSize));
+      break;
+    }
+    if (number == 0) {
+      if (h.kind != format::ChunkKind::kHeader) {
+        throw RecordingError(Reason::kCorrupt, path, name + ": the first chunk is not a header");
+      }
+      const std::string stored = file.Read(offset + format::kChunkHeaderSize, h.stored_size);
+      if (format::ChunkCrc(
+              std::span(reinterpret_cast<const std::uint8_t*>(hb.data()), format::kChunkCrcBytes),
+              stored) != h.crc) {
+        throw RecordingError(Reason::kCorrupt, path, name + " (header): checksum mismatch");
+      }
+      try {
+        r.info_ = format::DecodeInfo(format::Decompress(stored, h.codec, h.raw_size));
+      } catch (const std::exception& e) {
+        throw RecordingError(Reason::kCorrupt, path, name + " (header): " + e.what());
+      }
+      if (r.info_.format_version != kRecordingFormatVersion) {
+        throw RecordingError(Reason::kVersion, path,
+                             fmt::format("header chunk says format version {}; this URLab reads "
+                                         "version {}",
+                                         r.info_.format_version, kRecordingFormatVersion));
+      }
+    } else if (h.kind == format::ChunkKind::kEnd) {
+      r.finished_ = true;
+      if (offset + format::kChunkHeaderSize + h.stored_size != r.file_size_) {
+        stop(Reason::kCorrupt, name + ": bytes after the end chunk");
+      }
+      break;
+    } else if (h.kind == format::ChunkKind::kData) {
+      ChunkInfo c;
+      c.number = h.number;
+      c.offset = offset;
+      c.stored_size = h.stored_size;
+      c.raw_size = h.raw_size;
+      c.first_step = h.first_step;
+      c.last_step = h.last_step;
+      c.first_time = h.first_time;
+      c.last_time = h.last_time;
+      c.frames = h.frames;
+      c.starts_with_state = (h.flags & format::kStartsWithState) != 0;
+      r.chunks_.push_back(c);
+    } else {
+      stop(Reason::kCorrupt,
+           fmt::format("{}: unknown chunk kind {}", name, static_cast<std::uint32_t>(h.kind)));
+      break;
+    }
+    offset += format::kChunkHeaderSize + h.stored_size;
+    ++number;
+  }
+  return r;
+}
+
+std::uint64_t RecordingReader::frame_count() const {
+  std::uint64_t n = 0;
+  for (const ChunkInfo& c : chunks_) n += c.frames;
+  return n;
+}
+
+double RecordingReader::first_time() const {
+  for (const ChunkInfo& c : chunks_) {
+    if (c.frames) return c.first_time;
+  }
+  return 0;
+}
+
+double RecordingReader::last_time() const {
+  for (auto it = chunks_.rbegin(); it != chunks_.rend(); ++it) {
+    if (it->frames) return it->last_time;
+  }
+  return 0;
+}
+
+std::vector<Record> RecordingReader::ReadChunk(std::size_t index) const {
+  if (index >= chunks_.size()) {
+    throw Error(
+        fmt::format("{}: no data chunk {} (the file has {})", path_, index, chunks_.size()));
+  }
+  const ChunkInfo& c = chunks_[index];
+  const std::string name = ChunkName(c.number, c.offset);
+  InputFile file(path_);
+  const std::string hb = file.Read(c.offset, format::kChunkHeaderSize);
+  format::ChunkHeader h;
+  if (!format::DecodeChunkHeader(
+          std::span(reinterpret_cast<const std::uint8_t*>(hb.data()), hb.size()), &h)) {
+    throw RecordingError(Reason::kCorrupt, path_, name + ": no chunk magic number");
+  }
+  const std::string stored = file.Read(c.offset + format::kChunkHeaderSize, c.stored_size);
+  if (format::ChunkCrc(
+          std::span(reinterpret_cast<const std::uint8_t*>(hb.data()), format::kChunkCrcBytes),
+          stored) != h.crc) {
+    throw RecordingError(Reason::kCorrupt, path_,
+                         name +
+                             ": checksum mismatch (the chunk is damaged; the chunks before "
+                             "it are readable)");
+  }
+  try {
+    return format::DecodeChunk(format::Decompress(stored, h.codec, h.raw_size), info_.tables,
+                               info_.sensordata);
+  } catch (const std::exception& e) {
+    throw RecordingError(Reason::kCorrupt, path_, name + ": " + e.what());
+  }
+}
+
+void RecordingReader::Verify() const {
+  for (std::size_t i = 0; i < chunks_.size(); ++i) (void)ReadChunk(i);
+}
+
+std::size_t RecordingReader::ChunkAt(double time) const {
+  std::size_t best = 0;
+  for (std::size_t i = 0; i < chunks_.size(); ++i) {
+    if (chunks_[i].frames && chunks_[i].first_time <= time) best = i;
+  }
+  return best;
+}
+
+void WriteRecording(const std::string& path, const RecordingInfo& info,
+                    const std::vector<std::vector<Record>>& chunks) {
+  const format::Codec codec =
+      info.compression == "zstd" ? format::Codec::kZstd : format::Codec::kStored;
+  std::string out = format::FileHeader();
+  format::ChunkHeader h;
+  h.kind = format::ChunkKind::kHeader;
+  h.codec = codec;
+  const std::string raw = format::EncodeInfo(info);
+  h.raw_size = raw.size();
+  out += format::EncodeChunk(h, format::Compress(raw, codec));
+  std::uint32_t number = 1;
+  format::ChunkEncoder enc(info.tables, info.sensordata);
+  for (const std::vector<Record>& chunk : chunks) {
+    enc.Reset();
+    for (const Record& r : chunk) std::visit([&](const auto& x) { enc.Add(x); }, r);
+    format::ChunkHeader c;
+    c.kind = format::ChunkKind::kData;
+    c.number = number++;
+    c.codec = codec;
+    c.raw_size = enc.bytes().size();
+    c.first_step = enc.first_step();
+    c.last_step = enc.last_step();
+    c.first_time = enc.first_time();
+    c.last_time = enc.last_time();
+    c.frames = enc.frames();
+    c.flags = enc.starts_with_state() ? format::kStartsWithState : 0;
+    out += format::EncodeChunk(c, format::Compress(enc.bytes(), codec));
+  }
+  format::ChunkHeader end;
+  end.kind = format::ChunkKind::kEnd;
+  end.number = number;
+  const std::string totals = "{}";
+  end.raw_size = totals.size();
+  out += format::EncodeChunk(end, totals);
+  WriteFileAtomic(path, out);
+}
+
+std::vector<Record> ReadAllRecords(const RecordingReader& reader) {
+  std::vector<Record> all;
+  for (std::size_t i = 0; i < reader.chunks().size(); ++i) {
+    std::vector<Record> part = reader.ReadChunk(i);
+    std::move(part.begin(), part.end(), std::back_inserter(all));
+  }
+  return all;
+}
+
+}  // namespace urlab::replay

@@ -1,0 +1,357 @@
+// The recorder against a real physics thread: every step captured, jumps marked with their
+// states, re-simulation bit for bit, a perturbed recording reported at its step, kinematic
+// playback through the engine's custom step handler, and every kind of bad file.
+#include "urlab/replay/recorder.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "physics/test_models.h"
+#include "support/mujoco_test.h"
+#include "support/wait.h"
+#include "urlab/physics/engine.h"
+#include "urlab/replay/player.h"
+#include "urlab/replay/recording.h"
+
+namespace urlab::replay {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using physics::PhysicsEngine;
+namespace cmd = physics::cmd;
+using urlab::testing::WaitFor;
+
+class RecorderTest : public urlab::testing::MujocoTest {
+ protected:
+  std::string dir_ = urlab::testing::MakeTempDir("recorder");
+};
+
+std::vector<Frame> FramesOf(const std::vector<Record>& records) {
+  std::vector<Frame> frames;
+  for (const Record& r : records) {
+    if (const auto* f = std::get_if<Frame>(&r)) frames.push_back(*f);
+  }
+  return frames;
+}
+
+// Runs `engine` as fast as possible with controls that change every step (like a policy's
+// commands arriving), one-shot forces, a mocap move, a reset and an options change, recording
+// it all. Returns the finished file's path.
+std::string RecordBusyRun(PhysicsEngine& engine, Recorder& recorder, const std::string& path,
+                          RecorderOptions options = {}) {
+  options.path = path;
+  const mjModel* m = engine.model();
+  engine.AddPreStepCallback([](const mjModel* model, mjData* d) {
+    for (int i = 0; i < model->nu; ++i) d->ctrl[i] = 0.3 * std::sin(40 * d->time + i);
+  });
+  engine.SetAsFastAsPossible(true);
+  engine.Start();
+  recorder.Start(options);
+  std::this_thread::sleep_for(50ms);
+  const int box = mj_name2id(m, mjOBJ_BODY, "box");
+  if (box >= 0) engine.Submit(cmd::ApplyForce{box, {0.5, 0, 0}, {0, 0, 0}, 3});
+  if (m->nmocap > 0) engine.Submit(cmd::SetMocap{0, {0.2, 0.1, 0.6}, {1, 0, 0, 0}});
+  std::this_thread::sleep_for(50ms);
+  engine.Reset();
+  std::this_thread::sleep_for(30ms);
+  engine.Submit(cmd::SetOptions{[](mjOption& o) { o.gravity[2] = -5; }, "low gravity"});
+  std::this_thread::sleep_for(50ms);
+  recorder.Stop();
+  engine.Stop();
+  return path;
+}
+
+TEST_F(RecorderTest, RecordsEveryStepAndReSimulatesBitForBit) {
+  PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
+  Recorder recorder(engine, {{"arm"}, "<mujoco/>", "arm.xml"});
+  const std::uint64_t hash = ModelHash(engine.model());  // the run changes the options
+  const std::string path = RecordBusyRun(engine, recorder, dir_ + "/arm.urrec");
+  ASSERT_TRUE(fs::exists(path));
+  EXPECT_FALSE(fs::exists(path + ".part"));
+  const RecorderStatus st = recorder.status();
+  EXPECT_FALSE(st.active);
+  EXPECT_EQ(st.dropped, 0u);
+  EXPECT_GE(st.markers, 2u);  // the reset and the options change
+
+  const RecordingReader reader = RecordingReader::Open(path);
+  EXPECT_TRUE(reader.finished());
+  EXPECT_EQ(reader.info().tables.joints[0].short_name, "shoulder");
+  EXPECT_EQ(reader.info().model_hash, hash);
+  const std::vector<Record> records = ReadAllRecords(reader);
+  const std::vector<Frame> frames = FramesOf(records);
+  ASSERT_GT(frames.size(), 100u);
+  EXPECT_EQ(frames.size(), st.frames);
+  EXPECT_EQ(frames.size(), reader.frame_count());
+  // Consecutive steps, no gap.
+  for (std::size_t i = 1; i < frames.size(); ++i) ASSERT_EQ(frames[i].step, frames[i - 1].step + 1);
+  int resets = 0, options = 0;
+  for (const Record& r : records) {
+    if (const auto* mk = std::get_if<Marker>(&r)) {
+      resets += (mk->flags & physics::kDiscontinuityReset) != 0;
+      options += (mk->flags & physics::kDiscontinuityOptions) != 0;
+    }
+  }
+  EXPECT_EQ(resets, 1);
+  EXPECT_EQ(options, 1);
+  // The one-shot force is in the frames of the three steps it acted on.
+  const int box = mj_name2id(engine.model(), mjOBJ_BODY, "box");
+  int pushed = 0;
+  for (const Frame& f : frames) pushed += f.xfrc_applied[6 * box] == 0.5;
+  EXPECT_EQ(pushed, 3);
+
+  const ResimReport r = Resimulate(reader);
+  EXPECT_TRUE(r.identical) << r.str();
+  EXPECT_EQ(r.steps_checked, frames.size());
+}
+
+TEST_F(RecorderTest, HumanoidReSimulatesAndAPerturbedRecordingIsReportedAtItsStep) {
+  PhysicsEngine engine(physics::LoadXmlFile(urlab::testing::kHumanoidPath));
+  Recorder recorder(engine, {{}, "", ""});
+  const std::string path = RecordBusyRun(engine, recorder, dir_ + "/humanoid.urrec");
+  const RecordingReader reader = RecordingReader::Open(path);
+  ResimReport r = Resimulate(reader);
+  ASSERT_TRUE(r.identical) << r.str() << " of " << reader.frame_count();
+
+  // Change one control of one step, keep everything else: the step after it diverges.
+  std::vector<std::vector<Record>> chunks;
+  for (std::size_t c = 0; c < reader.chunks().size(); ++c) chunks.push_back(reader.ReadChunk(c));
+  std::uint64_t target_step = 0;
+  std::size_t seen = 0;
+  for (auto& chunk : chunks) {
+    for (Record& rec : chunk) {
+      if (auto* f = std::get_if<Frame>(&rec); f && ++seen == 500) {
+        f->ctrl[3] += 1e-9;
+        target_step = f->step;
+      }
+    }
+  }
+  ASSERT_GT(target_step, 0u);
+  const std::string perturbed = dir_ + "/perturbed.urrec";
+  WriteRecording(perturbed, reader.info(), chunks);
+  r = Resimulate(RecordingReader::Open(perturbed));
+  EXPECT_FALSE(r.identical);
+  ASSERT_TRUE(r.diverged) << r.str();
+  EXPECT_EQ(r.divergent_step, target_step) << r.str();
+  EXPECT_EQ(r.divergent_index, 499u);
+  EXPECT_TRUE(r.field == "qpos" || r.field == "qvel") << r.field;
+  EXPECT_NE(r.str().find("DIVERGED at step " + std::to_string(target_step)), std::string::npos);
+}
+
+TEST_F(RecorderTest, KinematicPlaybackShowsEveryRecordedFrameBitIdentical) {
+  PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
+  Recorder recorder(engine, {{"arm"}, "", ""});
+  const std::string path = RecordBusyRun(engine, recorder, dir_ + "/kin.urrec");
+  const RecordingReader reader = RecordingReader::Open(path);
+  const std::vector<Frame> frames = FramesOf(ReadAllRecords(reader));
+
+  for (PlayMode mode : {PlayMode::kKinematic, PlayMode::kResimulate}) {
+    PhysicsEngine player_engine(LoadRecordedModel(reader));
+    const auto ring = player_engine.SubscribeEveryStep("check", frames.size() + 16);
+    PlayerOptions options;
+    options.mode = mode;
+    Player player(player_engine, reader, options);
+    // One recorded frame per iteration, plus one iteration that waits for the recorded options
+    // change to apply (re-simulation).
+    for (int k = 0; k < 10 && !player.status().finished; ++k) {
+      player_engine.StepSync(k == 0 ? static_cast<int>(frames.size()) : 1);
+    }
+    EXPECT_TRUE(player.status().finished);
+    physics::StateFrame f;
+    std::size_t i = 0;
+    double last_time = -1;
+    while (ring->TryPop(&f)) {
+      if (!f.stepped || f.time == last_time) continue;  // an iteration that showed nothing new
+      last_time = f.time;
+      ASSERT_LT(i, frames.size());
+      ASSERT_EQ(f.qpos, frames[i].qpos)
+          << (mode == PlayMode::kKinematic ? "kinematic" : "resim") << " frame " << i << " t "
+          << f.time << " rec " << frames[i].time << " prev " << frames[i - 1].time;
+      ASSERT_EQ(f.time, frames[i].time) << "frame " << i;
+      ++i;
+    }
+    EXPECT_EQ(i, frames.size());
+    if (mode == PlayMode::kResimulate) {
+      EXPECT_FALSE(player.status().resim.diverged) << player.status().resim.str();
+    }
+  }
+}
+
+TEST_F(RecorderTest, SeekingLandsOnTheFrameAtThatTime) {
+  PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
+  Recorder recorder(engine, {{"arm"}, "", ""});
+  RecorderOptions o;
+  o.keyframe_interval = 0.05;  // many chunks
+  const std::string path = RecordBusyRun(engine, recorder, dir_ + "/seek.urrec", o);
+  const RecordingReader reader = RecordingReader::Open(path);
+  ASSERT_GT(reader.chunks().size(), 3u);
+  const std::vector<Frame> frames = FramesOf(ReadAllRecords(reader));
+  const Frame& target = frames[frames.size() / 2];
+  for (PlayMode mode : {PlayMode::kKinematic, PlayMode::kResimulate}) {
+    PhysicsEngine player_engine(LoadRecordedModel(reader));
+    Player player(player_engine, reader, {mode, 1.0, false, false});
+    player.SeekStep(target.step);
+    player_engine.StepSync(1);
+    EXPECT_EQ(player.status().step, target.step);
+    player_engine.WithLockedData([&](mjModel* m, mjData* d) {
+      EXPECT_EQ(std::vector<double>(d->qpos, d->qpos + m->nq), target.qpos);
+    });
+  }
+}
+
+TEST_F(RecorderTest, KilledRecordingKeepsEveryFlushedChunk) {
+  // A crash is simulated by copying the .part file while the recorder runs (what a kill -9
+  // leaves): it opens as partial, with everything but the unflushed tail.
+  PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
+  Recorder recorder(engine, {{"arm"}, "", ""});
+  engine.SetAsFastAsPossible(true);
+  engine.SetSpeedPercent(100);
+  engine.Start();
+  RecorderOptions o;
+  o.path = dir_ + "/killed.urrec";
+  o.chunk_seconds = 0.1;
+  recorder.Start(o);
+  ASSERT_TRUE(WaitFor([&] { return recorder.status().chunks >= 3; }));
+  fs::copy_file(o.path + ".part", dir_ + "/crash.urrec");
+  const RecorderStatus at_copy = recorder.status();
+  recorder.Stop();
+  engine.Stop();
+  EXPECT_THROW(RecordingReader::Open(dir_ + "/crash.urrec"), RecordingError);
+  const RecordingReader r = RecordingReader::Open(dir_ + "/crash.urrec", {true});
+  EXPECT_FALSE(r.finished());
+  EXPECT_FALSE(r.problem().empty());
+  EXPECT_GE(r.chunks().size(), 3u);
+  EXPECT_NO_THROW(r.Verify());
+  EXPECT_GT(r.frame_count(), 0u);
+  (void)at_copy;
+  EXPECT_TRUE(Resimulate(r).identical);
+}
+
+// ---- bad files ----
+
+class BadFileTest : public RecorderTest {
+ protected:
+  void SetUp() override {
+    PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
+    Recorder recorder(engine, {{"arm"}, "", ""});
+    RecorderOptions o;
+    o.keyframe_interval = 0.02;
+    good_ = RecordBusyRun(engine, recorder, dir_ + "/good.urrec", o);
+    std::ifstream in(good_, std::ios::binary);
+    bytes_.assign(std::istreambuf_iterator<char>(in), {});
+    const RecordingReader r = RecordingReader::Open(good_);
+    ASSERT_GE(r.chunks().size(), 4u);
+    chunk2_ = r.chunks()[2];
+  }
+  std::string Write(const std::string& name, const std::string& bytes) {
+    const std::string p = dir_ + "/" + name;
+    std::ofstream(p, std::ios::binary) << bytes;
+    return p;
+  }
+  static RecordingError::Reason ReasonOf(const std::function<void()>& fn, std::string* what) {
+    try {
+      fn();
+    } catch (const RecordingError& e) {
+      *what = e.what();
+      return e.reason();
+    }
+    ADD_FAILURE() << "no RecordingError";
+    return RecordingError::Reason::kNotARecording;
+  }
+  std::string good_, bytes_;
+  ChunkInfo chunk2_;
+};
+
+TEST_F(BadFileTest, TruncatedFileNamesTheChunkAndKeepsItsPrefix) {
+  const std::string p =
+      Write("truncated.urrec", bytes_.substr(0, chunk2_.offset + 80 + chunk2_.stored_size / 2));
+  std::string what;
+  EXPECT_EQ(ReasonOf([&] { RecordingReader::Open(p); }, &what), RecordingError::Reason::kTruncated);
+  EXPECT_NE(what.find("truncated.urrec"), std::string::npos) << what;
+  EXPECT_NE(what.find("chunk 3"), std::string::npos) << what;  // data chunk 2 is file chunk 3
+  const RecordingReader r = RecordingReader::Open(p, {true});
+  EXPECT_EQ(r.chunks().size(), 2u);
+  EXPECT_NO_THROW(r.Verify());
+}
+
+TEST_F(BadFileTest, CorruptedChunkNamesTheChunkAndTheOthersStayReadable) {
+  std::string bytes = bytes_;
+  bytes[chunk2_.offset + 80 + chunk2_.stored_size / 2] ^= 0x10;
+  const std::string p = Write("corrupt.urrec", bytes);
+  const RecordingReader r = RecordingReader::Open(p);  // the structure is intact
+  EXPECT_NO_THROW(r.ReadChunk(0));
+  EXPECT_NO_THROW(r.ReadChunk(1));
+  std::string what;
+  EXPECT_EQ(ReasonOf([&] { r.ReadChunk(2); }, &what), RecordingError::Reason::kCorrupt);
+  EXPECT_NE(what.find("chunk 3"), std::string::npos) << what;
+  EXPECT_NE(what.find("checksum"), std::string::npos) << what;
+  EXPECT_NO_THROW(r.ReadChunk(3));
+  EXPECT_THROW(r.Verify(), RecordingError);
+  EXPECT_THROW(Resimulate(r), RecordingError);
+}
+
+TEST_F(BadFileTest, WrongVersionAndNotARecording) {
+  std::string bytes = bytes_;
+  bytes[8] = 7;
+  std::string what;
+  EXPECT_EQ(ReasonOf([&] { RecordingReader::Open(Write("v7.urrec", bytes)); }, &what),
+            RecordingError::Reason::kVersion);
+  EXPECT_NE(what.find("version 7"), std::string::npos) << what;
+  EXPECT_EQ(
+      ReasonOf([&] { RecordingReader::Open(Write("text.urrec", "hello world, not ours")); }, &what),
+      RecordingError::Reason::kNotARecording);
+  EXPECT_EQ(ReasonOf([&] { RecordingReader::Open(dir_ + "/missing.urrec"); }, &what),
+            RecordingError::Reason::kNotARecording);
+  EXPECT_NE(what.find("no such file"), std::string::npos) << what;
+}
+
+TEST_F(BadFileTest, WrongModelIsRefusedWithBothHashes) {
+  const RecordingReader r = RecordingReader::Open(good_);
+  PhysicsEngine other(physics::LoadXmlFile(urlab::testing::kHumanoidPath));
+  std::string what;
+  EXPECT_EQ(ReasonOf([&] { Player p(other, r, {}); }, &what), RecordingError::Reason::kWrongModel);
+  EXPECT_NE(what.find(HashText(r.info().model_hash)), std::string::npos) << what;
+  EXPECT_EQ(ReasonOf([&] { Resimulate(r, other.model()); }, &what),
+            RecordingError::Reason::kWrongModel);
+}
+
+TEST_F(RecorderTest, RefusesWhatItCannotDo) {
+  PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
+  Recorder recorder(engine, {{"arm"}, "", ""});
+  EXPECT_THROW(recorder.Stop(), RecorderError);
+  RecorderOptions o;
+  o.path = "/proc/urlab-cannot-write-here/x.urrec";
+  try {
+    recorder.Start(o);
+    ADD_FAILURE();
+  } catch (const RecorderError& e) {
+    EXPECT_EQ(e.code(), "path_not_writable");
+  }
+  o.path = dir_ + "/a.urrec";
+  o.keyframe_interval = NAN;
+  try {
+    recorder.Start(o);
+    ADD_FAILURE();
+  } catch (const RecorderError& e) {
+    EXPECT_EQ(e.code(), "bad_value");
+  }
+  o.keyframe_interval = 1;
+  engine.Start();
+  recorder.Start(o);
+  try {
+    recorder.Start(o);
+    ADD_FAILURE();
+  } catch (const RecorderError& e) {
+    EXPECT_EQ(e.code(), "recording_already_active");
+  }
+  recorder.Stop();
+  engine.Stop();
+}
+
+}  // namespace
+}  // namespace urlab::replay
