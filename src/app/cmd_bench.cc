@@ -1,10 +1,16 @@
 // `urlab bench`: benchmarks that print a ratio against a baseline measured in the same process.
+#include <fmt/format.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
+#include <memory>
 
 #include "app/commands.h"
 #include "urlab/net/broadcast_bench.h"
 #include "urlab/net/latency_bench.h"
+#include "urlab/replay/recorder.h"
 #include "urlab/world/controller_factory.h"
 #include "urlab/world/loop_bench.h"
 #include "urlab/world/manager.h"
@@ -21,6 +27,7 @@ struct BenchLoopArgs {
   int trials = 15;
   int subscribers = 0;
   bool network = false;
+  bool record = false;
   CLI::Option* trials_option = nullptr;
 };
 
@@ -65,9 +72,39 @@ int BenchLoop(const BenchLoopArgs& args) {
     world::SetBenchTargets(control);
   };
   options.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
+  // --record: each trial also runs the loop with a recorder writing a compressed file.
+  std::unique_ptr<replay::Recorder> recorder;
+  const std::string folder =
+      (std::filesystem::temp_directory_path() / fmt::format("urlab-bench-{}", ::getpid())).string();
+  if (args.record) {
+    options.attach = [&](physics::PhysicsEngine& engine) {
+      recorder = std::make_unique<replay::Recorder>(
+          engine, replay::RecorderSource{{art.name}, "", scene.path});
+    };
+    options.toggle = [&](bool on) {
+      if (on) {
+        replay::RecorderOptions o;
+        o.path = folder + "/bench.urrec";
+        recorder->Start(o);
+      } else {
+        const replay::RecorderStatus st = recorder->Stop();
+        std::printf("recorded %llu steps, %llu bytes (%.1f bytes/step), %llu dropped\n",
+                    static_cast<unsigned long long>(st.frames),
+                    static_cast<unsigned long long>(st.bytes),
+                    st.frames ? static_cast<double>(st.bytes) / st.frames : 0.0,
+                    static_cast<unsigned long long>(st.dropped));
+      }
+    };
+  }
   std::printf("scene %s: articulation '%s', controller %s\n", scene.path.c_str(), art.name.c_str(),
               art.controller.type.c_str());
   const world::LoopBenchResult r = world::RunLoopBench(compiled.model.get(), options);
+  if (args.record) {
+    recorder.reset();
+    std::error_code ec;
+    std::filesystem::remove_all(folder, ec);
+    std::printf("record_ratio=%.4f\n", r.attached_ratio);
+  }
   std::printf("ratio=%.4f\n", r.ratio);
   std::fflush(stdout);
   return 0;
@@ -116,6 +153,10 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
                    "state readers attached to the loop: an every-step ring, then newest-frame "
                    "readers polling at 1 kHz and 60 Hz in turn")
       ->check(CLI::Range(0, 16));
+  loop->add_flag("--record", args.record,
+                 "also run each trial's loop with the recorder writing every step to a "
+                 "compressed recording (in the temporary folder, removed after), and print "
+                 "record_ratio=<loop with recorder / loop without> before ratio=");
   loop->add_flag("--network", args.network,
                  "instead: the loop with the network subsystem publishing every streaming topic "
                  "and state/full on every step to a subscriber on loopback, against the loop "

@@ -18,6 +18,7 @@
 #include "urlab/core/mujoco_handlers.h"
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/net/network.h"
+#include "urlab/replay/recorder.h"
 #include "urlab/world/manager.h"
 
 namespace urlab::app {
@@ -37,6 +38,12 @@ struct RunArgs {
   bool paused = false;
   bool reset_on_divergence = false;
   bool no_network = false;
+  // `urlab record` (and `run --record`): the file to record to, and how.
+  std::string record;
+  bool no_compress = false;
+  bool sensordata = false;
+  double ring_seconds = 0;
+  double keyframe_interval = 1;
 };
 
 // "message" plus MuJoCo's hint on a second line when the hint table has one.
@@ -55,6 +62,19 @@ int Run(const RunArgs& args) {
   world::Manager manager(options);
   // Loading and compiling: a signal ends the process at once (nothing runs, nothing is written).
   const world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
+  replay::RecorderSubsystem* recorder = nullptr;
+  if (!args.record.empty()) {
+    CheckOutputs({{args.record, "--output"}}, world::SceneInputFiles(scene));
+    replay::RecorderOptions rec;
+    rec.path = args.record;
+    rec.compress = !args.no_compress;
+    rec.sensordata = args.sensordata;
+    rec.ring_seconds = args.ring_seconds;
+    rec.keyframe_interval = args.keyframe_interval;
+    auto sub = std::make_unique<replay::RecorderSubsystem>(rec);
+    recorder = sub.get();
+    manager.AddSubsystem(std::move(sub));
+  }
   if (!args.no_network && scene.network.enabled) {
     manager.AddSubsystem(
         std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network)));
@@ -130,8 +150,29 @@ int Run(const RunArgs& args) {
   const int signal = StopSignal();
   const std::uint64_t steps = engine.step_count() - first_steps;
   sim_time += static_cast<double>(engine.step_count() - last_steps) * engine.timestep();
+  std::optional<replay::RecorderStatus> recorded;
+  if (recorder && recorder->recorder()) {
+    if (recorder->recorder()->active()) {
+      recorded = recorder->recorder()->Stop();
+    } else {
+      recorded = recorder->recorder()->status();
+    }
+  }
   manager.EndPlay();
   FlushMujocoWarningCounts();
+  if (recorded) {
+    std::printf(
+        "recording: %s steps=%llu sim=%.3f s bytes=%llu (%.1f bytes/step, %.1f before "
+        "compression) dropped=%llu%s\n",
+        recorded->path.c_str(), static_cast<unsigned long long>(recorded->frames),
+        recorded->duration, static_cast<unsigned long long>(recorded->bytes),
+        recorded->frames ? static_cast<double>(recorded->bytes) / recorded->frames : 0.0,
+        recorded->frames ? static_cast<double>(recorded->raw_bytes) / recorded->frames : 0.0,
+        static_cast<unsigned long long>(recorded->dropped),
+        recorded->stopped_because.starts_with("error")
+            ? (" (" + recorded->stopped_because + ")").c_str()
+            : "");
+  }
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();
   const double sim = sim_time;
   const std::string how = signal  ? std::string(" (stopped by signal ") + SignalName(signal) + ")"
@@ -185,16 +226,10 @@ const CLI::Validator kInteger(
 
 }  // namespace
 
-void RegisterRunCommand(CLI::App& app, int& exit_code) {
-  CLI::App* cmd = app.add_subcommand(
-      "run",
-      "Play a scene (YAML) or a single MJCF model headless: physics on its own thread, "
-      "controllers, initial keyframes. Logs the real-time factor once a second. Ctrl-C, SIGTERM "
-      "or SIGHUP stops it cleanly, prints a summary and exits 128+signal (130, 143, 129); "
-      "--duration ends it with exit 0; during loading a signal exits at once (a second one "
-      "forces a stuck stop). SIGUSR1 toggles pause. A MuJoCo error stops it with MuJoCo's "
-      "message and exit 1 unless --reset-on-divergence.");
-  static RunArgs args;
+namespace {
+
+// The options `run` and `record` share.
+void AddRunOptions(CLI::App* cmd, RunArgs& args) {
   cmd->add_option("SCENE", args.scene, "scene file (.yaml) or MJCF model (.xml)")->required();
   cmd->add_option("--duration", args.duration,
                   "stop after this many wall-clock seconds (default: run until Ctrl-C)")
@@ -214,6 +249,51 @@ void RegisterRunCommand(CLI::App& app, int& exit_code) {
   cmd->add_flag("--reset-on-divergence", args.reset_on_divergence,
                 "reset to the initial state when the simulation diverges or MuJoCo reports an "
                 "error (instead of stopping with exit 1)");
+}
+
+void AddRecordOptions(CLI::App* cmd, RunArgs& args) {
+  cmd->add_flag("--no-compress", args.no_compress, "store chunks without zstd compression");
+  cmd->add_flag("--sensordata", args.sensordata, "also record every sensor value of every step");
+  cmd->add_option("--ring", args.ring_seconds,
+                  "keep only the last SECONDS of simulated time (in memory; written at the end)")
+      ->check(kFinitePositive);
+  cmd->add_option("--keyframe-interval", args.keyframe_interval,
+                  "simulated seconds between full-state keyframes (seek points; default 1)")
+      ->check(kFinitePositive);
+}
+
+}  // namespace
+
+void RegisterRecordCommand(CLI::App& app, int& exit_code) {
+  CLI::App* cmd = app.add_subcommand(
+      "record",
+      "Play a scene like `urlab run` and record every physics step to a .urrec file: time, qpos, "
+      "qvel, act, ctrl, mocap poses, applied forces (one-shot included), optionally sensordata; "
+      "the state at every reset, restore or state write; keyframes for seeking. The file is "
+      "written as FILE.part (flushed at least once a second, so a crash loses at most about a "
+      "second) and renamed to FILE when the recording ends (--duration, Ctrl-C, SIGTERM). "
+      "`urlab replay` plays, checks and exports it.");
+  static RunArgs args;
+  AddRunOptions(cmd, args);
+  cmd->add_option("-o,--output", args.record, "the recording to write (.urrec)")->required();
+  AddRecordOptions(cmd, args);
+  cmd->callback([&exit_code] { exit_code = Run(args); });
+}
+
+void RegisterRunCommand(CLI::App& app, int& exit_code) {
+  CLI::App* cmd = app.add_subcommand(
+      "run",
+      "Play a scene (YAML) or a single MJCF model headless: physics on its own thread, "
+      "controllers, initial keyframes. Logs the real-time factor once a second. Ctrl-C, SIGTERM "
+      "or SIGHUP stops it cleanly, prints a summary and exits 128+signal (130, 143, 129); "
+      "--duration ends it with exit 0; during loading a signal exits at once (a second one "
+      "forces a stuck stop). SIGUSR1 toggles pause. A MuJoCo error stops it with MuJoCo's "
+      "message and exit 1 unless --reset-on-divergence.");
+  static RunArgs args;
+  AddRunOptions(cmd, args);
+  cmd->add_option("--record", args.record,
+                  "also record every step to this .urrec file (see `urlab record --help`)");
+  AddRecordOptions(cmd, args);
   cmd->callback([&exit_code] { exit_code = Run(args); });
 }
 

@@ -56,6 +56,8 @@ int main(int argc, char** argv) {
   urlab::app::RegisterMjcfCommands(app, exit_code);
   urlab::app::RegisterCompileCommand(app, exit_code);
   urlab::app::RegisterRunCommand(app, exit_code);
+  urlab::app::RegisterRecordCommand(app, exit_code);
+  urlab::app::RegisterReplayCommand(app, exit_code);
   urlab::app::RegisterBenchCommand(app, exit_code);
 
   // Every error names a place: its own location, else the path it concerns, else the input the

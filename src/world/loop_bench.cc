@@ -177,6 +177,7 @@ LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& optio
 
   // Readers attach before the timed trials (subscriptions are made while the loop is stopped).
   BenchReaders readers(engine, options.subscribers);
+  if (options.attach) options.attach(engine);
   if (options.subscribers > 0) {
     report(Format("%d state reader(s) attached (every-step ring, 1 kHz and 60 Hz newest-frame)",
                   options.subscribers));
@@ -199,21 +200,34 @@ LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& optio
     bare.join();
     r.bare_rates.push_back(bare_rate);
 
-    engine.Reset();  // not running: applied now
-    engine.SetPaused(false);
-    taken = 0;
-    done = false;
-    ncon_sum = 0;
-    engine.Start();
-    done.wait(false, std::memory_order_acquire);  // no polling wake-ups during the trial
-    engine.Stop();
-    const double s = std::chrono::duration<double>(last - first).count();
-    r.loop_rates.push_back((steps - 1) / s);  // first..last spans steps-1 full iterations
+    const auto run_loop = [&](bool with_attached) {
+      engine.Reset();  // not running: applied now
+      engine.SetPaused(false);
+      taken = 0;
+      done = false;
+      ncon_sum = 0;
+      if (with_attached) options.toggle(true);
+      engine.Start();
+      done.wait(false, std::memory_order_acquire);  // no polling wake-ups during the trial
+      engine.Stop();
+      if (with_attached) options.toggle(false);
+      const double s = std::chrono::duration<double>(last - first).count();
+      return (steps - 1) / s;  // first..last spans steps-1 full iterations
+    };
+    if (options.attach) {
+      r.attached_rates.push_back(run_loop(true));
+      engine.PollEvents();
+    }
+    r.loop_rates.push_back(run_loop(false));
     report(
         Format("trial %d: bare=%.0f steps/s (ncon %.2f)  loop=%.0f steps/s (ncon %.2f)  "
                "ratio=%.4f",
                t, r.bare_rates.back(), bare_ncon, r.loop_rates.back(),
                static_cast<double>(ncon_sum) / steps, r.loop_rates.back() / r.bare_rates.back()));
+    if (options.attach) {
+      report(Format("trial %d: loop with attached=%.0f steps/s  attached ratio=%.4f", t,
+                    r.attached_rates.back(), r.attached_rates.back() / r.loop_rates.back()));
+    }
     engine.PollEvents();
   }
   // Best-of-N per loop: on a shared machine the fastest trial is the one least disturbed by other
@@ -225,6 +239,14 @@ LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& optio
   if (options.subscribers > 0) {
     report(Format("every-step reader: %llu frame(s) dropped",
                   static_cast<unsigned long long>(readers.ring_dropped())));
+  }
+  if (options.attach) {
+    r.attached_ratio =
+        *std::max_element(r.attached_rates.begin(), r.attached_rates.end()) / best_loop;
+    r.attached_median_ratio = Median(r.attached_rates) / Median(r.loop_rates);
+    report(Format("attached: best %.0f steps/s, ratio to the loop without it %.4f (median %.4f)",
+                  *std::max_element(r.attached_rates.begin(), r.attached_rates.end()),
+                  r.attached_ratio, r.attached_median_ratio));
   }
   report(Format("median bare=%.0f loop=%.0f steps/s (median ratio %.4f)", Median(r.bare_rates),
                 Median(r.loop_rates), r.median_ratio));

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "urlab/control/articulation_control.h"
+#include "urlab/physics/engine.h"
 
 namespace urlab::world {
 
@@ -28,6 +29,12 @@ struct LoopBenchOptions {
   // network broadcaster), even ones at 60 Hz (a viewer). Their threads run through the bare
   // trials too, so both loops share the machine with the same background.
   int subscribers = 0;
+  // Something to weigh against the loop without it (`bench loop --record`): `attach` is called
+  // once with the engine (stopped; subscribe here), `toggle(true)` before and `toggle(false)`
+  // after each of its trials. Each trial then also runs the loop with it on, and the result's
+  // attached_ratio is the loop's rate with it over the loop's rate without.
+  std::function<void(physics::PhysicsEngine&)> attach;
+  std::function<void(bool on)> toggle;
   // Receives the report lines (model line, one per trial, medians); empty: silent.
   std::function<void(const std::string&)> report;
 };
@@ -38,6 +45,9 @@ struct LoopBenchResult {
   std::vector<double> bare_rates, loop_rates;  // steps per second, per trial
   double ratio = 0;                            // best full-loop rate / best bare rate
   double median_ratio = 0;                     // median full-loop rate / median bare rate
+  std::vector<double> attached_rates;          // with LoopBenchOptions::attach: the loop with it on
+  double attached_ratio = 0;                   // best attached rate / best loop rate
+  double attached_median_ratio = 0;            // median attached rate / median loop rate
 };
 
 // Small alternating targets (0.1 * ((i % 3) - 1)) on every actuator, network source.

@@ -1,0 +1,274 @@
+// `urlab replay`: information about a recording, its exports (CSV, .npz), a bit-for-bit
+// re-simulation check, and playback through a physics thread (kinematic or re-simulating) at a
+// chosen speed, with loop. Playback is headless here.
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <thread>
+
+#include "app/commands.h"
+#include "app/signals.h"
+#include "urlab/physics/engine.h"
+#include "urlab/replay/csv.h"
+#include "urlab/replay/npz.h"
+#include "urlab/replay/player.h"
+#include "urlab/replay/recording.h"
+#include "urlab/replay/trajectory.h"
+#include "urlab/world/scene_file.h"
+#include "urlab/world/session.h"
+
+namespace urlab::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using replay::RecordingReader;
+
+struct ReplayArgs {
+  std::string file;
+  std::string scene;
+  double speed = 1;
+  bool loop = false;
+  bool resimulate = false;
+  bool check = false;
+  bool info = false;
+  bool fast = false;
+  std::string export_csv;
+  std::string export_npz;
+  bool short_names = false;
+  double duration = 0;
+};
+
+// Opens a recording, keeping the readable prefix of a damaged or unfinished one (with a warning).
+RecordingReader OpenRecording(const std::string& path) {
+  RecordingReader r = RecordingReader::Open(path, {true});
+  if (!r.problem().empty()) {
+    spdlog::warn("{}: {}; using the {} readable chunk(s)", path, r.problem(), r.chunks().size());
+  }
+  return r;
+}
+
+int Info(const RecordingReader& r) {
+  const replay::RecordingInfo& i = r.info();
+  const replay::ModelTables& t = i.tables;
+  std::printf("file:        %s (%llu bytes)\n", r.path().c_str(),
+              static_cast<unsigned long long>(fs::file_size(r.path())));
+  std::printf("kind:        %s, format %u, written by URLab %s, %s\n", i.kind.c_str(),
+              i.format_version, i.urlab_version.c_str(), i.created.c_str());
+  std::printf("scene:       %s\n", i.scene.empty() ? "(not recorded)" : i.scene.c_str());
+  std::printf(
+      "model:       hash %s, nq %d, nv %d, na %d, nu %d, nbody %d, nmocap %d, "
+      "nsensordata %d, timestep %g\n",
+      replay::HashText(i.model_hash).c_str(), t.nq, t.nv, t.na, t.nu, t.nbody, t.nmocap,
+      t.nsensordata, t.timestep);
+  std::string arts;
+  for (const std::string& a : t.articulations) arts += (arts.empty() ? "" : ", ") + a;
+  std::printf("articulations: %s; %zu joints, %zu actuators, %zu sensors\n",
+              arts.empty() ? "(none)" : arts.c_str(), t.joints.size(), t.actuators.size(),
+              t.sensors.size());
+  std::printf(
+      "content:     %llu steps, t %.6f .. %.6f s, %zu chunks, compression %s, "
+      "sensordata %s, keyframe every %g s\n",
+      static_cast<unsigned long long>(r.frame_count()), r.first_time(), r.last_time(),
+      r.chunks().size(), i.compression.c_str(), i.sensordata ? "yes" : "no", i.keyframe_interval);
+  std::uint64_t payload = 0;
+  for (const replay::ChunkInfo& c : r.chunks()) payload += c.stored_size;
+  if (r.frame_count()) {
+    std::printf("size:        %.1f bytes per step in data chunks\n",
+                static_cast<double>(payload) / static_cast<double>(r.frame_count()));
+  }
+  std::printf("finished:    %s\n", r.finished() ? "yes" : ("NO: " + r.problem()).c_str());
+  std::uint64_t markers = 0, gaps = 0, dropped = 0;
+  for (std::size_t c = 0; c < r.chunks().size(); ++c) {
+    try {
+      for (const replay::Record& rec : r.ReadChunk(c)) {
+        if (const auto* m = std::get_if<replay::Marker>(&rec)) {
+          ++markers;
+          std::printf("  jump at step %llu, t=%.6f: %s\n", static_cast<unsigned long long>(m->step),
+                      m->time, m->text.c_str());
+        } else if (const auto* g = std::get_if<replay::Gap>(&rec)) {
+          ++gaps;
+          dropped += g->dropped;
+        }
+      }
+    } catch (const replay::RecordingError& e) {
+      std::printf("checked:     chunks 1..%zu fine; %s\n", c, e.what());
+      return 1;
+    }
+  }
+  std::printf(
+      "checked:     every chunk's checksum and records; %llu jumps, %llu gaps (%llu "
+      "frames lost)\n",
+      static_cast<unsigned long long>(markers), static_cast<unsigned long long>(gaps),
+      static_cast<unsigned long long>(dropped));
+  return 0;
+}
+
+// The frames as a trajectory; refuses a time axis that goes back (a reset), naming the step.
+replay::Trajectory ToTrajectory(const RecordingReader& r) {
+  replay::Trajectory t;
+  t.nq = r.info().tables.nq;
+  t.nv = r.info().tables.nv;
+  for (std::size_t c = 0; c < r.chunks().size(); ++c) {
+    for (const replay::Record& rec : r.ReadChunk(c)) {
+      const auto* f = std::get_if<replay::Frame>(&rec);
+      if (!f) continue;
+      if (!t.time.empty() && !(f->time > t.time.back())) {
+        throw InputError({r.path(), 0},
+                         fmt::format("time goes back at step {} (t={} after t={}, a reset): an "
+                                     "export needs increasing time",
+                                     f->step, f->time, t.time.back()));
+      }
+      t.time.push_back(f->time);
+      t.qpos.insert(t.qpos.end(), f->qpos.begin(), f->qpos.end());
+      t.qvel.insert(t.qvel.end(), f->qvel.begin(), f->qvel.end());
+    }
+  }
+  return t;
+}
+
+int Check(const RecordingReader& r) {
+  replay::ResimOptions o;
+  o.progress = [](std::uint64_t done, std::uint64_t total) {
+    spdlog::info("re-simulated {} of {} steps", done, total);
+  };
+  o.progress_every = 20000;
+  const auto start = Clock::now();
+  const replay::ResimReport rep = replay::Resimulate(r, nullptr, o);
+  std::printf("%s (%.2f s)\n", rep.str().c_str(),
+              std::chrono::duration<double>(Clock::now() - start).count());
+  return rep.identical ? 0 : 3;
+}
+
+int Play(const ReplayArgs& args, const RecordingReader& r) {
+  std::shared_ptr<world::Session> session;
+  std::unique_ptr<physics::PhysicsEngine> own;
+  physics::PhysicsEngine* engine = nullptr;
+  if (!args.scene.empty()) {
+    CurrentInput() = args.scene;
+    session = world::Session::Create(world::LoadSceneOrModel(args.scene));
+    engine = &session->engine();
+  } else {
+    own = std::make_unique<physics::PhysicsEngine>(replay::LoadRecordedModel(r));
+    engine = own.get();
+  }
+  replay::PlayerOptions po;
+  po.mode = args.resimulate ? replay::PlayMode::kResimulate : replay::PlayMode::kKinematic;
+  po.speed = args.fast ? 1 : args.speed;
+  po.loop = args.loop;
+  replay::Player player(*engine, r, po);
+  engine->SetAsFastAsPossible(args.fast);
+  engine->Start();
+  SetImmediateExit(false);
+  const auto start = Clock::now();
+  auto next_log = start + std::chrono::seconds(1);
+  spdlog::info("playing {} ({} steps, {}{}{})", r.path(), r.frame_count(),
+               args.resimulate ? "re-simulating" : "kinematic",
+               args.fast ? ", as fast as possible" : fmt::format(", speed {}", args.speed),
+               args.loop ? ", loop" : "");
+  replay::PlayerStatus st;
+  while (StopSignal() == 0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    st = player.status();
+    if (!st.error.empty()) break;
+    if (st.finished && !args.loop) break;
+    const auto now = Clock::now();
+    if (args.duration > 0 && now - start >= std::chrono::duration<double>(args.duration)) break;
+    if (now >= next_log) {
+      spdlog::info("t={:.3f} s  step {}  frame {}/{}{}", st.time, st.step, st.frame + 1, st.frames,
+                   st.loop ? fmt::format("  loops {}", st.loops) : "");
+      next_log += std::chrono::seconds(1);
+    }
+  }
+  engine->Stop();
+  st = player.status();
+  std::printf("played: frame %llu of %llu, t=%.6f s, step %llu%s\n",
+              static_cast<unsigned long long>(st.frame + 1),
+              static_cast<unsigned long long>(st.frames), st.time,
+              static_cast<unsigned long long>(st.step), st.finished ? " (end)" : "");
+  if (!st.error.empty()) {
+    std::fprintf(stderr, "urlab: error: %s\n", st.error.c_str());
+    return 1;
+  }
+  if (args.resimulate) {
+    st.resim.frames = st.frames;
+    st.resim.identical = !st.resim.diverged && st.resim.steps_checked > 0;
+    std::printf("%s\n", st.resim.str().c_str());
+    if (st.resim.diverged) return 3;
+  }
+  const int signal = StopSignal();
+  return signal ? ExitCodeForSignal(signal) : 0;
+}
+
+int Replay(const ReplayArgs& args) {
+  CurrentInput() = args.file;
+  const RecordingReader r = OpenRecording(args.file);
+  if (args.info) return Info(r);
+  if (!args.export_csv.empty() || !args.export_npz.empty()) {
+    const replay::Trajectory t = ToTrajectory(r);
+    if (!args.export_csv.empty()) {
+      CheckOutputs({{args.export_csv, "--export-csv"}}, {args.file});
+      replay::CsvExportOptions o;
+      o.short_names = args.short_names;
+      replay::ExportCsv(args.export_csv, r.info().tables, t, o);
+      std::printf("wrote %s: %zu rows\n", args.export_csv.c_str(), t.rows());
+    }
+    if (!args.export_npz.empty()) {
+      CheckOutputs({{args.export_npz, "--export-npz"}}, {args.file});
+      replay::ExportNpz(args.export_npz, r.info().tables, t);
+      std::printf("wrote %s: %zu rows\n", args.export_npz.c_str(), t.rows());
+    }
+    return 0;
+  }
+  if (args.check) return Check(r);
+  return Play(args, r);
+}
+
+}  // namespace
+
+void RegisterReplayCommand(CLI::App& app, int& exit_code) {
+  CLI::App* cmd = app.add_subcommand(
+      "replay",
+      "Play a recording made by `urlab record` (or the step server's recording_start) with the "
+      "model it carries: kinematic (every recorded frame shown exactly, on the recorded time "
+      "axis) or --resimulate (the recorded controls, forces and jumps re-applied to the physics, "
+      "each step checked bit for bit). --check re-simulates as fast as possible without a "
+      "physics thread and reports the first divergent step (exit 3). --info describes the file "
+      "and checks every chunk; --export-csv/--export-npz write qpos and qvel per step. A "
+      "damaged or unfinished file is played up to its last readable chunk, with a warning.");
+  static ReplayArgs args;
+  cmd->add_option("FILE", args.file, "the recording (.urrec)")->required();
+  cmd->add_option("--scene", args.scene,
+                  "play on this scene's model instead of the recorded one (it must be the same "
+                  "model: the hashes are compared)");
+  cmd->add_option("--speed", args.speed, "recorded seconds per second of wall time (default 1)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--fast", args.fast, "play as fast as possible (ignores --speed)");
+  cmd->add_flag("--loop", args.loop, "start again at the end");
+  cmd->add_flag("--resimulate", args.resimulate,
+                "re-simulate the physics from the recorded inputs and check each step");
+  cmd->add_option("--duration", args.duration, "stop after this many wall-clock seconds")
+      ->check(CLI::PositiveNumber);
+  CLI::Option* check =
+      cmd->add_flag("--check", args.check,
+                    "re-simulate the whole recording offline and report whether every step is "
+                    "bit-identical (exit 0) or the first divergent step (exit 3)");
+  CLI::Option* info = cmd->add_flag("--info", args.info, "describe the file and check every chunk");
+  CLI::Option* csv = cmd->add_option("--export-csv", args.export_csv,
+                                     "write time, qpos and qvel per step as CSV (columns by "
+                                     "joint name, name[i] for multi-value joints)");
+  CLI::Option* npz = cmd->add_option("--export-npz", args.export_npz,
+                                     "write time, qpos and qvel arrays as a NumPy .npz");
+  cmd->add_flag("--short-names", args.short_names,
+                "CSV columns without the articulation prefix where unambiguous");
+  info->excludes(check)->excludes(csv)->excludes(npz);
+  check->excludes(csv)->excludes(npz);
+  cmd->callback([&exit_code] { exit_code = Replay(args); });
+}
+
+}  // namespace urlab::app

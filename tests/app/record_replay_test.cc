@@ -1,0 +1,148 @@
+// `urlab record` and `urlab replay` end to end: the real binary records a humanoid under PD
+// control, the recording re-simulates bit for bit, exports to CSV and imports back (shuffled
+// columns, short names) bit for bit, and a recorder killed with SIGKILL leaves a file that opens
+// with all but the last second.
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "mujoco_test.h"
+#include "urlab/replay/csv.h"
+#include "urlab/replay/recording.h"
+
+extern char** environ;
+
+namespace urlab {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using testing::RunCommand;
+using testing::SourcePath;
+using testing::UrlabBinary;
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Writes `in` with its columns in a shuffled order.
+void ShuffleColumns(const std::string& in, const std::string& out) {
+  std::ifstream f(in);
+  std::vector<std::vector<std::string>> rows;
+  std::string line;
+  while (std::getline(f, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    rows.push_back(cells);
+  }
+  std::vector<std::size_t> order(rows.front().size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::shuffle(order.begin(), order.end(), std::mt19937(7));
+  std::ofstream o(out);
+  for (const auto& r : rows) {
+    for (std::size_t i = 0; i < order.size(); ++i) o << (i ? "," : "") << r[order[i]];
+    o << "\n";
+  }
+}
+
+TEST(RecordReplayTest, RecordsReSimulatesAndRoundTripsThroughCsv) {
+  const std::string dir = testing::MakeTempDir("record_replay");
+  const std::string file = dir + "/h.urrec";
+  std::string out;
+  ASSERT_EQ(RunCommand(UrlabBinary() + " record " + SourcePath("examples/scenes/humanoid_pd.yaml") +
+                           " -o " + file + " --duration 1.5 --no-network",
+                       &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("recording: " + file + " steps="), std::string::npos) << out;
+  ASSERT_TRUE(fs::exists(file));
+  EXPECT_FALSE(fs::exists(file + ".part"));
+
+  ASSERT_EQ(RunCommand(UrlabBinary() + " replay " + file + " --check", &out), 0) << out;
+  EXPECT_NE(out.find("re-simulation identical"), std::string::npos) << out;
+  ASSERT_EQ(RunCommand(UrlabBinary() + " replay " + file + " --info", &out), 0) << out;
+  EXPECT_NE(out.find("finished:    yes"), std::string::npos) << out;
+  ASSERT_EQ(RunCommand(UrlabBinary() + " replay " + file + " --resimulate --fast", &out), 0) << out;
+  EXPECT_NE(out.find("re-simulation identical"), std::string::npos) << out;
+
+  const std::string csv = dir + "/h.csv";
+  ASSERT_EQ(
+      RunCommand(UrlabBinary() + " replay " + file + " --export-csv " + csv + " --short-names",
+                 &out),
+      0)
+      << out;
+  ShuffleColumns(csv, dir + "/shuffled.csv");
+  const replay::RecordingReader reader = replay::RecordingReader::Open(file);
+  replay::CsvImportReport report;
+  const replay::Trajectory t = replay::ImportCsv(
+      dir + "/shuffled.csv", reader.info().tables,
+      std::vector<double>(static_cast<std::size_t>(reader.info().tables.nq), 0), &report);
+  EXPECT_TRUE(report.unmatched_columns.empty());
+  EXPECT_TRUE(report.unmatched_joints.empty());
+  std::vector<double> qpos, qvel;
+  for (const replay::Record& r : replay::ReadAllRecords(reader)) {
+    if (const auto* f = std::get_if<replay::Frame>(&r)) {
+      qpos.insert(qpos.end(), f->qpos.begin(), f->qpos.end());
+      qvel.insert(qvel.end(), f->qvel.begin(), f->qvel.end());
+    }
+  }
+  EXPECT_EQ(t.rows(), reader.frame_count());
+  EXPECT_EQ(t.qpos, qpos);  // bit for bit (== on doubles; no NaN here)
+  EXPECT_EQ(t.qvel, qvel);
+}
+
+TEST(RecordReplayTest, KilledRecorderLeavesAFileWithAllButTheLastSecond) {
+  const std::string dir = testing::MakeTempDir("record_kill");
+  const std::string file = dir + "/k.urrec";
+  const std::string log = dir + "/log.txt";
+  const std::string cmd = "exec " + UrlabBinary() + " record " +
+                          SourcePath("examples/scenes/humanoid_pd.yaml") + " -o " + file +
+                          " --no-network > " + log + " 2>&1";
+  const char* argv[] = {"/bin/sh", "-c", cmd.c_str(), nullptr};
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ), 0);
+  const auto started = Clock::now();
+  while (ReadFile(log).find("recording to") == std::string::npos) {
+    ASSERT_LT(Clock::now() - started, std::chrono::seconds(30)) << ReadFile(log);
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  const auto recording = Clock::now();
+  std::this_thread::sleep_for(std::chrono::milliseconds(3500));
+  const double wall = std::chrono::duration<double>(Clock::now() - recording).count();
+  ASSERT_EQ(kill(pid, SIGKILL), 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFSIGNALED(status));
+  EXPECT_FALSE(fs::exists(file));  // never renamed: it did not finish
+  ASSERT_TRUE(fs::exists(file + ".part"));
+
+  std::string out;
+  ASSERT_EQ(RunCommand(UrlabBinary() + " replay " + file + ".part --info", &out), 0) << out;
+  EXPECT_NE(out.find("finished:    NO"), std::string::npos) << out;
+  const replay::RecordingReader r = replay::RecordingReader::Open(file + ".part", {true});
+  EXPECT_NO_THROW(r.Verify());
+  // The scene runs at real time: the readable part covers all but about the last second.
+  const double covered = r.last_time() - r.first_time();
+  RecordProperty("killed_after_s", std::to_string(wall));
+  RecordProperty("readable_s", std::to_string(covered));
+  EXPECT_GT(covered, wall - 1.0 - 0.3) << "wall " << wall << " s, readable " << covered << " s";
+  ASSERT_EQ(RunCommand(UrlabBinary() + " replay " + file + ".part --check", &out), 0) << out;
+  EXPECT_NE(out.find("re-simulation identical"), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace urlab
