@@ -3,7 +3,8 @@
 # build-fuzz (or $URLAB_FUZZ_BUILD_DIR) and runs each for a bounded time on a fresh copy of its
 # seed corpus (fuzz/corpus/<target>; the MJCF reader also gets Debian's sample models).
 # Usage: tools/fuzz.sh [SECONDS=60] [TARGET...]
-#   targets: fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request (default: all)
+#   targets: fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_recording
+#   (default: all)
 # Exits non-zero when a target crashes (or leaks, or times out on one input), printing the
 # reproducer's path; rerun one with: build-fuzz/fuzz/<target> <reproducer>.
 # Run corpora, logs and reproducers stay under the build folder (not in git).
@@ -11,7 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_TO_RUN="${1:-60}"
 shift || true
-ALL=(fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request)
+ALL=(fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_recording)
 TARGETS=("$@")
 if [ ${#TARGETS[@]} -eq 0 ]; then TARGETS=("${ALL[@]}"); fi
 for t in "${TARGETS[@]}"; do

@@ -2,7 +2,7 @@
 # The test command (CI runs it): installs dependencies, builds, runs the whole test suite with
 # ctest, then more stages, each printing its wall time, and a table of them at the end:
 #   main        RelWithDebInfo build (GCC) + every test (ctest)
-#   tsan        ThreadSanitizer: the core, physics, control, world, net and client tests
+#   tsan        ThreadSanitizer: the core, physics, control, world, replay, net and client tests
 #   asan        AddressSanitizer + UndefinedBehaviorSanitizer: the mjcf, document, world tests
 #   release     Release build with GCC (-O3), warnings as errors, no tests
 #   clang       clang Debug build of everything (tests, benchmarks, examples) + the fast unit tests
@@ -82,9 +82,9 @@ tsan_stage() {
   configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_SANITIZE=thread -DURLAB_BUILD_BENCH=OFF
   # The net tests include the Python client's end-to-end test, which runs the urlab binary.
   cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_core urlab_tests_physics \
-    urlab_tests_control urlab_tests_world urlab_tests_net urlab_tests_client
+    urlab_tests_control urlab_tests_world urlab_tests_replay urlab_tests_net urlab_tests_client
   TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/tsan.supp" \
-    ctest --test-dir "$dir" -L 'core|physics|control|world|net|client' --output-on-failure \
+    ctest --test-dir "$dir" -L 'core|physics|control|world|replay|net|client' --output-on-failure \
     -j"$JOBS" --timeout 900
 }
 
@@ -92,9 +92,10 @@ asan_stage() {
   local dir="${BUILD_DIR}-asan"
   configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_SANITIZE=address,undefined \
     -DURLAB_BUILD_BENCH=OFF
-  cmake --build "$dir" -j"$JOBS" --target urlab_tests_mjcf urlab_tests_document urlab_tests_world
+  cmake --build "$dir" -j"$JOBS" --target urlab_tests_mjcf urlab_tests_document urlab_tests_world \
+    urlab_tests_replay
   ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1" \
-    ctest --test-dir "$dir" -L 'mjcf|document|world' --output-on-failure -j"$JOBS" --timeout 900
+    ctest --test-dir "$dir" -L 'mjcf|document|world|replay' --output-on-failure -j"$JOBS" --timeout 900
 }
 
 release_stage() {
