@@ -18,6 +18,7 @@
 #include "urlab/core/mujoco_handlers.h"
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/net/network.h"
+#include "urlab/replay/recorder.h"
 #include "urlab/world/manager.h"
 
 namespace urlab::app {
@@ -56,8 +57,14 @@ int Run(const RunArgs& args) {
   // Loading and compiling: a signal ends the process at once (nothing runs, nothing is written).
   const world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
   if (!args.no_network && scene.network.enabled) {
-    manager.AddSubsystem(
-        std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network)));
+    // An idle recorder costs the physics thread nothing; the step server's recording operations
+    // use it (added first: it begins before the network and ends after it).
+    auto& recorder = static_cast<replay::RecorderSubsystem&>(
+        manager.AddSubsystem(std::make_unique<replay::RecorderSubsystem>()));
+    auto network =
+        std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network));
+    network->SetRecorder(&recorder);
+    manager.AddSubsystem(std::move(network));
   }
   manager.BeginPlay(scene);
   SetImmediateExit(false);  // playing: a signal stops the loop, which ends cleanly
