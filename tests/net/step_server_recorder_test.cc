@@ -192,6 +192,13 @@ TEST_F(StepServerRecorderTest, SnapshotSaveAndLoadRoundTrip) {
   EXPECT_EQ(c().Op("snapshot_load", {{"path", dir_ + "/missing.urrec"}})["code"],
             "path_not_readable");
   EXPECT_EQ(c().Op("snapshot_load", {{"path", dir_ + "/arm.xml"}})["code"], "path_not_readable");
+  // Other physics options make another model: refused, naming both hashes.
+  ASSERT_EQ(c().Op("set_sim_options", {{"options", {{"timestep", 0.001}}}})["op"],
+            "set_sim_options_ok");
+  const Json other = c().Op("snapshot_load", {{"path", path}});
+  EXPECT_EQ(other["code"], "bad_value") << other.dump();
+  EXPECT_NE(other["message"].get<std::string>().find("model hash"), std::string::npos)
+      << other.dump();
 }
 
 TEST_F(StepServerRecorderTest, ReplaySessionsAndKinematicPlayback) {
