@@ -76,8 +76,14 @@ int Run(const RunArgs& args) {
     manager.AddSubsystem(std::move(sub));
   }
   if (!args.no_network && scene.network.enabled) {
-    manager.AddSubsystem(
-        std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network)));
+    // An idle recorder costs the physics thread nothing; the step server's recording operations
+    // use it (added first: it begins before the network and ends after it).
+    auto& recorder = static_cast<replay::RecorderSubsystem&>(
+        manager.AddSubsystem(std::make_unique<replay::RecorderSubsystem>()));
+    auto network =
+        std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network));
+    network->SetRecorder(&recorder);
+    manager.AddSubsystem(std::move(network));
   }
   manager.BeginPlay(scene);
   SetImmediateExit(false);  // playing: a signal stops the loop, which ends cleanly

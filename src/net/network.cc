@@ -466,6 +466,7 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
     so.lease_timeout = options_.lease_timeout;
     impl_->server = std::make_unique<StepServer>(
         session, impl_->tables, session.engine().SubscribeState("step_server"), so);
+    impl_->server->SetRecorder(recorder_);
   }
   std::promise<Endpoints> ready;
   std::future<Endpoints> bound = ready.get_future();

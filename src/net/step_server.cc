@@ -108,6 +108,50 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
        true,
        {"articulation", "params"},
        "articulation, kind, params"},
+      {"recording_start", &StepServer::RecordingStart, true, true, {}, "path"},
+      {"recording_stop",
+       &StepServer::RecordingStop,
+       true,
+       true,
+       {},
+       "path, frames, duration, bytes, dropped"},
+      {"recording_save", &StepServer::RecordingSave, true, false, {"path"}, "path"},
+      {"recording_clear", &StepServer::RecordingClear, true, true, {}, ""},
+      {"recording_status",
+       &StepServer::RecordingStatus,
+       true,
+       false,
+       {},
+       "active, path, frames, chunks, bytes, raw_bytes, dropped, markers, duration, "
+       "stopped_because"},
+      {"snapshot_save", &StepServer::SnapshotSave, true, false, {"path"}, "path, time"},
+      {"snapshot_load", &StepServer::SnapshotLoad, true, true, {"path"}, "path, time"},
+      {"replay_load",
+       &StepServer::ReplayLoad,
+       true,
+       true,
+       {"path"},
+       "session, path, frames, duration, chunks, finished, problem"},
+      {"replay_list_sessions",
+       &StepServer::ReplayListSessions,
+       true,
+       false,
+       {},
+       "sessions, active"},
+      {"replay_set_active", &StepServer::ReplaySetActive, true, true, {"session"}, "session"},
+      {"replay_start",
+       &StepServer::ReplayStart,
+       true,
+       true,
+       {},
+       "session, mode, speed, loop, frames"},
+      {"replay_stop", &StepServer::ReplayStop, true, true, {}, "session"},
+      {"replay_status",
+       &StepServer::ReplayStatus,
+       true,
+       false,
+       {},
+       "active, session, mode, playing, finished, time, step, frame, frames, ..."},
   };
   return ops;
 }
@@ -148,6 +192,7 @@ void StepServer::Close() {
   }
   pending_.clear();
   socket_.reset();
+  player_.reset();  // removes the custom step handler while the engine still runs
 }
 
 // ---------------------------------------------------------------------------------------------

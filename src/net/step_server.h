@@ -25,6 +25,9 @@
 #include "net/observation.h"
 #include "net/topic_table.h"
 #include "urlab/physics/state_frame.h"
+#include "urlab/replay/player.h"
+#include "urlab/replay/recorder.h"
+#include "urlab/replay/recording.h"
 #include "urlab/world/session.h"
 
 namespace urlab::net {
@@ -56,8 +59,11 @@ class StepServer {
   bool has_pending() const { return !pending_.empty(); }
   // True when the oldest parked reply's command took effect (Service would send it).
   bool has_ready() const;
-  // Closes the socket (pending replies get `shutting_down`).
+  // Closes the socket (pending replies get `shutting_down`) and ends a replay.
   void Close();
+  // The recorder the recording operations use (nullptr: none; they answer not_ready). Main
+  // thread, before the I/O thread starts.
+  void SetRecorder(replay::RecorderSubsystem* recorder) { recorder_ = recorder; }
 
   // Requests answered with an error, per code (I/O thread).
   const std::map<std::string, std::uint64_t>& errors() const { return errors_; }
@@ -148,6 +154,23 @@ class StepServer {
   Outcome GetCounters(Request& r);
   Outcome SetTwist(Request& r);
   Outcome ConfigureController(Request& r);
+  // Recorder, snapshot and replay operations (step_server_recorder_ops.cc).
+  replay::Recorder& RequireRecorder();
+  // Every client's lease runs from now (after a blocking file operation on this thread).
+  void RefreshLeases();
+  Outcome RecordingStart(Request& r);
+  Outcome RecordingStop(Request& r);
+  Outcome RecordingSave(Request& r);
+  Outcome RecordingClear(Request& r);
+  Outcome RecordingStatus(Request& r);
+  Outcome SnapshotSave(Request& r);
+  Outcome SnapshotLoad(Request& r);
+  Outcome ReplayLoad(Request& r);
+  Outcome ReplayListSessions(Request& r);
+  Outcome ReplaySetActive(Request& r);
+  Outcome ReplayStart(Request& r);
+  Outcome ReplayStop(Request& r);
+  Outcome ReplayStatus(Request& r);
 
   world::Session& session_;
   const std::vector<ArticulationTopics>& tables_;
@@ -163,6 +186,17 @@ class StepServer {
   std::vector<std::uint8_t> mjb_;          // the compiled model (mj_saveModel), for hello
   std::optional<ModelWithAssets> assets_;  // for hello's include_assets, built on first use
   MsgpackWriter writer_;                   // reply bytes, reused
+  replay::RecorderSubsystem* recorder_ = nullptr;
+  // Recordings loaded for replay ("r1", "r2", ...), in load order; never unloaded while playing.
+  struct ReplaySession {
+    std::string id;
+    std::unique_ptr<replay::RecordingReader> reader;
+  };
+  std::vector<ReplaySession> replays_;
+  std::string active_replay_;
+  std::string playing_replay_;              // the session player_ plays
+  std::string player_mode_;                 // kinematic | resimulate
+  std::unique_ptr<replay::Player> player_;  // declared after replays_: destroyed first
 };
 
 }  // namespace urlab::net

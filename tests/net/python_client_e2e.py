@@ -120,6 +120,30 @@ articulations:
         with StepClient(endpoints[3]) as c:  # the puppeteer left: live again
             if c.info["mode"] != "live":
                 fail(f"mode after the driver left: {c.info['mode']}", proc)
+            # Recording, snapshots and replay through the server's recorder.
+            rec = os.path.join(tmp, "run.urrec")
+            if c.recording_start(rec) != rec:
+                fail("recording_start did not echo the path", proc)
+            try:
+                c.recording_start(rec)
+                fail("recording_already_active not reported", proc)
+            except UrlabError as e:
+                assert e.code == "recording_already_active", e
+            deadline = time.monotonic() + 10
+            while c.recording_status()["duration"] < 0.2 and time.monotonic() < deadline:
+                time.sleep(0.02)
+            done = c.recording_stop()
+            if done["path"] != rec or done["frames"] < 50 or not os.path.exists(rec):
+                fail(f"recording_stop: {done}", proc)
+            snap = os.path.join(tmp, "state.urrec")
+            t = c.snapshot_save(snap)
+            if c.snapshot_load(snap) != t:
+                fail("snapshot_load did not restore the saved time", proc)
+            loaded = c.replay_load(rec)
+            assert loaded["session"] in [s["session"] for s in c.replay_list_sessions()], loaded
+            c.replay_start(mode="kinematic")
+            c.replay_stop()
+            print(f"recorded {done['frames']} steps ({done['bytes']} bytes), snapshot at t={t}")
     finally:
         proc.send_signal(signal.SIGINT)
         try:

@@ -160,6 +160,67 @@ class StepClient:
             fields["quat"] = [float(x) for x in quat]
         return self.call("set_mocap_pose", **fields)
 
+    # ---- Recorder, snapshots and replay (the server's recorder writes and reads the files)
+
+    def recording_start(self, path=None, compress=True, sensordata=False, keyframe_interval=None,
+                        max_duration=None, ring_seconds=None):
+        """Starts recording every physics step to `path` (a temporary file when None); returns
+        the path."""
+        fields = {"compress": compress, "sensordata": sensordata}
+        for key, value in (("path", path), ("keyframe_interval", keyframe_interval),
+                           ("max_duration", max_duration), ("ring_seconds", ring_seconds)):
+            if value is not None:
+                fields[key] = value
+        return self.call("recording_start", **fields)["path"]
+
+    def recording_stop(self):
+        """Finishes the recording: {"path", "frames", "duration", "bytes", "dropped"}."""
+        return self.call("recording_stop")
+
+    def recording_save(self, path):
+        return self.call("recording_save", path=path)["path"]
+
+    def recording_clear(self):
+        return self.call("recording_clear")
+
+    def recording_status(self):
+        return self.call("recording_status")
+
+    def snapshot_save(self, path):
+        """Saves the simulation's full state to `path`; returns its simulated time."""
+        return self.call("snapshot_save", path=path)["time"]
+
+    def snapshot_load(self, path):
+        """Restores a snapshot of this model (applied before the reply); returns its time."""
+        return self.call("snapshot_load", path=path)["time"]
+
+    def replay_load(self, path):
+        """Opens a recording for replay: {"session", "frames", "duration", "chunks", ...}."""
+        return self.call("replay_load", path=path)
+
+    def replay_list_sessions(self):
+        return self.call("replay_list_sessions")["sessions"]
+
+    def replay_set_active(self, session):
+        return self.call("replay_set_active", session=session)
+
+    def replay_start(self, session=None, mode="kinematic", speed=None, loop=None):
+        """Plays a loaded recording through the engine (mode kinematic or resimulate)."""
+        fields = {"mode": mode}
+        if session is not None:
+            fields["session"] = session
+        if speed is not None:
+            fields["speed"] = float(speed)
+        if loop is not None:
+            fields["loop"] = bool(loop)
+        return self.call("replay_start", **fields)
+
+    def replay_stop(self):
+        return self.call("replay_stop")
+
+    def replay_status(self):
+        return self.call("replay_status")
+
     def model_with_assets(self, folder):
         """Writes the server's composed model and its asset files into `folder` (which must
         exist); returns the model file's path, loadable with MuJoCo there."""

@@ -24,6 +24,10 @@
 #include "urlab/world/scene_file.h"
 #include "urlab/world/subsystem.h"
 
+namespace urlab::replay {
+class RecorderSubsystem;
+}
+
 namespace urlab::net {
 
 struct NetworkOptions {
@@ -75,11 +79,16 @@ class NetworkSubsystem : public world::Subsystem {
   const Endpoints& endpoints() const { return bound_; }
   // Any thread.
   NetworkCounters counters() const;
+  // The recorder the step server's recording operations use (its recorder() is looked up when a
+  // request comes; add it to the Manager before this subsystem). nullptr: none. Main thread,
+  // before BeginPlay.
+  void SetRecorder(replay::RecorderSubsystem* recorder) { recorder_ = recorder; }
 
  private:
   struct Impl;
   NetworkOptions options_;
   Endpoints bound_;
+  replay::RecorderSubsystem* recorder_ = nullptr;
   std::unique_ptr<Impl> impl_;
 };
 

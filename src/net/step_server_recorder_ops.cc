@@ -1,0 +1,330 @@
+// The step server's recorder operations (protocol.md, "Runtime operations"): recordings through
+// the recorder subsystem the network was given, snapshots of the engine's state, and replay of
+// loaded recordings through a Player on the live engine. File operations block the I/O thread
+// for their duration; leases run from their end.
+#include <mujoco/mujoco.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "net/request_fields.h"
+#include "net/step_server.h"
+#include "urlab/physics/model.h"
+#include "urlab/replay/snapshot.h"
+#include "urlab/world/scene.h"
+
+namespace urlab::net {
+
+using namespace request;
+
+namespace {
+
+using Reason = replay::RecordingError::Reason;
+
+// A copy of the engine's model taken with the step mutex held (options may change meanwhile).
+physics::ModelPtr ModelCopy(physics::PhysicsEngine& engine) {
+  physics::ModelPtr copy;
+  engine.WithLockedData([&copy](mjModel* m, mjData*) { copy.reset(mj_copyModel(nullptr, m)); });
+  return copy;
+}
+
+double OptionalNumber(const Json& body, const char* field, double fallback) {
+  const auto it = body.find(field);
+  return it == body.end() || it->is_null() ? fallback : Number(*it, field);
+}
+
+bool OptionalBool(const Json& body, const char* field, bool fallback) {
+  const auto it = body.find(field);
+  return it == body.end() || it->is_null() ? fallback : Bool(*it, field);
+}
+
+StepServer::Json StatusJson(const replay::RecorderStatus& s) {
+  return StepServer::Json{{"active", s.active},     {"path", s.path},
+                          {"frames", s.frames},     {"chunks", s.chunks},
+                          {"bytes", s.bytes},       {"raw_bytes", s.raw_bytes},
+                          {"dropped", s.dropped},   {"markers", s.markers},
+                          {"duration", s.duration}, {"stopped_because", s.stopped_because}};
+}
+
+}  // namespace
+
+replay::Recorder& StepServer::RequireRecorder() {
+  replay::Recorder* r = recorder_ ? recorder_->recorder() : nullptr;
+  if (!r) {
+    Fail("not_ready",
+         "this simulation has no recorder (run it with a recorder subsystem to record)");
+  }
+  return *r;
+}
+
+void StepServer::RefreshLeases() {
+  const auto now = Clock::now();
+  for (auto& [id, client] : clients_) client.last_seen = std::max(client.last_seen, now);
+}
+
+// ---- Recordings
+
+StepServer::Outcome StepServer::RecordingStart(Request& r) {
+  replay::Recorder& recorder = RequireRecorder();
+  replay::RecorderOptions o;
+  if (const auto it = r.body.find("path"); it != r.body.end() && !it->is_null()) {
+    o.path = String(*it, "path");
+  }
+  o.compress = OptionalBool(r.body, "compress", true);
+  o.sensordata = OptionalBool(r.body, "sensordata", false);
+  o.keyframe_interval = OptionalNumber(r.body, "keyframe_interval", o.keyframe_interval);
+  o.max_duration = OptionalNumber(r.body, "max_duration", o.max_duration);
+  o.ring_seconds = OptionalNumber(r.body, "ring_seconds", o.ring_seconds);
+  try {
+    recorder.Start(std::move(o));
+  } catch (const replay::RecorderError& e) {
+    RefreshLeases();
+    Fail(e.code(), e.what());
+  }
+  RefreshLeases();
+  return {Json{{"op", "recording_start_ok"}, {"path", recorder.status().path}}};
+}
+
+StepServer::Outcome StepServer::RecordingStop(Request&) {
+  replay::Recorder& recorder = RequireRecorder();
+  replay::RecorderStatus s;
+  try {
+    s = recorder.Stop();
+  } catch (const replay::RecorderError& e) {
+    RefreshLeases();
+    Fail(e.code(), e.what());
+  }
+  RefreshLeases();
+  return {Json{{"op", "recording_stop_ok"},
+               {"path", s.path},
+               {"frames", s.frames},
+               {"duration", s.duration},
+               {"bytes", s.bytes},
+               {"dropped", s.dropped}}};
+}
+
+StepServer::Outcome StepServer::RecordingSave(Request& r) {
+  replay::Recorder& recorder = RequireRecorder();
+  const std::string path = String(r.body["path"], "path");
+  std::string saved;
+  try {
+    saved = recorder.Save(path);
+  } catch (const replay::RecorderError& e) {
+    RefreshLeases();
+    Fail(e.code(), e.what());
+  }
+  RefreshLeases();
+  return {Json{{"op", "recording_save_ok"}, {"path", saved}}};
+}
+
+StepServer::Outcome StepServer::RecordingClear(Request&) {
+  replay::Recorder& recorder = RequireRecorder();
+  try {
+    recorder.Clear();
+  } catch (const replay::RecorderError& e) {
+    Fail(e.code(), e.what());
+  }
+  return {Json{{"op", "recording_clear_ok"}}};
+}
+
+StepServer::Outcome StepServer::RecordingStatus(Request&) {
+  Json reply = StatusJson(RequireRecorder().status());
+  reply["op"] = "recording_status_ok";
+  return {reply};
+}
+
+// ---- Snapshots
+
+StepServer::Outcome StepServer::SnapshotSave(Request& r) {
+  const std::string path = String(r.body["path"], "path");
+  physics::PhysicsEngine& engine = session_.engine();
+  // The state and the model it belongs to, taken together (the options may change).
+  physics::PhysicsState state;
+  physics::ModelPtr model;
+  engine.WithLockedData([&state, &model](mjModel* m, mjData* d) {
+    state = physics::CaptureState(m, d);
+    model.reset(mj_copyModel(nullptr, m));
+  });
+  replay::RecordingInfo info;
+  replay::Recorder* recorder = recorder_ ? recorder_->recorder() : nullptr;
+  if (recorder) {
+    info = recorder->info();  // scene, MJCF and the articulations' name tables
+  } else {
+    std::vector<std::string> names;
+    for (const ArticulationTopics& t : tables_) names.push_back(t.name);
+    info.tables = replay::ModelTables::Of(model.get(), names);
+  }
+  info.model_hash = replay::ModelHash(model.get());  // the model as it is now
+  info.mjb = world::MjbBytes(model.get());
+  try {
+    replay::SaveSnapshot(path, info, state);
+  } catch (const std::exception& e) {
+    RefreshLeases();
+    Fail("path_not_writable", e.what());
+  }
+  RefreshLeases();
+  return {Json{{"op", "snapshot_save_ok"}, {"path", path}, {"time", state.time}}};
+}
+
+StepServer::Outcome StepServer::SnapshotLoad(Request& r) {
+  const std::string path = String(r.body["path"], "path");
+  physics::PhysicsEngine& engine = session_.engine();
+  const physics::ModelPtr model = ModelCopy(engine);
+  physics::PhysicsState state;
+  try {
+    state = replay::LoadSnapshot(path, model.get());
+  } catch (const replay::RecordingError& e) {
+    RefreshLeases();
+    Fail(e.reason() == Reason::kWrongModel ? "bad_value" : "path_not_readable", e.what());
+  } catch (const std::exception& e) {
+    RefreshLeases();
+    Fail("path_not_readable", e.what());
+  }
+  RefreshLeases();
+  const double time = state.time;
+  Outcome out;
+  out.reply = Json{{"op", "snapshot_load_ok"}, {"path", path}, {"time", time}};
+  out.wait_for = engine.Restore(std::move(state));  // a misfit state: bad_value at once
+  return out;
+}
+
+// ---- Replay
+
+StepServer::Outcome StepServer::ReplayLoad(Request& r) {
+  const std::string path = String(r.body["path"], "path");
+  std::unique_ptr<replay::RecordingReader> reader;
+  try {
+    reader = std::make_unique<replay::RecordingReader>(
+        replay::RecordingReader::Open(path, {.allow_partial = true}));
+    replay::CheckSameModel(*reader, ModelCopy(session_.engine()).get());
+  } catch (const replay::RecordingError& e) {
+    RefreshLeases();
+    Fail(e.reason() == Reason::kWrongModel ? "bad_value" : "path_not_readable", e.what());
+  } catch (const std::exception& e) {
+    RefreshLeases();
+    Fail("path_not_readable", e.what());
+  }
+  RefreshLeases();
+  if (reader->info().kind != "recording") {
+    Fail("path_not_readable", path + ": not a recording (a " + reader->info().kind + ")");
+  }
+  ReplaySession s{"r" + std::to_string(replays_.size() + 1), std::move(reader)};
+  const replay::RecordingReader& rd = *s.reader;
+  Json reply{{"op", "replay_load_ok"},
+             {"session", s.id},
+             {"path", rd.path()},
+             {"frames", rd.frame_count()},
+             {"duration", rd.frame_count() > 0 ? rd.last_time() - rd.first_time() : 0.0},
+             {"chunks", rd.chunks().size()},
+             {"finished", rd.finished()},
+             {"problem", rd.problem()}};
+  active_replay_ = s.id;  // the newest recording is the one replay_start plays by default
+  replays_.push_back(std::move(s));
+  return {reply};
+}
+
+StepServer::Outcome StepServer::ReplayListSessions(Request&) {
+  Json sessions = Json::array();
+  for (const ReplaySession& s : replays_) {
+    sessions.push_back(Json{{"session", s.id},
+                            {"path", s.reader->path()},
+                            {"frames", s.reader->frame_count()},
+                            {"active", s.id == active_replay_}});
+  }
+  return {Json{{"op", "replay_list_sessions_ok"},
+               {"sessions", std::move(sessions)},
+               {"active", active_replay_.empty() ? Json() : Json(active_replay_)}}};
+}
+
+StepServer::Outcome StepServer::ReplaySetActive(Request& r) {
+  const std::string id = String(r.body["session"], "session");
+  if (std::none_of(replays_.begin(), replays_.end(),
+                   [&id](const ReplaySession& s) { return s.id == id; })) {
+    Fail("replay_session_not_found", "no replay session '" + id + "' (see replay_list_sessions)");
+  }
+  active_replay_ = id;
+  return {Json{{"op", "replay_set_active_ok"}, {"session", id}}};
+}
+
+StepServer::Outcome StepServer::ReplayStart(Request& r) {
+  std::string id = active_replay_;
+  if (const auto it = r.body.find("session"); it != r.body.end() && !it->is_null()) {
+    id = String(*it, "session");
+  }
+  const auto s = std::find_if(replays_.begin(), replays_.end(),
+                              [&id](const ReplaySession& x) { return x.id == id; });
+  if (s == replays_.end()) {
+    Fail("replay_session_not_found",
+         id.empty() ? std::string("no recording loaded (replay_load first)")
+                    : "no replay session '" + id + "' (see replay_list_sessions)");
+  }
+  replay::PlayerOptions o;
+  const std::string mode =
+      r.body.contains("mode") ? String(r.body["mode"], "mode") : std::string("kinematic");
+  if (mode == "kinematic") {
+    o.mode = replay::PlayMode::kKinematic;
+  } else if (mode == "resimulate") {
+    o.mode = replay::PlayMode::kResimulate;
+  } else {
+    Fail("bad_value", "mode must be kinematic or resimulate");
+  }
+  o.speed = OptionalNumber(r.body, "speed", 1.0);
+  if (!(o.speed > 0)) Fail("bad_value", "speed must be > 0");
+  o.loop = OptionalBool(r.body, "loop", false);
+  // The player runs in the engine's step handler: puppet mode never steps the engine.
+  if (mode_ == "puppet") {
+    Fail("replay_requires_stepped",
+         "replay plays through physics steps; puppet mode never steps (set_mode live or "
+         "direct)");
+  }
+  player_.reset();  // one replay at a time: a new start replaces it
+  try {
+    player_ = std::make_unique<replay::Player>(session_.engine(), *s->reader, o);
+  } catch (const replay::RecordingError& e) {
+    Fail(e.reason() == Reason::kWrongModel ? "bad_value" : "path_not_readable", e.what());
+  }
+  playing_replay_ = id;
+  player_mode_ = mode;
+  spdlog::info("step server: replaying {} ({}, speed {})", s->reader->path(), mode, o.speed);
+  return {Json{{"op", "replay_start_ok"},
+               {"session", id},
+               {"mode", mode},
+               {"speed", o.speed},
+               {"loop", o.loop},
+               {"frames", s->reader->frame_count()}}};
+}
+
+StepServer::Outcome StepServer::ReplayStop(Request&) {
+  const std::string was = player_ ? playing_replay_ : std::string();
+  player_.reset();  // the engine steps on its own again
+  playing_replay_.clear();
+  return {Json{{"op", "replay_stop_ok"}, {"session", was.empty() ? Json() : Json(was)}}};
+}
+
+StepServer::Outcome StepServer::ReplayStatus(Request&) {
+  if (!player_) return {Json{{"op", "replay_status_ok"}, {"active", false}}};
+  const replay::PlayerStatus st = player_->status();
+  Json resim{{"identical", st.resim.identical},
+             {"steps_checked", st.resim.steps_checked},
+             {"diverged", st.resim.diverged}};
+  if (st.resim.diverged) resim["report"] = st.resim.str();
+  return {Json{{"op", "replay_status_ok"},
+               {"active", true},
+               {"session", playing_replay_},
+               {"mode", player_mode_},
+               {"playing", st.playing},
+               {"finished", st.finished},
+               {"time", st.time},
+               {"step", st.step},
+               {"frame", st.frame},
+               {"frames", st.frames},
+               {"speed", st.speed},
+               {"loop", st.loop},
+               {"loops", st.loops},
+               {"resim", std::move(resim)},
+               {"error", st.error}}};
+}
+
+}  // namespace urlab::net

@@ -1,0 +1,253 @@
+// The step server's recorder, snapshot and replay operations against a real Manager with a
+// recorder subsystem and real sockets (a REQ client speaking msgpack, written here from
+// protocol.md).
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <thread>
+#include <zmq.hpp>
+
+#include "support/mujoco_test.h"
+#include "support/wait.h"
+#include "urlab/net/network.h"
+#include "urlab/replay/player.h"
+#include "urlab/replay/recorder.h"
+#include "urlab/replay/recording.h"
+#include "urlab/world/manager.h"
+
+namespace urlab::net {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using Json = nlohmann::json;
+using urlab::testing::WaitFor;
+
+constexpr const char* kArmXml = R"(<mujoco model="arm">
+  <option timestep="0.002"/>
+  <worldbody>
+    <body name="link" pos="0 0 1">
+      <joint name="hinge" type="hinge" axis="0 1 0" damping="0.05"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="1"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor name="motor" joint="hinge"/>
+  </actuator>
+</mujoco>
+)";
+
+class Client {
+ public:
+  Client(zmq::context_t& ctx, const std::string& endpoint) : socket_(ctx, zmq::socket_type::req) {
+    socket_.set(zmq::sockopt::linger, 0);
+    socket_.set(zmq::sockopt::rcvtimeo, 10000);
+    socket_.connect(endpoint);
+  }
+  Json Call(const Json& request) {
+    const std::vector<std::uint8_t> bytes = Json::to_msgpack(request);
+    socket_.send(zmq::buffer(bytes));
+    zmq::message_t reply;
+    if (!socket_.recv(reply)) return Json{{"op", "timeout"}};
+    const auto* b = static_cast<const std::uint8_t*>(reply.data());
+    return Json::from_msgpack(b, b + reply.size());
+  }
+  void Hello() { session_ = Call({{"op", "hello"}}).value("session_id", ""); }
+  Json Op(const std::string& op, Json fields = Json::object()) {
+    fields["op"] = op;
+    fields["session_id"] = session_;
+    return Call(fields);
+  }
+
+ private:
+  zmq::socket_t socket_;
+  std::string session_;
+};
+
+class StepServerRecorderTest : public urlab::testing::MujocoTest {
+ protected:
+  void SetUp() override {
+    dir_ = urlab::testing::MakeTempDir("step_server_recorder");
+    urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml);
+  }
+  void Play(bool with_recorder = true) {
+    replay::RecorderSubsystem* recorder = nullptr;
+    if (with_recorder) {
+      recorder = &static_cast<replay::RecorderSubsystem&>(
+          manager_.AddSubsystem(std::make_unique<replay::RecorderSubsystem>()));
+    }
+    NetworkOptions o;
+    o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
+    auto net = std::make_unique<NetworkSubsystem>(o);
+    net->SetRecorder(recorder);
+    net_ = &static_cast<NetworkSubsystem&>(manager_.AddSubsystem(std::move(net)));
+    manager_.BeginPlay(world::ParseScene(
+        "control_source: network\narticulations:\n  - {name: arm, mjcf: arm.xml}\n",
+        dir_ + "/scene.yaml"));
+    ASSERT_FALSE(net_->endpoints().rpc.empty());
+    client_ = std::make_unique<Client>(ctx_, net_->endpoints().rpc);
+    client_->Hello();
+  }
+  // Drives the arm with a changing torque for `steps` direct-mode steps.
+  void Drive(int steps) {
+    for (int i = 0; i < steps; ++i) {
+      const Json r = client_->Op(
+          "step", {{"per_articulation", {{"arm", {{"ctrl", {0.5 * std::sin(0.1 * i)}}}}}}});
+      ASSERT_EQ(r["op"], "step_ok") << r.dump();
+    }
+  }
+  Client& c() { return *client_; }
+
+  std::string dir_;
+  world::Manager manager_;
+  NetworkSubsystem* net_ = nullptr;
+  zmq::context_t ctx_{1};
+  std::unique_ptr<Client> client_;
+};
+
+TEST_F(StepServerRecorderTest, RecordsARunThatReSimulatesBitForBit) {
+  Play();
+  const std::string path = dir_ + "/run.urrec";
+  ASSERT_EQ(c().Op("set_mode", {{"mode", "direct"}})["op"], "set_mode_ok");
+  const Json start = c().Op("recording_start", {{"path", path}});
+  ASSERT_EQ(start["op"], "recording_start_ok") << start.dump();
+  EXPECT_EQ(start["path"], path);
+  const Json again = c().Op("recording_start", {{"path", dir_ + "/other.urrec"}});
+  EXPECT_EQ(again["code"], "recording_already_active") << again.dump();
+  // The recording starts at the recorder's first keyframe (requested by its writer thread).
+  ASSERT_TRUE(WaitFor([&] {
+    Drive(1);
+    return c().Op("recording_status")["frames"] > 0;
+  }));
+  Drive(60);
+  const Json status = c().Op("recording_status");
+  EXPECT_EQ(status["active"], true) << status.dump();
+  ASSERT_TRUE(WaitFor([&] { return c().Op("recording_status")["frames"] >= 60; }));
+  const Json stop = c().Op("recording_stop");
+  ASSERT_EQ(stop["op"], "recording_stop_ok") << stop.dump();
+  EXPECT_EQ(stop["path"], path);
+  EXPECT_GE(stop["frames"].get<std::uint64_t>(), 60u);
+  EXPECT_EQ(stop["dropped"], 0);
+  EXPECT_GT(stop["bytes"].get<std::uint64_t>(), 0u);
+  EXPECT_NEAR(stop["duration"].get<double>(), 60 * 0.002, 0.01);
+  EXPECT_EQ(c().Op("recording_stop")["code"], "recording_not_active");
+  EXPECT_EQ(c().Op("recording_status")["active"], false);
+
+  const replay::RecordingReader reader = replay::RecordingReader::Open(path);
+  const replay::ResimReport report = replay::Resimulate(reader);
+  EXPECT_TRUE(report.identical) << report.str();
+  EXPECT_GE(report.steps_checked, 59u);
+
+  const Json saved = c().Op("recording_save", {{"path", dir_ + "/copy.urrec"}});
+  EXPECT_EQ(saved["op"], "recording_save_ok") << saved.dump();
+  EXPECT_TRUE(fs::exists(dir_ + "/copy.urrec"));
+  EXPECT_EQ(c().Op("recording_clear")["op"], "recording_clear_ok");
+}
+
+TEST_F(StepServerRecorderTest, RecorderErrorsHaveTheirCodes) {
+  Play();
+  EXPECT_EQ(c().Op("recording_stop")["code"], "recording_not_active");
+  // A path under a regular file: unwritable even for root.
+  const Json bad = c().Op("recording_start", {{"path", dir_ + "/arm.xml/run.urrec"}});
+  EXPECT_EQ(bad["code"], "path_not_writable") << bad.dump();
+  const Json negative = c().Op("recording_start", {{"max_duration", -1}});
+  EXPECT_EQ(negative["code"], "bad_value") << negative.dump();
+  EXPECT_EQ(c().Op("recording_start", {{"compress", "yes"}})["code"], "bad_value");
+  EXPECT_EQ(c().Op("recording_status")["active"], false);
+}
+
+TEST_F(StepServerRecorderTest, WithoutARecorderRecordingIsNotReadyButSnapshotsWork) {
+  Play(/*with_recorder=*/false);
+  const Json r = c().Op("recording_start");
+  EXPECT_EQ(r["code"], "not_ready") << r.dump();
+  EXPECT_NE(r["message"].get<std::string>().find("recorder"), std::string::npos);
+  const Json s = c().Op("snapshot_save", {{"path", dir_ + "/s.urrec"}});
+  EXPECT_EQ(s["op"], "snapshot_save_ok") << s.dump();
+}
+
+TEST_F(StepServerRecorderTest, SnapshotSaveAndLoadRoundTrip) {
+  Play();
+  ASSERT_EQ(c().Op("set_mode", {{"mode", "direct"}})["op"], "set_mode_ok");
+  Drive(25);
+  const std::string path = dir_ + "/state.urrec";
+  const Json saved = c().Op("snapshot_save", {{"path", path}});
+  ASSERT_EQ(saved["op"], "snapshot_save_ok") << saved.dump();
+  const double t = saved["time"];
+  EXPECT_GE(t, 25 * 0.002 - 1e-9);
+  const Json before = c().Op("forward");
+  Drive(40);
+  const Json loaded = c().Op("snapshot_load", {{"path", path}});
+  ASSERT_EQ(loaded["op"], "snapshot_load_ok") << loaded.dump();
+  EXPECT_EQ(loaded["time"].get<double>(), t);
+  const Json after = c().Op("forward");  // the state shown once the restore took effect
+  EXPECT_EQ(after["time"].get<double>(), t);
+  EXPECT_EQ(after["per_articulation"]["arm"]["qpos"], before["per_articulation"]["arm"]["qpos"]);
+  EXPECT_EQ(after["per_articulation"]["arm"]["qvel"], before["per_articulation"]["arm"]["qvel"]);
+
+  EXPECT_EQ(c().Op("snapshot_save", {{"path", dir_ + "/arm.xml/s.urrec"}})["code"],
+            "path_not_writable");
+  EXPECT_EQ(c().Op("snapshot_load", {{"path", dir_ + "/missing.urrec"}})["code"],
+            "path_not_readable");
+  EXPECT_EQ(c().Op("snapshot_load", {{"path", dir_ + "/arm.xml"}})["code"], "path_not_readable");
+  // Other physics options make another model: refused, naming both hashes.
+  ASSERT_EQ(c().Op("set_sim_options", {{"options", {{"timestep", 0.001}}}})["op"],
+            "set_sim_options_ok");
+  const Json other = c().Op("snapshot_load", {{"path", path}});
+  EXPECT_EQ(other["code"], "bad_value") << other.dump();
+  EXPECT_NE(other["message"].get<std::string>().find("model hash"), std::string::npos)
+      << other.dump();
+}
+
+TEST_F(StepServerRecorderTest, ReplaySessionsAndKinematicPlayback) {
+  Play();
+  const Json missing = c().Op("replay_load", {{"path", dir_ + "/missing.urrec"}});
+  EXPECT_EQ(missing["code"], "path_not_readable") << missing.dump();
+  EXPECT_NE(missing["message"].get<std::string>().find("missing.urrec"), std::string::npos);
+  EXPECT_EQ(c().Op("replay_set_active", {{"session", "r9"}})["code"], "replay_session_not_found");
+  EXPECT_EQ(c().Op("replay_start")["code"], "replay_session_not_found");
+
+  // A second of recording in live mode.
+  const std::string path = dir_ + "/run.urrec";
+  ASSERT_EQ(c().Op("recording_start", {{"path", path}})["op"], "recording_start_ok");
+  ASSERT_TRUE(WaitFor([&] { return c().Op("recording_status")["duration"] >= 0.3; }));
+  ASSERT_EQ(c().Op("recording_stop")["op"], "recording_stop_ok");
+
+  const Json load = c().Op("replay_load", {{"path", path}});
+  ASSERT_EQ(load["op"], "replay_load_ok") << load.dump();
+  EXPECT_EQ(load["session"], "r1");
+  EXPECT_EQ(load["finished"], true);
+  EXPECT_GE(load["duration"].get<double>(), 0.29);
+  EXPECT_GT(load["frames"].get<std::uint64_t>(), 100u);
+  const Json list = c().Op("replay_list_sessions");
+  ASSERT_EQ(list["sessions"].size(), 1u) << list.dump();
+  EXPECT_EQ(list["sessions"][0]["session"], "r1");
+  EXPECT_EQ(list["sessions"][0]["path"], path);
+  EXPECT_EQ(c().Op("replay_set_active", {{"session", "r1"}})["op"], "replay_set_active_ok");
+  EXPECT_EQ(c().Op("replay_status")["active"], false);
+
+  EXPECT_EQ(c().Op("replay_start", {{"mode", "backwards"}})["code"], "bad_value");
+  const Json start = c().Op("replay_start", {{"mode", "kinematic"}});
+  ASSERT_EQ(start["op"], "replay_start_ok") << start.dump();
+  EXPECT_EQ(start["session"], "r1");
+  double first = -1;
+  ASSERT_TRUE(WaitFor([&] {
+    const Json st = c().Op("replay_status");
+    if (first < 0) first = st["time"];
+    return st["time"].get<double>() > first + 0.05;
+  })) << c().Op("replay_status").dump();
+  const Json st = c().Op("replay_status");
+  EXPECT_EQ(st["mode"], "kinematic");
+  EXPECT_TRUE(st["error"].get<std::string>().empty()) << st.dump();
+  EXPECT_EQ(c().Op("replay_stop")["op"], "replay_stop_ok");
+  EXPECT_EQ(c().Op("replay_status")["active"], false);
+
+  // Puppet mode never steps: no replay there.
+  ASSERT_EQ(c().Op("set_mode", {{"mode", "puppet"}})["op"], "set_mode_ok");
+  EXPECT_EQ(c().Op("replay_start")["code"], "replay_requires_stepped");
+}
+
+}  // namespace
+}  // namespace urlab::net
