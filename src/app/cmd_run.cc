@@ -78,11 +78,13 @@ int Run(const RunArgs& args) {
   if (!args.no_network && scene.network.enabled) {
     // An idle recorder costs the physics thread nothing; the step server's recording operations
     // use it (added first: it begins before the network and ends after it).
-    auto& recorder = static_cast<replay::RecorderSubsystem&>(
-        manager.AddSubsystem(std::make_unique<replay::RecorderSubsystem>()));
+    if (!recorder) {  // --record made one already
+      recorder = &static_cast<replay::RecorderSubsystem&>(
+          manager.AddSubsystem(std::make_unique<replay::RecorderSubsystem>()));
+    }
     auto network =
         std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network));
-    network->SetRecorder(&recorder);
+    network->SetRecorder(recorder);
     manager.AddSubsystem(std::move(network));
   }
   manager.BeginPlay(scene);

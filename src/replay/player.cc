@@ -244,6 +244,7 @@ struct Player::Impl {
   std::uint64_t frame_index = 0;
   bool have_state = false;
   bool options_pending = false;  // NextFrame stopped for an options command to apply
+  bool seeking = false;          // a seek is under way (it waits for recorded options)
 
   Impl(physics::PhysicsEngine& e, const RecordingReader& r) : engine(e), reader(r) {}
 
@@ -308,41 +309,49 @@ void Player::Impl::Step(const mjModel* m, mjData* d) {
     opt = options;
     play = playing;
     if (seek_time || seek_step) {
-      const std::size_t c = seek_time ? reader.ChunkAt(*seek_time) : [&] {
-        std::size_t best = 0;
-        for (std::size_t i = 0; i < reader.chunks().size(); ++i) {
-          if (reader.chunks()[i].frames && reader.chunks()[i].first_step <= *seek_step) best = i;
-        }
-        return best;
-      }();
-      Rewind(c);
-      // Skip (re-simulating silently in dynamic mode) to the target frame.
+      if (!seeking) {
+        const std::size_t c = seek_time ? reader.ChunkAt(*seek_time) : [&] {
+          std::size_t best = 0;
+          for (std::size_t i = 0; i < reader.chunks().size(); ++i) {
+            if (reader.chunks()[i].frames && reader.chunks()[i].first_step <= *seek_step) {
+              best = i;
+            }
+          }
+          return best;
+        }();
+        Rewind(c);
+        seeking = true;
+      }
+      // Skip (re-simulating silently in dynamic mode) to the target frame. A recorded options
+      // change ends this iteration (the engine applies it before the next), and seeking goes on
+      // from here in the next one.
       const bool resim = opt.mode == PlayMode::kResimulate;
       while (true) {
-        const std::size_t save_next = next;
-        const std::size_t save_chunk = chunk;
         const Frame* f = NextFrame(m, d, resim);
         if (!f && options_pending) {
-          options_pending = false;  // applied before the next iteration; seeking goes on there
-          continue;
+          options_pending = false;
+          return;
         }
         if (!f) break;
         if ((seek_time && f->time >= *seek_time) || (seek_step && f->step >= *seek_step)) {
-          if (chunk == save_chunk) {
-            next = save_next;  // show it next
-          }
+          --next;  // NextFrame returned records[next - 1]: show it next
           break;
         }
         if (resim && have_state) {
           ApplyInputs(*f, d);
           mj_step(m, d);
         }
+        last_frame_time = f->time;
         ++frame_index;
       }
-      clock = shown_pos;
+      seeking = false;
+      have_last = false;
+      shown_pos = 0;
+      clock = 0;
       seek_time.reset();
       seek_step.reset();
       status.finished = false;
+      play = true;  // show the frame sought, also while paused
     }
   }
   if (!play) return;

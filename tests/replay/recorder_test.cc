@@ -194,9 +194,11 @@ TEST_F(RecorderTest, SeekingLandsOnTheFrameAtThatTime) {
   const Frame& target = frames[frames.size() / 2];
   for (PlayMode mode : {PlayMode::kKinematic, PlayMode::kResimulate}) {
     PhysicsEngine player_engine(LoadRecordedModel(reader));
-    Player player(player_engine, reader, {mode, 1.0, false, false});
+    Player player(player_engine, reader, {mode, 1.0, false, /*start_paused=*/true});
     player.SeekStep(target.step);
-    player_engine.StepSync(1);
+    // One iteration, or a few when the seek passes a recorded options change (each waits for
+    // the engine to apply it).
+    for (int k = 0; k < 5 && player.status().step != target.step; ++k) player_engine.StepSync(1);
     EXPECT_EQ(player.status().step, target.step);
     player_engine.WithLockedData([&](mjModel* m, mjData* d) {
       EXPECT_EQ(std::vector<double>(d->qpos, d->qpos + m->nq), target.qpos);
