@@ -159,7 +159,7 @@ int Run(const RunArgs& args) {
   const std::uint64_t steps = engine.step_count() - first_steps;
   sim_time += static_cast<double>(engine.step_count() - last_steps) * engine.timestep();
   std::optional<replay::RecorderStatus> recorded;
-  if (recorder && recorder->recorder()) {
+  if (!args.record.empty() && recorder && recorder->recorder()) {  // not the step server's
     if (recorder->recorder()->active()) {
       recorded = recorder->recorder()->Stop();
     } else {

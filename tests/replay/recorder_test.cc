@@ -27,6 +27,11 @@ using physics::PhysicsEngine;
 namespace cmd = physics::cmd;
 using urlab::testing::WaitFor;
 
+// The engines here run as fast as possible (100k steps/s for the arm) on a machine that ctest
+// loads: a ring of about a second keeps a starved writer from dropping frames, which would end
+// bit-exact re-simulation at a gap.
+constexpr std::size_t kDeepRing = 1 << 17;
+
 class RecorderTest : public urlab::testing::MujocoTest {
  protected:
   std::string dir_ = urlab::testing::MakeTempDir("recorder");
@@ -69,7 +74,7 @@ std::string RecordBusyRun(PhysicsEngine& engine, Recorder& recorder, const std::
 
 TEST_F(RecorderTest, RecordsEveryStepAndReSimulatesBitForBit) {
   PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
-  Recorder recorder(engine, {{"arm"}, "<mujoco/>", "arm.xml"});
+  Recorder recorder(engine, {{"arm"}, "<mujoco/>", "arm.xml"}, kDeepRing);
   const std::uint64_t hash = ModelHash(engine.model());  // the run changes the options
   const std::string path = RecordBusyRun(engine, recorder, dir_ + "/arm.urrec");
   ASSERT_TRUE(fs::exists(path));
@@ -112,7 +117,7 @@ TEST_F(RecorderTest, RecordsEveryStepAndReSimulatesBitForBit) {
 
 TEST_F(RecorderTest, HumanoidReSimulatesAndAPerturbedRecordingIsReportedAtItsStep) {
   PhysicsEngine engine(physics::LoadXmlFile(urlab::testing::kHumanoidPath));
-  Recorder recorder(engine, {{}, "", ""});
+  Recorder recorder(engine, {{}, "", ""}, kDeepRing);
   const std::string path = RecordBusyRun(engine, recorder, dir_ + "/humanoid.urrec");
   const RecordingReader reader = RecordingReader::Open(path);
   ResimReport r = Resimulate(reader);
@@ -145,7 +150,7 @@ TEST_F(RecorderTest, HumanoidReSimulatesAndAPerturbedRecordingIsReportedAtItsSte
 
 TEST_F(RecorderTest, KinematicPlaybackShowsEveryRecordedFrameBitIdentical) {
   PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
-  Recorder recorder(engine, {{"arm"}, "", ""});
+  Recorder recorder(engine, {{"arm"}, "", ""}, kDeepRing);
   const std::string path = RecordBusyRun(engine, recorder, dir_ + "/kin.urrec");
   const RecordingReader reader = RecordingReader::Open(path);
   const std::vector<Frame> frames = FramesOf(ReadAllRecords(reader));
@@ -184,7 +189,7 @@ TEST_F(RecorderTest, KinematicPlaybackShowsEveryRecordedFrameBitIdentical) {
 
 TEST_F(RecorderTest, SeekingLandsOnTheFrameAtThatTime) {
   PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
-  Recorder recorder(engine, {{"arm"}, "", ""});
+  Recorder recorder(engine, {{"arm"}, "", ""}, kDeepRing);
   RecorderOptions o;
   o.keyframe_interval = 0.05;  // many chunks
   const std::string path = RecordBusyRun(engine, recorder, dir_ + "/seek.urrec", o);
@@ -210,7 +215,7 @@ TEST_F(RecorderTest, KilledRecordingKeepsEveryFlushedChunk) {
   // A crash is simulated by copying the .part file while the recorder runs (what a kill -9
   // leaves): it opens as partial, with everything but the unflushed tail.
   PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
-  Recorder recorder(engine, {{"arm"}, "", ""});
+  Recorder recorder(engine, {{"arm"}, "", ""}, kDeepRing);
   engine.SetAsFastAsPossible(true);
   engine.SetSpeedPercent(100);
   engine.Start();
@@ -240,7 +245,7 @@ class BadFileTest : public RecorderTest {
  protected:
   void SetUp() override {
     PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
-    Recorder recorder(engine, {{"arm"}, "", ""});
+    Recorder recorder(engine, {{"arm"}, "", ""}, kDeepRing);
     RecorderOptions o;
     o.keyframe_interval = 0.02;
     good_ = RecordBusyRun(engine, recorder, dir_ + "/good.urrec", o);
@@ -324,7 +329,7 @@ TEST_F(BadFileTest, WrongModelIsRefusedWithBothHashes) {
 
 TEST_F(RecorderTest, RefusesWhatItCannotDo) {
   PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
-  Recorder recorder(engine, {{"arm"}, "", ""});
+  Recorder recorder(engine, {{"arm"}, "", ""}, kDeepRing);
   EXPECT_THROW(recorder.Stop(), RecorderError);
   RecorderOptions o;
   o.path = "/proc/urlab-cannot-write-here/x.urrec";
