@@ -319,7 +319,13 @@ void Player::Impl::Step(const mjModel* m, mjData* d) {
           }
           return best;
         }();
-        Rewind(c);
+        // Re-simulation starts from a keyframe: the nearest chunk at or before that has one
+        // (a chunk flushed while a keyframe request was late starts without).
+        std::size_t from = c;
+        if (opt.mode == PlayMode::kResimulate) {
+          while (from > 0 && !reader.chunks()[from].starts_with_state) --from;
+        }
+        Rewind(from);
         seeking = true;
       }
       // Skip (re-simulating silently in dynamic mode) to the target frame. A recorded options

@@ -206,7 +206,8 @@ TEST_F(RecorderTest, SeekingLandsOnTheFrameAtThatTime) {
     for (int k = 0; k < 5 && player.status().step != target.step; ++k) player_engine.StepSync(1);
     EXPECT_EQ(player.status().step, target.step);
     player_engine.WithLockedData([&](mjModel* m, mjData* d) {
-      EXPECT_EQ(std::vector<double>(d->qpos, d->qpos + m->nq), target.qpos);
+      EXPECT_EQ(std::vector<double>(d->qpos, d->qpos + m->nq), target.qpos)
+          << (mode == PlayMode::kKinematic ? "kinematic" : "resimulate");
     });
   }
 }
