@@ -252,6 +252,24 @@ std::string Decompress(std::string_view stored, Codec codec, std::uint64_t raw_s
   return out;
 }
 
+std::string EncodeFileStart(const RecordingInfo& info, Codec codec, int level) {
+  ChunkHeader h;
+  h.kind = ChunkKind::kHeader;
+  h.number = 0;
+  h.codec = codec;
+  const std::string raw = EncodeInfo(info);
+  h.raw_size = raw.size();
+  return FileHeader() + EncodeChunk(h, Compress(raw, codec, level));
+}
+
+std::string EncodeEndChunk(std::uint32_t number, std::string_view totals_json) {
+  ChunkHeader h;
+  h.kind = ChunkKind::kEnd;
+  h.number = number;
+  h.raw_size = totals_json.size();
+  return EncodeChunk(h, totals_json);
+}
+
 std::string EncodeInfo(const RecordingInfo& info) {
   const ModelTables& t = info.tables;
   nlohmann::json joints = nlohmann::json::array();
@@ -379,6 +397,20 @@ void ChunkEncoder::Reset() {
   mocap_quat_ = z(4 * tables_.nmocap);
   qfrc_ = z(tables_.nv);
   xfrc_ = z(6 * tables_.nbody);
+}
+
+ChunkHeader ChunkEncoder::Header(Codec codec) const {
+  ChunkHeader h;
+  h.kind = ChunkKind::kData;
+  h.codec = codec;
+  h.raw_size = out_.size();
+  h.first_step = first_step_;
+  h.last_step = last_step_;
+  h.first_time = first_time_;
+  h.last_time = last_time_;
+  h.frames = frames_;
+  h.flags = starts_with_state_ ? kStartsWithState : 0;
+  return h;
 }
 
 void ChunkEncoder::Begin(std::uint8_t type) {

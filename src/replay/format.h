@@ -54,6 +54,11 @@ std::string Compress(std::string_view raw, Codec codec, int level = 3);
 // Throws std::runtime_error with zstd's reason when the bytes do not decompress to `raw_size`.
 std::string Decompress(std::string_view stored, Codec codec, std::uint64_t raw_size);
 
+// The start of every recording file: the file header, then chunk 0 holding EncodeInfo(info).
+std::string EncodeFileStart(const RecordingInfo& info, Codec codec, int level = 3);
+// The end chunk numbered `number`, its payload the totals as JSON text (stored).
+std::string EncodeEndChunk(std::uint32_t number, std::string_view totals_json);
+
 // The header chunk's payload: u64 length + JSON, u64 length + MJCF, u64 length + MJB.
 std::string EncodeInfo(const RecordingInfo& info);
 // Throws std::runtime_error naming the field at fault.
@@ -72,15 +77,11 @@ class ChunkEncoder {
   void Add(const Marker& marker);
   void Add(const OptionsRecord& options);
   void Add(const Gap& gap);
-  // The payload so far and the header fields that describe it; Reset() starts a new chunk.
+  // The payload so far; Reset() starts a new chunk.
   const std::string& bytes() const { return out_; }
-  std::uint32_t frames() const { return frames_; }
   bool empty() const { return out_.empty(); }
-  bool starts_with_state() const { return starts_with_state_; }
-  std::uint64_t first_step() const { return first_step_; }
-  std::uint64_t last_step() const { return last_step_; }
-  double first_time() const { return first_time_; }
-  double last_time() const { return last_time_; }
+  // The data chunk header that describes bytes() (number 0: the writer numbers it).
+  ChunkHeader Header(Codec codec) const;
   void Reset();
 
  private:

@@ -195,16 +195,8 @@ void Recorder::Start(RecorderOptions options) {
   s.info.created = NowUtc();
   s.held.clear();
   s.next_chunk = 1;
-  std::string header = format::FileHeader();
-  {
-    format::ChunkHeader h;
-    h.kind = format::ChunkKind::kHeader;
-    h.number = 0;
-    h.codec = options.compress ? format::Codec::kZstd : format::Codec::kStored;
-    const std::string raw = format::EncodeInfo(s.info);
-    h.raw_size = raw.size();
-    header += format::EncodeChunk(h, format::Compress(raw, h.codec, options.zstd_level));
-  }
+  const std::string header = format::EncodeFileStart(
+      s.info, options.compress ? format::Codec::kZstd : format::Codec::kStored, options.zstd_level);
   try {
     std::lock_guard<std::mutex> lock(s.file_mutex);
     s.file = std::make_unique<PartFile>(options.path);
@@ -262,23 +254,13 @@ std::string Recorder::Impl::EndChunk(std::uint32_t number) const {
   const nlohmann::json totals = {{"frames", st.frames},   {"duration", st.duration},
                                  {"dropped", st.dropped}, {"markers", st.markers},
                                  {"chunks", st.chunks},   {"stopped_because", st.stopped_because}};
-  format::ChunkHeader h;
-  h.kind = format::ChunkKind::kEnd;
-  h.number = number;
-  const std::string raw = totals.dump();
-  h.raw_size = raw.size();
-  return format::EncodeChunk(h, raw);
+  return format::EncodeEndChunk(number, totals.dump());
 }
 
 std::string Recorder::Impl::FileBytesLocked() {
   if (options.ring_seconds > 0) {
-    std::string out = format::FileHeader();
-    format::ChunkHeader h;
-    h.kind = format::ChunkKind::kHeader;
-    h.codec = options.compress ? format::Codec::kZstd : format::Codec::kStored;
-    const std::string raw = format::EncodeInfo(info);
-    h.raw_size = raw.size();
-    out += format::EncodeChunk(h, format::Compress(raw, h.codec, options.zstd_level));
+    std::string out = format::EncodeFileStart(
+        info, options.compress ? format::Codec::kZstd : format::Codec::kStored, options.zstd_level);
     std::uint32_t n = 1;
     for (const HeldChunk& c : held) {
       format::ChunkHeader ch = c.header;
@@ -393,15 +375,7 @@ void Recorder::Impl::Run() {
   const auto flush = [&] {
     if (enc.empty()) return;
     HeldChunk c;
-    c.header.kind = format::ChunkKind::kData;
-    c.header.codec = codec;
-    c.header.raw_size = enc.bytes().size();
-    c.header.first_step = enc.first_step();
-    c.header.last_step = enc.last_step();
-    c.header.first_time = enc.first_time();
-    c.header.last_time = enc.last_time();
-    c.header.frames = enc.frames();
-    c.header.flags = enc.starts_with_state() ? format::kStartsWithState : 0;
+    c.header = enc.Header(codec);
     c.stored = format::Compress(enc.bytes(), codec, options.zstd_level);
     c.duration = chunk_duration;
     raw_bytes += enc.bytes().size();

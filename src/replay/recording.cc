@@ -218,37 +218,17 @@ void WriteRecording(const std::string& path, const RecordingInfo& info,
                     const std::vector<std::vector<Record>>& chunks) {
   const format::Codec codec =
       info.compression == "zstd" ? format::Codec::kZstd : format::Codec::kStored;
-  std::string out = format::FileHeader();
-  format::ChunkHeader h;
-  h.kind = format::ChunkKind::kHeader;
-  h.codec = codec;
-  const std::string raw = format::EncodeInfo(info);
-  h.raw_size = raw.size();
-  out += format::EncodeChunk(h, format::Compress(raw, codec));
+  std::string out = format::EncodeFileStart(info, codec);
   std::uint32_t number = 1;
   format::ChunkEncoder enc(info.tables, info.sensordata);
   for (const std::vector<Record>& chunk : chunks) {
     enc.Reset();
     for (const Record& r : chunk) std::visit([&](const auto& x) { enc.Add(x); }, r);
-    format::ChunkHeader c;
-    c.kind = format::ChunkKind::kData;
+    format::ChunkHeader c = enc.Header(codec);
     c.number = number++;
-    c.codec = codec;
-    c.raw_size = enc.bytes().size();
-    c.first_step = enc.first_step();
-    c.last_step = enc.last_step();
-    c.first_time = enc.first_time();
-    c.last_time = enc.last_time();
-    c.frames = enc.frames();
-    c.flags = enc.starts_with_state() ? format::kStartsWithState : 0;
     out += format::EncodeChunk(c, format::Compress(enc.bytes(), codec));
   }
-  format::ChunkHeader end;
-  end.kind = format::ChunkKind::kEnd;
-  end.number = number;
-  const std::string totals = "{}";
-  end.raw_size = totals.size();
-  out += format::EncodeChunk(end, totals);
+  out += format::EncodeEndChunk(number, "{}");
   WriteFileAtomic(path, out);
 }
 
