@@ -13,7 +13,6 @@
 #include "net/step_server.h"
 #include "urlab/physics/model.h"
 #include "urlab/replay/snapshot.h"
-#include "urlab/world/scene.h"
 
 namespace urlab::net {
 
@@ -156,8 +155,7 @@ StepServer::Outcome StepServer::SnapshotSave(Request& r) {
     for (const ArticulationTopics& t : tables_) names.push_back(t.name);
     info.tables = replay::ModelTables::Of(model.get(), names);
   }
-  info.model_hash = replay::ModelHash(model.get());  // the model as it is now
-  info.mjb = world::MjbBytes(model.get());
+  replay::DescribeModel(model.get(), &info);  // the model as it is now
   try {
     replay::SaveSnapshot(path, info, state);
   } catch (const std::exception& e) {

@@ -107,6 +107,10 @@ physics::ModelPtr LoadRecordedModel(const RecordingReader& reader) {
   if (mjb.empty()) {
     throw RecordingError(Reason::kCorrupt, reader.path(), "the recording holds no model");
   }
+  if (MjbHash(mjb) != reader.info().model_hash) {
+    throw RecordingError(Reason::kCorrupt, reader.path(),
+                         "the recorded model does not match the header's model hash");
+  }
   auto vfs = std::make_unique<mjVFS>();
   mj_defaultVFS(vfs.get());
   constexpr const char* kName = "recorded.mjb";
@@ -129,12 +133,7 @@ physics::ModelPtr LoadRecordedModel(const RecordingReader& reader) {
         Reason::kCorrupt, reader.path(),
         "MuJoCo cannot load the recorded model" + (error.empty() ? std::string() : ": " + error));
   }
-  physics::ModelPtr model(m);
-  if (ModelHash(m) != reader.info().model_hash) {
-    throw RecordingError(Reason::kCorrupt, reader.path(),
-                         "the recorded model does not match the header's model hash");
-  }
-  return model;
+  return physics::ModelPtr(m);
 }
 
 void CheckSameModel(const RecordingReader& reader, const mjModel* m) {

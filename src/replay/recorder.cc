@@ -18,9 +18,7 @@
 #include "replay/format.h"
 #include "replay/io.h"
 #include "urlab/core/files.h"
-#include "urlab/core/version.h"
 #include "urlab/mjcf/writer.h"
-#include "urlab/world/scene.h"
 #include "urlab/world/session.h"
 
 namespace urlab::replay {
@@ -124,9 +122,7 @@ Recorder::Recorder(physics::PhysicsEngine& engine, RecorderSource source, std::s
     : impl_(std::make_unique<Impl>(engine)) {
   Impl& s = *impl_;
   const mjModel* m = engine.model();
-  s.info.urlab_version = kVersion;
-  s.info.model_hash = ModelHash(m);
-  s.info.mjb = world::MjbBytes(m);
+  DescribeModel(m, &s.info);
   s.info.mjcf = std::move(source.mjcf);
   s.info.scene = std::move(source.scene);
   s.info.tables = ModelTables::Of(m, source.articulations);

@@ -8,22 +8,29 @@
 #include "replay/format.h"
 #include "replay/io.h"
 #include "urlab/core/files.h"
+#include "urlab/core/version.h"
+#include "urlab/world/scene.h"
 
 namespace urlab::replay {
 
 namespace fs = std::filesystem;
 using Reason = RecordingError::Reason;
 
-std::uint64_t ModelHash(const mjModel* m) {
-  const int size = mj_sizeModel(m);
-  std::string bytes(static_cast<std::size_t>(size), '\0');
-  mj_saveModel(m, nullptr, bytes.data(), size);
+std::uint64_t MjbHash(std::string_view mjb) {
   std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : bytes) {
+  for (unsigned char c : mjb) {
     h ^= c;
     h *= 1099511628211ull;
   }
   return h;
+}
+
+std::uint64_t ModelHash(const mjModel* m) { return MjbHash(world::MjbBytes(m)); }
+
+void DescribeModel(const mjModel* m, RecordingInfo* info) {
+  info->urlab_version = kVersion;
+  info->mjb = world::MjbBytes(m);
+  info->model_hash = MjbHash(info->mjb);
 }
 
 std::string HashText(std::uint64_t hash) { return fmt::format("{:016x}", hash); }

@@ -24,6 +24,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -73,6 +74,10 @@ struct RecordingInfo {
 
 // FNV-1a 64 of the model's MJB bytes: equal models (same compilation) hash equal.
 std::uint64_t ModelHash(const mjModel* m);
+// The same hash of MJB bytes already at hand (world::MjbBytes).
+std::uint64_t MjbHash(std::string_view mjb);
+// Sets info->urlab_version, info->mjb and info->model_hash from `m` (saving the model once).
+void DescribeModel(const mjModel* m, RecordingInfo* info);
 // 16 hexadecimal digits.
 std::string HashText(std::uint64_t hash);
 
