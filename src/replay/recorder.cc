@@ -96,7 +96,6 @@ struct Recorder::Impl {
   mutable std::mutex api_mutex;
   std::thread writer;
   std::atomic<bool> stop_requested{false};
-  std::atomic<bool> writer_done{false};
   RecorderOptions options;
   bool temporary = false;
   std::string last_path;  // the last finished recording
@@ -214,7 +213,6 @@ void Recorder::Start(RecorderOptions options) {
     s.captures.clear();
   }
   s.stop_requested.store(false);
-  s.writer_done.store(false);
   s.recording.store(true, std::memory_order_release);
   s.ring->SetActive(true);
   s.writer = std::thread([&s] { s.Run(); });
@@ -541,7 +539,6 @@ void Recorder::Impl::Run() {
     std::lock_guard<std::mutex> lock(status_mutex);
     status.active = false;
   }
-  writer_done.store(true);
   spdlog::info("recording {}: {} steps, {:.3f} s simulated, {} bytes{}", options.path,
                status.frames, status.duration, status.bytes,
                status.dropped ? fmt::format(", {} frames DROPPED", status.dropped) : "");
