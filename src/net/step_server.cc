@@ -13,6 +13,7 @@
 #include "net/request_fields.h"
 #include "urlab/control/controller.h"
 #include "urlab/core/version.h"
+#include "urlab/replay/tables.h"
 
 namespace urlab::net {
 
@@ -26,22 +27,6 @@ std::string NewSessionId(std::uint64_t n) {
   std::snprintf(buf, sizeof(buf), "%016llx%04llx", static_cast<unsigned long long>(rng()),
                 static_cast<unsigned long long>(n & 0xffff));
   return buf;
-}
-
-// Values of qpos a joint of MuJoCo type `t` holds.
-int QposWidth(int t) { return t == mjJNT_FREE ? 7 : t == mjJNT_BALL ? 4 : 1; }
-
-const char* JointType(int t) {
-  switch (t) {
-    case mjJNT_FREE:
-      return "free";
-    case mjJNT_BALL:
-      return "ball";
-    case mjJNT_SLIDE:
-      return "slide";
-    default:
-      return "hinge";
-  }
 }
 
 // `values` written at `adrs` (one address per value) as runs of consecutive addresses.
@@ -462,10 +447,10 @@ StepServer::Outcome StepServer::Hello(Request& r) {
     for (std::size_t i = 0; i < t.joints.size(); ++i) {
       const JointTopicEntry& j = t.joints[i];
       const int id = j.id;
-      const int width = QposWidth(j.type);
+      const int width = replay::JointQposWidth(j.type);
       joints.push_back(Json{{"name", t.joint_names[i]},
                             {"id", id},
-                            {"type", JointType(j.type)},
+                            {"type", replay::JointTypeName(j.type)},
                             {"qpos_adr", j.qpos_adr},
                             {"qpos_width", width},
                             {"dof_adr", j.dof_adr},
@@ -661,7 +646,7 @@ StepServer::Outcome StepServer::Reset(Request& r) {
         if (i == t.joint_names.size()) Fail("bad_value", name + ": no joint '" + joint + "'");
         std::vector<double> v =
             value.is_array() ? Numbers(value, "qpos") : std::vector<double>{Number(value, "qpos")};
-        const int width = QposWidth(t.joints[i].type);
+        const int width = replay::JointQposWidth(t.joints[i].type);
         if (v.size() != static_cast<std::size_t>(width)) {
           Fail("dim_mismatch", name + ": joint '" + joint + "' takes " + std::to_string(width) +
                                    " qpos value(s), got " + std::to_string(v.size()));

@@ -170,19 +170,6 @@ ColumnMatch MatchColumn(const ModelTables& tables, std::string_view cell) {
   return m;
 }
 
-const char* TypeName(int type) {
-  switch (type) {
-    case mjJNT_FREE:
-      return "free";
-    case mjJNT_BALL:
-      return "ball";
-    case mjJNT_SLIDE:
-      return "slide";
-    default:
-      return "hinge";
-  }
-}
-
 // Where a cell's value goes.
 struct Target {
   enum Kind : unsigned char { kSkip, kTime, kQpos, kQvel } kind = kSkip;
@@ -302,7 +289,7 @@ class Parser {
         const std::string stem = velocity ? m.base + ".v" : m.base;
         HeaderError(fmt::format(
             "{}: {} is a {} joint with {} {} values; name its columns {}[0] .. {}[{}]", Column(c),
-            j.name, TypeName(j.type), size, velocity ? "qvel" : "qpos", stem, stem, size - 1));
+            j.name, JointTypeName(j.type), size, velocity ? "qvel" : "qpos", stem, stem, size - 1));
       }
       std::vector<int>& columns = velocity ? qvel_column : qpos_column;
       const int slot = (velocity ? j.dofadr : j.qposadr) + m.index;

@@ -354,8 +354,8 @@ RecordingInfo DecodeInfo(std::string_view payload) {
       if (je.type < mjJNT_FREE || je.type > mjJNT_HINGE) {
         throw std::runtime_error("header: joint '" + je.name + "' has an unknown type");
       }
-      je.nq = je.type == mjJNT_FREE ? 7 : je.type == mjJNT_BALL ? 4 : 1;
-      je.nv = je.type == mjJNT_FREE ? 6 : je.type == mjJNT_BALL ? 3 : 1;
+      je.nq = JointQposWidth(je.type);
+      je.nv = JointDofWidth(je.type);
       CheckRange("joint", je.name, je.qposadr, je.nq, t.nq);
       CheckRange("joint", je.name, je.dofadr, je.nv, t.nv);
       t.joints.push_back(std::move(je));

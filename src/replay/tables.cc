@@ -11,6 +11,23 @@ std::string NameOf(const mjModel* m, mjtObj type, int id) {
 
 }  // namespace
 
+int JointQposWidth(int type) { return type == mjJNT_FREE ? 7 : type == mjJNT_BALL ? 4 : 1; }
+
+int JointDofWidth(int type) { return type == mjJNT_FREE ? 6 : type == mjJNT_BALL ? 3 : 1; }
+
+const char* JointTypeName(int type) {
+  switch (type) {
+    case mjJNT_FREE:
+      return "free";
+    case mjJNT_BALL:
+      return "ball";
+    case mjJNT_SLIDE:
+      return "slide";
+    default:
+      return "hinge";
+  }
+}
+
 ModelTables ModelTables::Of(const mjModel* m, const std::vector<std::string>& articulations) {
   ModelTables t;
   t.nq = m->nq;
@@ -28,8 +45,8 @@ ModelTables ModelTables::Of(const mjModel* m, const std::vector<std::string>& ar
     e.type = m->jnt_type[j];
     e.qposadr = m->jnt_qposadr[j];
     e.dofadr = m->jnt_dofadr[j];
-    e.nq = e.type == mjJNT_FREE ? 7 : e.type == mjJNT_BALL ? 4 : 1;
-    e.nv = e.type == mjJNT_FREE ? 6 : e.type == mjJNT_BALL ? 3 : 1;
+    e.nq = JointQposWidth(e.type);
+    e.nv = JointDofWidth(e.type);
     std::size_t best = 0;
     for (const std::string& a : articulations) {
       const std::string prefix = a + "_";

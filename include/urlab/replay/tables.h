@@ -11,6 +11,12 @@
 
 namespace urlab::replay {
 
+// Values a joint of MuJoCo type `type` (mjtJoint) holds in qpos (7 free, 4 ball, else 1), in
+// qvel (6, 3, 1), and its MJCF name ("free", "ball", "slide", "hinge").
+int JointQposWidth(int type);
+int JointDofWidth(int type);
+const char* JointTypeName(int type);
+
 struct JointEntry {
   std::string name;          // full (prefixed) name, e.g. "g1_left_knee"
   std::string articulation;  // owning articulation ("g1"), "" when none matches
