@@ -10,6 +10,7 @@
 #include <thread>
 #include <zmq.hpp>
 
+#include "net/step_test_client.h"
 #include "support/mujoco_test.h"
 #include "support/wait.h"
 #include "urlab/net/network.h"
@@ -40,32 +41,7 @@ constexpr const char* kArmXml = R"(<mujoco model="arm">
 </mujoco>
 )";
 
-class Client {
- public:
-  Client(zmq::context_t& ctx, const std::string& endpoint) : socket_(ctx, zmq::socket_type::req) {
-    socket_.set(zmq::sockopt::linger, 0);
-    socket_.set(zmq::sockopt::rcvtimeo, 10000);
-    socket_.connect(endpoint);
-  }
-  Json Call(const Json& request) {
-    const std::vector<std::uint8_t> bytes = Json::to_msgpack(request);
-    socket_.send(zmq::buffer(bytes));
-    zmq::message_t reply;
-    if (!socket_.recv(reply)) return Json{{"op", "timeout"}};
-    const auto* b = static_cast<const std::uint8_t*>(reply.data());
-    return Json::from_msgpack(b, b + reply.size());
-  }
-  void Hello() { session_ = Call({{"op", "hello"}}).value("session_id", ""); }
-  Json Op(const std::string& op, Json fields = Json::object()) {
-    fields["op"] = op;
-    fields["session_id"] = session_;
-    return Call(fields);
-  }
-
- private:
-  zmq::socket_t socket_;
-  std::string session_;
-};
+using test_client::Client;
 
 class StepServerRecorderTest : public urlab::testing::MujocoTest {
  protected:
