@@ -27,13 +27,6 @@ using testing::UrlabBinary;
 
 const std::string kArm = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
 
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 bool Has(const std::string& text, const std::string& what) {
   return text.find(what) != std::string::npos;
 }
@@ -56,7 +49,7 @@ class Process {
   }
   bool WaitFor(const std::string& text, std::chrono::seconds limit = std::chrono::seconds(30)) {
     const auto start = Clock::now();
-    while (!Has(Slurp(log_), text)) {
+    while (!Has(testing::ReadTextFile(log_), text)) {
       if (Clock::now() - start > limit) return false;
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
@@ -74,7 +67,7 @@ class Process {
     done_ = true;
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   }
-  std::string output() const { return Slurp(log_); }
+  std::string output() const { return testing::ReadTextFile(log_); }
 
  private:
   std::string log_;
@@ -204,7 +197,7 @@ TEST_F(CliBadInputTest, OutputsNeverOverwriteAnInput) {
   const std::string part = Write("parts/body.xml",
                                  "<mujoco><worldbody><geom size=\"1\"/>"
                                  "</worldbody></mujoco>\n");
-  const std::string part_text = Slurp(part);
+  const std::string part_text = testing::ReadTextFile(part);
   fs::create_symlink(model, dir_ + "/link.xml");
   std::string out;
   for (const std::string& target :
@@ -215,8 +208,8 @@ TEST_F(CliBadInputTest, OutputsNeverOverwriteAnInput) {
   EXPECT_EQ(Urlab("compile " + model + " --save-xml " + part, &out), 1) << out;
   EXPECT_EQ(Urlab("compile " + model + " --save-mjb " + model, &out), 1) << out;
   EXPECT_TRUE(Has(out, "--save-mjb would overwrite")) << out;
-  EXPECT_EQ(Slurp(model), text);
-  EXPECT_EQ(Slurp(part), part_text);
+  EXPECT_EQ(testing::ReadTextFile(model), text);
+  EXPECT_EQ(testing::ReadTextFile(part), part_text);
   // Missing folders are created for every output.
   EXPECT_EQ(Urlab("mjcf roundtrip " + model + " -o " + dir_ + "/new/deep/rt.xml", &out), 0) << out;
   EXPECT_EQ(Urlab("compile " + model + " --save-xml " + dir_ + "/x/y/m.xml --save-mjb " + dir_ +

@@ -30,13 +30,6 @@ using testing::RunCommand;
 using testing::SourcePath;
 using testing::UrlabBinary;
 
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // Writes `in` with its columns in a shuffled order.
 void ShuffleColumns(const std::string& in, const std::string& out) {
   std::ifstream f(in);
@@ -116,8 +109,8 @@ TEST(RecordReplayTest, KilledRecorderLeavesAFileWithAllButTheLastSecond) {
   pid_t pid = 0;
   ASSERT_EQ(posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ), 0);
   const auto started = Clock::now();
-  while (ReadFile(log).find("recording to") == std::string::npos) {
-    ASSERT_LT(Clock::now() - started, std::chrono::seconds(30)) << ReadFile(log);
+  while (testing::ReadTextFile(log).find("recording to") == std::string::npos) {
+    ASSERT_LT(Clock::now() - started, std::chrono::seconds(30)) << testing::ReadTextFile(log);
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   const auto recording = Clock::now();

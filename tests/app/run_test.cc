@@ -24,13 +24,6 @@ using testing::RunCommand;
 using testing::SourcePath;
 using testing::UrlabBinary;
 
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 std::string LastLine(const std::string& text) {
   std::string s = text;
   while (!s.empty() && s.back() == '\n') s.pop_back();
@@ -70,8 +63,8 @@ TEST(RunTest, SigtermStopsItCleanly) {
   ASSERT_EQ(posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ), 0);
   // Wait until it plays.
   const auto started = Clock::now();
-  while (ReadFile(log).find("playing") == std::string::npos) {
-    ASSERT_LT(Clock::now() - started, std::chrono::seconds(30)) << ReadFile(log);
+  while (testing::ReadTextFile(log).find("playing") == std::string::npos) {
+    ASSERT_LT(Clock::now() - started, std::chrono::seconds(30)) << testing::ReadTextFile(log);
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
@@ -82,15 +75,15 @@ TEST(RunTest, SigtermStopsItCleanly) {
     if (Clock::now() - signalled > std::chrono::seconds(5)) {
       kill(pid, SIGKILL);
       waitpid(pid, &status, 0);
-      FAIL() << "urlab run did not stop within 5 s of SIGTERM\n" << ReadFile(log);
+      FAIL() << "urlab run did not stop within 5 s of SIGTERM\n" << testing::ReadTextFile(log);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  ASSERT_TRUE(WIFEXITED(status)) << ReadFile(log);
+  ASSERT_TRUE(WIFEXITED(status)) << testing::ReadTextFile(log);
   // 128 + SIGTERM: scripts can tell an interrupted run from a finished one (exit 0).
-  EXPECT_EQ(WEXITSTATUS(status), 143) << ReadFile(log);
+  EXPECT_EQ(WEXITSTATUS(status), 143) << testing::ReadTextFile(log);
   EXPECT_LT(Clock::now() - signalled, std::chrono::seconds(2));
-  const std::string out = ReadFile(log);
+  const std::string out = testing::ReadTextFile(log);
   EXPECT_NE(out.find("summary:"), std::string::npos) << out;
   EXPECT_NE(out.find("stopped by signal SIGTERM"), std::string::npos) << out;
 }

@@ -18,13 +18,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 std::string ErrorOf(const std::function<void()>& f) {
   try {
     f();
@@ -38,18 +31,18 @@ TEST(FilesTest, WriteFileAtomicLeavesTheOldFileIntactUntilTheRename) {
   const std::string dir = testing::MakeTempDir("atomic");
   const std::string path = dir + "/model.xml";
   std::ofstream(path) << "<mujoco><!-- the good old file --></mujoco>\n";
-  const std::string old_text = Slurp(path);
+  const std::string old_text = testing::ReadTextFile(path);
   const std::string new_text(1 << 20, 'x');  // 1 MiB
   bool checked = false;
   WriteFileAtomic(path, new_text, [&](const std::string& temp) {
     // Everything is written, nothing renamed: the target is still the old file.
-    EXPECT_EQ(Slurp(path), old_text);
-    EXPECT_EQ(Slurp(temp), new_text);
+    EXPECT_EQ(testing::ReadTextFile(path), old_text);
+    EXPECT_EQ(testing::ReadTextFile(temp), new_text);
     EXPECT_EQ(fs::path(temp).parent_path(), fs::path(path).parent_path());
     checked = true;
   });
   EXPECT_TRUE(checked);
-  EXPECT_EQ(Slurp(path), new_text);
+  EXPECT_EQ(testing::ReadTextFile(path), new_text);
   // No temporary is left behind.
   int entries = 0;
   for (const auto& e : fs::directory_iterator(dir)) entries += e.is_regular_file();
@@ -60,7 +53,7 @@ TEST(FilesTest, AKillDuringTheWriteCannotTruncateAGoodFile) {
   const std::string dir = testing::MakeTempDir("atomic_kill");
   const std::string path = dir + "/scene_compiled.xml";
   std::ofstream(path) << "<mujoco model=\"good\"/>\n";
-  const std::string old_text = Slurp(path);
+  const std::string old_text = testing::ReadTextFile(path);
   const pid_t pid = fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
@@ -73,14 +66,14 @@ TEST(FilesTest, AKillDuringTheWriteCannotTruncateAGoodFile) {
   ASSERT_EQ(waitpid(pid, &status, 0), pid);
   ASSERT_TRUE(WIFSIGNALED(status));
   EXPECT_EQ(WTERMSIG(status), SIGKILL);
-  EXPECT_EQ(Slurp(path), old_text);
+  EXPECT_EQ(testing::ReadTextFile(path), old_text);
 }
 
 TEST(FilesTest, WriteFileAtomicCreatesMissingFoldersAndKeepsTheUsualMode) {
   const std::string dir = testing::MakeTempDir("atomic_dirs");
   const std::string path = dir + "/a/b/c/out.mjb";
   WriteFileAtomic(path, "bytes");
-  EXPECT_EQ(Slurp(path), "bytes");
+  EXPECT_EQ(testing::ReadTextFile(path), "bytes");
   struct stat st;
   ASSERT_EQ(::stat(path.c_str(), &st), 0);
   const mode_t mask = ::umask(0);

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 namespace urlab::testing {
 
@@ -73,6 +74,13 @@ std::string WriteTextFile(const std::string& dir, const std::string& rel, const 
   std::filesystem::create_directories(p.parent_path());
   std::ofstream(p) << text;
   return p.string();
+}
+
+std::string ReadTextFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
 }
 
 std::string MakeTempDir(const std::string& tag) {

@@ -42,5 +42,7 @@ int RunCommand(const std::string& command, std::string* output = nullptr);
 std::string MakeTempDir(const std::string& tag);
 // Writes `text` to dir/rel (creating folders); returns the file's path.
 std::string WriteTextFile(const std::string& dir, const std::string& rel, const std::string& text);
+// The whole file's bytes ("" when it cannot be read, e.g. not yet written).
+std::string ReadTextFile(const std::string& path);
 
 }  // namespace urlab::testing
