@@ -208,7 +208,8 @@ StepServer::Outcome StepServer::ReplayLoad(Request& r) {
   if (reader->info().kind != "recording") {
     Fail("path_not_readable", path + ": not a recording (a " + reader->info().kind + ")");
   }
-  ReplaySession s{"r" + std::to_string(replays_.size() + 1), std::move(reader)};
+  // fmt, not "r" + std::to_string: GCC 12 -O3 raises a false -Wrestrict on the latter.
+  ReplaySession s{fmt::format("r{}", replays_.size() + 1), std::move(reader)};
   const replay::RecordingReader& rd = *s.reader;
   Json reply{{"op", "replay_load_ok"},
              {"session", s.id},
