@@ -444,7 +444,10 @@ void Recorder::Impl::Run() {
             }
             if (pending_seq > f->command_seq) break;
             flush();  // a keyframe starts the next chunk
+            // With the options in effect, so that a re-simulating seek that starts here runs
+            // with them even when they changed since the start.
             enc.Add(StateRecord{0, std::move(c.state)});
+            enc.Add(OptionsRecord{std::move(c.option)});
             pending_token = 0;
           } else {
             if (c.seq < start_seq) {

@@ -196,21 +196,28 @@ TEST_F(RecorderTest, SeekingLandsOnTheFrameAtThatTime) {
   const RecordingReader reader = RecordingReader::Open(path);
   ASSERT_GT(reader.chunks().size(), 3u);
   const std::vector<Frame> frames = FramesOf(ReadAllRecords(reader));
-  const Frame& target = frames[frames.size() / 2];
-  // Kinematic only: a re-simulating seek landed on a wrong state in one TSan run (open bug, see
-  // the issue notes); re-simulating playback from the start is checked above.
-  for (PlayMode mode : {PlayMode::kKinematic}) {
-    PhysicsEngine player_engine(LoadRecordedModel(reader));
-    Player player(player_engine, reader, {mode, 1.0, false, /*start_paused=*/true});
-    player.SeekStep(target.step);
-    // One iteration, or a few when the seek passes a recorded options change (each waits for
-    // the engine to apply it).
-    for (int k = 0; k < 5 && player.status().step != target.step; ++k) player_engine.StepSync(1);
-    EXPECT_EQ(player.status().step, target.step);
-    player_engine.WithLockedData([&](mjModel* m, mjData* d) {
-      EXPECT_EQ(std::vector<double>(d->qpos, d->qpos + m->nq), target.qpos)
-          << (mode == PlayMode::kKinematic ? "kinematic" : "resimulate");
-    });
+  // The middle frame, and the last one (after the run's options change: a re-simulating seek
+  // must start from a keyframe with the options in effect there).
+  for (const Frame* target : {&frames[frames.size() / 2], &frames.back()}) {
+    for (PlayMode mode : {PlayMode::kKinematic, PlayMode::kResimulate}) {
+      const char* what = mode == PlayMode::kKinematic ? "kinematic" : "resimulate";
+      PhysicsEngine player_engine(LoadRecordedModel(reader));
+      Player player(player_engine, reader, {mode, 1.0, false, /*start_paused=*/true});
+      player.SeekStep(target->step);
+      // One iteration, or a few when the seek passes a recorded options change (each waits for
+      // the engine to apply it).
+      for (int k = 0; k < 5 && player.status().step != target->step; ++k) {
+        player_engine.StepSync(1);
+      }
+      EXPECT_EQ(player.status().step, target->step) << what;
+      player_engine.WithLockedData([&](mjModel* m, mjData* d) {
+        EXPECT_EQ(std::vector<double>(d->qpos, d->qpos + m->nq), target->qpos) << what;
+        EXPECT_EQ(std::vector<double>(d->qvel, d->qvel + m->nv), target->qvel) << what;
+      });
+      if (mode == PlayMode::kResimulate) {
+        EXPECT_FALSE(player.status().resim.diverged) << player.status().resim.str();
+      }
+    }
   }
 }
 
