@@ -41,6 +41,7 @@ struct ReplayArgs {
   std::string export_csv;
   std::string export_npz;
   bool short_names = false;
+  std::size_t segment = 0;  // 0: the recording must be one segment
   double duration = 0;
 };
 
@@ -71,6 +72,15 @@ int Info(const RecordingReader& r) {
   std::printf("articulations: %s; %zu joints, %zu actuators, %zu sensors\n",
               arts.empty() ? "(none)" : arts.c_str(), t.joints.size(), t.actuators.size(),
               t.sensors.size());
+  for (const physics::CommandGroupLayout& g : t.command_groups) {
+    std::string names;
+    for (int a : g.actuators) {
+      names += (names.empty() ? "" : " ") +
+               (a < static_cast<int>(t.actuators.size()) ? t.actuators[a].name : "?");
+    }
+    std::printf("commands:    %s: %zu targets (%s)\n", g.name.c_str(), g.actuators.size(),
+                names.c_str());
+  }
   std::printf(
       "content:     %llu steps, t %.6f .. %.6f s, %zu chunks, compression %s, "
       "sensordata %s, keyframe every %g s\n",
@@ -109,27 +119,55 @@ int Info(const RecordingReader& r) {
   return 0;
 }
 
-// The frames as a trajectory; refuses a time axis that goes back (a reset), naming the step.
-replay::Trajectory ToTrajectory(const RecordingReader& r) {
-  replay::Trajectory t;
+// What an export writes: one segment of the frames (a segment ends where the recorded time goes
+// back, at a reset) as a trajectory, with the ctrl and the applied command targets of each row.
+struct ExportRows {
+  replay::Trajectory traj;
+  std::vector<double> ctrl;     // rows x nu
+  std::vector<double> targets;  // rows x (command targets), empty without command groups
+  std::size_t segments = 0;     // in the whole recording
+};
+
+// Segment `segment` (1-based; 0: the recording must have a single segment) of the recording.
+ExportRows ToRows(const RecordingReader& r, std::size_t segment) {
+  ExportRows out;
+  replay::Trajectory& t = out.traj;
   t.nq = r.info().tables.nq;
   t.nv = r.info().tables.nv;
+  double last = 0;
+  bool any = false;
+  std::uint64_t first_back_step = 0;
+  std::size_t current = 0;
   for (std::size_t c = 0; c < r.chunks().size(); ++c) {
     for (const replay::Record& rec : r.ReadChunk(c)) {
       const auto* f = std::get_if<replay::Frame>(&rec);
       if (!f) continue;
-      if (!t.time.empty() && !(f->time > t.time.back())) {
-        throw InputError({r.path(), 0},
-                         fmt::format("time goes back at step {} (t={} after t={}, a reset): an "
-                                     "export needs increasing time",
-                                     f->step, f->time, t.time.back()));
+      if (!any || !(f->time > last)) {
+        if (any && current == 1) first_back_step = f->step;
+        ++current;
       }
+      any = true;
+      last = f->time;
+      if (current != (segment == 0 ? 1 : segment)) continue;
       t.time.push_back(f->time);
       t.qpos.insert(t.qpos.end(), f->qpos.begin(), f->qpos.end());
       t.qvel.insert(t.qvel.end(), f->qvel.begin(), f->qvel.end());
+      out.ctrl.insert(out.ctrl.end(), f->ctrl.begin(), f->ctrl.end());
+      out.targets.insert(out.targets.end(), f->commands.targets.begin(), f->commands.targets.end());
     }
   }
-  return t;
+  out.segments = current;
+  if (segment == 0 && current > 1) {
+    throw InputError({r.path(), 0},
+                     fmt::format("time goes back at step {} (a reset): the recording has {} "
+                                 "segments of increasing time; export one with --segment 1..{}",
+                                 first_back_step, current, current));
+  }
+  if (segment > current) {
+    throw InputError({r.path(), 0}, fmt::format("--segment {}: the recording has {} segment(s)",
+                                                segment, current));
+  }
+  return out;
 }
 
 int Check(const RecordingReader& r) {
@@ -210,18 +248,27 @@ int Replay(const ReplayArgs& args) {
   const RecordingReader r = OpenRecording(args.file);
   if (args.info) return Info(r);
   if (!args.export_csv.empty() || !args.export_npz.empty()) {
-    const replay::Trajectory t = ToTrajectory(r);
+    const ExportRows rows = ToRows(r, args.segment);
+    const replay::Trajectory& t = rows.traj;
+    const std::string which =
+        rows.segments > 1 ? fmt::format(" (segment {} of {})", args.segment, rows.segments) : "";
     if (!args.export_csv.empty()) {
       CheckOutputs({{args.export_csv, "--export-csv"}}, {args.file});
       replay::CsvExportOptions o;
       o.short_names = args.short_names;
       replay::ExportCsv(args.export_csv, r.info().tables, t, o);
-      std::printf("wrote %s: %zu rows\n", args.export_csv.c_str(), t.rows());
+      std::printf("wrote %s: %zu rows%s\n", args.export_csv.c_str(), t.rows(), which.c_str());
     }
     if (!args.export_npz.empty()) {
       CheckOutputs({{args.export_npz, "--export-npz"}}, {args.file});
-      replay::ExportNpz(args.export_npz, r.info().tables, t);
-      std::printf("wrote %s: %zu rows\n", args.export_npz.c_str(), t.rows());
+      const replay::ModelTables& tables = r.info().tables;
+      std::vector<replay::NpyArray> extra;
+      extra.push_back({"ctrl", {t.rows(), static_cast<std::size_t>(tables.nu)}, rows.ctrl});
+      if (!rows.targets.empty() && t.rows() > 0) {
+        extra.push_back({"targets", {t.rows(), rows.targets.size() / t.rows()}, rows.targets});
+      }
+      replay::ExportNpz(args.export_npz, tables, t, extra);
+      std::printf("wrote %s: %zu rows%s\n", args.export_npz.c_str(), t.rows(), which.c_str());
     }
     return 0;
   }
@@ -239,7 +286,8 @@ void RegisterReplayCommand(CLI::App& app, int& exit_code) {
       "axis) or --resimulate (the recorded controls, forces and jumps re-applied to the physics, "
       "each step checked bit for bit). --check re-simulates as fast as possible without a "
       "physics thread and reports the first divergent step (exit 3). --info describes the file "
-      "and checks every chunk; --export-csv/--export-npz write qpos and qvel per step. A "
+      "and checks every chunk; --export-csv writes qpos and qvel per step, --export-npz also ctrl "
+      "and the applied command targets. A "
       "damaged or unfinished file is played up to its last readable chunk, with a warning.");
   static ReplayArgs args;
   cmd->add_option("FILE", args.file, "the recording (.urrec)")->required();
@@ -262,12 +310,21 @@ void RegisterReplayCommand(CLI::App& app, int& exit_code) {
   CLI::Option* csv = cmd->add_option("--export-csv", args.export_csv,
                                      "write time, qpos and qvel per step as CSV (columns by "
                                      "joint name, name[i] for multi-value joints)");
-  CLI::Option* npz = cmd->add_option("--export-npz", args.export_npz,
-                                     "write time, qpos and qvel arrays as a NumPy .npz");
+  CLI::Option* npz =
+      cmd->add_option("--export-npz", args.export_npz,
+                      "write time, qpos, qvel, ctrl and the applied command targets (rows x "
+                      "targets, groups as --info lists them) as a NumPy .npz");
+  CLI::Option* segment = cmd->add_option(
+      "--segment", args.segment,
+      "export this segment (1, 2, ...) of a recording whose time goes back at resets; --info "
+      "lists the jumps");
+  segment->check(CLI::PositiveNumber);
   cmd->add_flag("--short-names", args.short_names,
                 "CSV columns without the articulation prefix where unambiguous");
   info->excludes(check)->excludes(csv)->excludes(npz);
   check->excludes(csv)->excludes(npz);
+  info->excludes(segment);
+  check->excludes(segment);
   cmd->callback([&exit_code] { exit_code = Replay(args); });
 }
 

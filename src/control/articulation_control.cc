@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 
 #include "urlab/control/controllers.h"
 
@@ -126,10 +127,12 @@ void ArticulationControl::SeedTargets(int key) {
   }
 }
 
-void ArticulationControl::ApplyControls(const mjModel* m, mjData* d, ControlSource global) {
+const CommandFrame& ArticulationControl::ApplyControls(const mjModel* m, mjData* d,
+                                                       ControlSource global) {
   const CommandFrame& frame = channel(EffectiveSource(global)).Read();
   controller_->UseFrameGains(frame.kp, frame.kv);
   controller_->ComputeAndApply(m, d, frame.targets);
+  return frame;
 }
 
 void ArticulationControl::ResetToKeyframe(const mjModel* m, mjData* d, int key) const {
@@ -171,12 +174,41 @@ ArticulationControl* ControlSystem::Find(std::string_view prefix) const {
 }
 
 void ControlSystem::Install(PhysicsEngine& engine) {
-  engine.SetApplyControlsHook([this](const mjModel* m, mjData* d) { ApplyControls(m, d); });
+  std::vector<physics::CommandGroupLayout> layout;
+  for (const auto& a : all_) {
+    // Named as the scene names the articulation: its prefix without the joining '_'.
+    std::string name = a->prefix();
+    if (name.size() > 1 && name.back() == '_') name.pop_back();
+    layout.push_back({std::move(name), a->actuator_ids()});
+  }
+  engine.SetCommandLayout(std::move(layout));
+  PhysicsEngine* e = &engine;
+  engine.SetApplyControlsHook(
+      [this, e](const mjModel* m, mjData* d) { ApplyControls(m, d, &e->applied_commands()); });
 }
 
-void ControlSystem::ApplyControls(const mjModel* m, mjData* d) {
+void ControlSystem::ApplyControls(const mjModel* m, mjData* d, physics::AppliedCommands* applied) {
   const ControlSource global = global_source();
-  for (const auto& a : all_) a->ApplyControls(m, d, global);
+  std::size_t offset = 0;
+  for (std::size_t i = 0; i < all_.size(); ++i) {
+    const CommandFrame& frame = all_[i]->ApplyControls(m, d, global);
+    if (!applied || i >= applied->seq.size()) continue;
+    const std::size_t n = frame.targets.size();
+    if (offset + n > applied->targets.size()) continue;
+    std::copy(frame.targets.begin(), frame.targets.end(), applied->targets.begin() + offset);
+    const auto gains = [&](const std::vector<double>& g, std::vector<double>* out) {
+      if (g.size() == n) {
+        std::copy(g.begin(), g.end(), out->begin() + offset);
+      } else {
+        std::fill_n(out->begin() + offset, n, std::numeric_limits<double>::quiet_NaN());
+      }
+    };
+    gains(frame.kp, &applied->kp);
+    gains(frame.kv, &applied->kv);
+    applied->seq[i] = frame.seq;
+    applied->source[i] = static_cast<std::uint8_t>(all_[i]->EffectiveSource(global));
+    offset += n;
+  }
 }
 
 std::uint64_t ControlSystem::RequestKeyframeReset(PhysicsEngine& engine, std::string_view prefix,

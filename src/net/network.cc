@@ -449,7 +449,7 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
     impl_->routes[impl_->tables[i].set_gains_topic] = {i, Impl::Kind::kSetGains};
     impl_->info_messages.push_back(InfoJson(impl_->tables[i]));
   }
-  impl_->frame = physics::StateFrame::SizedFor(impl_->model);
+  impl_->frame = physics::StateFrame::SizedFor(impl_->model, session.engine().command_layout());
   if (!options_.full_state.empty()) {
     impl_->full_state = ParseObservationLevel(options_.full_state);
     if (!impl_->full_state) {

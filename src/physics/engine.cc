@@ -188,6 +188,14 @@ void PhysicsEngine::SetApplyControlsHook(StepCallback fn) {
   apply_controls_ = std::move(fn);
 }
 
+void PhysicsEngine::SetCommandLayout(std::vector<CommandGroupLayout> layout) {
+  ThrowIfOnPhysicsThread("SetCommandLayout");
+  std::lock_guard<std::mutex> lock(step_mutex_);
+  applied_commands_ = AppliedCommands::SizedFor(layout);
+  publisher_.SetCommandLayout(layout);
+  command_layout_ = std::move(layout);
+}
+
 void PhysicsEngine::SetCustomStepHandler(StepCallback fn) {
   ThrowIfOnPhysicsThread("SetCustomStepHandler");
   std::lock_guard<std::mutex> lock(step_mutex_);
@@ -777,6 +785,7 @@ void PhysicsEngine::PublishFrameLocked(bool may_coalesce) {
   meta.stepped = last_iteration_stepped_;
   meta.xfrc_applied =
       stepped_xfrc_valid_ && last_iteration_stepped_ ? stepped_xfrc_.data() : nullptr;
+  meta.commands = applied_commands_.empty() ? nullptr : &applied_commands_;
   publisher_.Publish(model_.get(), data_.get(), meta);
   stepped_xfrc_valid_ = false;
   last_iteration_stepped_ = false;

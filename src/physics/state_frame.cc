@@ -1,6 +1,7 @@
 #include "urlab/physics/state_frame.h"
 
 #include <algorithm>
+#include <limits>
 
 #include "core/gcc_workarounds.h"
 #include "urlab/core/error.h"
@@ -13,7 +14,16 @@ void CopyArray(std::vector<mjtNum>* out, const mjtNum* src, int n) {
   out->assign(src, src + n);  // no allocation once sized
 }
 
+void CopyCommands(AppliedCommands* out, const AppliedCommands& in) {
+  out->targets.assign(in.targets.begin(), in.targets.end());  // no allocation once sized
+  out->kp.assign(in.kp.begin(), in.kp.end());
+  out->kv.assign(in.kv.begin(), in.kv.end());
+  out->seq.assign(in.seq.begin(), in.seq.end());
+  out->source.assign(in.source.begin(), in.source.end());
+}
+
 void ApplyMeta(StateFrame* f, const FrameMeta& meta) {
+  if (meta.commands) CopyCommands(&f->commands, *meta.commands);
   f->step = meta.step;
   f->frame = meta.frame;
   f->command_seq = meta.command_seq;
@@ -43,8 +53,21 @@ std::string DiscontinuityString(std::uint32_t flags) {
   return s;
 }
 
-StateFrame StateFrame::SizedFor(const mjModel* m) {
+AppliedCommands AppliedCommands::SizedFor(const std::vector<CommandGroupLayout>& layout) {
+  AppliedCommands c;
+  std::size_t n = 0;
+  for (const CommandGroupLayout& g : layout) n += g.actuators.size();
+  c.targets.assign(n, 0.0);
+  c.kp.assign(n, std::numeric_limits<double>::quiet_NaN());
+  c.kv.assign(n, std::numeric_limits<double>::quiet_NaN());
+  c.seq.assign(layout.size(), 0);
+  c.source.assign(layout.size(), 0);
+  return c;
+}
+
+StateFrame StateFrame::SizedFor(const mjModel* m, const std::vector<CommandGroupLayout>& layout) {
   StateFrame f;
+  f.commands = AppliedCommands::SizedFor(layout);
   const auto z = [](int n) { return std::vector<mjtNum>(static_cast<std::size_t>(n), 0); };
   f.qpos = z(m->nq);
   f.qvel = z(m->nv);
@@ -80,23 +103,25 @@ void StateFrame::CopyFrom(const mjModel* m, const mjData* d, const mjtNum* xfrc)
   CopyArray(&xfrc_applied, xfrc ? xfrc : d->xfrc_applied, 6 * m->nbody);
 }
 
-StateSubscription::StateSubscription(std::string name, const mjModel* m)
-    : name_(std::move(name)), buffer_(StateFrame::SizedFor(m)) {}
+StateSubscription::StateSubscription(std::string name, const mjModel* m,
+                                     const std::vector<CommandGroupLayout>& layout)
+    : name_(std::move(name)), buffer_(StateFrame::SizedFor(m, layout)) {}
 
-StateRing::StateRing(std::string name, const mjModel* m, std::size_t capacity)
-    : name_(std::move(name)), ring_(capacity, StateFrame::SizedFor(m)) {
+StateRing::StateRing(std::string name, const mjModel* m, std::size_t capacity,
+                     const std::vector<CommandGroupLayout>& layout)
+    : name_(std::move(name)), ring_(capacity, StateFrame::SizedFor(m, layout)) {
   if (capacity == 0) throw Error("StateRing '" + name_ + "': capacity must be at least 1");
 }
 
 std::shared_ptr<StateSubscription> StatePublisher::SubscribeLatest(std::string name) {
-  auto s = std::make_shared<StateSubscription>(std::move(name), model_);
+  auto s = std::make_shared<StateSubscription>(std::move(name), model_, layout_);
   latest_.push_back(s);
   return s;
 }
 
 std::shared_ptr<StateRing> StatePublisher::SubscribeEveryStep(std::string name,
                                                               std::size_t capacity) {
-  auto r = std::make_shared<StateRing>(std::move(name), model_, capacity);
+  auto r = std::make_shared<StateRing>(std::move(name), model_, capacity, layout_);
   rings_.push_back(r);
   return r;
 }

@@ -29,7 +29,18 @@ enum FrameGroups : std::uint8_t {
   kGroupQfrc = 2,
   kGroupXfrc = 4,
   kGroupSensors = 8,
+  kGroupCommands = 16,  // the applied command frames changed (always in a chunk's first frame)
 };
+constexpr std::uint8_t kAllGroups =
+    kGroupMocap | kGroupQfrc | kGroupXfrc | kGroupSensors | kGroupCommands;
+
+bool SameCommands(const physics::AppliedCommands& a, const physics::AppliedCommands& b) {
+  const auto same = [](const std::vector<double>& x, const std::vector<double>& y) {
+    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0;
+  };
+  return a.seq == b.seq && a.source == b.source && same(a.targets, b.targets) && same(a.kp, b.kp) &&
+         same(a.kv, b.kv);
+}
 
 template <typename T>
 void Put(std::string* out, T value) {
@@ -276,6 +287,10 @@ std::string EncodeInfo(const RecordingInfo& info) {
   for (const JointEntry& j : t.joints) {
     joints.push_back({j.name, j.articulation, j.short_name, j.type, j.qposadr, j.dofadr});
   }
+  nlohmann::json groups = nlohmann::json::array();
+  for (const physics::CommandGroupLayout& g : t.command_groups) {
+    groups.push_back({g.name, g.actuators});
+  }
   nlohmann::json j = {{"format_version", info.format_version},
                       {"kind", info.kind},
                       {"urlab_version", info.urlab_version},
@@ -299,7 +314,8 @@ std::string EncodeInfo(const RecordingInfo& info) {
                         {"actuators", RangesToJson(t.actuators)},
                         {"sensors", RangesToJson(t.sensors)},
                         {"mocap_bodies", RangesToJson(t.mocap_bodies)},
-                        {"bodies", t.bodies}}}};
+                        {"bodies", t.bodies},
+                        {"command_groups", groups}}}};
   const std::string text = j.dump();
   std::string out;
   Put<std::uint64_t>(&out, text.size());
@@ -367,6 +383,20 @@ RecordingInfo DecodeInfo(std::string_view payload) {
     if (static_cast<int>(t.bodies.size()) != t.nbody) {
       throw std::runtime_error("header: the body table does not have nbody names");
     }
+    if (tj.contains("command_groups")) {
+      for (const nlohmann::json& e : tj.at("command_groups")) {
+        physics::CommandGroupLayout g;
+        g.name = e.at(0).get<std::string>();
+        g.actuators = e.at(1).get<std::vector<int>>();
+        for (int a : g.actuators) {
+          if (a < 0 || a >= t.nu) {
+            throw std::runtime_error("header: command group '" + g.name + "' names actuator " +
+                                     std::to_string(a) + " of " + std::to_string(t.nu));
+          }
+        }
+        t.command_groups.push_back(std::move(g));
+      }
+    }
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(std::string("header JSON: ") + e.what());
   }
@@ -387,6 +417,7 @@ void ChunkEncoder::Reset() {
   first_step_ = last_step_ = 0;
   first_time_ = last_time_ = 0;
   have_prev_ = false;
+  have_commands_ = false;
   const auto z = [](int n) { return std::vector<double>(static_cast<std::size_t>(n), 0.0); };
   qpos_ = z(tables_.nq);
   qvel_ = z(tables_.nv);
@@ -447,6 +478,10 @@ void ChunkEncoder::Add(const physics::StateFrame& f) {
   if (!SameBits(f.qfrc_applied, qfrc_)) groups |= kGroupQfrc;
   if (!SameBits(f.xfrc_applied, xfrc_)) groups |= kGroupXfrc;
   if (sensordata_) groups |= kGroupSensors;
+  const bool commands = !tables_.command_groups.empty() && !f.commands.empty();
+  if (commands && (!have_commands_ || !SameCommands(f.commands, commands_))) {
+    groups |= kGroupCommands;
+  }
   Begin(kFrame);
   Put<double>(&out_, f.time);
   Put<std::uint64_t>(&out_, f.step);
@@ -482,6 +517,17 @@ void ChunkEncoder::Add(const physics::StateFrame& f) {
     xfrc_ = f.xfrc_applied;
   }
   if (groups & kGroupSensors) PutXor(f.sensordata, &sensordata_prev_);
+  if (groups & kGroupCommands) {  // per group seq and source, then targets, kp, kv
+    for (std::size_t g = 0; g < f.commands.seq.size(); ++g) {
+      Put<std::uint64_t>(&out_, f.commands.seq[g]);
+      out_.push_back(static_cast<char>(f.commands.source[g]));
+    }
+    PutDoubles(&out_, f.commands.targets);
+    PutDoubles(&out_, f.commands.kp);
+    PutDoubles(&out_, f.commands.kv);
+    commands_ = f.commands;
+    have_commands_ = true;
+  }
   have_prev_ = true;
   End();
 }
@@ -498,6 +544,7 @@ void ChunkEncoder::Add(const Frame& f) {
   scratch_.mocap_quat = f.mocap_quat;
   scratch_.qfrc_applied = f.qfrc_applied;
   scratch_.xfrc_applied = f.xfrc_applied;
+  scratch_.commands = f.commands;
   scratch_.sensordata = f.sensordata;
   Add(scratch_);
 }
@@ -544,6 +591,8 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
   std::vector<double> mocap_pos = z(3 * t.nmocap), mocap_quat = z(4 * t.nmocap);
   std::vector<double> qfrc = z(t.nv), xfrc = z(6 * t.nbody);
   bool have_mocap = t.nmocap == 0;
+  physics::AppliedCommands commands = physics::AppliedCommands::SizedFor(t.command_groups);
+  bool have_commands = false;  // a recorder may start before the first controlled step
   std::size_t index = 0;
   while (!c.done()) {
     const std::string where = "record " + std::to_string(index);
@@ -557,7 +606,7 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
           f.time = r.Get<double>();
           f.step = r.Get<std::uint64_t>();
           const auto groups = r.Get<std::uint8_t>();
-          if (groups & ~(kGroupMocap | kGroupQfrc | kGroupXfrc | kGroupSensors)) {
+          if (groups & ~kAllGroups) {
             throw std::runtime_error("unknown frame fields");
           }
           const auto unxor = [&](std::vector<double>* out, std::vector<double>* prev) {
@@ -597,8 +646,22 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
           }
           f.mocap_pos = mocap_pos;
           f.mocap_quat = mocap_quat;
+          if (groups & kGroupCommands) {
+            if (t.command_groups.empty()) {
+              throw std::runtime_error("command frames in a file without command groups");
+            }
+            for (std::size_t g = 0; g < commands.seq.size(); ++g) {
+              commands.seq[g] = r.Get<std::uint64_t>();
+              commands.source[g] = r.Get<std::uint8_t>();
+            }
+            r.Doubles(&commands.targets, commands.targets.size());
+            r.Doubles(&commands.kp, commands.kp.size());
+            r.Doubles(&commands.kv, commands.kv.size());
+            have_commands = true;
+          }
           f.qfrc_applied = qfrc;
           f.xfrc_applied = xfrc;
+          if (have_commands) f.commands = commands;
           records.emplace_back(std::move(f));
           break;
         }

@@ -99,6 +99,8 @@ class ChunkEncoder {
   std::uint64_t first_step_ = 0, last_step_ = 0;
   double first_time_ = 0, last_time_ = 0;
   bool have_prev_ = false;
+  physics::AppliedCommands commands_;  // the last command frames written in this chunk
+  bool have_commands_ = false;
   std::vector<double> qpos_, qvel_, act_, ctrl_, sensordata_prev_;
   std::vector<double> mocap_pos_, mocap_quat_, qfrc_, xfrc_;
 };

@@ -227,7 +227,8 @@ void WriteNpz(const std::string& path, const std::vector<NpyArray>& arrays) {
   Write(path, views);
 }
 
-void ExportNpz(const std::string& path, const ModelTables& tables, const Trajectory& traj) {
+void ExportNpz(const std::string& path, const ModelTables& tables, const Trajectory& traj,
+               const std::vector<NpyArray>& extra) {
   traj.Check(tables);
   const std::size_t rows = traj.rows();
   std::vector<ArrayView> arrays;
@@ -236,6 +237,7 @@ void ExportNpz(const std::string& path, const ModelTables& tables, const Traject
   if (traj.has_qvel()) {
     arrays.push_back({"qvel", {rows, static_cast<std::size_t>(traj.nv)}, traj.qvel});
   }
+  for (const NpyArray& a : extra) arrays.push_back({a.name, a.shape, a.data});
   Write(path, arrays);
 }
 

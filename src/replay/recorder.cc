@@ -125,6 +125,7 @@ Recorder::Recorder(physics::PhysicsEngine& engine, RecorderSource source, std::s
   s.info.mjcf = std::move(source.mjcf);
   s.info.scene = std::move(source.scene);
   s.info.tables = ModelTables::Of(m, source.articulations);
+  s.info.tables.command_groups = engine.command_layout();
   s.ring = engine.SubscribeEveryStep("recorder", ring_frames);
   s.ring->SetActive(false);
   Impl* impl = impl_.get();

@@ -65,13 +65,14 @@ class BenchReaders {
     for (int i = 0; i < n; ++i) {
       if (i == 0) {
         ring_ = engine.SubscribeEveryStep("bench_ring", 4096);
-        threads_.emplace_back([this, ring = ring_, m = engine.model()] {
-          physics::StateFrame f = physics::StateFrame::SizedFor(m);
-          while (!stop_.load(std::memory_order_relaxed)) {
-            while (ring->TryPop(&f)) sink_ += f.qpos.empty() ? 0 : f.qpos[0];
-            std::this_thread::sleep_for(std::chrono::milliseconds(2));
-          }
-        });
+        threads_.emplace_back(
+            [this, ring = ring_, m = engine.model(), layout = engine.command_layout()] {
+              physics::StateFrame f = physics::StateFrame::SizedFor(m, layout);
+              while (!stop_.load(std::memory_order_relaxed)) {
+                while (ring->TryPop(&f)) sink_ += f.qpos.empty() ? 0 : f.qpos[0];
+                std::this_thread::sleep_for(std::chrono::milliseconds(2));
+              }
+            });
       } else {
         auto sub = engine.SubscribeState("bench_latest_" + std::to_string(i));
         const auto period =

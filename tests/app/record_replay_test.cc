@@ -16,7 +16,10 @@
 #include <thread>
 
 #include "mujoco_test.h"
+#include "urlab/physics/engine.h"
+#include "urlab/physics/model.h"
 #include "urlab/replay/csv.h"
+#include "urlab/replay/recorder.h"
 #include "urlab/replay/recording.h"
 
 extern char** environ;
@@ -69,8 +72,20 @@ TEST(RecordReplayTest, RecordsReSimulatesAndRoundTripsThroughCsv) {
   EXPECT_NE(out.find("re-simulation identical"), std::string::npos) << out;
   ASSERT_EQ(RunCommand(UrlabBinary() + " replay " + file + " --info", &out), 0) << out;
   EXPECT_NE(out.find("finished:    yes"), std::string::npos) << out;
+  EXPECT_NE(out.find("commands:    h: "), std::string::npos) << out;
   ASSERT_EQ(RunCommand(UrlabBinary() + " replay " + file + " --resimulate --fast", &out), 0) << out;
   EXPECT_NE(out.find("re-simulation identical"), std::string::npos) << out;
+  // The .npz holds ctrl and the applied command targets beside qpos/qvel, one row per step.
+  const std::string npz = dir + "/h.npz";
+  ASSERT_EQ(RunCommand(UrlabBinary() + " replay " + file + " --export-npz " + npz, &out), 0) << out;
+  ASSERT_EQ(RunCommand("/usr/bin/python3 -c \"import numpy as n; z = n.load('" + npz +
+                           "'); print(sorted(z.keys()), z['ctrl'].shape[0] == z['qpos'].shape[0] "
+                           "== z['targets'].shape[0], z['targets'].shape[1] > 0)\"",
+                       &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("['ctrl', 'qpos', 'qvel', 'targets', 'time'] True True"), std::string::npos)
+      << out;
 
   const std::string csv = dir + "/h.csv";
   ASSERT_EQ(
@@ -135,6 +150,51 @@ TEST(RecordReplayTest, KilledRecorderLeavesAFileWithAllButTheLastSecond) {
   EXPECT_GT(covered, wall - 1.0 - 0.3) << "wall " << wall << " s, readable " << covered << " s";
   ASSERT_EQ(RunCommand(UrlabBinary() + " replay " + file + ".part --check", &out), 0) << out;
   EXPECT_NE(out.find("re-simulation identical"), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace urlab
+
+namespace urlab {
+namespace {
+
+// A recording whose time goes back at a reset exports one segment at a time.
+TEST(RecordReplayTest, ExportsOneSegmentOfARecordingWithAReset) {
+  const std::string dir = testing::MakeTempDir("record_segments");
+  const std::string file = dir + "/reset.urrec";
+  {
+    physics::PhysicsEngine engine(
+        physics::CompileXmlString("<mujoco><worldbody><body><joint name='s' type='slide'/><geom "
+                                  "size='.1'/></body></worldbody>"
+                                  "</mujoco>"));
+    replay::Recorder recorder(engine, {{}, "", ""}, 1 << 16);
+    replay::RecorderOptions o;
+    o.path = file;
+    engine.SetAsFastAsPossible(true);
+    engine.Start();
+    recorder.Start(o);
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    engine.Reset();
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    recorder.Stop();
+    engine.Stop();
+  }
+  std::string out;
+  const std::string csv = dir + "/out.csv";
+  EXPECT_NE(RunCommand(UrlabBinary() + " replay " + file + " --export-csv " + csv, &out), 0);
+  EXPECT_NE(out.find("2 segments of increasing time; export one with --segment 1..2"),
+            std::string::npos)
+      << out;
+  EXPECT_FALSE(fs::exists(csv));
+  ASSERT_EQ(
+      RunCommand(UrlabBinary() + " replay " + file + " --export-csv " + csv + " --segment 2", &out),
+      0)
+      << out;
+  EXPECT_NE(out.find("(segment 2 of 2)"), std::string::npos) << out;
+  EXPECT_NE(
+      RunCommand(UrlabBinary() + " replay " + file + " --export-csv " + csv + " --segment 3", &out),
+      0);
+  EXPECT_NE(out.find("--segment 3: the recording has 2 segment(s)"), std::string::npos) << out;
 }
 
 }  // namespace

@@ -173,5 +173,35 @@ TEST_F(CommandFrameTest, NamedSourcesSwitchWholeFrames) {
   EXPECT_EQ(rig.robot->EffectiveSource(ControlSource::kUi), ControlSource::kUi);
 }
 
+// Every published frame carries the command frames its step applied (what a recorder keeps): the
+// targets and gain overrides of the active source, its publication number and the source.
+TEST_F(CommandFrameTest, StateFramesCarryTheAppliedCommandFrames) {
+  Rig rig(3);
+  ASSERT_EQ(rig.engine.command_layout().size(), 1u);
+  EXPECT_EQ(rig.engine.command_layout()[0].name, "r");
+  EXPECT_EQ(rig.engine.command_layout()[0].actuators, (std::vector<int>{0, 1, 2}));
+  auto ring = rig.engine.SubscribeEveryStep("test", 16);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  ASSERT_TRUE(rig.robot->PublishFrame(ControlSource::kNetwork, std::vector<double>{1, 2, 3},
+                                      std::vector<double>{5, nan, nan}));
+  rig.engine.StepSync(1);
+  physics::StateFrame f;
+  ASSERT_TRUE(ring->TryPop(&f));
+  EXPECT_EQ(f.commands.targets, (std::vector<double>{1, 2, 3}));
+  EXPECT_EQ(f.commands.kp[0], 5.0);
+  EXPECT_TRUE(std::isnan(f.commands.kp[1]) && std::isnan(f.commands.kv[0]));
+  EXPECT_EQ(f.commands.seq,
+            (std::vector<std::uint64_t>{rig.robot->channel(ControlSource::kNetwork).last_seq()}));
+  EXPECT_EQ(f.commands.source,
+            (std::vector<std::uint8_t>{static_cast<std::uint8_t>(ControlSource::kNetwork)}));
+  rig.robot->SetSourceOverride(ControlSource::kUi);
+  ASSERT_TRUE(rig.robot->SetTarget(ControlSource::kUi, 2, 9));
+  rig.engine.StepSync(1);
+  ASSERT_TRUE(ring->TryPop(&f));
+  EXPECT_EQ(f.commands.targets, (std::vector<double>{0, 0, 9}));
+  EXPECT_EQ(f.commands.source[0], static_cast<std::uint8_t>(ControlSource::kUi));
+  EXPECT_EQ(f.ctrl, (std::vector<double>{0, 0, 9}));  // passthrough: what the frame asked
+}
+
 }  // namespace
 }  // namespace urlab::control

@@ -9,11 +9,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <thread>
 
 #include "physics/test_models.h"
 #include "support/mujoco_test.h"
 #include "support/wait.h"
+#include "urlab/control/articulation_control.h"
 #include "urlab/physics/engine.h"
 #include "urlab/replay/player.h"
 #include "urlab/replay/recording.h"
@@ -185,6 +187,61 @@ TEST_F(RecorderTest, KinematicPlaybackShowsEveryRecordedFrameBitIdentical) {
       EXPECT_FALSE(player.status().resim.diverged) << player.status().resim.str();
     }
   }
+}
+
+// The command frames behind every step are recorded beside the state: a policy's targets (and
+// gain overrides) as the controllers applied them, with their publication numbers and source.
+TEST_F(RecorderTest, RecordsTheAppliedCommandFrames) {
+  PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
+  control::ControlSystem controls;
+  control::ArticulationControl* arm = nullptr;
+  engine.WithLockedData([&](mjModel* m, mjData* d) {
+    arm = &controls.Add(std::make_unique<control::ArticulationControl>(
+        physics::ArticulationBindings(m, d, "arm_")));
+  });
+  controls.Install(engine);
+  Recorder recorder(engine, {{"arm"}, "", ""}, kDeepRing);
+  engine.SetAsFastAsPossible(true);
+  engine.Start();
+  RecorderOptions o;
+  o.path = dir_ + "/commands.urrec";
+  o.keyframe_interval = 0.05;  // several chunks: each must carry the frames again
+  recorder.Start(o);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::uint64_t> published;
+  for (int k = 1; k <= 3; ++k) {
+    std::this_thread::sleep_for(30ms);
+    ASSERT_TRUE(arm->PublishFrame(control::ControlSource::kNetwork,
+                                  std::vector<double>{0.1 * k, 0.2 * k, 0.3 * k},
+                                  std::vector<double>{k == 2 ? 7.0 : nan, nan, nan}));
+    published.push_back(arm->channel(control::ControlSource::kNetwork).last_seq());
+  }
+  std::this_thread::sleep_for(30ms);
+  recorder.Stop();
+  engine.Stop();
+
+  const RecordingReader reader = RecordingReader::Open(o.path);
+  ASSERT_EQ(reader.info().tables.command_groups, engine.command_layout());
+  ASSERT_GT(reader.chunks().size(), 2u);
+  const std::vector<Frame> frames = FramesOf(ReadAllRecords(reader));
+  std::vector<std::uint64_t> seen;
+  for (const Frame& f : frames) {
+    ASSERT_EQ(f.commands.targets.size(), 3u);
+    ASSERT_EQ(f.commands.seq.size(), 1u);
+    EXPECT_EQ(f.commands.source[0], static_cast<std::uint8_t>(control::ControlSource::kNetwork));
+    // Passthrough controller: the ctrl of a step is exactly the targets it applied.
+    EXPECT_EQ(f.ctrl, f.commands.targets);
+    if (seen.empty() || seen.back() != f.commands.seq[0]) seen.push_back(f.commands.seq[0]);
+    for (std::size_t k = 0; k < published.size(); ++k) {
+      if (f.commands.seq[0] != published[k]) continue;
+      const double scale = static_cast<double>(k + 1);
+      EXPECT_EQ(f.commands.targets, (std::vector<double>{0.1 * scale, 0.2 * scale, 0.3 * scale}));
+      EXPECT_EQ(f.commands.kp[0] == 7.0, k >= 1);  // NaN: the gain stays
+    }
+  }
+  ASSERT_GE(seen.size(), 3u);
+  EXPECT_TRUE(std::equal(published.begin(), published.end(), seen.end() - 3));
+  EXPECT_TRUE(Resimulate(reader).identical);
 }
 
 TEST_F(RecorderTest, SeekingLandsOnTheFrameAtThatTime) {

@@ -86,8 +86,9 @@ class ArticulationControl {
   void StopHold() { holding_.store(false, std::memory_order_release); }
   bool holding() const { return holding_.load(std::memory_order_acquire); }
 
-  // Physics thread: feeds the active targets to the controller, which writes d->ctrl.
-  void ApplyControls(const mjModel* m, mjData* d, ControlSource global);
+  // Physics thread: feeds the active targets to the controller, which writes d->ctrl. Returns
+  // the frame it applied (valid until the next call).
+  const CommandFrame& ApplyControls(const mjModel* m, mjData* d, ControlSource global);
 
   // Physics thread (use via ControlSystem::RequestKeyframeReset or PhysicsEngine::ResetWith):
   // writes this articulation's qpos/qvel/act/ctrl/mocap from keyframe `key` and clears its
@@ -134,11 +135,14 @@ class ControlSystem {
   ArticulationControl* Find(std::string_view prefix) const;
   const std::vector<std::unique_ptr<ArticulationControl>>& articulations() const { return all_; }
 
-  // Registers ApplyControls of every articulation as the engine's apply-controls hook. Main
-  // thread. The ControlSystem must outlive the engine's use of the hook.
+  // Registers ApplyControls of every articulation as the engine's apply-controls hook, and the
+  // articulations as the engine's command layout (one group each, in Add order). Main thread,
+  // before state subscriptions are made. The ControlSystem must outlive the engine's use of the
+  // hook.
   void Install(physics::PhysicsEngine& engine);
-  // Physics thread: what the hook does.
-  void ApplyControls(const mjModel* m, mjData* d);
+  // Physics thread: what the hook does; `applied` (laid out as Install did), when given, receives
+  // the frames applied.
+  void ApplyControls(const mjModel* m, mjData* d, physics::AppliedCommands* applied = nullptr);
 
   // Queues a reset of one articulation to keyframe `key_name` (or prefix + name) on `engine`;
   // other articulations keep their state; returns the command's sequence number. Any thread.

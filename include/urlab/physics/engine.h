@@ -141,6 +141,13 @@ class PhysicsEngine {
   // The control layer's hook writing d->ctrl before each step (not on paused iterations that do
   // not step); empty function clears it.
   void SetApplyControlsHook(StepCallback fn);
+  // The groups of command frames the apply-controls hook reports (one per controlled
+  // articulation). Main thread, before subscriptions are made (their frames are sized for it).
+  void SetCommandLayout(std::vector<CommandGroupLayout> layout);
+  const std::vector<CommandGroupLayout>& command_layout() const { return command_layout_; }
+  // Physics thread, inside the apply-controls hook: where the hook writes the command frames it
+  // applied; the frames published after the step carry them.
+  AppliedCommands& applied_commands() { return applied_commands_; }
   // Replaces mj_step while set (replay playback); empty function clears it.
   void SetCustomStepHandler(StepCallback fn);
   // Names the articulation in divergence reports.
@@ -270,6 +277,8 @@ class PhysicsEngine {
   std::vector<std::pair<CallbackId, CommandListener>> command_listeners_;
   std::vector<std::shared_ptr<Doorbell>> doorbells_;
   StepCallback apply_controls_;
+  std::vector<CommandGroupLayout> command_layout_;
+  AppliedCommands applied_commands_;  // physics thread (the apply-controls hook writes it)
   StepCallback custom_step_;
   ArticulationResolver resolver_;
   CallbackId next_id_ = 1;

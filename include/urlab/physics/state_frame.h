@@ -20,6 +20,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "urlab/core/spsc_ring.h"
@@ -38,6 +39,26 @@ enum Discontinuity : std::uint32_t {
 
 // Text for a set of Discontinuity flags ("reset|restore"), "" for none.
 std::string DiscontinuityString(std::uint32_t flags);
+
+// The command frames one step applied: one group per controlled articulation, laid out by the
+// engine's command layout (PhysicsEngine::SetCommandLayout). The control layer fills them; the
+// physics layer only carries them to the readers (a recorder keeps what a policy asked for beside
+// what the robot did).
+struct CommandGroupLayout {
+  std::string name;            // the articulation
+  std::vector<int> actuators;  // MuJoCo actuator ids, in the group's target order
+  bool operator==(const CommandGroupLayout&) const = default;
+};
+
+struct AppliedCommands {
+  std::vector<double> targets;       // concatenated over the groups, in layout order
+  std::vector<double> kp, kv;        // gain overrides, same layout; NaN: the controller's own
+  std::vector<std::uint64_t> seq;    // per group: the applied frame's publication number
+  std::vector<std::uint8_t> source;  // per group: the control source it came from
+  // Sized for `layout`: zero targets, NaN gains, zero seq and source.
+  static AppliedCommands SizedFor(const std::vector<CommandGroupLayout>& layout);
+  bool empty() const { return seq.empty(); }
+};
 
 // One published state. Arrays are sized for the model; a frame is only ever filled whole.
 struct StateFrame {
@@ -59,9 +80,11 @@ struct StateFrame {
   // mj_step besides the state, so a recorder can re-simulate a run exactly.
   std::vector<mjtNum> qfrc_applied;  // nv
   std::vector<mjtNum> xfrc_applied;  // 6 per body
+  // The command frames behind this frame's ctrl (empty without a command layout).
+  AppliedCommands commands;
 
-  // A frame with every array sized for `m` (zeros).
-  static StateFrame SizedFor(const mjModel* m);
+  // A frame with every array sized for `m` (zeros), and its commands for `layout`.
+  static StateFrame SizedFor(const mjModel* m, const std::vector<CommandGroupLayout>& layout = {});
   // Copies everything from `d` except the bookkeeping fields (no allocation when sized);
   // `xfrc_applied`, when given, replaces d->xfrc_applied (6 * nbody values).
   void CopyFrom(const mjModel* m, const mjData* d, const mjtNum* xfrc_applied = nullptr);
@@ -76,13 +99,15 @@ struct FrameMeta {
   std::uint64_t epoch = 0;
   bool paused = false;
   bool stepped = false;
-  const mjtNum* xfrc_applied = nullptr;  // the step's xfrc_applied when it differs from d's
+  const mjtNum* xfrc_applied = nullptr;       // the step's xfrc_applied when it differs from d's
+  const AppliedCommands* commands = nullptr;  // the command frames applied last, when any
 };
 
 // Latest-frame subscription: one consumer thread reads the newest frame.
 class StateSubscription {
  public:
-  StateSubscription(std::string name, const mjModel* m);
+  StateSubscription(std::string name, const mjModel* m,
+                    const std::vector<CommandGroupLayout>& layout = {});
   const std::string& name() const { return name_; }
   // Consumer: the newest frame (stable until the next call), nullptr before the first.
   const StateFrame* Latest() { return buffer_.Latest(); }
@@ -100,7 +125,8 @@ class StateSubscription {
 // Every-step subscription: one consumer thread takes frames in order.
 class StateRing {
  public:
-  StateRing(std::string name, const mjModel* m, std::size_t capacity);
+  StateRing(std::string name, const mjModel* m, std::size_t capacity,
+            const std::vector<CommandGroupLayout>& layout = {});
   const std::string& name() const { return name_; }
   // Consumer: swaps the oldest frame into *out (keep reusing the same frame); false when empty.
   bool TryPop(StateFrame* out) { return ring_.TryPop(out); }
@@ -128,6 +154,8 @@ class StateRing {
 class StatePublisher {
  public:
   explicit StatePublisher(const mjModel* m) : model_(m) {}
+  // Main thread, before subscribing: frames of later subscriptions are sized for this layout.
+  void SetCommandLayout(std::vector<CommandGroupLayout> layout) { layout_ = std::move(layout); }
   // Main thread, engine not running. `name` identifies the reader in logs.
   std::shared_ptr<StateSubscription> SubscribeLatest(std::string name);
   std::shared_ptr<StateRing> SubscribeEveryStep(std::string name, std::size_t capacity);
@@ -142,6 +170,7 @@ class StatePublisher {
 
  private:
   const mjModel* model_;
+  std::vector<CommandGroupLayout> layout_;
   std::vector<std::shared_ptr<StateSubscription>> latest_;
   std::vector<std::shared_ptr<StateRing>> rings_;
 };

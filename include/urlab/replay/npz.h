@@ -28,8 +28,10 @@ struct NpyArray {
 void WriteNpz(const std::string& path, const std::vector<NpyArray>& arrays);
 
 // Writes `traj` as a .npz file with arrays `time` (rows), `qpos` (rows x nq) and, when the
-// trajectory has velocities, `qvel` (rows x nv). Throws Error when traj fails Trajectory::Check
-// or the file cannot be written.
-void ExportNpz(const std::string& path, const ModelTables& tables, const Trajectory& traj);
+// trajectory has velocities, `qvel` (rows x nv), then the `extra` arrays. Throws Error when traj
+// fails Trajectory::Check, for a bad extra array (as WriteNpz), or when the file cannot be
+// written.
+void ExportNpz(const std::string& path, const ModelTables& tables, const Trajectory& traj,
+               const std::vector<NpyArray>& extra = {});
 
 }  // namespace urlab::replay

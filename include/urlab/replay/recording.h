@@ -89,6 +89,9 @@ struct Frame {
   std::vector<double> mocap_pos, mocap_quat;       // 3 / 4 per mocap body
   std::vector<double> qfrc_applied, xfrc_applied;  // nv / 6 per body, as the step used them
   std::vector<double> sensordata;                  // empty unless recorded
+  // The command frames the step applied, laid out by the tables' command_groups (empty when the
+  // recording has none).
+  physics::AppliedCommands commands;
 };
 
 // The full state at a point of the recording: a chunk's keyframe (`jump` 0) or the state right

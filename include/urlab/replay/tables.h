@@ -9,6 +9,8 @@
 #include <string_view>
 #include <vector>
 
+#include "urlab/physics/state_frame.h"
+
 namespace urlab::replay {
 
 // Values a joint of MuJoCo type `type` (mjtJoint) holds in qpos (7 free, 4 ball, else 1), in
@@ -47,6 +49,8 @@ struct ModelTables {
   std::vector<NamedRange> sensors;         // adr/dim: range in sensordata
   std::vector<NamedRange> mocap_bodies;    // adr: mocap index; name: the body's name
   std::vector<std::string> bodies;         // body names by id ("" when unnamed)
+  // The command-frame groups frames carry (the engine's command layout; empty: none recorded).
+  std::vector<physics::CommandGroupLayout> command_groups;
 
   // The tables of `m`; a joint belongs to the articulation whose "{name}_" prefixes it (the
   // longest such prefix).
