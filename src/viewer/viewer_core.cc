@@ -271,11 +271,12 @@ void ViewerCore::Present() {
   for (const auto& own : debug_.articulation) {
     want_contacts = want_contacts || own[static_cast<std::size_t>(DebugLayer::kContacts)];
   }
-  if (want_contacts) {
-    capture_->Request();
-  } else {
-    contacts_.clear();
-  }
+  // The last capture stays (drawing filters it by the toggles): turning contacts on shows them
+  // at once, refreshed from the next capture.
+  if (want_contacts) capture_->Request();
+  // Contact points and forces lie inside the bodies touching: moving bodies turn translucent
+  // while they are drawn (MuJoCo's own transparency flag).
+  view_->option().flags[mjVIS_TRANSPARENT] = want_contacts;
   ApplyPerturbation();
   view_->UpdateScene();
   HideVisualGeoms(view_->model(), debug_, tables_, &view_->scene());
