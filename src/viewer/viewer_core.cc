@@ -262,6 +262,13 @@ void ViewerCore::ApplyPerturbation() {
 
 void ViewerCore::Present() {
   if (!window_) return;
+  if (!lowered_) {
+    // The first frame runs after the physics thread started (Manager::BeginPlay starts it after
+    // every subsystem began): from now on this thread draws at a lower priority, so that on a
+    // machine with few cores a slow frame takes time from the viewer, not from the physics.
+    lowered_ = true;
+    LowerRenderThreadPriority();
+  }
   if (state_->has_new() || !frame_) {
     frame_ = state_->Latest();
     if (frame_) view_->Update(*frame_);

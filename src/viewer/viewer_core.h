@@ -114,6 +114,7 @@ class ViewerCore : public InputHandler {
   std::string pending_screenshot_;
   std::string last_screenshot_;
   bool screenshot_done_ = false;
+  bool lowered_ = false;  // the main thread's priority was lowered (first Present)
   std::unique_ptr<VideoWriter> video_;
   std::chrono::steady_clock::time_point next_video_frame_;
   std::vector<std::uint8_t> pixels_;  // scratch for read-backs

@@ -8,8 +8,15 @@
 #include <backends/imgui_impl_opengl2.h>
 #include <imgui.h>
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
+#include <cstdlib>
 #include <mutex>
+#include <string>
+#include <thread>
 
 #include "urlab/core/error.h"
 
@@ -32,11 +39,51 @@ void OnGlfwError(int code, const char* text) {
   spdlog::debug("GLFW error {}: {}", code, LastGlfwError());
 }
 
+// Mesa's software rasteriser (llvmpipe) draws on threads of its own, created with the context
+// and inheriting the creating thread's nice value. So that drawing never takes the physics
+// thread's core, they run at a lower priority (the creating thread's nice + kRenderNice, only
+// while the context is made), and by default one fewer than the cores.
+constexpr int kRenderNice = 5;
+
+class LowerPriorityScope {
+ public:
+  LowerPriorityScope() {
+    errno = 0;
+    const int now = getpriority(PRIO_PROCESS, static_cast<id_t>(gettid()));
+    if (errno == 0 &&
+        setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), now + kRenderNice) == 0) {
+      saved_ = now;
+      lowered_ = true;
+    }
+  }
+  ~LowerPriorityScope() {
+    // Raising it back may need privileges a lowered thread lacks; then it stays lower.
+    if (lowered_) setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), saved_);
+  }
+
+ private:
+  int saved_ = 0;
+  bool lowered_ = false;
+};
+
+void LimitSoftwareRasterThreads() {
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const std::string n = std::to_string(std::max(1u, cores - 1));
+  setenv("LP_NUM_THREADS", n.c_str(), /*overwrite=*/0);  // the user's setting wins
+}
+
 InputHandler* HandlerOf(GLFWwindow* w) {
   return static_cast<InputHandler*>(glfwGetWindowUserPointer(w));
 }
 
 }  // namespace
+
+bool LowerRenderThreadPriority() {
+  errno = 0;
+  const int now = getpriority(PRIO_PROCESS, static_cast<id_t>(gettid()));
+  return errno == 0 &&
+         setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), now + kRenderNice) == 0;
+}
 
 Window::Window(int width, int height, const std::string& title, InputHandler* handler, bool imgui)
     : handler_(handler) {
@@ -50,14 +97,18 @@ Window::Window(int width, int height, const std::string& title, InputHandler* ha
   // Default hints: a compatibility context, as MuJoCo's fixed-function renderer needs.
   glfwDefaultWindowHints();
   glfwWindowHint(GLFW_SAMPLES, 0);
-  window_ = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
+  LimitSoftwareRasterThreads();
+  {
+    LowerPriorityScope lower;
+    window_ = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
+    if (window_) glfwMakeContextCurrent(window_);
+  }
   if (!window_) {
     if (OpenWindows() == 0) glfwTerminate();
     throw Error("viewer: cannot create a " + std::to_string(width) + "x" + std::to_string(height) +
                 " window with an OpenGL context (GLFW: " + LastGlfwError() + ")");
   }
   ++OpenWindows();
-  glfwMakeContextCurrent(window_);
   glfwSwapInterval(0);  // the host paces frames; never wait for a vertical blank
   glfwSetWindowUserPointer(window_, handler_);
   // Ours first: ImGui's backend chains to the callbacks installed before it.

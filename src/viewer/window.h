@@ -21,6 +21,10 @@ class InputHandler {
   virtual void OnScroll(double dx, double dy) = 0;
 };
 
+// Lowers the calling thread's priority (nice + 5) for good: the thread that draws, once the
+// physics thread exists (threads it creates later inherit it). False when it could not.
+bool LowerRenderThreadPriority();
+
 class Window {
  public:
   // Opens the window and makes its context current; throws Error when GLFW cannot initialise (no
