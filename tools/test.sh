@@ -75,6 +75,10 @@ main_stage() {
       echo "mujoco-js not installed: the 3.x reference test will skip"
   fi
   ctest --test-dir "$BUILD_DIR" --output-on-failure -j"$JOBS" --timeout 900
+  # The viewer end to end on a virtual display (the viewer.xvfb ctest entry runs its unit tests
+  # the same way): a window, the panel, a screenshot taken at t=0.5 s.
+  xvfb-run -a -s "-screen 0 1280x1024x24" "$BUILD_DIR/urlab" view examples/scenes/two_arms.yaml \
+    --no-network --debug-all --screenshot "$BUILD_DIR/viewer-smoke.png" --at 0.5
 }
 
 tsan_stage() {

@@ -11,6 +11,7 @@
 #include "urlab/net/broadcast_bench.h"
 #include "urlab/net/latency_bench.h"
 #include "urlab/replay/recorder.h"
+#include "urlab/viewer/view_bench.h"
 #include "urlab/world/controller_factory.h"
 #include "urlab/world/loop_bench.h"
 #include "urlab/world/manager.h"
@@ -28,6 +29,7 @@ struct BenchLoopArgs {
   int subscribers = 0;
   bool network = false;
   bool record = false;
+  bool view = false;
   CLI::Option* trials_option = nullptr;
 };
 
@@ -98,6 +100,16 @@ int BenchLoop(const BenchLoopArgs& args) {
   }
   std::printf("scene %s: articulation '%s', controller %s\n", scene.path.c_str(), art.name.c_str(),
               art.controller.type.c_str());
+  if (args.view) {
+    const viewer::ViewBenchResult v =
+        viewer::RunLoopBenchWithView(compiled.model.get(), options, viewer::ViewerOptions{});
+    std::printf("viewer: %llu frames at 1280x720, %.1f frames/s of drawing time\n",
+                static_cast<unsigned long long>(v.frames), v.fps);
+    std::printf("view_ratio=%.4f\n", v.loop.attached_ratio);
+    std::printf("ratio=%.4f\n", v.loop.ratio);
+    std::fflush(stdout);
+    return 0;
+  }
   const world::LoopBenchResult r = world::RunLoopBench(compiled.model.get(), options);
   if (args.record) {
     recorder.reset();
@@ -157,6 +169,11 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
                  "also run each trial's loop with the recorder writing every step to a "
                  "compressed recording (in the temporary folder, removed after), and print "
                  "record_ratio=<loop with recorder / loop without> before ratio=");
+  loop->add_flag("--view", args.view,
+                 "also run each trial's loop with the viewer drawing its newest state frame at "
+                 "60 Hz in a 1280x720 window (every debug layer on; needs a display, xvfb-run "
+                 "works), and print view_ratio=<loop with viewer / loop without> before ratio=")
+      ->excludes("--record");
   loop->add_flag("--network", args.network,
                  "instead: the loop with the network subsystem publishing every streaming topic "
                  "and state/full on every step to a subscriber on loopback, against the loop "

@@ -19,6 +19,7 @@
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/net/network.h"
 #include "urlab/replay/recorder.h"
+#include "urlab/viewer/viewer.h"
 #include "urlab/world/manager.h"
 
 namespace urlab::app {
@@ -44,6 +45,9 @@ struct RunArgs {
   bool sensordata = false;
   double ring_seconds = 0;
   double keyframe_interval = 1;
+  // `urlab view` (and `run --view`): the window.
+  bool view = false;
+  viewer::ViewerOptions viewer;
 };
 
 // "message" plus MuJoCo's hint on a second line when the hint table has one.
@@ -86,6 +90,11 @@ int Run(const RunArgs& args) {
         std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network));
     network->SetRecorder(recorder);
     manager.AddSubsystem(std::move(network));
+  }
+  if (args.view) {
+    auto view = std::make_unique<viewer::ViewerSubsystem>(args.viewer);
+    view->SetManager(&manager);
+    manager.AddSubsystem(std::move(view));
   }
   manager.BeginPlay(scene);
   SetImmediateExit(false);  // playing: a signal stops the loop, which ends cleanly
@@ -151,6 +160,7 @@ int Run(const RunArgs& args) {
       if (next_log <= now) next_log = now + kLogPeriod;
     }
     if (args.duration > 0 && now - start >= std::chrono::duration<double>(args.duration)) break;
+    if (manager.StopRequested()) break;  // the window closed, the screenshot was taken
     next_frame += kFrame;
     if (next_frame < now) next_frame = now;  // far behind: do not burst
     std::this_thread::sleep_until(next_frame);
@@ -259,6 +269,26 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                 "error (instead of stopping with exit 1)");
 }
 
+void AddViewOptions(CLI::App* cmd, RunArgs& args) {
+  viewer::ViewerOptions& v = args.viewer;
+  cmd->add_option("--width", v.width, "window width in pixels (default 1280)")
+      ->check(CLI::Range(64, 8192));
+  cmd->add_option("--height", v.height, "window height in pixels (default 720)")
+      ->check(CLI::Range(64, 8192));
+  CLI::Option* shot = cmd->add_option(
+      "--screenshot", v.screenshot,
+      "write a PNG of the window when the simulation reaches --at seconds, then stop (exit 0)");
+  cmd->add_option("--at", v.screenshot_at, "simulation time of --screenshot (default 0)")
+      ->check(CLI::NonNegativeNumber)
+      ->needs(shot);
+  cmd->add_flag("--debug-all", v.debug_all,
+                "start with contact forces, collision wireframes, joint axes and sites drawn");
+  cmd->add_option("--video", v.video, "record the window to a video file (.mp4 or .webm; ffmpeg)");
+  cmd->add_option("--video-fps", v.video_fps, "frames per second of --video (default 30)")
+      ->check(CLI::Range(1, 240));
+  cmd->add_flag("!--no-panel", v.panel, "no simulate panel");
+}
+
 void AddRecordOptions(CLI::App* cmd, RunArgs& args) {
   cmd->add_flag("--no-compress", args.no_compress, "store chunks without zstd compression");
   cmd->add_flag("--sensordata", args.sensordata, "also record every sensor value of every step");
@@ -288,6 +318,20 @@ void RegisterRecordCommand(CLI::App& app, int& exit_code) {
   cmd->callback([&exit_code] { exit_code = Run(args); });
 }
 
+void RegisterViewCommand(CLI::App& app, int& exit_code) {
+  CLI::App* cmd = app.add_subcommand(
+      "view",
+      "Play a scene like `urlab run`, in a window: MuJoCo's renderer with the simulate panel, "
+      "debug drawing (keys 1-5), pause (P), reset (R), mouse camera (left drag rotate, right "
+      "drag move, wheel zoom, double-click select, Ctrl+right double-click track) and Ctrl+drag "
+      "perturbation. Closing the window stops it (exit 0). Needs a display (xvfb-run works).");
+  static RunArgs args;
+  args.view = true;
+  AddRunOptions(cmd, args);
+  AddViewOptions(cmd, args);
+  cmd->callback([&exit_code] { exit_code = Run(args); });
+}
+
 void RegisterRunCommand(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "run",
@@ -302,6 +346,8 @@ void RegisterRunCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--record", args.record,
                   "also record every step to this .urrec file (see `urlab record --help`)");
   AddRecordOptions(cmd, args);
+  cmd->add_flag("--view", args.view, "open the viewer window (see `urlab view --help`)");
+  AddViewOptions(cmd, args);
   cmd->callback([&exit_code] { exit_code = Run(args); });
 }
 

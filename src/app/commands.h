@@ -14,6 +14,7 @@ namespace urlab::app {
 void RegisterMjcfCommands(CLI::App& app, int& exit_code);
 void RegisterCompileCommand(CLI::App& app, int& exit_code);
 void RegisterRunCommand(CLI::App& app, int& exit_code);
+void RegisterViewCommand(CLI::App& app, int& exit_code);
 void RegisterRecordCommand(CLI::App& app, int& exit_code);
 void RegisterReplayCommand(CLI::App& app, int& exit_code);
 void RegisterBenchCommand(CLI::App& app, int& exit_code);

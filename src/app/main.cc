@@ -56,6 +56,7 @@ int main(int argc, char** argv) {
   urlab::app::RegisterMjcfCommands(app, exit_code);
   urlab::app::RegisterCompileCommand(app, exit_code);
   urlab::app::RegisterRunCommand(app, exit_code);
+  urlab::app::RegisterViewCommand(app, exit_code);
   urlab::app::RegisterRecordCommand(app, exit_code);
   urlab::app::RegisterReplayCommand(app, exit_code);
   urlab::app::RegisterBenchCommand(app, exit_code);

@@ -493,6 +493,21 @@ void NetworkSubsystem::EndPlay(world::Session&) {
       c.steps_published, c.controls_applied, c.gains_applied, c.total_drops(), c.frames_dropped);
 }
 
+std::vector<world::StatusLine> NetworkSubsystem::Status() const {
+  const auto or_none = [](const std::string& e) {
+    return e.empty() ? std::string("(not bound)") : e;
+  };
+  const NetworkCounters c = counters();
+  return {{"state", or_none(bound_.state)},
+          {"control", or_none(bound_.control)},
+          {"info", or_none(bound_.info)},
+          {"step server", or_none(bound_.rpc)},
+          {"controls applied", std::to_string(c.controls_applied)},
+          {"steps published", std::to_string(c.steps_published)},
+          {"frames dropped", std::to_string(c.frames_dropped)},
+          {"inbound dropped", std::to_string(c.total_drops())}};
+}
+
 NetworkCounters NetworkSubsystem::counters() const {
   NetworkCounters c;
   for (std::size_t i = 0; i < c.drops.size(); ++i) c.drops[i] = impl_->drops[i].load();

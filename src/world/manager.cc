@@ -111,6 +111,12 @@ int Manager::Tick() {
   return events;
 }
 
+bool Manager::StopRequested() const {
+  if (!session_) return false;
+  return std::any_of(subsystems_.begin(), subsystems_.end(),
+                     [](const auto& s) { return s->RequestsStop(); });
+}
+
 Session& Manager::session() {
   if (!session_) throw Error("Manager: not playing (call BeginPlay first)");
   return *session_;

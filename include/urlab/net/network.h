@@ -70,6 +70,8 @@ class NetworkSubsystem : public world::Subsystem {
   std::string_view name() const override { return "network"; }
   void BeginPlay(world::Session& session) override;
   void EndPlay(world::Session& session) override;
+  // The bound endpoints and the counters, for the viewer's panel.
+  std::vector<world::StatusLine> Status() const override;
 
   // The endpoints actually bound (a wildcard port resolved), "" for one that failed to bind.
   // Main thread, after BeginPlay.

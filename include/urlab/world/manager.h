@@ -64,6 +64,8 @@ class Manager {
   // releases the session (subsystems holding it keep it alive, stopped). Idempotent.
   void EndPlay();
   bool playing() const { return session_ != nullptr; }
+  // True when a subsystem asks to end play (Subsystem::RequestsStop). Main thread.
+  bool StopRequested() const;
 
   // ---- The running world (valid while playing) ----
   Session& session();

@@ -10,7 +10,9 @@
 // - The physics thread starts after every subsystem's BeginPlay and stops after every
 //   subsystem's EndPlay. The Session passed in stays valid as long as the subsystem keeps
 //   session.shared_from_this().
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "urlab/physics/engine.h"
 
@@ -23,6 +25,12 @@ enum class TickPhase {
   kInput,    // read input (window events, sockets) and turn it into commands
   kUpdate,   // advance the subsystem's own state
   kPresent,  // draw, publish, write out
+};
+
+// One line of a subsystem's status for a panel or a log ("endpoint", "tcp://*:5555").
+struct StatusLine {
+  std::string key;
+  std::string value;
 };
 
 class Subsystem {
@@ -42,6 +50,12 @@ class Subsystem {
   // Before the physics thread stops, in reverse order of BeginPlay: stop own threads, remove
   // callbacks (the engine still runs; subscriptions may simply be dropped).
   virtual void EndPlay(Session& /*session*/) {}
+  // What the subsystem is doing, for the viewer's panel (endpoints, counters, a recording's
+  // state). Main thread, while playing; empty by default.
+  virtual std::vector<StatusLine> Status() const { return {}; }
+  // True when the subsystem asks the host to end play (a viewer window closed, a screenshot
+  // taken). The host's loop checks Manager::StopRequested() after each Tick. Main thread.
+  virtual bool RequestsStop() const { return false; }
 };
 
 }  // namespace urlab::world

@@ -1,0 +1,86 @@
+#pragma once
+// ViewerSubsystem: the desktop window of a running world (the description's MjSimulate widget,
+// UMjDebugVisualizer and UMjInputHandler): MuJoCo's renderer in a GLFW window with a Dear ImGui
+// simulate panel, debug drawing, hotkeys, mouse camera and perturbation. It renders from its own
+// copy of the model and its own mjData, filled from a state subscription (never live mjData), so
+// a slow frame never slows the physics thread; everything it asks of the simulation (pause,
+// reset, keyframes, perturbation forces, options) goes to the physics thread as queued commands,
+// and the panel's sliders publish command frames on the UI control source.
+//
+// Threading contract
+// - Main thread (GLFW requires it): construction, the Subsystem hooks, SetManager, the test
+//   accessors (ReadPixels, core()). The window's events are polled in the kInput phase and the
+//   frame is drawn in kPresent.
+// - Physics thread: the debug capture's post-step callback (registered in BeginPlay, removed in
+//   EndPlay), which copies contacts into the viewer's own buffer under its own mutex.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "urlab/world/subsystem.h"
+
+namespace urlab::world {
+class Manager;
+}
+
+namespace urlab::viewer {
+
+namespace internal {
+class ViewerCore;
+}
+
+struct ViewerOptions {
+  int width = 1280;  // window size in screen pixels
+  int height = 720;
+  std::string title = "URLab";
+  bool panel = true;  // the simulate panel (ImGui)
+  // Take a PNG of the window when the simulation time reaches `screenshot_at` seconds, then ask
+  // the host to stop (RequestsStop). "" : none.
+  std::string screenshot;
+  double screenshot_at = 0;
+  // Turn on debug drawing at start: contact forces, collision wireframes, joint axes, sites.
+  bool debug_all = false;
+  // Record the window to this video file (.mp4 or .webm) through ffmpeg. "" : none.
+  std::string video;
+  int video_fps = 30;
+};
+
+// RGB pixels, rows top-down.
+struct Image {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;
+  const std::uint8_t* at(int x, int y) const { return &rgb[3 * (y * width + x)]; }
+};
+
+class ViewerSubsystem : public world::Subsystem {
+ public:
+  explicit ViewerSubsystem(ViewerOptions options = {});
+  ~ViewerSubsystem() override;
+
+  std::string_view name() const override { return "viewer"; }
+  // Opens the window (throws Error when no display or no OpenGL context is available), copies the
+  // model, subscribes to state, registers the debug capture.
+  void BeginPlay(world::Session& session) override;
+  void Tick(world::Session& session, world::TickPhase phase) override;
+  void EndPlay(world::Session& session) override;
+  std::vector<world::StatusLine> Status() const override;
+  // The window was closed, or the screenshot was taken.
+  bool RequestsStop() const override;
+
+  // The manager whose other subsystems the panel shows (their Status) and drives (the recorder).
+  // Main thread, before BeginPlay; optional.
+  void SetManager(const world::Manager* manager) { manager_ = manager; }
+
+  // The last drawn frame as the window shows it (scene and panel). Main thread, while playing.
+  Image ReadPixels();
+  // The implementation, for tests that inject input events and read its state. Main thread.
+  internal::ViewerCore& core();
+
+ private:
+  ViewerOptions options_;
+  const world::Manager* manager_ = nullptr;
+  std::unique_ptr<internal::ViewerCore> core_;
+};
+
+}  // namespace urlab::viewer

@@ -1,0 +1,293 @@
+#include "viewer/panel.h"
+
+#include <fmt/format.h>
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include <algorithm>
+#include <array>
+
+#include "urlab/replay/recorder.h"
+#include "urlab/world/manager.h"
+#include "viewer/viewer_core.h"
+
+namespace urlab::viewer::internal {
+
+namespace {
+
+// MuJoCo 2.2.2's integrators and solvers, as the panel's combo boxes list them.
+constexpr std::array<const char*, 3> kIntegrators = {"Euler", "RK4", "implicit"};
+constexpr std::array<const char*, 3> kSolvers = {"PGS", "CG", "Newton"};
+// The sources a user may pick for an articulation (hold and replay are set by their features).
+constexpr std::array<const char*, 4> kSourceChoices = {"scene default", "network", "ui", "input"};
+constexpr std::array<control::ControlSource, 3> kSources = {
+    control::ControlSource::kNetwork, control::ControlSource::kUi, control::ControlSource::kInput};
+
+void Text(const std::string& s) { ImGui::TextUnformatted(s.c_str()); }
+
+}  // namespace
+
+void Panel::Draw(ViewerCore& core) {
+  int w = 0, h = 0;
+  core.WindowSize(&w, &h);
+  ImGui::SetNextWindowPos(ImVec2(0, 0), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(kWidth, static_cast<float>(h)), ImGuiCond_Always);
+  ImGui::SetNextWindowBgAlpha(0.85f);
+  ImGui::Begin("URLab simulate", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  DrawSimulation(core);
+  DrawOptions(core);
+  DrawArticulation(core);
+  DrawDebug(core);
+  DrawRendering(core);
+  DrawRecording(core);
+  DrawSubsystems(core);
+  DrawHelp(core);
+  ImGui::End();
+}
+
+void Panel::DrawSimulation(ViewerCore& core) {
+  physics::PhysicsEngine& engine = core.session().engine();
+  if (!ImGui::CollapsingHeader("Simulation", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  const physics::StateFrame* f = core.frame();
+  Text(fmt::format("time {:.3f} s   step {}", f ? f->time : 0.0, f ? f->step : 0));
+  Text(fmt::format("RTF {:.3f}   {:.0f} steps/s   {:.0f} fps{}", engine.real_time_factor(),
+                   engine.step_rate(), core.fps(), engine.paused() ? "   PAUSED" : ""));
+  if (ImGui::Button(engine.paused() ? "Run (P)" : "Pause (P)")) core.Perform(Action::kTogglePause);
+  ImGui::SameLine();
+  if (ImGui::Button("Reset (R)")) core.Perform(Action::kReset);
+  int speed = engine.speed_percent();
+  if (ImGui::SliderInt("speed %", &speed, 5, 100)) engine.SetSpeedPercent(speed);
+  bool fast = engine.as_fast_as_possible();
+  if (ImGui::Checkbox("as fast as possible", &fast)) engine.SetAsFastAsPossible(fast);
+}
+
+void Panel::DrawOptions(ViewerCore& core) {
+  if (!ImGui::CollapsingHeader("Physics options")) return;
+  const mjOption& opt = core.view().model()->opt;  // the viewer's copy follows what it sets
+  double timestep = opt.timestep;
+  if (ImGui::InputDouble("timestep", &timestep, 0.0005, 0.001, "%.5f",
+                         ImGuiInputTextFlags_EnterReturnsTrue) &&
+      timestep > 0) {
+    core.SetOptions([timestep](mjOption& o) { o.timestep = timestep; }, "timestep");
+  }
+  int integrator = std::clamp(opt.integrator, 0, static_cast<int>(kIntegrators.size()) - 1);
+  if (ImGui::Combo("integrator", &integrator, kIntegrators.data(),
+                   static_cast<int>(kIntegrators.size()))) {
+    core.SetOptions([integrator](mjOption& o) { o.integrator = integrator; }, "integrator");
+  }
+  int solver = std::clamp(opt.solver, 0, static_cast<int>(kSolvers.size()) - 1);
+  if (ImGui::Combo("solver", &solver, kSolvers.data(), static_cast<int>(kSolvers.size()))) {
+    core.SetOptions([solver](mjOption& o) { o.solver = solver; }, "solver");
+  }
+  int iterations = opt.iterations;
+  if (ImGui::SliderInt("iterations", &iterations, 1, 200)) {
+    core.SetOptions([iterations](mjOption& o) { o.iterations = iterations; }, "iterations");
+  }
+}
+
+void Panel::DrawArticulation(ViewerCore& core) {
+  slider_centres_.clear();
+  world::Session& session = core.session();
+  const auto& arts = session.articulations();
+  if (arts.empty() || !ImGui::CollapsingHeader("Articulation", ImGuiTreeNodeFlags_DefaultOpen)) {
+    return;
+  }
+  int selected = core.selected_articulation();
+  std::vector<const char*> names;
+  for (const world::Articulation& a : arts) names.push_back(a.name().c_str());
+  if (ImGui::Combo("articulation", &selected, names.data(), static_cast<int>(names.size()))) {
+    core.SelectArticulation(selected);
+    keyframe_ = 0;
+  }
+  const world::Articulation& art = arts[static_cast<std::size_t>(core.selected_articulation())];
+  control::ArticulationControl& ctl = *art.control;
+  const control::ControlSource global = session.controls().global_source();
+  // Control source: the scene's default, or an override.
+  int choice = 0;
+  if (const auto o = ctl.source_override()) {
+    const auto* it = std::find(kSources.begin(), kSources.end(), *o);
+    if (it != kSources.end()) choice = 1 + static_cast<int>(it - kSources.begin());
+  }
+  if (ImGui::Combo("control source", &choice, kSourceChoices.data(),
+                   static_cast<int>(kSourceChoices.size()))) {
+    ctl.SetSourceOverride(
+        choice == 0 ? std::nullopt : std::optional(kSources[static_cast<std::size_t>(choice - 1)]));
+  }
+  const control::ControlSource active = ctl.EffectiveSource(global);
+  Text(fmt::format("active: {}", control::ToString(active)));
+
+  // Actuator sliders: the UI source's targets; locked and showing what another source sends.
+  const mjModel* m = core.view().model();
+  const control::Controller* controller = ctl.controller();
+  const bool editable = active == control::ControlSource::kUi;
+  if (ImGui::TreeNodeEx("actuators", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::BeginDisabled(!editable);
+    for (int i = 0; i < ctl.num_actuators(); ++i) {
+      const int id = ctl.actuator_ids()[static_cast<std::size_t>(i)];
+      double lo = -1, hi = 1;
+      if (controller && static_cast<std::size_t>(i) < controller->bindings().size()) {
+        const control::ActuatorBinding& b = controller->bindings()[static_cast<std::size_t>(i)];
+        if (controller->TargetsArePositions() && b.joint_limited) {
+          lo = b.joint_range[0], hi = b.joint_range[1];
+        } else if (b.ctrl_limited) {
+          lo = b.ctrl_range[0], hi = b.ctrl_range[1];
+        }
+      } else if (m->actuator_ctrllimited[id]) {
+        lo = m->actuator_ctrlrange[2 * id], hi = m->actuator_ctrlrange[2 * id + 1];
+      }
+      double value = ctl.GetTarget(editable ? control::ControlSource::kUi : active, i);
+      const char* full = mj_id2name(m, mjOBJ_ACTUATOR, id);
+      std::string label = full ? full : fmt::format("actuator {}", id);
+      if (label.starts_with(art.prefix)) label.erase(0, art.prefix.size());
+      if (ImGui::SliderScalar(label.c_str(), ImGuiDataType_Double, &value, &lo, &hi, "%.3f") &&
+          editable) {
+        ctl.SetTarget(control::ControlSource::kUi, i, value);
+      }
+      const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
+      slider_centres_.emplace_back((a.x + b.x) / 2, (a.y + b.y) / 2);
+    }
+    ImGui::EndDisabled();
+    ImGui::TreePop();
+  }
+
+  // Keyframes of this articulation.
+  const std::vector<int>& keys = art.bindings->keyframes();
+  if (!keys.empty()) {
+    std::vector<std::string> key_names;
+    for (int k : keys) {
+      const char* n = mj_id2name(m, mjOBJ_KEY, k);
+      std::string s = n ? n : fmt::format("key {}", k);
+      if (s.starts_with(art.prefix)) s.erase(0, art.prefix.size());
+      key_names.push_back(std::move(s));
+    }
+    std::vector<const char*> ptrs;
+    for (const std::string& s : key_names) ptrs.push_back(s.c_str());
+    keyframe_ = std::clamp(keyframe_, 0, static_cast<int>(keys.size()) - 1);
+    ImGui::Combo("keyframe", &keyframe_, ptrs.data(), static_cast<int>(ptrs.size()));
+    if (ImGui::Button("Reset##key")) {
+      session.ResetArticulation(art.name(), key_names[static_cast<std::size_t>(keyframe_)]);
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Hold")) ctl.HoldKeyframe(keys[static_cast<std::size_t>(keyframe_)]);
+    ImGui::SameLine();
+    if (ImGui::Button("Stop")) ctl.StopHold();
+    if (ctl.holding()) {
+      ImGui::SameLine();
+      ImGui::TextUnformatted("holding");
+    }
+  }
+
+  // Readouts from the viewer's copy of the state.
+  const mjData* d = core.view().data();
+  if (ImGui::TreeNode("joints")) {
+    for (const physics::JointView& j : art.bindings->joints().all()) {
+      if (j.qpos_size == 1) {
+        Text(fmt::format("{:<20} {:+.4f}", j.name.substr(art.prefix.size()), d->qpos[j.qpos_adr]));
+      }
+    }
+    ImGui::TreePop();
+  }
+  const physics::StateFrame* f = core.frame();
+  if (f && !f->sensordata.empty() && ImGui::TreeNode("sensors")) {
+    for (const physics::SensorView& s : art.bindings->sensors().all()) {
+      std::string values;
+      for (int k = 0; k < std::min(s.dim, 4); ++k) {
+        values += fmt::format(" {:+.3f}", f->sensordata[static_cast<std::size_t>(s.adr + k)]);
+      }
+      Text(fmt::format("{:<18}{}", s.name.substr(art.prefix.size()), values));
+    }
+    ImGui::TreePop();
+  }
+  if (ImGui::Button("Possess (Tab)")) core.Perform(Action::kTogglePossess);
+}
+
+void Panel::DrawDebug(ViewerCore& core) {
+  if (!ImGui::CollapsingHeader("Debug drawing", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  DebugSettings& s = core.debug();
+  ImGui::TextUnformatted("global");
+  for (int i = 0; i < kNumDebugLayers; ++i) {
+    const auto layer = static_cast<DebugLayer>(i);
+    const std::string label =
+        i < 5 ? fmt::format("{} ({})", DebugLayerName(layer), i + 1) : DebugLayerName(layer);
+    ImGui::Checkbox(label.c_str(), &s.global[static_cast<std::size_t>(i)]);
+  }
+  const auto sel = static_cast<std::size_t>(core.selected_articulation());
+  if (sel < s.articulation.size()) {
+    Text(fmt::format("articulation '{}'", core.session().articulations()[sel].name()));
+    for (DebugLayer layer : {DebugLayer::kContacts, DebugLayer::kVisual, DebugLayer::kCollision,
+                             DebugLayer::kJoints, DebugLayer::kSites}) {
+      const std::string label = fmt::format("{}##art", DebugLayerName(layer));
+      ImGui::Checkbox(label.c_str(), &s.articulation[sel][static_cast<std::size_t>(layer)]);
+    }
+  }
+}
+
+void Panel::DrawRendering(ViewerCore& core) {
+  if (!ImGui::CollapsingHeader("Rendering")) return;
+  mjvScene& scn = core.view().scene();
+  bool shadow = scn.flags[mjRND_SHADOW] != 0, reflection = scn.flags[mjRND_REFLECTION] != 0;
+  if (ImGui::Checkbox("shadows", &shadow)) scn.flags[mjRND_SHADOW] = shadow;
+  if (ImGui::Checkbox("reflections", &reflection)) scn.flags[mjRND_REFLECTION] = reflection;
+  if (ImGui::Button("Free camera (Esc)")) core.Perform(Action::kFreeCamera);
+}
+
+void Panel::DrawRecording(ViewerCore& core) {
+  if (!ImGui::CollapsingHeader("Record and snapshot")) return;
+  physics::PhysicsEngine& engine = core.session().engine();
+  if (ImGui::Button("Snapshot")) {
+    snapshot_ = engine.Snapshot();
+    message_ = fmt::format("snapshot at t={:.3f} s", snapshot_->time);
+  }
+  ImGui::SameLine();
+  ImGui::BeginDisabled(!snapshot_);
+  if (ImGui::Button("Restore")) engine.Restore(*snapshot_);
+  ImGui::EndDisabled();
+  auto* recorder =
+      core.manager()
+          ? dynamic_cast<replay::RecorderSubsystem*>(core.manager()->FindSubsystem("recorder"))
+          : nullptr;
+  replay::Recorder* rec = recorder ? recorder->recorder() : nullptr;
+  if (rec) {
+    ImGui::InputText("file", &record_path_);
+    if (!rec->active()) {
+      if (ImGui::Button("Record")) {
+        try {
+          replay::RecorderOptions o;
+          o.path = record_path_;
+          rec->Start(o);
+          message_ = "recording " + record_path_;
+        } catch (const std::exception& e) {
+          message_ = e.what();
+        }
+      }
+    } else if (ImGui::Button("Stop recording")) {
+      const replay::RecorderStatus st = rec->Stop();
+      message_ = fmt::format("{}: {} steps", st.path, st.frames);
+    }
+  } else {
+    ImGui::TextUnformatted("(no recorder in this run)");
+  }
+  if (!message_.empty()) Text(message_);
+}
+
+void Panel::DrawSubsystems(ViewerCore& core) {
+  if (!core.manager() || !ImGui::CollapsingHeader("Subsystems")) return;
+  for (const auto& s : core.manager()->subsystems()) {
+    const std::vector<world::StatusLine> lines = s->Status();
+    Text(std::string(s->name()));
+    for (const world::StatusLine& l : lines) Text(fmt::format("  {}: {}", l.key, l.value));
+  }
+}
+
+void Panel::DrawHelp(ViewerCore& /*core*/) {
+  if (!ImGui::CollapsingHeader("Keys and mouse")) return;
+  for (const Hotkey& h : Hotkeys()) {
+    Text(fmt::format("{:<4} {}", h.label, h.help));
+  }
+  ImGui::TextWrapped(
+      "left drag: rotate, right drag: move, wheel: zoom; double-click: select, Ctrl+right "
+      "double-click: track; Ctrl+left/right drag: push the selected body");
+}
+
+}  // namespace urlab::viewer::internal

@@ -1,0 +1,48 @@
+#pragma once
+// Panel: the simulate panel (the description's WBP_MjSimulate) drawn with Dear ImGui: the
+// simulation's state and speed, physics options, the selected articulation's control source,
+// actuator sliders (locked, showing the received values, while the network drives it), joint
+// and sensor readouts, keyframes (Reset, Hold, Stop), debug drawing toggles (global and per
+// articulation), recording and snapshots, the other subsystems' status, and the hotkeys. It
+// reads the viewer's own copy of the state, never live mjData, and acts through commands and
+// the UI control source's command frames.
+//
+// Threading contract: main thread only, between Window::BeginImGui and EndImGui.
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "urlab/physics/state.h"
+
+namespace urlab::viewer::internal {
+
+class ViewerCore;
+
+class Panel {
+ public:
+  static constexpr float kWidth = 360;  // screen pixels, at the window's left edge
+
+  void Draw(ViewerCore& core);
+  // Where each actuator slider of the selected articulation was last drawn (window
+  // coordinates of its centre), for tests that click them.
+  const std::vector<std::pair<float, float>>& slider_centres() const { return slider_centres_; }
+
+ private:
+  void DrawSimulation(ViewerCore& core);
+  void DrawOptions(ViewerCore& core);
+  void DrawArticulation(ViewerCore& core);
+  void DrawDebug(ViewerCore& core);
+  void DrawRendering(ViewerCore& core);
+  void DrawRecording(ViewerCore& core);
+  void DrawSubsystems(ViewerCore& core);
+  void DrawHelp(ViewerCore& core);
+
+  int keyframe_ = 0;
+  std::optional<physics::PhysicsState> snapshot_;
+  std::string record_path_ = "viewer.urrec";
+  std::string message_;
+  std::vector<std::pair<float, float>> slider_centres_;
+};
+
+}  // namespace urlab::viewer::internal

@@ -1,0 +1,59 @@
+#pragma once
+// SceneView: what the viewer draws from: its own copy of the compiled model, its own mjData
+// filled from state frames (never the physics thread's), and MuJoCo's abstract scene, camera,
+// visual options, perturbation and GPU context.
+//
+// Threading contract: main thread only (the thread whose GL context is current).
+#include <mujoco/mujoco.h>
+
+#include "urlab/physics/model.h"
+#include "urlab/physics/state_frame.h"
+
+namespace urlab::viewer::internal {
+
+class SceneView {
+ public:
+  // Copies `source` (call while the physics thread does not run: its options may change there).
+  // `maxgeom` bounds the scene's geoms (the model's and the debug drawing's).
+  SceneView(const mjModel* source, int maxgeom);
+  ~SceneView();
+  SceneView(const SceneView&) = delete;
+  SceneView& operator=(const SceneView&) = delete;
+
+  // Uploads the model to the GPU; a GL context must be current.
+  void MakeContext();
+  // Copies the frame's state (time, qpos, qvel, act, ctrl, mocap poses, applied forces) into the
+  // viewer's mjData and recomputes positions (kinematics, camera and light poses, tendons).
+  void Update(const physics::StateFrame& frame);
+  // mjv_updateScene from the viewer's data.
+  void UpdateScene();
+  // Draws the scene into the window's back buffer.
+  void Render(int width, int height);
+  // Reads the window's back buffer (bottom-up RGB rows).
+  void ReadPixels(int width, int height, unsigned char* rgb);
+
+  mjModel* model() { return model_.get(); }
+  mjData* data() { return data_.get(); }
+  mjvScene& scene() { return scene_; }
+  mjvCamera& camera() { return camera_; }
+  mjvOption& option() { return option_; }
+  mjvPerturb& perturb() { return perturb_; }
+  mjrContext& context() { return context_; }
+  // The frame number of the last Update (0 before the first).
+  std::uint64_t frame() const { return frame_; }
+  bool paused() const { return paused_; }
+
+ private:
+  physics::ModelPtr model_;
+  physics::DataPtr data_;
+  mjvScene scene_;
+  mjvCamera camera_;
+  mjvOption option_;
+  mjvPerturb perturb_;
+  mjrContext context_;
+  bool has_context_ = false;
+  std::uint64_t frame_ = 0;
+  bool paused_ = false;
+};
+
+}  // namespace urlab::viewer::internal

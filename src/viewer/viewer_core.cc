@@ -1,0 +1,356 @@
+#include "viewer/viewer_core.h"
+
+#include <GLFW/glfw3.h>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <ctime>
+
+#include "urlab/core/error.h"
+#include "viewer/panel.h"
+
+namespace urlab::viewer::internal {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Room in the abstract scene for the model's geoms plus the debug drawing's lines.
+constexpr int kMaxGeom = 40000;
+// Longest a perturbation force is applied for without a new frame (a stalled viewer must not
+// push a body forever).
+constexpr double kMaxPerturbSeconds = 0.1;
+
+// The layer a toggle hotkey flips.
+std::optional<DebugLayer> LayerOf(Action a) {
+  switch (a) {
+    case Action::kToggleContacts:
+      return DebugLayer::kContacts;
+    case Action::kToggleVisual:
+      return DebugLayer::kVisual;
+    case Action::kToggleCollision:
+      return DebugLayer::kCollision;
+    case Action::kToggleJoints:
+      return DebugLayer::kJoints;
+    case Action::kTogglePropCollision:
+      return DebugLayer::kPropCollision;
+    default:
+      return std::nullopt;
+  }
+}
+
+}  // namespace
+
+ViewerCore::ViewerCore(ViewerOptions options, const world::Manager* manager)
+    : options_(std::move(options)), manager_(manager) {}
+
+ViewerCore::~ViewerCore() { End(); }
+
+void ViewerCore::Begin(world::Session& session) {
+  session_ = session.shared_from_this();
+  physics::PhysicsEngine& engine = session.engine();
+  start_ = last_present_ = fps_window_start_ = Clock::now();
+  // The window first: without a display nothing else is set up.
+  window_ = std::make_unique<Window>(options_.width, options_.height, options_.title, this,
+                                     options_.panel);
+  view_ = std::make_unique<SceneView>(engine.model(), kMaxGeom);  // engine not running yet
+  view_->MakeContext();
+  spdlog::info("viewer: {}x{} window, OpenGL {}", options_.width, options_.height,
+               window_->GlVersion());
+  if (window_->software_renderer()) {
+    // Shadows and reflections cost most of a software-rendered frame (platform notes: a 4096
+    // shadow map gives ~9 fps at 640x480); the panel turns them back on.
+    view_->scene().flags[mjRND_SHADOW] = 0;
+    view_->scene().flags[mjRND_REFLECTION] = 0;
+    spdlog::info("viewer: software renderer: shadows and reflections off (panel: Rendering)");
+  }
+  BuildTables();
+  if (options_.debug_all) {
+    for (DebugLayer l :
+         {DebugLayer::kContacts, DebugLayer::kCollision, DebugLayer::kJoints, DebugLayer::kSites}) {
+      debug_.Global(l) = true;
+    }
+  }
+  panel_ = std::make_unique<Panel>();
+  if (!options_.video.empty()) {
+    int w = 0, h = 0;
+    window_->FramebufferSize(&w, &h);
+    video_ = std::make_unique<VideoWriter>(options_.video, w, h, options_.video_fps);
+    next_video_frame_ = Clock::now();
+  }
+  state_ = engine.SubscribeState("viewer");
+  capture_ = std::make_shared<DebugCapture>();
+  capture_id_ =
+      engine.AddPostStepCallback([c = capture_](const mjModel* m, mjData* d) { c->Capture(m, d); });
+}
+
+void ViewerCore::End() {
+  if (!session_) return;
+  physics::PhysicsEngine& engine = session_->engine();
+  const double seconds = Now();
+  if (window_) {
+    int w = 0, h = 0;
+    window_->FramebufferSize(&w, &h);
+    spdlog::info("viewer: {} frames in {:.1f} s ({:.1f} frames/s at {}x{})", frames_drawn_, seconds,
+                 seconds > 0 ? static_cast<double>(frames_drawn_) / seconds : 0.0, w, h);
+  }
+  if (capture_id_) engine.RemoveCallback(capture_id_);
+  capture_id_ = 0;
+  if (video_) {
+    const int frames = video_->frames();
+    const int status = video_->Close();
+    if (status == 0) {
+      spdlog::info("viewer: video {} ({} frames)", video_->path(), frames);
+    } else {
+      spdlog::error("viewer: ffmpeg failed (exit {}) writing {}", status, video_->path());
+    }
+    video_.reset();
+  }
+  panel_.reset();
+  view_.reset();  // frees the GPU context while the window's context is current
+  window_.reset();
+  frame_ = nullptr;
+  state_.reset();  // the engine drops it when it is destroyed; nothing reads it any more
+  session_.reset();
+}
+
+void ViewerCore::BuildTables() {
+  const mjModel* m = view_->model();
+  const auto& arts = session_->articulations();
+  tables_.body_articulation.assign(static_cast<std::size_t>(m->nbody), -1);
+  for (int b = 1; b < m->nbody; ++b) {
+    const char* name = mj_id2name(m, mjOBJ_BODY, b);
+    const world::Articulation* owner = name ? session_->OwnerOf(name) : nullptr;
+    int index = owner ? static_cast<int>(owner - arts.data()) : -1;
+    if (index < 0) index = tables_.body_articulation[static_cast<std::size_t>(m->body_parentid[b])];
+    tables_.body_articulation[static_cast<std::size_t>(b)] = index;
+  }
+  tables_.prop_geom.assign(static_cast<std::size_t>(m->ngeom), false);
+  DebugSettings::Layers own{};
+  own[static_cast<std::size_t>(DebugLayer::kVisual)] = true;
+  debug_.articulation.assign(arts.size(), own);
+}
+
+void ViewerCore::SetPropGeoms(const std::vector<int>& geoms) {
+  std::fill(tables_.prop_geom.begin(), tables_.prop_geom.end(), false);
+  for (int g : geoms) {
+    if (g >= 0 && static_cast<std::size_t>(g) < tables_.prop_geom.size()) {
+      tables_.prop_geom[static_cast<std::size_t>(g)] = true;
+    }
+  }
+}
+
+void ViewerCore::SelectArticulation(int index) {
+  if (index >= 0 && static_cast<std::size_t>(index) < session_->articulations().size()) {
+    selected_articulation_ = index;
+  }
+}
+
+double ViewerCore::Now() const {
+  return std::chrono::duration<double>(Clock::now() - start_).count();
+}
+
+void ViewerCore::WindowSize(int* w, int* h) const { window_->WindowSize(w, h); }
+
+bool ViewerCore::stop_requested() const {
+  return (window_ && window_->should_close()) || screenshot_done_;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Input
+
+void ViewerCore::Input() {
+  if (!window_) return;
+  window_->PollEvents();
+}
+
+void ViewerCore::OnKey(int key, int action, int /*mods*/) {
+  if (action != GLFW_PRESS) return;
+  if (window_ && window_->imgui_wants_keyboard()) return;
+  if (const Hotkey* h = FindHotkey(key)) Perform(h->action);
+}
+
+void ViewerCore::OnMouseButton(int button, int action, int mods) {
+  if (action == GLFW_PRESS && window_ && window_->imgui_wants_mouse()) return;
+  int w = 0, h = 0;
+  WindowSize(&w, &h);
+  mouse_.Button(*view_, button, action, mods, cursor_x_, cursor_y_, w, h, Now());
+}
+
+void ViewerCore::OnCursor(double x, double y) {
+  cursor_x_ = x;
+  cursor_y_ = y;
+  int w = 0, h = 0;
+  WindowSize(&w, &h);
+  mouse_.Move(*view_, x, y, w, h);
+}
+
+void ViewerCore::OnScroll(double /*dx*/, double dy) {
+  if (window_ && window_->imgui_wants_mouse()) return;
+  mouse_.Scroll(*view_, dy);
+}
+
+void ViewerCore::Perform(Action action) {
+  if (const std::optional<DebugLayer> layer = LayerOf(action)) {
+    bool& on = debug_.Global(*layer);
+    on = !on;
+    spdlog::info("viewer: {} {}", DebugLayerName(*layer), on ? "on" : "off");
+    return;
+  }
+  physics::PhysicsEngine& engine = session_->engine();
+  switch (action) {
+    case Action::kTogglePause:
+      session_->SetPaused(!engine.paused());
+      break;
+    case Action::kReset:
+      session_->ResetToInitialState();
+      break;
+    case Action::kScreenshot: {
+      const std::time_t t = std::time(nullptr);
+      char stamp[32];
+      std::strftime(stamp, sizeof stamp, "%Y%m%d-%H%M%S", std::localtime(&t));
+      RequestScreenshot(fmt::format("urlab-{}.png", stamp));
+      break;
+    }
+    case Action::kFreeCamera:
+      view_->camera().type = mjCAMERA_FREE;
+      break;
+    case Action::kToggleCinematic:
+    case Action::kFireLaunchers:
+    case Action::kTogglePossess:
+      spdlog::info("viewer: nothing to do for this key in this scene");
+      break;
+    default:
+      break;
+  }
+}
+
+void ViewerCore::SetOptions(std::function<void(mjOption&)> fn, std::string label) {
+  fn(view_->model()->opt);
+  session_->engine().Submit(physics::cmd::SetOptions{std::move(fn), std::move(label)});
+}
+
+// ---------------------------------------------------------------------------------------------
+// Drawing
+
+void ViewerCore::ApplyPerturbation() {
+  mjvPerturb& pert = view_->perturb();
+  const auto now = Clock::now();
+  const double dt =
+      std::min(std::chrono::duration<double>(now - last_present_).count(), kMaxPerturbSeconds);
+  last_present_ = now;
+  if (!pert.active || pert.select <= 0) return;
+  const mjModel* m = view_->model();
+  mjData* d = view_->data();
+  mjtNum* row = d->xfrc_applied + 6 * pert.select;
+  mju_zero(row, 6);
+  mjv_applyPerturbForce(m, d, &pert);
+  physics::cmd::ApplyForce force;
+  force.body = pert.select;
+  std::copy_n(row, 3, force.force.begin());
+  std::copy_n(row + 3, 3, force.torque.begin());
+  const double timestep = session_->engine().timestep();
+  force.steps = std::max(1, static_cast<int>(std::ceil(dt / timestep)));
+  try {
+    session_->engine().Submit(std::move(force));
+  } catch (const Error& e) {
+    spdlog::warn("viewer: perturbation not applied: {}", e.what());
+  }
+}
+
+void ViewerCore::Present() {
+  if (!window_) return;
+  if (!lowered_) {
+    // The first frame runs after the physics thread started (Manager::BeginPlay starts it after
+    // every subsystem began): from now on this thread draws at a lower priority, so that on a
+    // machine with few cores a slow frame takes time from the viewer, not from the physics.
+    lowered_ = true;
+    LowerRenderThreadPriority();
+  }
+  if (state_->has_new() || !frame_) {
+    frame_ = state_->Latest();
+    if (frame_) view_->Update(*frame_);
+  }
+  capture_->Take(&contacts_);
+  bool want_contacts = debug_.Global(DebugLayer::kContacts);
+  for (const auto& own : debug_.articulation) {
+    want_contacts = want_contacts || own[static_cast<std::size_t>(DebugLayer::kContacts)];
+  }
+  // The last capture stays (drawing filters it by the toggles): turning contacts on shows them
+  // at once, refreshed from the next capture.
+  if (want_contacts) capture_->Request();
+  // Contact points and forces lie inside the bodies touching: moving bodies turn translucent
+  // while they are drawn (MuJoCo's own transparency flag).
+  view_->option().flags[mjVIS_TRANSPARENT] = want_contacts;
+  ApplyPerturbation();
+  view_->UpdateScene();
+  HideVisualGeoms(view_->model(), debug_, tables_, &view_->scene());
+  AddDebugGeoms(view_->model(), view_->data(), debug_, tables_, contacts_, &view_->scene());
+  int w = 0, h = 0;
+  window_->FramebufferSize(&w, &h);
+  view_->Render(w, h);
+  if (window_->has_imgui()) {
+    window_->BeginImGui();
+    panel_->Draw(*this);
+    window_->EndImGui();
+  }
+  if (!options_.screenshot.empty() && !screenshot_done_ && frame_ &&
+      frame_->time + 1e-9 >= options_.screenshot_at && pending_screenshot_.empty()) {
+    pending_screenshot_ = options_.screenshot;
+  }
+  Capture();
+  if (keep_frame_) {
+    pixels_.resize(static_cast<std::size_t>(3 * w * h));
+    view_->ReadPixels(w, h, pixels_.data());
+    kept_ = FromBottomUp(w, h, pixels_.data());
+  }
+  window_->SwapBuffers();
+  ++frames_drawn_;
+  ++fps_window_frames_;
+  const auto now = Clock::now();
+  const double window = std::chrono::duration<double>(now - fps_window_start_).count();
+  if (window >= 1.0) {
+    fps_ = static_cast<double>(fps_window_frames_) / window;
+    fps_window_frames_ = 0;
+    fps_window_start_ = now;
+  }
+}
+
+void ViewerCore::Capture() {
+  const bool video_due = video_ && Clock::now() >= next_video_frame_;
+  if (pending_screenshot_.empty() && !video_due) return;
+  int w = 0, h = 0;
+  window_->FramebufferSize(&w, &h);
+  pixels_.resize(static_cast<std::size_t>(3 * w * h));
+  view_->ReadPixels(w, h, pixels_.data());
+  if (!pending_screenshot_.empty()) {
+    const std::string path = std::move(pending_screenshot_);
+    pending_screenshot_.clear();
+    try {
+      WritePng(path, FromBottomUp(w, h, pixels_.data()));
+      last_screenshot_ = path;
+      spdlog::info("viewer: screenshot {} ({}x{}, t={:.3f} s)", path, w, h,
+                   frame_ ? frame_->time : 0.0);
+    } catch (const Error& e) {
+      spdlog::error("viewer: {}", e.what());
+    }
+    if (path == options_.screenshot) screenshot_done_ = true;
+  }
+  if (video_due) {
+    video_->Write(pixels_.data());
+    next_video_frame_ += std::chrono::microseconds(1000000 / std::max(1, options_.video_fps));
+    if (next_video_frame_ < Clock::now()) next_video_frame_ = Clock::now();
+  }
+}
+
+Image ViewerCore::ReadPixels() {
+  // The back buffer is undefined after a swap: draw the frame again and keep it before swapping.
+  keep_frame_ = true;
+  Present();
+  keep_frame_ = false;
+  return std::move(kept_);
+}
+
+}  // namespace urlab::viewer::internal

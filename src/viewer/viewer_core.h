@@ -1,0 +1,125 @@
+#pragma once
+// ViewerCore: the viewer subsystem's implementation. It owns the window, the viewer's own model
+// and data (SceneView), the debug capture and settings, the mouse control and the panel's state;
+// it turns input into commands for the physics thread and draws each frame from the newest state
+// frame of its own subscription.
+//
+// Threading contract
+// - Main thread: everything here (construction, Begin, Input, Present, End, the InputHandler
+//   events, Perform and the accessors).
+// - Physics thread: only the DebugCapture's post-step callback (debug_capture.h).
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "urlab/physics/engine.h"
+#include "urlab/viewer/viewer.h"
+#include "urlab/world/session.h"
+#include "viewer/debug_capture.h"
+#include "viewer/debug_draw.h"
+#include "viewer/hotkeys.h"
+#include "viewer/image_io.h"
+#include "viewer/mouse.h"
+#include "viewer/scene_view.h"
+#include "viewer/window.h"
+
+namespace urlab::world {
+class Manager;
+}
+
+namespace urlab::viewer::internal {
+
+class Panel;
+
+class ViewerCore : public InputHandler {
+ public:
+  ViewerCore(ViewerOptions options, const world::Manager* manager);
+  ~ViewerCore() override;
+
+  // Subsystem hooks (see ViewerSubsystem).
+  void Begin(world::Session& session);
+  void Input();
+  void Present();
+  void End();
+
+  // Window events (GLFW codes); tests call them to inject input.
+  void OnKey(int key, int action, int mods) override;
+  void OnMouseButton(int button, int action, int mods) override;
+  void OnCursor(double x, double y) override;
+  void OnScroll(double dx, double dy) override;
+  // Does what a hotkey does.
+  void Perform(Action action);
+
+  // ---- State (main thread) ----
+  bool stop_requested() const;
+  // Draws a frame (as Present does) and returns it as the window shows it.
+  Image ReadPixels();
+  SceneView& view() { return *view_; }
+  Window& window() { return *window_; }
+  world::Session& session() { return *session_; }
+  DebugSettings& debug() { return debug_; }
+  const DebugTables& tables() const { return tables_; }
+  DebugCapture& capture() { return *capture_; }
+  const std::vector<CapturedContact>& contacts() const { return contacts_; }
+  const physics::StateFrame* frame() const { return frame_; }
+  const world::Manager* manager() const { return manager_; }
+  // Frames drawn, and the frame rate over the last second.
+  std::uint64_t frames_drawn() const { return frames_drawn_; }
+  double fps() const { return fps_; }
+  // The articulation the panel shows (index into session().articulations()).
+  int selected_articulation() const { return selected_articulation_; }
+  void SelectArticulation(int index);
+  // The window's size in screen coordinates (input events use them).
+  void WindowSize(int* w, int* h) const;
+  // Takes a screenshot of the next drawn frame into `path`.
+  void RequestScreenshot(std::string path) { pending_screenshot_ = std::move(path); }
+  const std::string& last_screenshot() const { return last_screenshot_; }
+  // Sets the converted props' geoms (hotkey 5 draws their wireframes). Mesh conversion feeds it.
+  void SetPropGeoms(const std::vector<int>& geoms);
+  // Applies physics options to the simulation (a queued command) and to the viewer's copy.
+  void SetOptions(std::function<void(mjOption&)> fn, std::string label);
+  // Seconds since Begin (the clock double-clicks use).
+  double Now() const;
+
+ private:
+  void BuildTables();
+  void ApplyPerturbation();
+  void Capture();  // screenshots and video frames of the frame just drawn
+
+  ViewerOptions options_;
+  const world::Manager* manager_;
+  std::shared_ptr<world::Session> session_;
+  std::unique_ptr<Window> window_;
+  std::unique_ptr<SceneView> view_;
+  std::unique_ptr<Panel> panel_;
+  std::shared_ptr<physics::StateSubscription> state_;
+  const physics::StateFrame* frame_ = nullptr;
+  std::shared_ptr<DebugCapture> capture_;
+  physics::PhysicsEngine::CallbackId capture_id_ = 0;
+  DebugSettings debug_;
+  DebugTables tables_;
+  std::vector<CapturedContact> contacts_;
+  MouseControl mouse_;
+  double cursor_x_ = 0, cursor_y_ = 0;
+  int selected_articulation_ = 0;
+  std::chrono::steady_clock::time_point start_;
+  std::chrono::steady_clock::time_point last_present_;
+  std::chrono::steady_clock::time_point fps_window_start_;
+  std::uint64_t fps_window_frames_ = 0;
+  std::uint64_t frames_drawn_ = 0;
+  double fps_ = 0;
+  std::string pending_screenshot_;
+  std::string last_screenshot_;
+  bool screenshot_done_ = false;
+  bool lowered_ = false;  // the main thread's priority was lowered (first Present)
+  std::unique_ptr<VideoWriter> video_;
+  std::chrono::steady_clock::time_point next_video_frame_;
+  std::vector<std::uint8_t> pixels_;  // scratch for read-backs
+  bool keep_frame_ = false;           // ReadPixels: keep the frame being drawn in kept_
+  Image kept_;
+};
+
+}  // namespace urlab::viewer::internal
