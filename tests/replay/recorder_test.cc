@@ -60,15 +60,23 @@ std::string RecordBusyRun(PhysicsEngine& engine, Recorder& recorder, const std::
   engine.SetAsFastAsPossible(true);
   engine.Start();
   recorder.Start(options);
-  std::this_thread::sleep_for(50ms);
+  // Each phase lasts a little wall time and at least `kPhaseSteps` steps (a loaded machine steps
+  // slowly; the tests need a few hundred frames in each phase).
+  constexpr std::uint64_t kPhaseSteps = 300;
+  const auto phase = [&](std::chrono::milliseconds at_least) {
+    const std::uint64_t from = engine.step_count();
+    std::this_thread::sleep_for(at_least);
+    WaitFor([&] { return engine.step_count() >= from + kPhaseSteps; }, 60000ms);
+  };
+  phase(50ms);
   const int box = mj_name2id(m, mjOBJ_BODY, "box");
   if (box >= 0) engine.Submit(cmd::ApplyForce{box, {0.5, 0, 0}, {0, 0, 0}, 3});
   if (m->nmocap > 0) engine.Submit(cmd::SetMocap{0, {0.2, 0.1, 0.6}, {1, 0, 0, 0}});
-  std::this_thread::sleep_for(50ms);
+  phase(50ms);
   engine.Reset();
-  std::this_thread::sleep_for(30ms);
+  phase(30ms);
   engine.Submit(cmd::SetOptions{[](mjOption& o) { o.gravity[2] = -5; }, "low gravity"});
-  std::this_thread::sleep_for(50ms);
+  phase(50ms);
   recorder.Stop();
   engine.Stop();
   return path;
