@@ -158,6 +158,11 @@ class StepServer {
   replay::Recorder& RequireRecorder();
   // Every client's lease runs from now (after a blocking file operation on this thread).
   void RefreshLeases();
+  // Runs `op` (file work that may block this thread), then refreshes the leases, also when it
+  // fails. Its errors become replies: a RecorderError by its code, a RecordingError as bad_value
+  // (another model) or path_not_readable, any other exception as `other_errors` (rethrown when
+  // null).
+  void RunFileOp(const std::function<void()>& op, const char* other_errors = nullptr);
   Outcome RecordingStart(Request& r);
   Outcome RecordingStop(Request& r);
   Outcome RecordingSave(Request& r);

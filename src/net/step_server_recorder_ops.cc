@@ -63,6 +63,23 @@ void StepServer::RefreshLeases() {
   for (auto& [id, client] : clients_) client.last_seen = std::max(client.last_seen, now);
 }
 
+void StepServer::RunFileOp(const std::function<void()>& op, const char* other_errors) {
+  try {
+    op();
+  } catch (const replay::RecorderError& e) {
+    RefreshLeases();
+    Fail(e.code(), e.what());
+  } catch (const replay::RecordingError& e) {
+    RefreshLeases();
+    Fail(e.reason() == Reason::kWrongModel ? "bad_value" : "path_not_readable", e.what());
+  } catch (const std::exception& e) {
+    if (!other_errors) throw;
+    RefreshLeases();
+    Fail(other_errors, e.what());
+  }
+  RefreshLeases();
+}
+
 // ---- Recordings
 
 StepServer::Outcome StepServer::RecordingStart(Request& r) {
@@ -76,26 +93,14 @@ StepServer::Outcome StepServer::RecordingStart(Request& r) {
   o.keyframe_interval = OptionalNumber(r.body, "keyframe_interval", o.keyframe_interval);
   o.max_duration = OptionalNumber(r.body, "max_duration", o.max_duration);
   o.ring_seconds = OptionalNumber(r.body, "ring_seconds", o.ring_seconds);
-  try {
-    recorder.Start(std::move(o));
-  } catch (const replay::RecorderError& e) {
-    RefreshLeases();
-    Fail(e.code(), e.what());
-  }
-  RefreshLeases();
+  RunFileOp([&] { recorder.Start(std::move(o)); });
   return {Json{{"op", "recording_start_ok"}, {"path", recorder.status().path}}};
 }
 
 StepServer::Outcome StepServer::RecordingStop(Request&) {
   replay::Recorder& recorder = RequireRecorder();
   replay::RecorderStatus s;
-  try {
-    s = recorder.Stop();
-  } catch (const replay::RecorderError& e) {
-    RefreshLeases();
-    Fail(e.code(), e.what());
-  }
-  RefreshLeases();
+  RunFileOp([&] { s = recorder.Stop(); });
   return {Json{{"op", "recording_stop_ok"},
                {"path", s.path},
                {"frames", s.frames},
@@ -108,13 +113,7 @@ StepServer::Outcome StepServer::RecordingSave(Request& r) {
   replay::Recorder& recorder = RequireRecorder();
   const std::string path = String(r.body["path"], "path");
   std::string saved;
-  try {
-    saved = recorder.Save(path);
-  } catch (const replay::RecorderError& e) {
-    RefreshLeases();
-    Fail(e.code(), e.what());
-  }
-  RefreshLeases();
+  RunFileOp([&] { saved = recorder.Save(path); });
   return {Json{{"op", "recording_save_ok"}, {"path", saved}}};
 }
 
@@ -156,13 +155,7 @@ StepServer::Outcome StepServer::SnapshotSave(Request& r) {
     info.tables = replay::ModelTables::Of(model.get(), names);
   }
   replay::DescribeModel(model.get(), &info);  // the model as it is now
-  try {
-    replay::SaveSnapshot(path, info, state);
-  } catch (const std::exception& e) {
-    RefreshLeases();
-    Fail("path_not_writable", e.what());
-  }
-  RefreshLeases();
+  RunFileOp([&] { replay::SaveSnapshot(path, info, state); }, "path_not_writable");
   return {Json{{"op", "snapshot_save_ok"}, {"path", path}, {"time", state.time}}};
 }
 
@@ -171,16 +164,7 @@ StepServer::Outcome StepServer::SnapshotLoad(Request& r) {
   physics::PhysicsEngine& engine = session_.engine();
   const physics::ModelPtr model = ModelCopy(engine);
   physics::PhysicsState state;
-  try {
-    state = replay::LoadSnapshot(path, model.get());
-  } catch (const replay::RecordingError& e) {
-    RefreshLeases();
-    Fail(e.reason() == Reason::kWrongModel ? "bad_value" : "path_not_readable", e.what());
-  } catch (const std::exception& e) {
-    RefreshLeases();
-    Fail("path_not_readable", e.what());
-  }
-  RefreshLeases();
+  RunFileOp([&] { state = replay::LoadSnapshot(path, model.get()); }, "path_not_readable");
   const double time = state.time;
   Outcome out;
   out.reply = Json{{"op", "snapshot_load_ok"}, {"path", path}, {"time", time}};
@@ -193,18 +177,13 @@ StepServer::Outcome StepServer::SnapshotLoad(Request& r) {
 StepServer::Outcome StepServer::ReplayLoad(Request& r) {
   const std::string path = String(r.body["path"], "path");
   std::unique_ptr<replay::RecordingReader> reader;
-  try {
-    reader = std::make_unique<replay::RecordingReader>(
-        replay::RecordingReader::Open(path, {.allow_partial = true}));
-    replay::CheckSameModel(*reader, ModelCopy(session_.engine()).get());
-  } catch (const replay::RecordingError& e) {
-    RefreshLeases();
-    Fail(e.reason() == Reason::kWrongModel ? "bad_value" : "path_not_readable", e.what());
-  } catch (const std::exception& e) {
-    RefreshLeases();
-    Fail("path_not_readable", e.what());
-  }
-  RefreshLeases();
+  RunFileOp(
+      [&] {
+        reader = std::make_unique<replay::RecordingReader>(
+            replay::RecordingReader::Open(path, {.allow_partial = true}));
+        replay::CheckSameModel(*reader, ModelCopy(session_.engine()).get());
+      },
+      "path_not_readable");
   if (reader->info().kind != "recording") {
     Fail("path_not_readable", path + ": not a recording (a " + reader->info().kind + ")");
   }
