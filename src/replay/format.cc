@@ -34,14 +34,6 @@ enum FrameGroups : std::uint8_t {
 constexpr std::uint8_t kAllGroups =
     kGroupMocap | kGroupQfrc | kGroupXfrc | kGroupSensors | kGroupCommands;
 
-bool SameCommands(const physics::AppliedCommands& a, const physics::AppliedCommands& b) {
-  const auto same = [](const std::vector<double>& x, const std::vector<double>& y) {
-    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0;
-  };
-  return a.seq == b.seq && a.source == b.source && same(a.targets, b.targets) && same(a.kp, b.kp) &&
-         same(a.kv, b.kv);
-}
-
 template <typename T>
 void Put(std::string* out, T value) {
   char bytes[sizeof(T)];
@@ -104,6 +96,11 @@ void XorInto(std::vector<double>* values, const std::vector<double>& prev) {
 bool SameBits(const std::vector<double>& a, const std::vector<double>& b) {
   return a.size() == b.size() &&
          (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
+}
+
+bool SameCommands(const physics::AppliedCommands& a, const physics::AppliedCommands& b) {
+  return a.seq == b.seq && a.source == b.source && SameBits(a.targets, b.targets) &&
+         SameBits(a.kp, b.kp) && SameBits(a.kv, b.kv);
 }
 
 // Limits on what a header may declare, so damaged bytes cannot ask for absurd allocations.
