@@ -11,7 +11,9 @@ namespace {
 // clang-format off
 constexpr GrammarRow kRows[] = {
     // <frame> (3.1): flattened by the bridge; children are linked below
-    {"frame", "frame", "", "body geom site camera light joint freejoint frame", "name:s childclass:s@class pos:r3 quat:r4 axisangle:r4 xyaxes:r6 zaxis:r3 euler:r3"},
+    {"frame", "frame", "", "body geom site camera light joint freejoint frame replicate", "name:s childclass:s@class pos:r3 quat:r4 axisangle:r4 xyaxes:r6 zaxis:r3 euler:r3"},
+    // <replicate> (3.2): expanded by the bridge into suffixed copies (one <frame> each)
+    {"replicate", "replicate", "", "body geom site camera light joint frame replicate", "count:i sep:s offset:r3 euler:r3"},
     {"+compiler", "", "", "", "alignfree:k{false|true} assetdir:s saveinertial:k{false|true} conflict:s"},
     {"+compiler.lengthrange", "", "", "", "interval:r"},
     {"+option", "", "", "", "integrator:k{implicitfast} actuatorgroupdisable:i* ccd_iterations:i ccd_tolerance:r ls_iterations:i ls_tolerance:r o_friction:r5 sdf_initpoints:i sdf_iterations:i sleep_tolerance:r"},
@@ -26,8 +28,8 @@ constexpr GrammarRow kRows[] = {
     {"+default.material", "", "", "", "metallic:r roughness:r"},
     {"+texture", "", "", "", "colorspace:s nchannel:i content_type:s"},
     {"+hfield", "", "", "", "content_type:s"},
-    {"+worldbody", "", "", "frame", ""},
-    {"+body", "", "", "frame", "gravcomp:r sleep:s simple:s"},
+    {"+worldbody", "", "", "frame replicate", ""},
+    {"+body", "", "", "frame replicate", "gravcomp:r sleep:s simple:s"},
     {"+joint", "", "", "", "actuatorfrcrange:r2 actuatorfrclimited:k{false|true|auto} actuatorgravcomp:k{false|true}"},
     {"+default.joint", "", "", "", "actuatorfrcrange:r2 actuatorfrclimited:k{false|true|auto} actuatorgravcomp:k{false|true}"},
     {"+freejoint", "", "", "", "align:k{false|true|auto}"},

@@ -18,16 +18,23 @@ struct Entry {
   mjtNum cutoff = 0;
 };
 
+struct GravcompEntry {
+  int body = 0;
+  mjtNum gravcomp = 0;
+};
+
 struct Registered {
   unsigned long generation = 0;
   std::vector<Entry> entries;
+  std::vector<GravcompEntry> gravcomp;
 };
 
 struct Registry {
   std::shared_mutex mutex;
   std::unordered_map<const mjModel*, Registered> models;
   unsigned long next_generation = 1;
-  mjfSensor previous = nullptr;  // callback installed before ours
+  mjfSensor previous = nullptr;           // callback installed before ours
+  mjfGeneric previous_passive = nullptr;  // likewise for mjcb_passive
 };
 
 Registry& TheRegistry() {
@@ -52,6 +59,27 @@ void Compute(const mjModel* m, mjData* d, const std::vector<Entry>& entries) {
   }
 }
 
+// 3.x's mj_gravcomp: -gravity * mass * gravcomp at each body's centre of mass.
+void Gravcomp(const mjModel* m, mjData* d, const std::vector<GravcompEntry>& entries) {
+  if (entries.empty() || (m->opt.disableflags & mjDSBL_GRAVITY) || mju_norm3(m->opt.gravity) == 0) {
+    return;
+  }
+  const mjtNum torque[3] = {0, 0, 0};
+  for (const GravcompEntry& g : entries) {
+    mjtNum force[3];
+    mju_scl3(force, m->opt.gravity, -(m->body_mass[g.body] * g.gravcomp));
+    mj_applyFT(m, d, force, torque, d->xipos + 3 * g.body, g.body, d->qfrc_passive);
+  }
+}
+
+void PassiveCallback(const mjModel* m, mjData* d) {
+  Registry& r = TheRegistry();
+  std::shared_lock lock(r.mutex);
+  if (r.previous_passive) r.previous_passive(m, d);
+  auto it = r.models.find(m);
+  if (it != r.models.end()) Gravcomp(m, d, it->second.gravcomp);
+}
+
 void Callback(const mjModel* m, mjData* d, int stage) {
   Registry& r = TheRegistry();
   std::shared_lock lock(r.mutex);
@@ -68,6 +96,8 @@ void InstallCallback() {
     std::unique_lock lock(r.mutex);
     if (mjcb_sensor != &Callback) r.previous = mjcb_sensor;
     mjcb_sensor = &Callback;
+    if (mjcb_passive != &PassiveCallback) r.previous_passive = mjcb_passive;
+    mjcb_passive = &PassiveCallback;
   });
 }
 
@@ -96,9 +126,15 @@ SoftwareSensorRegistration::~SoftwareSensorRegistration() { Unregister(model_, g
 
 SoftwareSensorRegistration RegisterSoftwareSensors(const mjModel* m,
                                                    std::span<const SoftwareSensorSpec> specs) {
-  if (specs.empty()) return {};
+  SoftwareModelSpec spec;
+  spec.sensors.assign(specs.begin(), specs.end());
+  return RegisterSoftwareModel(m, spec);
+}
+
+SoftwareSensorRegistration RegisterSoftwareModel(const mjModel* m, const SoftwareModelSpec& spec) {
+  if (spec.empty()) return {};
   std::vector<Entry> entries;
-  for (const SoftwareSensorSpec& s : specs) {
+  for (const SoftwareSensorSpec& s : spec.sensors) {
     const int id = mj_name2id(m, mjOBJ_SENSOR, s.sensor_name.c_str());
     const std::string what = "software sensor '" + s.sensor_name + "'";
     if (id < 0) throw Error(what + ": no sensor of that name in the model");
@@ -122,13 +158,19 @@ SoftwareSensorRegistration RegisterSoftwareSensors(const mjModel* m,
     }
     entries.push_back(e);
   }
+  std::vector<GravcompEntry> gravcomp;
+  for (const GravityCompensationSpec& g : spec.gravcomp) {
+    const int id = mj_name2id(m, mjOBJ_BODY, g.body_name.c_str());
+    if (id <= 0) throw Error("gravity compensation: no body '" + g.body_name + "' in the model");
+    gravcomp.push_back({id, g.gravcomp});
+  }
   InstallCallback();
   Registry& r = TheRegistry();
   unsigned long generation = 0;
   {
     std::unique_lock lock(r.mutex);
     generation = r.next_generation++;
-    r.models[m] = Registered{generation, std::move(entries)};
+    r.models[m] = Registered{generation, std::move(entries), std::move(gravcomp)};
   }
   return SoftwareSensorRegistration(m, generation);
 }
@@ -144,6 +186,17 @@ void ComputeSoftwareSensors(const mjModel* m, mjData* d) {
   std::shared_lock lock(r.mutex);
   auto it = r.models.find(m);
   if (it != r.models.end()) Compute(m, d, it->second.entries);
+}
+
+}  // namespace urlab::physics
+
+namespace urlab::physics {
+
+void ComputeSoftwarePassive(const mjModel* m, mjData* d) {
+  Registry& r = TheRegistry();
+  std::shared_lock lock(r.mutex);
+  auto it = r.models.find(m);
+  if (it != r.models.end()) Gravcomp(m, d, it->second.gravcomp);
 }
 
 }  // namespace urlab::physics

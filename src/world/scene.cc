@@ -53,14 +53,22 @@ document::Document ReadBridged(const std::string& path, const std::string& label
   }
 }
 
-void AddSoftwareSensors(const mjcf::BridgeReport& report, const std::string& prefix,
-                        std::vector<physics::SoftwareSensorSpec>* specs) {
+}  // namespace
+
+void AddBridgeRuntime(const mjcf::BridgeReport& report, const std::string& prefix,
+                      physics::SoftwareModelSpec* spec) {
   for (const mjcf::BridgedSensor& b : report.software_sensors) {
-    specs->push_back({prefix + b.name, b.kind == mjcf::BridgedSensor::Kind::kJointActuatorForce
-                                           ? physics::SoftwareSensorKind::kJointActuatorForce
-                                           : physics::SoftwareSensorKind::kTendonActuatorForce});
+    spec->sensors.push_back(
+        {prefix + b.name, b.kind == mjcf::BridgedSensor::Kind::kJointActuatorForce
+                              ? physics::SoftwareSensorKind::kJointActuatorForce
+                              : physics::SoftwareSensorKind::kTendonActuatorForce});
+  }
+  for (const mjcf::BridgedGravcomp& g : report.gravcomp) {
+    spec->gravcomp.push_back({prefix + g.body, g.gravcomp});
   }
 }
+
+namespace {
 
 void NoteBridge(const mjcf::BridgeReport& report, const std::string& label, std::string* out) {
   if (report.changes.empty()) return;
@@ -109,14 +117,14 @@ void SaveDebug(const document::Document& doc, const mjModel* m, const std::strin
 
 CompiledScene BuildScene(const SceneConfig& scene) {
   std::vector<mjcf::ArticulationInput> inputs;
-  std::vector<physics::SoftwareSensorSpec> software;
+  physics::SoftwareModelSpec software;
   std::string bridge_text;
   for (const ArticulationConfig& a : scene.articulations) {
     mjcf::ArticulationInput in;
     in.name = a.name;
     mjcf::BridgeReport report;
     in.doc = ReadBridged(a.mjcf, a.name + ": ", &report);
-    AddSoftwareSensors(report, a.name + "_", &software);
+    AddBridgeRuntime(report, a.name + "_", &software);
     NoteBridge(report, a.name + ": ", &bridge_text);
     in.placement.pos = a.pos;
     in.placement.quat = a.quat;
@@ -132,7 +140,7 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   out.model = CompileDocument(composed.doc, &composed.articulations);
   mjcf::ApplyArticulationKeyframes(composed.articulations, out.model.get());
   WriteKeyframeValues(composed.doc, out.model.get());
-  out.software_sensors = physics::RegisterSoftwareSensors(out.model.get(), software);
+  out.software_sensors = physics::RegisterSoftwareModel(out.model.get(), software);
   out.bridge_report = std::move(bridge_text);
   if (!scene.save_debug_xml.empty()) {
     SaveDebug(composed.doc, out.model.get(), scene.save_debug_xml, SceneInputFiles(scene));
@@ -149,9 +157,9 @@ CompiledScene BuildModel(const std::string& mjcf_path) {
   CompiledScene out;
   out.diagnostics = doc.diagnostics();
   out.model = CompileDocument(doc, nullptr);
-  std::vector<physics::SoftwareSensorSpec> software;
-  AddSoftwareSensors(report, "", &software);
-  out.software_sensors = physics::RegisterSoftwareSensors(out.model.get(), software);
+  physics::SoftwareModelSpec software;
+  AddBridgeRuntime(report, "", &software);
+  out.software_sensors = physics::RegisterSoftwareModel(out.model.get(), software);
   NoteBridge(report, "", &out.bridge_report);
   out.doc = std::move(doc);
   return out;
@@ -212,7 +220,8 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
       if (bridge_report) {
         for (const mjcf::BridgeChange& c : bridged.changes) {
           report.bridge.push_back(label + c.where.str() + ": " + mjcf::BridgeKindName(c.kind) +
-                                  ": " + c.what);
+                                  " [" + c.rule + "]: " + c.what);
+          ++report.bridge_rules[c.rule];
         }
       }
       // References are checked after the bridge (3.x names such as frames are flattened).

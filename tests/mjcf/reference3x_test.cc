@@ -30,6 +30,8 @@
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
 #include "urlab/physics/model.h"
+#include "urlab/physics/software_sensors.h"
+#include "urlab/world/scene.h"
 
 #ifndef URLAB_MUJOCO_JS_DIR
 #define URLAB_MUJOCO_JS_DIR ""
@@ -146,6 +148,11 @@ constexpr Tolerance kTolerances[] = {
      "differ near the solver tolerance and the differences grow with the motion; 1e-3 of the "
      "joint's range of motion. Models whose contacts are chaotic or ill-posed are listed in "
      "kContactTrajectoryNotCompared"},
+    {"trajectory_sensor", When::kAlways, 1e-6, 1e-9,
+     "sensors along the contact-free trajectory (bridge corpus): as the trajectory; relative to "
+     "the sensor's largest |value| over the trajectory"},
+    {"contact_trajectory_sensor", When::kAlways, 1e-3, 1e-9,
+     "sensors along the trajectory with contacts (bridge corpus): as contact_trajectory"},
     {"*", When::kAlways, 1e-9, 1e-12,
      "compiled quantities: both engines evaluate the same double-precision formulas from the "
      "same text (the bridge writes shortest round-trip decimals); 1e-9 is ~1e7 ulp of slack for "
@@ -155,8 +162,8 @@ constexpr Tolerance kTolerances[] = {
 
 // Known differences: a quantity of a model's entity that is not compared, with the reason (also
 // in docs/dialect-bridge.md, "Checked against MuJoCo 3.x"). `model`, `quantity` and `entity` are
-// exact or "*"; an entity pattern ending in '*' matches by prefix. `when` restricts a row to
-// reference entities with a property.
+// exact or "*"; an entity pattern ending in '*' matches by prefix, one starting with '*' by suffix.
+// `when` restricts a row to reference entities with a property.
 struct KnownDifference {
   const char* model;
   const char* quantity;
@@ -196,6 +203,12 @@ constexpr KnownDifference kKnownDifferences[] = {
      "hfield.size"},
     {"*", "geom.rbound", "*", When::kHfieldGeom,
      "2.2.2 gives height fields rbound 0 (always tested in the broad phase), 3.x a radius"},
+    {"bridge3x/gravcomp", "passive.qfrc_passive", "shoulder", When::kAlways,
+     "joint actuatorgravcomp: 3.x adds the shoulder's gravity compensation to qfrc_actuator, the "
+     "bridge's mjcb_passive to qfrc_passive (documented); compared through their sum, "
+     "passive.qfrc_passive_plus_actuator, and the trajectories"},
+    {"bridge3x/gravcomp", "probe.qfrc_actuator", "*/shoulder", When::kAlways,
+     "same as passive.qfrc_passive (the compensation is in 3.x's qfrc_actuator)"},
     {"*", "option.integrator", "*", When::kImplicitFast,
      "implicitfast (3.x) becomes 2.2.2's implicit, which also includes the Coriolis/centripetal "
      "derivatives (the bridge's documented approximation)"},
@@ -285,7 +298,9 @@ std::vector<double> MeshBox(const mjModel* m, int g) {
   return box;
 }
 
-json Dump222(const mjModel* m, mjData* d) {
+// `extended`: also the nsensordata size, the passive forces at qpos0 and every sensor along the
+// trajectories (the bridge corpus, tests/data/mjcf/bridge3x).
+json Dump222(const mjModel* m, mjData* d, bool extended) {
   json out;
   auto put = [&](const std::string& cat, const std::string& ent, const std::string& field,
                  const json& v) { out[cat][ent][field] = v; };
@@ -311,6 +326,7 @@ json Dump222(const mjModel* m, mjData* d) {
       {"ncam", m->ncam},   {"nlight", m->nlight}, {"ntendon", m->ntendon}, {"neq", m->neq},
       {"nkey", m->nkey},   {"nmesh", m->nmesh},   {"nhfield", m->nhfield}};
   for (const auto& [k, v] : sizes) put("size", "model", k, std::vector<double>{double(v)});
+  if (extended) put("size", "model", "nsensordata", std::vector<double>{double(m->nsensordata)});
 
   const mjOption& o = m->opt;
   put("option", "opt", "timestep", std::vector<double>{o.timestep});
@@ -556,6 +572,24 @@ json Dump222(const mjModel* m, mjData* d) {
     }
   }
 
+  std::vector<std::string> sensor_keys;
+  if (extended) {
+    mj_resetData(m, d);
+    mj_forward(m, d);
+    per_joint(d->qfrc_passive, false, [&](const std::string& j, const std::vector<double>& v) {
+      put("passive", j, "qfrc_passive", v);
+    });
+    std::vector<mjtNum> total(static_cast<size_t>(m->nv));
+    mju_add(total.data(), d->qfrc_passive, d->qfrc_actuator, m->nv);
+    per_joint(total.data(), false, [&](const std::string& j, const std::vector<double>& v) {
+      put("passive", j, "qfrc_passive_plus_actuator", v);
+    });
+    for (int i = 0; i < m->nsensor; ++i) {
+      const std::string n = Name(m, mjOBJ_SENSOR, i);
+      sensor_keys.push_back(n.empty() ? "sensor#" + std::to_string(i) : n);
+    }
+  }
+
   // Zero-control trajectories (see dump3x.mjs): without contacts, then the full physics.
   mjModel* mm = const_cast<mjModel*>(m);  // the flag is restored below
   const int flags = m->opt.disableflags;
@@ -575,6 +609,11 @@ json Dump222(const mjModel* m, mjData* d) {
       per_joint(d->qvel, false, [&](const std::string& j, const std::vector<double>& v) {
         put(cat, j + at, "qvel", v);
       });
+      for (size_t i = 0; i < sensor_keys.size(); ++i) {
+        const int id = static_cast<int>(i);
+        put(cat + "_sensor", sensor_keys[i] + at, "value",
+            Slice(d->sensordata + m->sensor_adr[id], 0, m->sensor_dim[id]));
+      }
     }
     put(cat, "final", "time", std::vector<double>{d->time});
   }
@@ -589,6 +628,10 @@ bool Matches(const char* pattern, const std::string& s) {
   const std::string p = pattern;
   if (p == "*") return true;
   if (!p.empty() && p.back() == '*') return s.compare(0, p.size() - 1, p, 0, p.size() - 1) == 0;
+  if (p.size() > 1 && p.front() == '*') {
+    return s.size() >= p.size() - 1 &&
+           s.compare(s.size() - (p.size() - 1), p.size() - 1, p, 1) == 0;
+  }
   return p == s;
 }
 
@@ -617,14 +660,15 @@ class Comparison {
     for (const auto& [cat, entities] : ours_.items()) {
       for (const auto& [ent, fields] : entities.items()) {
         if (!ref_.contains(cat) || !ref_[cat].contains(ent)) {
-          if (Chaotic() && cat == "contact_trajectory") continue;
+          if (Chaotic() && cat.starts_with("contact_trajectory")) continue;
           ADD_FAILURE() << model_ << ": " << cat << " '" << ent << "' exists only on 2.2.2";
         }
       }
     }
   }
 
-  std::set<std::string> compared;  // "quantity|entity" actually compared
+  std::set<std::string> compared;         // "quantity|entity" actually compared
+  std::map<std::string, Stat> per_model;  // this model's largest differences per quantity
 
  private:
   bool Chaotic() const {
@@ -636,7 +680,8 @@ class Comparison {
 
   // Largest |ref| of each joint's qpos/qvel over the trajectory (per joint, per field).
   void TrajectoryScales() {
-    for (const char* cat : {"trajectory", "contact_trajectory"}) {
+    for (const char* cat :
+         {"trajectory", "contact_trajectory", "trajectory_sensor", "contact_trajectory_sensor"}) {
       if (!ref_.contains(cat)) continue;
       for (const auto& [ent, fields] : ref_[cat].items()) {
         const std::string joint = ent.substr(0, ent.rfind('@'));
@@ -703,7 +748,7 @@ class Comparison {
     if (cat == "meta") return;  // reference-side facts used by the tables above
     const std::string quantity = cat + "." + field;
     Stat& stat = stats_[quantity];
-    if ((cat == "contact_trajectory" && Chaotic()) || Known(cat, ent, quantity)) {
+    if ((cat.starts_with("contact_trajectory") && Chaotic()) || Known(cat, ent, quantity)) {
       ++stat.excluded;
       return;
     }
@@ -740,7 +785,7 @@ class Comparison {
       scale = std::max({scale, std::abs(a[i]), std::abs(b[i])});
     }
     if (quat) diff = std::min(diff, diff_neg);  // q and -q are the same rotation
-    if (cat == "trajectory" || cat == "contact_trajectory") {
+    if (cat.find("trajectory") != std::string::npos) {
       const std::string key = cat + "|" + ent.substr(0, ent.rfind('@')) + "|" + field;
       scale = scales_.count(key) ? scales_[key] : scale;
     }
@@ -752,6 +797,13 @@ class Comparison {
       stat.worst = where;
     }
     stat.max_abs = std::max(stat.max_abs, diff);
+    Stat& mine_stat = per_model[quantity];
+    ++mine_stat.compared;
+    if (rel >= mine_stat.max_rel) {
+      mine_stat.max_rel = rel;
+      mine_stat.max_abs = std::max(mine_stat.max_abs, diff);
+      mine_stat.worst = ent;
+    }
     if (diff > tol.atol + tol.rtol * scale) {
       ++stat.failed;
       ADD_FAILURE() << where << ": 2.2.2 " << mine.dump() << ", 3.x " << ref.dump() << " (|diff| "
@@ -775,7 +827,7 @@ std::string MujocoJsDir() {
 
 std::vector<std::pair<std::string, std::string>> Corpus() {
   std::vector<std::pair<std::string, std::string>> models;  // id, path
-  for (const char* dir : {"mjcf/dialect3x", "mjcf/robots"}) {
+  for (const char* dir : {"mjcf/dialect3x", "mjcf/robots", "mjcf/bridge3x"}) {
     const fs::path root = testing::TestData(dir);
     std::vector<fs::path> files;
     for (const auto& e : fs::recursive_directory_iterator(root)) {
@@ -790,6 +842,9 @@ std::vector<std::pair<std::string, std::string>> Corpus() {
   }
   return models;
 }
+
+// The bridge corpus (one small model per 3.x construct) also compares passive forces and sensors.
+bool Extended(const std::string& id) { return id.starts_with("bridge3x/"); }
 
 class Reference3xTest : public testing::MujocoTest {};
 
@@ -828,7 +883,9 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
                           {"value", f.value},
                           {"if_present", f.if_present}});
   }
-  for (const auto& [id, path] : corpus) job["models"].push_back({{"id", id}, {"file", path}});
+  for (const auto& [id, path] : corpus) {
+    job["models"].push_back({{"id", id}, {"file", path}, {"extended", Extended(id)}});
+  }
   const std::string dir = testing::MakeTempDir("reference3x");
   const std::string job_file = testing::WriteTextFile(dir, "job.json", job.dump());
   const std::string out_file = dir + "/out.json";
@@ -847,6 +904,7 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
             << js_dir << "); MuJoCo " << mj_versionString() << " here\n";
 
   std::map<std::string, Stat> stats;
+  std::map<std::string, std::map<std::string, Stat>> per_model;  // bridge corpus: model -> quantity
   std::set<std::string> compared;
   for (const auto& [id, path] : corpus) {
     SCOPED_TRACE(id);
@@ -859,13 +917,19 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
         if (n.affects_physics && e.tag() == n.element) e.Unset(n.attribute);
       }
     });
-    mjcf::ApplyBridge(doc);
+    const mjcf::BridgeReport report = mjcf::ApplyBridge(doc);
     physics::ModelPtr model = physics::CompileXmlString(mjcf::WriteString(doc));
     physics::DataPtr data = physics::MakeData(model.get());
-    const json ours = Dump222(model.get(), data.get());
+    // The runtime's share of the bridge (software sensors, gravity compensation), as urlab runs.
+    physics::SoftwareModelSpec runtime;
+    world::AddBridgeRuntime(report, "", &runtime);
+    const physics::SoftwareSensorRegistration registered =
+        physics::RegisterSoftwareModel(model.get(), runtime);
+    const json ours = Dump222(model.get(), data.get(), Extended(id));
     Comparison c(id, ours, r["data"], &stats);
     c.Run();
     for (const std::string& q : c.compared) compared.insert(id + "|" + q);
+    if (Extended(id)) per_model[id] = c.per_model;
   }
 
   // The checks this test exists for were made (not excluded, not vacuous).
@@ -877,6 +941,10 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
            "dialect3x/arm_servos|probe.qfrc_actuator|hi/finger_left",  // tendon clamp, gear 1
            "robots/arm/arm|probe.qfrc_actuator|hi/joint4",             // joint clamp with gear 2
            "dialect3x/arm_servos|probe.act|hi/elbow",                  // timeconst filter
+           "bridge3x/replicate|body.pos|driven-3",                     // replicate offset
+           "bridge3x/replicate|body.quat|arm1_2",                      // nested euler
+           "bridge3x/gravcomp|passive.qfrc_passive_plus_actuator|shoulder",  // actuatorgravcomp
+           "bridge3x/gravcomp|trajectory.qpos|ball_free@500",                // over-compensated
        }) {
     EXPECT_TRUE(compared.count(must)) << "not compared: " << must;
   }
@@ -897,6 +965,25 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
       << (tols.empty() ? "-" : tols) << " | " << (s.max_rel > 0 ? s.worst : "") << " |\n";
   }
   std::cout << t.str() << std::endl;
+
+  // The bridge corpus, model by model: the largest relative difference of every quantity that
+  // is not exactly equal (what each construct's translation or approximation costs).
+  std::ostringstream pm;
+  pm << "\n| bridge corpus model | quantity | compared | max rel diff | max abs diff | at |\n"
+        "|---|---|---|---|---|---|\n";
+  for (const auto& [model, quantities] : per_model) {
+    bool any = false;
+    for (const auto& [q, st] : quantities) {
+      if (st.max_rel == 0) continue;
+      any = true;
+      pm << "| " << model << " | " << q << " | " << st.compared << " | " << std::setprecision(2)
+         << std::scientific << st.max_rel << " | " << st.max_abs << std::defaultfloat << " | "
+         << st.worst << " |\n";
+    }
+    if (!any)
+      pm << "| " << model << " | (all " << quantities.size() << " quantities) | | 0 | 0 | |\n";
+  }
+  std::cout << pm.str() << std::endl;
 }
 
 }  // namespace

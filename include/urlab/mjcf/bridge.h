@@ -14,6 +14,7 @@
 //
 // Thread: plain function over a document the caller owns. Translating `dampratio` compiles a
 // trial copy of the model with MuJoCo (no global state other than MuJoCo's handlers).
+#include <span>
 #include <string>
 #include <vector>
 
@@ -27,7 +28,20 @@ struct BridgeChange {
   Kind kind = Kind::kTranslated;
   SourceLocation where;
   std::string what;
+  std::string rule;  // id of the BridgeRules() row that made this change
 };
+
+// One rule of the bridge (the rule table, src/mjcf/bridge_rules.cc): a MuJoCo 3.x construct, what
+// the bridge does with it and the function of src/mjcf/bridge.cc that does it.
+struct BridgeRule {
+  const char* id;
+  const char* construct;
+  BridgeChange::Kind kind;
+  const char* function;
+};
+
+// Every rule, in the order the bridge applies them.
+std::span<const BridgeRule> BridgeRules();
 
 // "translated", "approximated", "dropped", "refused".
 const char* BridgeKindName(BridgeChange::Kind kind);
@@ -41,15 +55,23 @@ struct BridgedSensor {
   std::string target;  // joint or tendon name
 };
 
+// A body with 3.x gravity compensation; the runtime adds the force through mjcb_passive
+// (physics/software_sensors.h, GravityCompensationSpec).
+struct BridgedGravcomp {
+  std::string body;
+  double gravcomp = 0;
+};
+
 struct BridgeReport {
   bool dialect = false;  // the document used 3.x constructs (so 3.x defaults were applied)
   std::vector<BridgeChange> changes;
   std::vector<BridgedSensor> software_sensors;
+  std::vector<BridgedGravcomp> gravcomp;
 
   bool HasRefusals() const;
   // Every refusal as an error (file:line: message).
   std::vector<InputError> Refusals() const;
-  // One line per change: "file:line: <kind>: <what>".
+  // One line per change: "file:line: <kind> [<rule id>]: <what>".
   std::string Format() const;
 };
 
