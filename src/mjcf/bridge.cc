@@ -85,6 +85,7 @@ class Bridge {
     compiler_ = doc_.Compiler();
     Replicates();
     FlattenFrames();
+    SiteEqualities();
     ActuatorArmatureDamping();
     GravityCompensation();
     ActuatorForceRanges();
@@ -571,6 +572,70 @@ class Bridge {
     if (!childclass.empty()) what += ", childclass='" + childclass + "' given to them";
     Note("frame", f, what);
     parent->RemoveChild(&f);
+  }
+
+  // ---- equality constraints on sites ----
+  // 3.x connect/weld with site1/site2 hold the two sites together (position; weld also the
+  // orientation). 2.2.2 knows only bodies, and derives the second anchor (and the weld's relative
+  // pose) from qpos0; the body constraint is written here and its data set from the compiled
+  // sites after compilation (ApplySiteEqualities), which is exact wherever the sites start.
+  void SiteEqualities() {
+    int unnamed = 0;
+    for (Element* e : Find({"connect", "weld"})) {
+      if (!e->parent() || e->parent()->tag() != "equality") continue;
+      const std::string* a = e->Get("site1");
+      const std::string* b = e->Get("site2");
+      if (!a && !b) continue;
+      if (!a || !b) {
+        Note("equality.site.refused", *e,
+             Tag(*e) +
+                 " needs both site1 and site2 (MuJoCo 3.x too); nearest 2.2.2 construct: "
+                 "body1/body2 with anchor");
+        UnsetDialect(*e, "site1");
+        UnsetDialect(*e, "site2");
+        continue;
+      }
+      const std::string s1 = *a, s2 = *b;
+      const std::string b1 = SiteBody(s1), b2 = SiteBody(s2);
+      if (b1.empty() || b2.empty()) continue;  // dangling site: reported by the reader
+      std::string name = e->Name();
+      if (name.empty()) {
+        name = "site_equality" + std::to_string(unnamed++);
+        e->Set("name", name);
+      }
+      UnsetDialect(*e, "site1");
+      UnsetDialect(*e, "site2");
+      std::string ignored;
+      for (const char* n : {"anchor", "relpose"}) {
+        if (e->Unset(n)) ignored += std::string(ignored.empty() ? "; " : ", ") + n;
+      }
+      if (!ignored.empty()) ignored += " ignored with sites, as in MuJoCo 3.x";
+      e->Set("body1", b1);
+      e->Set("body2", b2);
+      if (e->tag() == "connect") e->Set("anchor", "0 0 0");  // replaced after compilation
+      report_.site_equalities.push_back({name, s1, s2});
+      Note(e->tag() == "weld" ? "equality.site.weld" : "equality.site", *e,
+           Tag(*e) + " site1='" + s1 + "' site2='" + s2 + "' -> body1='" + b1 + "' body2='" + b2 +
+               "'; anchors" + (e->tag() == "weld" ? " and relative orientation" : "") +
+               " set from the sites' frames after compilation" +
+               (e->tag() == "weld" ? "; 3.x's site weld weighs the rotational residual "
+                                     "differently (same equilibrium without load, different "
+                                     "transient and sag)"
+                                   : "") +
+               ignored);
+    }
+  }
+
+  // The name of the body holding site `site` ("world" for the world body); names an unnamed one.
+  std::string SiteBody(const std::string& site) {
+    Element* s = FindNamed(document::Namespace::kSite, site);
+    if (!s) return "";
+    Element* b = s->parent();
+    while (b && b->tag() != "body" && b->tag() != "worldbody") b = b->parent();
+    if (!b) return "";
+    if (b->tag() == "worldbody") return "world";
+    if (b->Name().empty()) b->Set("name", "body_of_" + site);
+    return b->Name();
   }
 
   // ---- actuator armature / damping (3.x) move to the transmission target ----

@@ -200,3 +200,35 @@ void ComputeSoftwarePassive(const mjModel* m, mjData* d) {
 }
 
 }  // namespace urlab::physics
+
+namespace urlab::physics {
+
+void ApplySiteEqualities(mjModel* m, const SoftwareModelSpec& spec) {
+  for (const SiteEqualitySpec& e : spec.site_equalities) {
+    const int id = mj_name2id(m, mjOBJ_EQUALITY, e.equality.c_str());
+    const int s1 = mj_name2id(m, mjOBJ_SITE, e.site1.c_str());
+    const int s2 = mj_name2id(m, mjOBJ_SITE, e.site2.c_str());
+    const std::string what = "site equality '" + e.equality + "'";
+    if (id < 0 || s1 < 0 || s2 < 0) throw Error(what + ": equality or site not in the model");
+    const int type = m->eq_type[id];
+    if ((type != mjEQ_CONNECT && type != mjEQ_WELD) || m->eq_obj1id[id] != m->site_bodyid[s1] ||
+        m->eq_obj2id[id] != m->site_bodyid[s2]) {
+      throw Error(what + ": must be a connect/weld between the bodies of its sites");
+    }
+    mjtNum* data = m->eq_data + static_cast<size_t>(id) * mjNEQDATA;
+    if (type == mjEQ_CONNECT) {
+      mju_copy3(data, m->site_pos + 3 * s1);      // anchor in body1
+      mju_copy3(data + 3, m->site_pos + 3 * s2);  // anchor in body2
+    } else {
+      // 2.2.2's weld: data[0..2] the point in body2, data[3..5] the point in body1, data[6..9]
+      // body2's orientation relative to body1: with site frames coinciding, q1^-1 q2 = qs1 qs2^-1.
+      mju_copy3(data, m->site_pos + 3 * s2);
+      mju_copy3(data + 3, m->site_pos + 3 * s1);
+      mjtNum inv[4];
+      mju_negQuat(inv, m->site_quat + 4 * s2);
+      mju_mulQuat(data + 6, m->site_quat + 4 * s1, inv);
+    }
+  }
+}
+
+}  // namespace urlab::physics

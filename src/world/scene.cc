@@ -66,6 +66,9 @@ void AddBridgeRuntime(const mjcf::BridgeReport& report, const std::string& prefi
   for (const mjcf::BridgedGravcomp& g : report.gravcomp) {
     spec->gravcomp.push_back({prefix + g.body, g.gravcomp});
   }
+  for (const mjcf::BridgedSiteEquality& e : report.site_equalities) {
+    spec->site_equalities.push_back({prefix + e.equality, prefix + e.site1, prefix + e.site2});
+  }
 }
 
 namespace {
@@ -138,6 +141,7 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   for (const auto& [k, v] : scene.size) composed.doc.Section("size").Set(k, v);
   CompiledScene out;
   out.model = CompileDocument(composed.doc, &composed.articulations);
+  physics::ApplySiteEqualities(out.model.get(), software);
   mjcf::ApplyArticulationKeyframes(composed.articulations, out.model.get());
   WriteKeyframeValues(composed.doc, out.model.get());
   out.software_sensors = physics::RegisterSoftwareModel(out.model.get(), software);
@@ -159,6 +163,7 @@ CompiledScene BuildModel(const std::string& mjcf_path) {
   out.model = CompileDocument(doc, nullptr);
   physics::SoftwareModelSpec software;
   AddBridgeRuntime(report, "", &software);
+  physics::ApplySiteEqualities(out.model.get(), software);
   out.software_sensors = physics::RegisterSoftwareModel(out.model.get(), software);
   NoteBridge(report, "", &out.bridge_report);
   out.doc = std::move(doc);

@@ -160,6 +160,28 @@ constexpr Tolerance kTolerances[] = {
      "factorisation), anything larger is a modelling difference"},
 };
 
+// Approximations of the bridge corpus: per model and category (trajectory, sensor, ...), the
+// tolerance that bounds what the approximation costs (its measured error is in the per-model
+// table the test prints). Checked before kTolerances.
+struct Approximation {
+  const char* model;
+  Tolerance tolerance;  // its quantity: a category ("trajectory") or "*trajectory*" for all four
+};
+constexpr const char* kSiteWeld =
+    "weld on sites: the bridge's body weld holds the two site frames together (the same "
+    "constraint manifold: anchors and relative orientation from the compiled sites), but 3.x's "
+    "site weld weighs the rotational residual differently, so the block turns into alignment "
+    "along another path";
+constexpr Approximation kApproximations[] = {
+    {"bridge3x/site_weld",
+     {"trajectory_sensor", When::kAlways, 5e-3, 1e-9,
+      "weld on sites, the welded site's position (what the constraint holds): within 5e-3 of "
+      "its largest coordinate over 500 steps (measured 2.7e-3)"}},
+    {"bridge3x/site_weld",
+     {"contact_trajectory_sensor", When::kAlways, 5e-3, 1e-9, "as trajectory_sensor"}},
+    {"bridge3x/site_weld", {"*trajectory*", When::kAlways, 1.0, 1e-9, kSiteWeld}},
+};
+
 // Known differences: a quantity of a model's entity that is not compared, with the reason (also
 // in docs/dialect-bridge.md, "Checked against MuJoCo 3.x"). `model`, `quantity` and `entity` are
 // exact or "*"; an entity pattern ending in '*' matches by prefix, one starting with '*' by suffix.
@@ -203,6 +225,9 @@ constexpr KnownDifference kKnownDifferences[] = {
      "hfield.size"},
     {"*", "geom.rbound", "*", When::kHfieldGeom,
      "2.2.2 gives height fields rbound 0 (always tested in the broad phase), 3.x a radius"},
+    {"bridge3x/*", "equality.data", "*", When::kAlways,
+     "equalities on sites: 3.x keeps site-relative data, the bridge body-relative anchors set "
+     "from the sites after compilation; compared through the trajectories"},
     {"bridge3x/gravcomp", "passive.qfrc_passive", "shoulder", When::kAlways,
      "joint actuatorgravcomp: 3.x adds the shoulder's gravity compensation to qfrc_actuator, the "
      "bridge's mjcb_passive to qfrc_passive (documented); compared through their sum, "
@@ -695,6 +720,11 @@ class Comparison {
 
   const Tolerance& ToleranceFor(const std::string& cat, const std::string& ent,
                                 const std::string& quantity) const {
+    for (const Approximation& a : kApproximations) {
+      const std::string q = a.tolerance.quantity;
+      const bool all = q == "*trajectory*" && cat.find("trajectory") != std::string::npos;
+      if (model_ == a.model && (all || q == cat)) return a.tolerance;
+    }
     for (const Tolerance& t : kTolerances) {
       const std::string q = t.quantity;
       if ((q == quantity || q == cat || q == "*") && Holds(t.when, cat, ent)) return t;
@@ -923,6 +953,7 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
     // The runtime's share of the bridge (software sensors, gravity compensation), as urlab runs.
     physics::SoftwareModelSpec runtime;
     world::AddBridgeRuntime(report, "", &runtime);
+    physics::ApplySiteEqualities(model.get(), runtime);
     const physics::SoftwareSensorRegistration registered =
         physics::RegisterSoftwareModel(model.get(), runtime);
     const json ours = Dump222(model.get(), data.get(), Extended(id));

@@ -62,11 +62,20 @@ struct BridgedGravcomp {
   double gravcomp = 0;
 };
 
+// A 3.x equality constraint on sites (connect/weld with site1/site2), written as the 2.2.2
+// body-based constraint `equality`; its anchors and relative pose are set from the compiled
+// sites' frames after compilation (physics/software_sensors.h, SiteEqualitySpec).
+struct BridgedSiteEquality {
+  std::string equality;
+  std::string site1, site2;
+};
+
 struct BridgeReport {
   bool dialect = false;  // the document used 3.x constructs (so 3.x defaults were applied)
   std::vector<BridgeChange> changes;
   std::vector<BridgedSensor> software_sensors;
   std::vector<BridgedGravcomp> gravcomp;
+  std::vector<BridgedSiteEquality> site_equalities;
 
   bool HasRefusals() const;
   // Every refusal as an error (file:line: message).

@@ -63,11 +63,20 @@ struct GravityCompensationSpec {
   double gravcomp = 0;
 };
 
+// A body-based connect/weld that stands for a MuJoCo 3.x equality on two sites: its data is set
+// from the sites' frames (connect: site1's position in body1, site2's in body2; weld: the same
+// points and the relative orientation site1 * site2^-1), so the constraint holds the sites
+// together as 3.x's does, wherever they are at qpos0.
+struct SiteEqualitySpec {
+  std::string equality, site1, site2;
+};
+
 // Everything the runtime computes for one model: sensors (mjcb_sensor) and passive forces
 // (mjcb_passive). One registry serves both callbacks.
 struct SoftwareModelSpec {
   std::vector<SoftwareSensorSpec> sensors;
   std::vector<GravityCompensationSpec> gravcomp;
+  std::vector<SiteEqualitySpec> site_equalities;  // applied by ApplySiteEqualities, not callbacks
   bool empty() const { return sensors.empty() && gravcomp.empty(); }
 };
 
@@ -75,6 +84,11 @@ struct SoftwareModelSpec {
 // callbacks. Throws Error for a sensor as RegisterSoftwareSensors does, or a body that is not in
 // the model. With an empty spec, registers nothing and returns an empty registration.
 SoftwareSensorRegistration RegisterSoftwareModel(const mjModel* m, const SoftwareModelSpec& spec);
+
+// Writes the data of the site equalities `spec` names into `m` (after compilation, before any
+// mjData is made from it). Throws Error for names not in the model or an equality that is not
+// a connect/weld between the sites' bodies.
+void ApplySiteEqualities(mjModel* m, const SoftwareModelSpec& spec);
 
 // Registers the sensors of `m` named in `specs` (replacing an earlier registration of `m`) and
 // installs the callback. Throws Error when a name is not a user sensor of dimension 1 attached
