@@ -46,6 +46,19 @@ bool InDefault(const Element& e) {
 
 bool IsDialect(const Attribute& a) { return a.spec && a.spec->dialect; }
 
+// A 3.x attribute, a 3.x keyword of a 2.2.2 attribute, or a value count only 3.x accepts.
+bool DialectValue(const Attribute& a) {
+  if (!a.spec) return false;
+  if (a.spec->dialect) return true;
+  const auto& kw = a.spec->dialect_keywords;
+  if (std::find(kw.begin(), kw.end(), a.value) != kw.end()) return true;
+  if (!a.spec->dialect_count) return false;
+  const auto v = ParseReals(a.value);
+  const int n = v ? static_cast<int>(v->size()) : 0;
+  return n < a.spec->legacy_min_count ||
+         (a.spec->legacy_max_count >= 0 && n > a.spec->legacy_max_count);
+}
+
 std::string Join(const std::vector<std::string>& v, const char* sep) {
   std::string s;
   for (const std::string& x : v) s += (s.empty() ? "" : sep) + x;
@@ -91,12 +104,18 @@ class Bridge {
     ActuatorForceRanges();
     PositionShortcuts();
     Options();
+    FilterExact();
+    PolyCoef();
+    SpringLength();
+    PassiveFlags();
+    VisualOnly();
     MeshInertia();
     GenericAttributes();
     Sensors();
     OrderActuators();
     Leftovers();
     if (!report_.HasRefusals()) DampRatio();
+    if (!report_.HasRefusals()) PadKeyframes();
   }
 
  private:
@@ -214,7 +233,7 @@ class Bridge {
     doc_.root().Visit([&](const Element& e) {
       if (dialect) return;
       if (e.spec() && e.spec()->dialect) dialect = true;
-      for (const Attribute& a : e.attributes()) dialect = dialect || IsDialect(a);
+      for (const Attribute& a : e.attributes()) dialect = dialect || DialectValue(a);
       if (dialect || c.autolimits || InDefault(e) || e.tag() == "default") return;
       // A range without its limited attribute only loads with 3.x's autolimits default.
       auto missing = [&](const char* range, const char* limited) {
@@ -1302,9 +1321,16 @@ class Bridge {
         Note("flag.spring_damper", f,
              "flag spring/damper=\"" + s + "\" -> 2.2.2's single passive=\"" + s + "\"");
       } else {
-        Note("flag.spring_damper.refused", f,
+        // One of the two is off: passive stays on and the disabled forces are zeroed in the
+        // model (PassiveFlags, after every translation that sets stiffness or damping).
+        springs_off_ = s == "disable";
+        dampers_off_ = d == "disable";
+        Note("flag.spring_damper.split", f,
              "flag spring=\"" + s + "\" damper=\"" + d +
-                 "\": 2.2.2 can only enable or disable both (flag passive)");
+                 "\": 2.2.2 can only switch both (flag passive), so passive stays enabled and "
+                 "every joint and tendon gets " +
+                 (springs_off_ ? "stiffness" : "damping") +
+                 " 0 instead; exact while the flags are not changed at run time");
       }
       f.Unset("spring");
       f.Unset("damper");
@@ -1332,6 +1358,193 @@ class Bridge {
         f.Unset(r.attr);
       }
     }
+  }
+
+  // ---- general dyntype="filterexact" ----
+  // As position timeconst: 3.x's filterexact act += (ctrl - act)(1 - exp(-dt/tau)) is 2.2.2's
+  // Euler-integrated filter with tau' = dt / (1 - exp(-dt/tau)).
+  void FilterExact() {
+    const double dt = ResolveTimestep();
+    const bool rk4 = Integrator() == "RK4";
+    for (Element* a : Find({"general"})) {
+      if (!a->parent() || a->parent()->tag() != "actuator") continue;
+      const std::string* t = Resolve(*a, "dyntype");
+      if (!t || *t != "filterexact") continue;
+      std::vector<double> prm = ResolveReals(*a, "dynprm").value_or(std::vector<double>{1});
+      if (prm.empty() || prm[0] <= 0) {
+        Note("actuator.filterexact.refused", *a, Tag(*a) + " filterexact needs dynprm[0] > 0");
+        continue;
+      }
+      const double tau = prm[0];
+      prm[0] = dt / (1 - std::exp(-dt / tau));
+      a->Set("dyntype", "filter");
+      a->SetReals("dynprm", prm);
+      Note(rk4 ? "actuator.filterexact.rk4" : "actuator.filterexact", *a,
+           Tag(*a) + " dyntype=\"filterexact\" dynprm[0]=" + FormatReal(tau) +
+               " -> dyntype=\"filter\" dynprm[0]=" + FormatReal(prm[0]) +
+               " (the same update per step for the model's timestep " + FormatReal(dt) + ")" +
+               (rk4 ? "; with RK4 the filter state differs at O(dt^2)"
+                    : ", exact while the timestep is unchanged"));
+    }
+    for (Element* d : FindDefaults({"general"})) {
+      if (d->GetOr("dyntype", "") == "filterexact") {
+        d->Set("dyntype", "filter");
+        Note("actuator.filterexact.default", *d,
+             "default " + Tag(*d) + " dyntype=\"filterexact\" resolved into each actuator");
+      }
+    }
+  }
+  double ResolveTimestep() {
+    const Element* o = doc_.root().FirstChild("option");
+    return o ? std::atof(o->GetOr("timestep", "0.002").c_str()) : 0.002;
+  }
+  std::string Integrator() {
+    const Element* o = doc_.root().FirstChild("option");
+    return o ? o->GetOr("integrator", "Euler") : "Euler";
+  }
+
+  // ---- equality polycoef with fewer than 5 numbers ----
+  void PolyCoef() {
+    for (Element* e : Find({"joint", "tendon"})) {
+      if (!e->parent() || e->parent()->tag() != "equality") continue;
+      const std::string* v = e->Get("polycoef");
+      if (!v) continue;
+      std::vector<double> c = ParseReals(*v).value_or(std::vector<double>{});
+      if (c.size() >= 5 || c.empty()) continue;
+      const double defaults[5] = {0, 1, 0, 0, 0};
+      const std::string before = *v;
+      for (size_t i = c.size(); i < 5; ++i) c.push_back(defaults[i]);
+      e->SetReals("polycoef", c);
+      Note("equality.polycoef", *e,
+           Tag(*e) + " polycoef=\"" + before + "\" -> \"" + FormatReals(c) +
+               "\" (3.x fills the missing coefficients with the defaults 0 1 0 0 0)");
+    }
+  }
+
+  // ---- tendon springlength with two numbers (a dead band) ----
+  void SpringLength() {
+    for (Element* t : Find({"fixed", "spatial"})) {
+      auto sl = ResolveReals(*t, "springlength");
+      if (!sl || sl->size() != 2) continue;
+      const double lo = (*sl)[0], hi = (*sl)[1];
+      const double k = ResolveReal(*t, "stiffness", 0);
+      const std::string desc = Tag(*t) + " springlength=\"" + FormatReals(*sl) + "\"";
+      if (lo == hi) {
+        t->SetReal("springlength", lo);
+        Note("tendon.springlength.single", *t, desc + " -> one value (no dead band)");
+        continue;
+      }
+      if (lo > hi) {
+        Note("tendon.springlength.refused", *t, desc + ": the lower bound exceeds the upper");
+        continue;
+      }
+      t->SetReal("springlength", lo);
+      if (k == 0) {
+        Note("tendon.springlength.nostiffness", *t, desc + ": no stiffness, no spring force");
+        continue;
+      }
+      std::string name = t->Name();
+      if (name.empty()) {
+        name = "deadband_tendon" + std::to_string(report_.deadband_springs.size());
+        t->Set("name", name);
+      }
+      t->SetReal("stiffness", 0);
+      report_.deadband_springs.push_back({name, k, lo, hi});
+      Note("tendon.springlength.deadband", *t,
+           desc + " (a dead band) with stiffness " + FormatReal(k) +
+               ": the tendon gets stiffness 0 and the runtime adds stiffness * (bound - length) "
+               "outside [" +
+               FormatReal(lo) + ", " + FormatReal(hi) +
+               "] through mjcb_passive, as MuJoCo 3.x does");
+    }
+    for (Element* d : FindDefaults({"tendon"})) {
+      auto sl = d->GetReals("springlength");
+      if (sl && sl->size() == 2) {
+        d->SetReal("springlength", (*sl)[0]);
+        Note("tendon.springlength.default", *d,
+             "default " + Tag(*d) + " springlength resolved into each tendon");
+      }
+    }
+  }
+
+  // ---- flag spring or damper disabled alone ----
+  void PassiveFlags() {
+    if (!springs_off_ && !dampers_off_) return;
+    const char* attr = springs_off_ ? "stiffness" : "damping";
+    int n = 0;
+    for (Element* e : Find({"joint", "fixed", "spatial"})) {
+      if (e->tag() == "joint" && (!e->parent() || e->parent()->tag() != "body")) continue;
+      if (ResolveReal(*e, attr, 0) == 0) continue;
+      e->SetReal(attr, 0);
+      ++n;
+    }
+    if (springs_off_ && !report_.deadband_springs.empty()) {
+      n += static_cast<int>(report_.deadband_springs.size());
+      report_.deadband_springs.clear();
+    }
+    Element* f = doc_.root().FirstChild("option");
+    Note("flag.spring_damper.split", f ? *f : doc_.root(),
+         std::string(attr) + " set to 0 on " + std::to_string(n) + " joint(s)/tendon(s) (flag " +
+             (springs_off_ ? "spring" : "damper") + " disabled)");
+  }
+
+  // ---- render-only elements of 3.x ----
+  void VisualOnly() {
+    for (Element* l : Find({"layer"})) {
+      if (!l->parent() || l->parent()->tag() != "material") continue;
+      Note("material.layer", *l,
+           "<material><layer> (physically based texture layer) dropped: render-only");
+      l->parent()->RemoveChild(l);
+    }
+  }
+
+  // ---- keyframes shorter than the model ----
+  // 3.x pads a key's qpos with qpos0, qvel/act/ctrl with zeros, mpos/mquat with the mocap bodies'
+  // poses; 2.2.2 refuses a key of the wrong length. The padding needs the compiled sizes and
+  // qpos0: a trial compile without the keys.
+  void PadKeyframes() {
+    Element* section = nullptr;
+    for (Element* k : Find({"keyframe"})) section = k;
+    if (!section || section->children().empty()) return;
+    std::unique_ptr<Element> keys = doc_.root().RemoveChild(section);
+    std::string error;
+    mjModel* m = TrialCompile(WriteString(doc_), &error);
+    doc_.root().InsertChild(doc_.root().children().size(), std::move(keys));
+    if (!m) return;  // the real compile reports it
+    for (const auto& k : section->children()) {
+      std::vector<std::string> padded;
+      auto pad = [&](const char* attr, int size, const mjtNum* fill) {
+        const std::string* v = k->Get(attr);
+        if (!v) return;
+        std::vector<double> x = ParseReals(*v).value_or(std::vector<double>{});
+        if (static_cast<int>(x.size()) >= size) return;
+        const size_t had = x.size();
+        for (int i = static_cast<int>(had); i < size; ++i) x.push_back(fill ? fill[i] : 0.0);
+        k->SetReals(attr, x);
+        padded.push_back(std::string(attr) + " " + std::to_string(had) + " -> " +
+                         std::to_string(size));
+      };
+      std::vector<mjtNum> mpos, mquat;
+      for (int b = 0; b < m->nbody; ++b) {
+        if (m->body_mocapid[b] < 0) continue;
+        mpos.insert(mpos.end(), m->body_pos + 3 * b, m->body_pos + 3 * b + 3);
+        mquat.insert(mquat.end(), m->body_quat + 4 * b, m->body_quat + 4 * b + 4);
+      }
+      pad("qpos", m->nq, m->qpos0);
+      pad("qvel", m->nv, nullptr);
+      pad("act", m->na, nullptr);
+      pad("ctrl", m->nu, nullptr);
+      pad("mpos", 3 * m->nmocap, mpos.data());
+      pad("mquat", 4 * m->nmocap, mquat.data());
+      if (!padded.empty()) {
+        Note("keyframe.pad", *k,
+             Tag(*k) +
+                 " shorter than the model, padded as MuJoCo 3.x does (qpos with qpos0, "
+                 "mocap with the bodies' poses, the rest with zeros): " +
+                 Join(padded, ", "));
+      }
+    }
+    mj_deleteModel(m);
   }
 
   // ---- mesh inertia ----
@@ -1608,6 +1821,8 @@ class Bridge {
   Document& doc_;
   BridgeReport& report_;
   CompilerSettings compiler_;
+  bool springs_off_ = false;  // flag spring disabled, damper enabled
+  bool dampers_off_ = false;  // flag damper disabled, spring enabled
   std::vector<PendingDampRatio> pending_;
 };
 

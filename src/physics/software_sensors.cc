@@ -23,10 +23,16 @@ struct GravcompEntry {
   mjtNum gravcomp = 0;
 };
 
+struct DeadbandEntry {
+  int tendon = 0;
+  mjtNum stiffness = 0, lo = 0, hi = 0;
+};
+
 struct Registered {
   unsigned long generation = 0;
   std::vector<Entry> entries;
   std::vector<GravcompEntry> gravcomp;
+  std::vector<DeadbandEntry> deadband;
 };
 
 struct Registry {
@@ -72,12 +78,38 @@ void Gravcomp(const mjModel* m, mjData* d, const std::vector<GravcompEntry>& ent
   }
 }
 
+// 3.x's dead-band tendon spring: zero inside [lo, hi], stiffness * (bound - length) outside.
+void Deadband(const mjModel* m, mjData* d, const std::vector<DeadbandEntry>& entries) {
+  for (const DeadbandEntry& e : entries) {
+    const mjtNum length = d->ten_length[e.tendon];
+    mjtNum force = 0;
+    if (length < e.lo) force = e.stiffness * (e.lo - length);
+    if (length > e.hi) force = e.stiffness * (e.hi - length);
+    if (force == 0) continue;
+    // The tendon's Jacobian (its moment arms), sparse or dense as the engine keeps it.
+    const int t = e.tendon;
+    if (mj_isSparse(m)) {
+      const int adr = d->ten_J_rowadr[t];
+      for (int k = 0; k < d->ten_J_rownnz[t]; ++k) {
+        d->qfrc_passive[d->ten_J_colind[adr + k]] += d->ten_J[adr + k] * force;
+      }
+    } else {
+      mju_addToScl(d->qfrc_passive, d->ten_J + static_cast<size_t>(t) * m->nv, force, m->nv);
+    }
+  }
+}
+
+void Passive(const mjModel* m, mjData* d, const Registered& r) {
+  Gravcomp(m, d, r.gravcomp);
+  Deadband(m, d, r.deadband);
+}
+
 void PassiveCallback(const mjModel* m, mjData* d) {
   Registry& r = TheRegistry();
   std::shared_lock lock(r.mutex);
   if (r.previous_passive) r.previous_passive(m, d);
   auto it = r.models.find(m);
-  if (it != r.models.end()) Gravcomp(m, d, it->second.gravcomp);
+  if (it != r.models.end()) Passive(m, d, it->second);
 }
 
 void Callback(const mjModel* m, mjData* d, int stage) {
@@ -164,13 +196,20 @@ SoftwareSensorRegistration RegisterSoftwareModel(const mjModel* m, const Softwar
     if (id <= 0) throw Error("gravity compensation: no body '" + g.body_name + "' in the model");
     gravcomp.push_back({id, g.gravcomp});
   }
+  std::vector<DeadbandEntry> deadband;
+  for (const DeadbandSpringSpec& t : spec.deadband_springs) {
+    const int id = mj_name2id(m, mjOBJ_TENDON, t.tendon_name.c_str());
+    if (id < 0) throw Error("dead-band spring: no tendon '" + t.tendon_name + "' in the model");
+    deadband.push_back({id, t.stiffness, t.lo, t.hi});
+  }
   InstallCallback();
   Registry& r = TheRegistry();
   unsigned long generation = 0;
   {
     std::unique_lock lock(r.mutex);
     generation = r.next_generation++;
-    r.models[m] = Registered{generation, std::move(entries), std::move(gravcomp)};
+    r.models[m] =
+        Registered{generation, std::move(entries), std::move(gravcomp), std::move(deadband)};
   }
   return SoftwareSensorRegistration(m, generation);
 }
@@ -196,7 +235,7 @@ void ComputeSoftwarePassive(const mjModel* m, mjData* d) {
   Registry& r = TheRegistry();
   std::shared_lock lock(r.mutex);
   auto it = r.models.find(m);
-  if (it != r.models.end()) Gravcomp(m, d, it->second.gravcomp);
+  if (it != r.models.end()) Passive(m, d, it->second);
 }
 
 }  // namespace urlab::physics

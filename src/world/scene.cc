@@ -66,6 +66,9 @@ void AddBridgeRuntime(const mjcf::BridgeReport& report, const std::string& prefi
   for (const mjcf::BridgedGravcomp& g : report.gravcomp) {
     spec->gravcomp.push_back({prefix + g.body, g.gravcomp});
   }
+  for (const mjcf::BridgedDeadbandSpring& t : report.deadband_springs) {
+    spec->deadband_springs.push_back({prefix + t.tendon, t.stiffness, t.lo, t.hi});
+  }
   for (const mjcf::BridgedSiteEquality& e : report.site_equalities) {
     spec->site_equalities.push_back({prefix + e.equality, prefix + e.site1, prefix + e.site2});
   }

@@ -683,10 +683,23 @@ TEST_F(BridgeTest, SpringDamperFlagsBecomePassive) {
   b.data->qpos[0] = 0.5;
   mj_forward(b.model.get(), b.data.get());
   EXPECT_EQ(b.data->qfrc_passive[0], 0);
-  const mjcf::BridgeReport split = ReportOf(R"(<mujoco>
-  <option><flag spring="disable"/></option>
+  // One of the two: passive stays on, the disabled forces are zeroed in the model.
+  for (const char* which : {"spring", "damper"}) {
+    Bridged one = Load(std::string(R"(<mujoco>
+  <option><flag )") + which + R"(="disable"/></option>
+  <default><joint stiffness="10"/></default>
+  <worldbody>
+    <body><joint name="j" axis="0 1 0" damping="3"/><geom size="0.1" pos="0 0 -1"/></body>
+  </worldbody>
 </mujoco>)");
-  EXPECT_TRUE(Mentions(split, Kind::kRefused, "spring=\"disable\" damper=\"enable\""));
+    EXPECT_FALSE(one.model->opt.disableflags & mjDSBL_PASSIVE) << which;
+    one.data->qvel[0] = 1;
+    one.data->qpos[0] = 0.5;
+    mj_forward(one.model.get(), one.data.get());
+    const double expected = std::string(which) == "spring" ? -3.0 : -5.0;  // -d*v or -k*q
+    EXPECT_DOUBLE_EQ(one.data->qfrc_passive[0], expected) << which;
+    EXPECT_TRUE(Mentions(one.report, Kind::kTranslated, "passive stays enabled")) << which;
+  }
 }
 
 TEST_F(BridgeTest, OptionsMiscLoadsAndTranslatesWhatIsExact) {

@@ -228,6 +228,14 @@ constexpr KnownDifference kKnownDifferences[] = {
     {"bridge3x/*", "equality.data", "*", When::kAlways,
      "equalities on sites: 3.x keeps site-relative data, the bridge body-relative anchors set "
      "from the sites after compilation; compared through the trajectories"},
+    {"bridge3x/small_attributes", "tendon.stiffness", "band", When::kAlways,
+     "dead-band spring: the 2.2.2 tendon has stiffness 0 and the runtime adds the spring force "
+     "through mjcb_passive; compared through passive.qfrc_passive and the trajectories"},
+    {"bridge3x/spring_flag", "joint.stiffness", "*", When::kAlways,
+     "flag spring disabled alone: the bridge zeroes the stiffness in the model (2.2.2 can only "
+     "switch spring and damper together); compared through its effect, the trajectories"},
+    {"bridge3x/spring_flag", "flag.passive", "opt", When::kAlways,
+     "the same: 2.2.2's passive flag stays enabled for the dampers"},
     {"bridge3x/gravcomp", "passive.qfrc_passive", "shoulder", When::kAlways,
      "joint actuatorgravcomp: 3.x adds the shoulder's gravity compensation to qfrc_actuator, the "
      "bridge's mjcb_passive to qfrc_passive (documented); compared through their sum, "
@@ -975,7 +983,13 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
            "bridge3x/replicate|body.pos|driven-3",                     // replicate offset
            "bridge3x/replicate|body.quat|arm1_2",                      // nested euler
            "bridge3x/gravcomp|passive.qfrc_passive_plus_actuator|shoulder",  // actuatorgravcomp
-           "bridge3x/gravcomp|trajectory.qpos|ball_free@500",                // over-compensated
+           "bridge3x/small_attributes|probe.act|hi/drive",                   // filterexact
+           "bridge3x/small_attributes|key.qpos|bent/slide",           // key padded with qpos0
+           "bridge3x/small_attributes|passive.qfrc_passive|slide",    // dead-band spring
+           "bridge3x/small_attributes|trajectory.qpos|follower@500",  // polycoef "0 2"
+           "bridge3x/spring_flag|trajectory.qpos|h1@500",             // spring off, damper on
+           "bridge3x/site_equality|trajectory.qpos|hinge2@500",       // connect on sites
+           "bridge3x/gravcomp|trajectory.qpos|ball_free@500",         // over-compensated
        }) {
     EXPECT_TRUE(compared.count(must)) << "not compared: " << must;
   }

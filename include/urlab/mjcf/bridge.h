@@ -70,12 +70,20 @@ struct BridgedSiteEquality {
   std::string site1, site2;
 };
 
+// A tendon spring with a 3.x dead band (springlength="lo hi"); the 2.2.2 tendon gets stiffness 0
+// and the runtime adds the force through mjcb_passive (physics/software_sensors.h).
+struct BridgedDeadbandSpring {
+  std::string tendon;
+  double stiffness = 0, lo = 0, hi = 0;
+};
+
 struct BridgeReport {
   bool dialect = false;  // the document used 3.x constructs (so 3.x defaults were applied)
   std::vector<BridgeChange> changes;
   std::vector<BridgedSensor> software_sensors;
   std::vector<BridgedGravcomp> gravcomp;
   std::vector<BridgedSiteEquality> site_equalities;
+  std::vector<BridgedDeadbandSpring> deadband_springs;
 
   bool HasRefusals() const;
   // Every refusal as an error (file:line: message).

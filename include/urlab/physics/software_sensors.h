@@ -71,13 +71,23 @@ struct SiteEqualitySpec {
   std::string equality, site1, site2;
 };
 
+// A tendon spring with a dead band (MuJoCo 3.x springlength="lo hi"): no force while the length is
+// in [lo, hi], stiffness * (bound - length) outside, added to qfrc_passive through the tendon's
+// moment arms (mjcb_passive). The 2.2.2 tendon carries stiffness 0.
+struct DeadbandSpringSpec {
+  std::string tendon_name;
+  double stiffness = 0;
+  double lo = 0, hi = 0;
+};
+
 // Everything the runtime computes for one model: sensors (mjcb_sensor) and passive forces
 // (mjcb_passive). One registry serves both callbacks.
 struct SoftwareModelSpec {
   std::vector<SoftwareSensorSpec> sensors;
   std::vector<GravityCompensationSpec> gravcomp;
+  std::vector<DeadbandSpringSpec> deadband_springs;
   std::vector<SiteEqualitySpec> site_equalities;  // applied by ApplySiteEqualities, not callbacks
-  bool empty() const { return sensors.empty() && gravcomp.empty(); }
+  bool empty() const { return sensors.empty() && gravcomp.empty() && deadband_springs.empty(); }
 };
 
 // Registers what `spec` names for `m` (replacing an earlier registration of `m`) and installs the
