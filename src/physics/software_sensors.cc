@@ -4,6 +4,7 @@
 #include <shared_mutex>
 #include <unordered_map>
 
+#include "physics/sensors3x.h"
 #include "urlab/core/error.h"
 
 namespace urlab::physics {
@@ -16,6 +17,9 @@ struct Entry {
   int objid = 0;  // joint or tendon id
   int dof = 0;    // joint's dof address
   mjtNum cutoff = 0;
+  int stage = mjSTAGE_ACC;
+  InsideSiteSensor inside;
+  ContactSensor contact;
 };
 
 struct GravcompEntry {
@@ -48,17 +52,33 @@ Registry& TheRegistry() {
   return *r;
 }
 
-void Compute(const mjModel* m, mjData* d, const std::vector<Entry>& entries) {
+void Compute(const mjModel* m, mjData* d, const std::vector<Entry>& entries, int stage) {
   for (const Entry& e : entries) {
+    if (e.stage != stage) continue;
     mjtNum v = 0;
-    if (e.kind == SoftwareSensorKind::kJointActuatorForce) {
-      v = d->qfrc_actuator[e.dof];
-    } else {
-      for (int i = 0; i < m->nu; ++i) {
-        if (m->actuator_trntype[i] == mjTRN_TENDON && m->actuator_trnid[2 * i] == e.objid) {
-          v += d->actuator_force[i];
+    switch (e.kind) {
+      case SoftwareSensorKind::kJointActuatorForce:
+        v = d->qfrc_actuator[e.dof];
+        break;
+      case SoftwareSensorKind::kTendonActuatorForce:
+        for (int i = 0; i < m->nu; ++i) {
+          if (m->actuator_trntype[i] == mjTRN_TENDON && m->actuator_trnid[2 * i] == e.objid) {
+            v += d->actuator_force[i];
+          }
         }
-      }
+        break;
+      case SoftwareSensorKind::kKineticEnergy:
+        v = KineticEnergy(m, d);
+        break;
+      case SoftwareSensorKind::kPotentialEnergy:
+        v = PotentialEnergy(m, d);
+        break;
+      case SoftwareSensorKind::kInsideSite:
+        v = InsideSiteValue(m, d, e.inside);
+        break;
+      case SoftwareSensorKind::kContact:
+        ContactSensorValues(m, d, e.contact, d->sensordata + e.adr);
+        continue;  // several values, no cutoff (3.x applies none to contact sensors)
     }
     if (e.cutoff > 0) v = mju_clip(v, -e.cutoff, e.cutoff);
     d->sensordata[e.adr] = v;
@@ -116,9 +136,8 @@ void Callback(const mjModel* m, mjData* d, int stage) {
   Registry& r = TheRegistry();
   std::shared_lock lock(r.mutex);
   if (r.previous) r.previous(m, d, stage);
-  if (stage != mjSTAGE_ACC) return;
   auto it = r.models.find(m);
-  if (it != r.models.end()) Compute(m, d, it->second.entries);
+  if (it != r.models.end()) Compute(m, d, it->second.entries, stage);
 }
 
 void InstallCallback() {
@@ -170,22 +189,37 @@ SoftwareSensorRegistration RegisterSoftwareModel(const mjModel* m, const Softwar
     const int id = mj_name2id(m, mjOBJ_SENSOR, s.sensor_name.c_str());
     const std::string what = "software sensor '" + s.sensor_name + "'";
     if (id < 0) throw Error(what + ": no sensor of that name in the model");
-    if (m->sensor_type[id] != mjSENS_USER || m->sensor_dim[id] != 1) {
-      throw Error(what + ": must be a <user> sensor of dimension 1");
-    }
     Entry e;
     e.adr = m->sensor_adr[id];
     e.kind = s.kind;
     e.objid = m->sensor_objid[id];
     e.cutoff = m->sensor_cutoff[id];
-    if (s.kind == SoftwareSensorKind::kJointActuatorForce) {
+    int dim = 1;
+    if (s.kind == SoftwareSensorKind::kContact) {
+      e.contact = ParseContactSensor(m, s.params, what);
+      dim = e.contact.num * e.contact.SlotSize();
+    }
+    if (m->sensor_type[id] != mjSENS_USER || m->sensor_dim[id] != dim) {
+      throw Error(what + ": must be a <user> sensor of dimension " + std::to_string(dim));
+    }
+    e.stage = s.kind == SoftwareSensorKind::kKineticEnergy     ? mjSTAGE_VEL
+              : s.kind == SoftwareSensorKind::kPotentialEnergy ? mjSTAGE_POS
+              : s.kind == SoftwareSensorKind::kInsideSite      ? mjSTAGE_POS
+                                                               : mjSTAGE_ACC;
+    if (m->sensor_needstage[id] != e.stage) {
+      throw Error(what + ": the <user> sensor's needstage does not match its kind");
+    }
+    if (s.kind == SoftwareSensorKind::kInsideSite) {
+      e.inside = ParseInsideSite(m, s.params, what);
+    } else if (s.kind == SoftwareSensorKind::kJointActuatorForce) {
       if (m->sensor_objtype[id] != mjOBJ_JOINT) throw Error(what + ": must be attached to a joint");
       const int type = m->jnt_type[e.objid];
       if (type != mjJNT_HINGE && type != mjJNT_SLIDE) {
         throw Error(what + ": the joint must be a hinge or a slide");
       }
       e.dof = m->jnt_dofadr[e.objid];
-    } else if (m->sensor_objtype[id] != mjOBJ_TENDON) {
+    } else if (s.kind == SoftwareSensorKind::kTendonActuatorForce &&
+               m->sensor_objtype[id] != mjOBJ_TENDON) {
       throw Error(what + ": must be attached to a tendon");
     }
     entries.push_back(e);
@@ -224,7 +258,10 @@ void ComputeSoftwareSensors(const mjModel* m, mjData* d) {
   Registry& r = TheRegistry();
   std::shared_lock lock(r.mutex);
   auto it = r.models.find(m);
-  if (it != r.models.end()) Compute(m, d, it->second.entries);
+  if (it != r.models.end()) {
+    for (int stage : {mjSTAGE_POS, mjSTAGE_VEL, mjSTAGE_ACC})
+      Compute(m, d, it->second.entries, stage);
+  }
 }
 
 }  // namespace urlab::physics

@@ -57,11 +57,23 @@ document::Document ReadBridged(const std::string& path, const std::string& label
 
 void AddBridgeRuntime(const mjcf::BridgeReport& report, const std::string& prefix,
                       physics::SoftwareModelSpec* spec) {
+  using B = mjcf::BridgedSensor::Kind;
+  using P = physics::SoftwareSensorKind;
+  static const std::map<B, P> kKinds = {{B::kJointActuatorForce, P::kJointActuatorForce},
+                                        {B::kTendonActuatorForce, P::kTendonActuatorForce},
+                                        {B::kKineticEnergy, P::kKineticEnergy},
+                                        {B::kPotentialEnergy, P::kPotentialEnergy},
+                                        {B::kInsideSite, P::kInsideSite},
+                                        {B::kContact, P::kContact}};
+  // Attributes naming model elements get the articulation's prefix like every name.
+  static const char* kNames[] = {"site",  "objname", "geom1",    "geom2",
+                                 "body1", "body2",   "subtree1", "subtree2"};
   for (const mjcf::BridgedSensor& b : report.software_sensors) {
-    spec->sensors.push_back(
-        {prefix + b.name, b.kind == mjcf::BridgedSensor::Kind::kJointActuatorForce
-                              ? physics::SoftwareSensorKind::kJointActuatorForce
-                              : physics::SoftwareSensorKind::kTendonActuatorForce});
+    std::map<std::string, std::string> params = b.params;
+    for (const char* n : kNames) {
+      if (params.count(n) && params[n] != "world") params[n] = prefix + params[n];
+    }
+    spec->sensors.push_back({prefix + b.name, kKinds.at(b.kind), std::move(params)});
   }
   for (const mjcf::BridgedGravcomp& g : report.gravcomp) {
     spec->gravcomp.push_back({prefix + g.body, g.gravcomp});

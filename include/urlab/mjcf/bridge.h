@@ -14,6 +14,7 @@
 //
 // Thread: plain function over a document the caller owns. Translating `dampratio` compiles a
 // trial copy of the model with MuJoCo (no global state other than MuJoCo's handlers).
+#include <map>
 #include <span>
 #include <string>
 #include <vector>
@@ -49,10 +50,20 @@ const char* BridgeKindName(BridgeChange::Kind kind);
 // A 3.x sensor the bridge turned into a 2.2.2 <user> sensor of the same name; the runtime must
 // compute it (physics/software_sensors.h).
 struct BridgedSensor {
-  enum class Kind { kJointActuatorForce, kTendonActuatorForce };
+  enum class Kind {
+    kJointActuatorForce,
+    kTendonActuatorForce,
+    kKineticEnergy,
+    kPotentialEnergy,
+    kInsideSite,
+    kContact
+  };
   std::string name;
   Kind kind = Kind::kJointActuatorForce;
-  std::string target;  // joint or tendon name
+  std::string target;  // joint or tendon name (actuator forces)
+  // insidesite/contact: the 3.x attributes (site, objtype, objname, geom1, ..., num, data,
+  // reduce); names the runtime resolves are listed in `references`.
+  std::map<std::string, std::string> params;
 };
 
 // A body with 3.x gravity compensation; the runtime adds the force through mjcb_passive

@@ -1,5 +1,6 @@
 #pragma once
-// Sensors and passive forces MuJoCo 2.2.2 cannot compute but the runtime can (gravity
+// Sensors and passive forces MuJoCo 2.2.2 cannot compute but the runtime can (also the 3.x
+// sensors e_kinetic, e_potential, insidesite and contact, src/physics/sensors3x.h; gravity
 // compensation: see GravityCompensationSpec below). MJCF written for MuJoCo 3.x uses
 // `jointactuatorfrc` and `tendonactuatorfrc`, which the dialect bridge (mjcf/bridge.h) turns into
 // 2.2.2 `<user>` sensors of the same name (objtype joint/tendon, dim 1, needstage acc). This
@@ -18,18 +19,29 @@
 // guarded by a reader-writer lock; the callback only takes the shared side.
 #include <mujoco/mujoco.h>
 
+#include <map>
 #include <span>
 #include <string>
 #include <vector>
 
 namespace urlab::physics {
 
-enum class SoftwareSensorKind { kJointActuatorForce, kTendonActuatorForce };
+enum class SoftwareSensorKind {
+  kJointActuatorForce,
+  kTendonActuatorForce,
+  kKineticEnergy,    // 3.x e_kinetic (mj_energyVel), velocity stage
+  kPotentialEnergy,  // 3.x e_potential (mj_energyPos), position stage
+  kInsideSite,       // 3.x insidesite, position stage
+  kContact,          // 3.x contact (num slots of the data fields), acceleration stage
+};
 
-// A user sensor the runtime computes, named as in the model.
+// A user sensor the runtime computes, named as in the model. `params`: the 3.x sensor's
+// attributes for insidesite (site, objtype, objname) and contact (geom1/2, body1/2,
+// subtree1/2, site, num, data, reduce); the user sensor's dimension must match.
 struct SoftwareSensorSpec {
   std::string sensor_name;
   SoftwareSensorKind kind = SoftwareSensorKind::kJointActuatorForce;
+  std::map<std::string, std::string> params;
 };
 
 // Keeps the sensors of one model registered; unregisters on destruction. Movable, not copyable.
