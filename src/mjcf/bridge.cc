@@ -1864,6 +1864,16 @@ class Bridge {
 
   // ---- anything 3.x that is still there cannot be expressed ----
   void Leftovers() {
+    for (Element* g : Find({"geom"})) {
+      if (g->GetOr("type", "") == "sdf") {
+        Note("refused.sdf", *g,
+             Tag(*g) +
+                 " type=\"sdf\": signed-distance-field geoms need engine plugins, which "
+                 "MuJoCo 2.2.2 cannot load; nearest 2.2.2 construct: type=\"mesh\" (its "
+                 "convex hull collides)");
+        g->Set("type", "sphere");  // keeps the document writable for --bridge-report
+      }
+    }
     std::vector<Element*> elements;
     doc_.root().Visit([&](Element& e) {
       if (e.spec() && e.spec()->dialect) {
@@ -1887,6 +1897,13 @@ class Bridge {
         inside = inside || std::find(elements.begin(), elements.end(), p) != elements.end();
       }
       if (inside) continue;
+      const auto refused = RefusedElements();
+      const auto r = std::find_if(refused.begin(), refused.end(),
+                                  [&](const RefusedElement& x) { return e->tag() == x.tag; });
+      if (r != refused.end()) {
+        Note("refused.element", *e, Tag(*e) + ": " + r->why + "; " + r->nearest);
+        continue;
+      }
       Note("leftover", *e, Tag(*e) + " (MuJoCo 3.x) has no MuJoCo 2.2.2 translation");
     }
     for (auto it = elements.rbegin(); it != elements.rend(); ++it) {

@@ -94,6 +94,8 @@ constexpr BridgeRule kRules[] = {
     {"actuator.order",                  "stateful actuators before stateless ones",          kT, "OrderActuators"},
     {"keyframe.pad",                    "<key> shorter than the model",                      kT, "PadKeyframes"},
     {"leftover",                        "any other 3.x element or attribute",                kR, "Leftovers"},
+    {"refused.element",                 "flexcomp, deformable, extension, plugin",           kR, "Leftovers"},
+    {"refused.sdf",                     "geom type=\"sdf\"",                                 kR, "Leftovers"},
     // attribute policies (AttributePolicies below), applied by GenericAttribute
     {"attr.dropped",                    "3.x attribute without effect here",                 kD, "GenericAttribute"},
     {"attr.approximated",               "3.x attribute approximated",                        kA, "GenericAttribute"},
@@ -123,16 +125,28 @@ constexpr AttributePolicy kPolicies[] = {
     {"global rgba scale",            "*",              AttributeCondition::kAlways,    nullptr,      "attr.dropped",     "visualisation only",                            nullptr,              nullptr},
     {"body",                         "sleep simple",   AttributeCondition::kAlways,    nullptr,      "attr.dropped",     "a 3.x simulation optimisation hint",            nullptr,              nullptr},
     {"joint",                        "actuatorgravcomp", AttributeCondition::kValueIn, "false",      "attr.dropped",     "2.2.2's behaviour",                             "attr.dropped",       "without body gravcomp it has no effect"},
-    {"fixed spatial tendon",         "armature",       AttributeCondition::kZero,      nullptr,      "attr.dropped",     "zero",                                          "attr.refused",       "tendon armature does not exist in 2.2.2"},
+    {"fixed spatial tendon",         "armature",       AttributeCondition::kZero,      nullptr,      "attr.dropped",     "zero",                                          "attr.refused",       "tendon armature (3.3+: inertia on the tendon's length) does not exist in 2.2.2; nearest 2.2.2 construct: armature on the tendon's joints (a fixed tendon over one joint with coef c: c^2 x armature)"},
     {"geom",                         "adhesion surfacevel", AttributeCondition::kZero, nullptr,      "attr.dropped",     "zero",                                          "attr.refused",       "this contact feature does not exist in 2.2.2"},
     {"pair",                         "solreffriction adhesion", AttributeCondition::kZero, nullptr,  "attr.dropped",     "zero means the 2.2.2 behaviour",                "attr.refused",       "no 2.2.2 equivalent"},
     {"freejoint",                    "align",          AttributeCondition::kValueIn,   "false",      "attr.dropped",     "2.2.2's behaviour",                             "attr.refused",       "aligning the free body with its inertia frame"},
     {"rangefinder",                  "data",           AttributeCondition::kValueIn,   "dist",       "attr.dropped",     "the 2.2.2 output",                              "attr.refused",       "rangefinder outputs"},
     {"rangefinder",                  "camera",         AttributeCondition::kAlways,    nullptr,      "attr.refused",     "rangefinders mounted on cameras do not exist in 2.2.2", nullptr,       nullptr},
 };
+constexpr RefusedElement kRefused[] = {
+    {"flexcomp", "deformable bodies (flex objects with elasticity, 3.0+) do not exist in MuJoCo 2.2.2",
+     "nearest 2.2.2 construct: <composite> (grid, cloth, box or particle) of rigid bodies joined by tendons or joints"},
+    {"deformable", "flex objects (3.0+) do not exist in MuJoCo 2.2.2",
+     "nearest 2.2.2 construct: <composite> of rigid bodies; a plain <skin> for rendering"},
+    {"extension", "engine plugins (SDF colliders, elasticity, actuators, sensors; 2.3+) cannot be loaded by MuJoCo 2.2.2",
+     "nearest 2.2.2 construct: a mesh geom (its convex hull collides) for an SDF shape"},
+    {"plugin", "engine plugins (2.3+) cannot be loaded by MuJoCo 2.2.2",
+     "nearest 2.2.2 construct: a mesh geom for an SDF shape, a <user> sensor or actuator for the rest"},
+};
 // clang-format on
 
 }  // namespace
+
+std::span<const RefusedElement> RefusedElements() { return kRefused; }
 
 std::span<const BridgeRule> BridgeRules() { return kRules; }
 

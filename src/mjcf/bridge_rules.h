@@ -43,4 +43,13 @@ struct AttributePolicy {
 // The policies, first match wins.
 std::span<const AttributePolicy> AttributePolicies();
 
+// 3.x elements that cannot be expressed in 2.2.2: why, and the nearest 2.2.2 construct (the
+// refusal message says both).
+struct RefusedElement {
+  const char* tag;
+  const char* why;
+  const char* nearest;
+};
+std::span<const RefusedElement> RefusedElements();
+
 }  // namespace urlab::mjcf

@@ -686,7 +686,8 @@ TEST_F(BridgeTest, SpringDamperFlagsBecomePassive) {
   // One of the two: passive stays on, the disabled forces are zeroed in the model.
   for (const char* which : {"spring", "damper"}) {
     Bridged one = Load(std::string(R"(<mujoco>
-  <option><flag )") + which + R"(="disable"/></option>
+  <option><flag )") + which +
+                       R"(="disable"/></option>
   <default><joint stiffness="10"/></default>
   <worldbody>
     <body><joint name="j" axis="0 1 0" damping="3"/><geom size="0.1" pos="0 0 -1"/></body>
@@ -773,6 +774,28 @@ TEST_F(BridgeTest, ReplicateFollowsTheReferenceExample) {
   }
   EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "<replicate count=2>"));
   EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "refers into a <replicate>"));
+}
+
+// What cannot be expressed in 2.2.2 is refused with where, why and the nearest 2.2.2 construct
+// (reference3x_test checks that MuJoCo 3.x loads these models).
+TEST_F(BridgeTest, InexpressibleConstructsAreRefusedWithReasonAndNearestConstruct) {
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(URLAB_TEST_DATA_DIR "/mjcf/bridge3x_refused")) {
+    if (e.path().extension() != ".xml") continue;
+    ++files;
+    document::Document doc = mjcf::ReadFile(e.path().string());
+    mjcf::BridgeOptions o;
+    o.throw_on_refusal = false;
+    const mjcf::BridgeReport r = mjcf::ApplyBridge(doc, o);
+    ASSERT_TRUE(r.HasRefusals()) << e.path();
+    for (const InputError& err : r.Refusals()) {
+      EXPECT_GT(err.where().line, 0) << err.what();
+      EXPECT_NE(err.message().find("nearest 2.2.2 construct"), std::string::npos) << err.what();
+    }
+    document::Document again = mjcf::ReadFile(e.path().string());
+    EXPECT_THROW(mjcf::ApplyBridge(again), InputError) << e.path();
+  }
+  EXPECT_EQ(files, 3);
 }
 
 TEST(BridgeRulesTest, RuleIdsAreUniqueAndPoliciesNameRules) {

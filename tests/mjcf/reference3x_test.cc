@@ -1036,5 +1036,35 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
   std::cout << pm.str() << std::endl;
 }
 
+// The models the bridge refuses (tests/data/mjcf/bridge3x_refused) are valid MuJoCo 3.x: the
+// reference loads them (bridge_test checks the refusals). The WebAssembly build has no engine
+// plugins, so the SDF model is only read by the bridge.
+TEST_F(Reference3xTest, RefusedCorpusLoadsInMujoco3) {
+  const std::string js_dir = MujocoJsDir();
+  const std::string module = js_dir + "/node_modules/mujoco-js/dist/mujoco_wasm.js";
+  if (testing::RunCommand("node --version") != 0 || !fs::is_regular_file(module)) {
+    GTEST_SKIP() << "MuJoCo 3.x reference not installed (see BridgedCorpusMatchesMujoco3)";
+  }
+  json job = {{"module", module}, {"steps", 1},           {"record_every", 1},
+              {"probe", false},   {"probe_act_steps", 0}, {"models", json::array()}};
+  for (const char* f : {"flexcomp.xml", "tendon_armature.xml"}) {
+    job["models"].push_back(
+        {{"id", f}, {"file", testing::TestData("mjcf/bridge3x_refused") + "/" + f}});
+  }
+  const std::string dir = testing::MakeTempDir("refused3x");
+  const std::string job_file = testing::WriteTextFile(dir, "job.json", job.dump());
+  std::string out;
+  ASSERT_EQ(testing::RunCommand("timeout 120 node '" +
+                                    testing::SourcePath("tests/mjcf/reference3x/dump3x.mjs") +
+                                    "' '" + job_file + "'",
+                                &out),
+            0)
+      << out;
+  const json ref = json::parse(out.substr(out.find('{')));
+  for (const auto& [id, r] : ref["models"].items()) {
+    EXPECT_FALSE(r.contains("error")) << id << ": " << r.dump().substr(0, 300);
+  }
+}
+
 }  // namespace
 }  // namespace urlab
