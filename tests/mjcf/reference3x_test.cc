@@ -837,9 +837,9 @@ class Comparison {
     stat.max_abs = std::max(stat.max_abs, diff);
     Stat& mine_stat = per_model[quantity];
     ++mine_stat.compared;
+    mine_stat.max_abs = std::max(mine_stat.max_abs, diff);
     if (rel >= mine_stat.max_rel) {
       mine_stat.max_rel = rel;
-      mine_stat.max_abs = std::max(mine_stat.max_abs, diff);
       mine_stat.worst = ent;
     }
     if (diff > tol.atol + tol.rtol * scale) {
