@@ -11,7 +11,7 @@ namespace {
 // clang-format off
 constexpr GrammarRow kRows[] = {
     // <frame> (3.1): flattened by the bridge; children are linked below
-    {"frame", "frame", "", "body geom site camera light joint freejoint frame replicate", "name:s childclass:s@class pos:r3 quat:r4 axisangle:r4 xyaxes:r6 zaxis:r3 euler:r3"},
+    {"frame", "frame", "", "body geom site camera light joint freejoint frame replicate attach", "name:s childclass:s@class pos:r3 quat:r4 axisangle:r4 xyaxes:r6 zaxis:r3 euler:r3"},
     // <replicate> (3.2): expanded by the bridge into suffixed copies (one <frame> each)
     {"replicate", "replicate", "", "body geom site camera light joint frame replicate", "count:i sep:s offset:r3 euler:r3"},
     {"+compiler", "", "", "", "alignfree:k{false|true} assetdir:s saveinertial:k{false|true} conflict:s"},
@@ -30,8 +30,12 @@ constexpr GrammarRow kRows[] = {
     {"+default.material", "", "", "", "metallic:r roughness:r"},
     {"+texture", "", "", "", "colorspace:s nchannel:i content_type:s"},
     {"+hfield", "", "", "", "content_type:s"},
-    {"+worldbody", "", "", "frame replicate flexcomp", ""},
-    {"+body", "", "", "frame replicate flexcomp plugin", "gravcomp:r sleep:s simple:s"},
+    {"+worldbody", "", "", "frame replicate flexcomp attach", ""},
+    {"+body", "", "", "frame replicate flexcomp plugin attach", "gravcomp:r sleep:s simple:s"},
+    // <model> assets and <attach> (3.2): another model's body subtree, prefixed (the composer's job)
+    {"attach", "attach", "", "", "model:s body:s frame:s prefix:s"},
+    {"asset.model", "model", "", "", "name:s file:f content_type:s"},
+    {"+asset", "", "", "asset.model", ""},
     // Deformables and plugins (3.x): read so that the bridge refuses them with the reason and the
     // nearest 2.2.2 construct (bridge_rules.cc, kRefusedElements) instead of "unknown element".
     {"flexcomp", "flexcomp", "", "flex.edge flex.elasticity flex.contact flexcomp.pin plugin", "name:s type:s count:i3 spacing:r3 radius:r rigid:k{false|true} mass:r inertiabox:r scale:r3 file:s point:r* element:i* texcoord:r* material:s rgba:r4 group:i dim:i pos:r3 quat:r4 axisangle:r4 xyaxes:r6 zaxis:r3 euler:r3 origin:r3 dof:s"},

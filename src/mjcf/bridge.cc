@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "mjcf/bridge_attach.h"
 #include "mjcf/bridge_rules.h"
 #include "urlab/document/orientation.h"
 #include "urlab/mjcf/writer.h"
@@ -97,6 +98,7 @@ class Bridge {
     compiler_ = doc_.Compiler();
     Compiler();
     compiler_ = doc_.Compiler();
+    ExpandAttachments(doc_, report_);
     Replicates();
     FlattenFrames();
     SiteEqualities();

@@ -984,17 +984,20 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
            "bridge3x/replicate|body.quat|arm1_2",                      // nested euler
            "bridge3x/gravcomp|passive.qfrc_passive_plus_actuator|shoulder",  // actuatorgravcomp
            "bridge3x/small_attributes|probe.act|hi/drive",                   // filterexact
-           "bridge3x/small_attributes|key.qpos|bent/slide",           // key padded with qpos0
-           "bridge3x/small_attributes|passive.qfrc_passive|slide",    // dead-band spring
-           "bridge3x/small_attributes|trajectory.qpos|follower@500",  // polycoef "0 2"
-           "bridge3x/spring_flag|trajectory.qpos|h1@500",             // spring off, damper on
-           "bridge3x/site_equality|trajectory.qpos|hinge2@500",       // connect on sites
-           "bridge3x/sensors|contact_trajectory_sensor.value|ball_any@100",   // contact, data
-           "bridge3x/sensors|contact_trajectory_sensor.value|floor_box@100",  // body1/body2
-           "bridge3x/sensors|contact_trajectory_sensor.value|in_zone@100",    // insidesite
-           "bridge3x/sensors|contact_trajectory_sensor.value|kinetic@100",    // e_kinetic
-           "bridge3x/sensors|contact_trajectory_sensor.value|potential@100",  // e_potential
-           "bridge3x/gravcomp|trajectory.qpos|ball_free@500",                 // over-compensated
+           "bridge3x/small_attributes|key.qpos|bent/slide",             // key padded with qpos0
+           "bridge3x/small_attributes|passive.qfrc_passive|slide",      // dead-band spring
+           "bridge3x/small_attributes|trajectory.qpos|follower@500",    // polycoef "0 2"
+           "bridge3x/spring_flag|trajectory.qpos|h1@500",               // spring off, damper on
+           "bridge3x/site_equality|trajectory.qpos|hinge2@500",         // connect on sites
+           "bridge3x/attach/parent|body.pos|right_base",                // attach in a frame
+           "bridge3x/attach/parent|actuator.biasprm|left_elbow_servo",  // attached actuator
+           "bridge3x/attach/parent|trajectory_sensor.value|right_tip_pos@500",  // and sensor
+           "bridge3x/sensors|contact_trajectory_sensor.value|ball_any@100",     // contact, data
+           "bridge3x/sensors|contact_trajectory_sensor.value|floor_box@100",    // body1/body2
+           "bridge3x/sensors|contact_trajectory_sensor.value|in_zone@100",      // insidesite
+           "bridge3x/sensors|contact_trajectory_sensor.value|kinetic@100",      // e_kinetic
+           "bridge3x/sensors|contact_trajectory_sensor.value|potential@100",    // e_potential
+           "bridge3x/gravcomp|trajectory.qpos|ball_free@500",                   // over-compensated
        }) {
     EXPECT_TRUE(compared.count(must)) << "not compared: " << must;
   }
