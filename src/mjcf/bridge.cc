@@ -1506,10 +1506,43 @@ class Bridge {
   // 3.x pads a key's qpos with qpos0, qvel/act/ctrl with zeros, mpos/mquat with the mocap bodies'
   // poses; 2.2.2 refuses a key of the wrong length. The padding needs the compiled sizes and
   // qpos0: a trial compile without the keys.
+  // Whether every key already has the document's sizes, counted from its joints and actuators
+  // (no trial compile needed). False when unsure (composites, mocap or act values).
+  bool KeysFitTheDocument(const Element& section) {
+    int nq = 0, nv = 0, nu = 0;
+    bool unsure = false;
+    doc_.root().Visit([&](const Element& e) {
+      if (InDefault(e)) return;
+      if (e.tag() == "composite") unsure = true;
+      if (e.tag() == "freejoint") {
+        nq += 7;
+        nv += 6;
+      } else if (e.tag() == "joint" && e.parent() && e.parent()->tag() == "body") {
+        const std::string* t = Resolve(e, "type");
+        const std::string type = t ? *t : "hinge";
+        nq += type == "free" ? 7 : type == "ball" ? 4 : 1;
+        nv += type == "free" ? 6 : type == "ball" ? 3 : 1;
+      } else if (IsActuatorTag(e.tag()) && e.parent() && e.parent()->tag() == "actuator") {
+        ++nu;
+      }
+    });
+    if (unsure) return false;
+    for (const auto& k : section.children()) {
+      if (k->Has("act") || k->Has("mpos") || k->Has("mquat")) return false;
+      auto count = [&](const char* a) {
+        const std::string* v = k->Get(a);
+        return v ? static_cast<int>(ParseReals(*v).value_or(std::vector<double>{}).size()) : -1;
+      };
+      const int q = count("qpos"), v = count("qvel"), c = count("ctrl");
+      if ((q >= 0 && q != nq) || (v >= 0 && v != nv) || (c >= 0 && c != nu)) return false;
+    }
+    return true;
+  }
+
   void PadKeyframes() {
     Element* section = nullptr;
     for (Element* k : Find({"keyframe"})) section = k;
-    if (!section || section->children().empty()) return;
+    if (!section || section->children().empty() || KeysFitTheDocument(*section)) return;
     std::unique_ptr<Element> keys = doc_.root().RemoveChild(section);
     std::string error;
     mjModel* m = TrialCompile(WriteString(doc_), &error);
