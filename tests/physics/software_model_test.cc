@@ -4,6 +4,7 @@
 // reference3x_test compares them with MuJoCo 3.x.
 #include <cmath>
 
+#include "compiled_model_test.h"
 #include "mujoco_test.h"
 #include "urlab/core/error.h"
 #include "urlab/physics/model.h"
@@ -35,14 +36,9 @@ constexpr const char* kModel = R"(<mujoco>
   </equality>
 </mujoco>)";
 
-class SoftwareModelTest : public testing::MujocoTest {
+class SoftwareModelTest : public testing::CompiledModelTest {
  protected:
-  void SetUp() override {
-    model_ = physics::CompileXmlString(kModel);
-    data_ = physics::MakeData(model_.get());
-  }
-  physics::ModelPtr model_;
-  physics::DataPtr data_;
+  const char* Xml() const override { return kModel; }
 };
 
 TEST_F(SoftwareModelTest, GravityCompensationCancelsGravityExactlyAndOnlyWhileRegistered) {
