@@ -112,6 +112,7 @@ class Bridge {
     SpringLength();
     PassiveFlags();
     VisualOnly();
+    KeepVisualGeoms();
     MeshInertia();
     GenericAttributes();
     Sensors();
@@ -253,6 +254,8 @@ class Bridge {
                   (e.tag() == "general" && missing("actrange", "actlimited"));
       }
     });
+    // 2.2.2 discards a visual geom a <pair> uses and then fails: only 3.x loads it.
+    if (!dialect && !VisualPairGeoms().empty()) dialect = true;
     return dialect;
   }
 
@@ -1490,6 +1493,48 @@ class Bridge {
     Note("flag.spring_damper.split", f ? *f : doc_.root(),
          std::string(attr) + " set to 0 on " + std::to_string(n) + " joint(s)/tendon(s) (flag " +
              (springs_off_ ? "spring" : "damper") + " disabled)");
+  }
+
+  // ---- compiler discardvisual ----
+  // 3.x computes body masses and inertias with the visual geoms, then discards them (and keeps
+  // those a <pair> uses); 2.2.2 discards them first, so the bodies lose their mass, and fails on
+  // a <pair> naming one. Keeping every geom gives 3.x's physics: visual geoms (contype =
+  // conaffinity = 0) do not collide; only the model's geom (and mesh) counts are larger.
+  // Visual-only geoms (contype = conaffinity = 0) that a <pair> uses, under discardvisual.
+  std::vector<Element*> VisualPairGeoms() {
+    std::vector<Element*> out;
+    if (!DiscardVisual()) return out;
+    std::set<std::string> paired;
+    for (Element* p : Find({"pair"})) {
+      for (const char* a : {"geom1", "geom2"}) {
+        if (const std::string* g = p->Get(a)) paired.insert(*g);
+      }
+    }
+    for (Element* g : Find({"geom"})) {
+      if (paired.count(g->Name()) && ResolveReal(*g, "contype", 1) == 0 &&
+          ResolveReal(*g, "conaffinity", 1) == 0) {
+        out.push_back(g);
+      }
+    }
+    return out;
+  }
+  bool DiscardVisual() {
+    for (const auto& c : doc_.root().children()) {
+      if (c->tag() == "compiler" && c->GetOr("discardvisual", "") == "true") return true;
+    }
+    return false;
+  }
+
+  void KeepVisualGeoms() {
+    for (const auto& c : doc_.root().children()) {
+      if (c->tag() != "compiler" || c->GetOr("discardvisual", "") != "true") continue;
+      c->Set("discardvisual", "false");
+      Note("compiler.discardvisual", *c,
+           "compiler discardvisual=\"true\" -> \"false\": MuJoCo 3.x weighs bodies with their "
+           "visual geoms before discarding them (and keeps those contact pairs use), 2.2.2 "
+           "discards them first; keeping them gives 3.x's masses and contacts, with more geoms "
+           "in the model (visual geoms do not collide)");
+    }
   }
 
   // ---- render-only elements of 3.x ----

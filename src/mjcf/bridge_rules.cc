@@ -28,6 +28,7 @@ constexpr BridgeRule kRules[] = {
     {"compiler.alignfree.false",        "compiler alignfree=\"false\"",                      kD, "Compiler"},
     {"compiler.saveinertial",           "compiler saveinertial",                             kD, "Compiler"},
     {"compiler.conflict",               "compiler conflict",                                 kD, "Compiler"},
+    {"compiler.discardvisual",          "compiler discardvisual=\"true\"",                   kT, "KeepVisualGeoms"},
     {"compiler.lengthrange.interval",   "lengthrange interval",                              kT, "Compiler"},
     {"attach",                          "<attach model body prefix> of a <model> asset",     kT, "ExpandAttachments (bridge_attach.cc)"},
     {"attach.model",                    "<model> asset",                                     kT, "ExpandAttachments (bridge_attach.cc)"},
