@@ -9,6 +9,7 @@
 #include "app/commands.h"
 #include "app/signals.h"
 #include "urlab/core/files.h"
+#include "urlab/mjcf/bridge.h"
 #include "urlab/mjcf/writer.h"
 #include "urlab/world/scene.h"
 #include "urlab/world/scene_checks.h"
@@ -83,14 +84,35 @@ int Compile(const CompileArgs& args) {
 struct ValidateArgs {
   std::string file;
   bool bridge_report = false;
+  bool bridge_rules = false;
 };
 
+// The dialect bridge's rule table, one line per rule.
+void PrintBridgeRules() {
+  for (const mjcf::BridgeRule& rule : mjcf::BridgeRules()) {
+    std::cout << rule.id << "\t" << mjcf::BridgeKindName(rule.kind) << "\t" << rule.function << "\t"
+              << rule.construct << "\n";
+  }
+}
+
 int Validate(const ValidateArgs& args) {
+  if (args.bridge_rules) {
+    PrintBridgeRules();
+    if (args.file.empty()) return 0;
+  }
   CurrentInput() = args.file;
   const world::ValidationReport r = world::Validate(args.file, args.bridge_report);
   for (const auto& b : r.bridge) std::cout << "bridge: " << b << "\n";
   if (args.bridge_report && r.bridge.empty()) {
     std::cout << "bridge: no changes (MuJoCo 2.2.2 MJCF)\n";
+  }
+  // The rules applied (rows of the rule table, src/mjcf/bridge_rules.cc), in table order.
+  for (const mjcf::BridgeRule& rule : mjcf::BridgeRules()) {
+    auto it = r.bridge_rules.find(rule.id);
+    if (it == r.bridge_rules.end()) continue;
+    std::cout << "bridge rule: " << rule.id << " (" << mjcf::BridgeKindName(rule.kind) << ", "
+              << rule.construct << ", src/mjcf/bridge.cc " << rule.function << "): " << it->second
+              << " change(s)\n";
   }
   for (const auto& w : r.diagnostics.warnings()) std::cout << "warning: " << w.str() << "\n";
   for (const auto& e : r.diagnostics.errors()) std::cout << "error: " << e.str() << "\n";
@@ -129,10 +151,19 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
       "and compile as `urlab run` does, run every check begin-play runs, and report every "
       "problem found with its file and line. Exit code 1 when there is any error.");
   static ValidateArgs vargs;
-  val->add_option("FILE", vargs.file, "scene (.yaml) or MJCF (.xml) file")->required();
+  val->add_option("FILE", vargs.file, "scene (.yaml) or MJCF (.xml) file");
+  val->add_flag("--bridge-rules", vargs.bridge_rules,
+                "print the dialect bridge's rule table (id, kind, function, construct)");
   val->add_flag("--bridge-report", vargs.bridge_report,
                 "list every change the MuJoCo 3.x dialect bridge makes, with file and line");
-  val->callback([&exit_code] { exit_code = Validate(vargs); });
+  val->callback([&exit_code] {
+    if (vargs.file.empty() && !vargs.bridge_rules) {
+      std::cerr << "validate: FILE is required\n";
+      exit_code = 2;
+      return;
+    }
+    exit_code = Validate(vargs);
+  });
 }
 
 }  // namespace urlab::app

@@ -213,6 +213,13 @@ Grammar::Grammar(std::span<const GrammarRow> rows, std::span<const GrammarRow> d
             existing->dialect_keywords.push_back(k);
           }
         }
+        if (added.min_count != existing->min_count || added.max_count != existing->max_count) {
+          existing->dialect_count = true;
+          existing->legacy_min_count = existing->min_count;
+          existing->legacy_max_count = existing->max_count;
+          existing->min_count = added.min_count;
+          existing->max_count = added.max_count;
+        }
         continue;
       }
       added.dialect = true;

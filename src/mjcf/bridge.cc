@@ -9,7 +9,10 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <sstream>
 
+#include "mjcf/bridge_attach.h"
+#include "mjcf/bridge_rules.h"
 #include "urlab/document/orientation.h"
 #include "urlab/mjcf/writer.h"
 
@@ -44,6 +47,19 @@ bool InDefault(const Element& e) {
 }
 
 bool IsDialect(const Attribute& a) { return a.spec && a.spec->dialect; }
+
+// A 3.x attribute, a 3.x keyword of a 2.2.2 attribute, or a value count only 3.x accepts.
+bool DialectValue(const Attribute& a) {
+  if (!a.spec) return false;
+  if (a.spec->dialect) return true;
+  const auto& kw = a.spec->dialect_keywords;
+  if (std::find(kw.begin(), kw.end(), a.value) != kw.end()) return true;
+  if (!a.spec->dialect_count) return false;
+  const auto v = ParseReals(a.value);
+  const int n = v ? static_cast<int>(v->size()) : 0;
+  return n < a.spec->legacy_min_count ||
+         (a.spec->legacy_max_count >= 0 && n > a.spec->legacy_max_count);
+}
 
 std::string Join(const std::vector<std::string>& v, const char* sep) {
   std::string s;
@@ -82,23 +98,37 @@ class Bridge {
     compiler_ = doc_.Compiler();
     Compiler();
     compiler_ = doc_.Compiler();
+    ExpandAttachments(doc_, report_);
+    Replicates();
     FlattenFrames();
+    SiteEqualities();
     ActuatorArmatureDamping();
+    GravityCompensation();
     ActuatorForceRanges();
     PositionShortcuts();
     Options();
+    FilterExact();
+    PolyCoef();
+    SpringLength();
+    PassiveFlags();
+    VisualOnly();
+    KeepVisualGeoms();
     MeshInertia();
     GenericAttributes();
     Sensors();
+    ComputedSensors();
     OrderActuators();
     Leftovers();
     if (!report_.HasRefusals()) DampRatio();
+    if (!report_.HasRefusals()) PadKeyframes();
   }
 
  private:
   // ---- reporting ----
-  void Note(Kind kind, const Element& e, std::string what) {
-    report_.changes.push_back(BridgeChange{kind, e.location(), std::move(what)});
+  // Records a change made by the rule `rule` (a row of the rule table, which gives its kind).
+  void Note(std::string_view rule, const Element& e, std::string what) {
+    const BridgeRule& r = FindBridgeRule(rule);
+    report_.changes.push_back(BridgeChange{r.kind, e.location(), std::move(what), r.id});
   }
   static std::string Tag(const Element& e) {
     std::string s = "<" + e.tag();
@@ -208,7 +238,7 @@ class Bridge {
     doc_.root().Visit([&](const Element& e) {
       if (dialect) return;
       if (e.spec() && e.spec()->dialect) dialect = true;
-      for (const Attribute& a : e.attributes()) dialect = dialect || IsDialect(a);
+      for (const Attribute& a : e.attributes()) dialect = dialect || DialectValue(a);
       if (dialect || c.autolimits || InDefault(e) || e.tag() == "default") return;
       // A range without its limited attribute only loads with 3.x's autolimits default.
       auto missing = [&](const char* range, const char* limited) {
@@ -224,6 +254,8 @@ class Bridge {
                   (e.tag() == "general" && missing("actrange", "actlimited"));
       }
     });
+    // 2.2.2 discards a visual geom a <pair> uses and then fails: only 3.x loads it.
+    if (!dialect && !VisualPairGeoms().empty()) dialect = true;
     return dialect;
   }
 
@@ -250,7 +282,7 @@ class Bridge {
     if (!autolimits_set) {
       Element& c = FirstCompiler();
       c.Set("autolimits", "true");
-      Note(Kind::kTranslated, c,
+      Note("compiler.autolimits", c,
            "compiler autolimits=\"true\" written explicitly: the document uses MuJoCo 3.x MJCF, "
            "whose default is true (2.2.2's is false)");
     }
@@ -268,7 +300,7 @@ class Bridge {
         if (texturedir.empty()) bases->texture_dir = join(*v);
         std::shared_ptr<const document::FileBases> shared = bases;
         doc_.root().Visit([&](Element& e) { e.set_file_bases(shared); });
-        Note(Kind::kTranslated, c,
+        Note("compiler.assetdir", c,
              "compiler assetdir=\"" + *v +
                  "\" applied as meshdir/texturedir (asset paths are "
                  "written resolved)");
@@ -276,20 +308,22 @@ class Bridge {
       }
       if (const std::string* v = c.Get("alignfree")) {
         if (*v == "true") {
-          Note(Kind::kRefused, c,
+          Note("compiler.alignfree", c,
                "compiler alignfree=\"true\" re-expresses free bodies in their inertial frame, "
                "which MuJoCo 2.2.2 cannot do; the body poses and qpos would differ");
         } else {
-          Note(Kind::kDropped, c, "compiler alignfree=\"false\" is 2.2.2's behaviour");
+          Note("compiler.alignfree.false", c, "compiler alignfree=\"false\" is 2.2.2's behaviour");
         }
         c.Unset("alignfree");
       }
       if (c.Has("saveinertial")) {
-        Note(Kind::kDropped, c, "compiler saveinertial only affects saving XML; no effect here");
+        Note("compiler.saveinertial", c,
+             "compiler saveinertial only affects saving XML; no effect here");
         c.Unset("saveinertial");
       }
       if (c.Has("conflict")) {
-        Note(Kind::kDropped, c, "compiler conflict only concerns model attachment; no effect here");
+        Note("compiler.conflict", c,
+             "compiler conflict only concerns model attachment; no effect here");
         c.Unset("conflict");
       }
       for (Element* lr = c.FirstChild("lengthrange"); lr; lr = nullptr) {
@@ -297,7 +331,8 @@ class Bridge {
           const std::string value = *v;
           lr->Unset("interval");
           lr->Set("inteval", value);
-          Note(Kind::kTranslated, *lr, "lengthrange interval renamed to 2.2.2's inteval");
+          Note("compiler.lengthrange.interval", *lr,
+               "lengthrange interval renamed to 2.2.2's inteval");
         }
       }
     }
@@ -359,8 +394,161 @@ class Bridge {
     } else if (t == "freejoint" || t == "inertial") {
       // a free joint has no pose; an inertial cannot be in a frame
     } else {
-      Note(Kind::kRefused, c,
+      Note("frame.child", c,
            Tag(c) + " inside a <frame> with a pose: the bridge cannot move this element");
+    }
+  }
+
+  // ---- <replicate> ----
+  // 3.x expands <replicate count offset euler sep> at compile time: copy i (0..count-1) of the
+  // children sits at T^i, T = (offset, euler) relative to the previous copy, and every name
+  // inside gets the suffix sep + i (i with as many digits as count has); elements outside that
+  // refer to something inside (sensors, actuators, tendons, equalities, contact pairs/excludes)
+  // are copied once per replica with the same suffix. Nested replicates: the innermost suffix
+  // comes first, so they are expanded innermost first. Each copy becomes a <frame> with T^i,
+  // which FlattenFrames then composes into its children.
+  using NameSets = std::map<document::Namespace, std::set<std::string>>;
+
+  static void DefinedNames(const Element& root, NameSets* out) {
+    root.Visit([&](const Element& e) {
+      if (!e.spec() || e.spec()->name_space == document::Namespace::kNone ||
+          e.spec()->name_space == document::Namespace::kClass) {
+        return;
+      }
+      if (const std::string* n = e.Get("name")) (*out)[e.spec()->name_space].insert(*n);
+    });
+  }
+
+  // The namespace an attribute of `e` names, when it is a reference.
+  static document::Namespace RefNamespace(const Element& e, const Attribute& a) {
+    const document::AttributeSpec* spec = e.spec() ? e.spec()->FindAttribute(a.name) : nullptr;
+    if (!spec || !spec->IsReference()) return document::Namespace::kNone;
+    if (spec->ref != document::Namespace::kNone) return spec->ref;
+    const std::string* sel = e.Get(spec->ref_selector);
+    return sel ? document::NamespaceFromObjType(*sel) : document::Namespace::kNone;
+  }
+
+  static bool RefersTo(const Element& root, const NameSets& names) {
+    bool found = false;
+    root.Visit([&](const Element& e) {
+      for (const Attribute& a : e.attributes()) {
+        auto it = names.find(RefNamespace(e, a));
+        if (it != names.end() && it->second.count(a.value)) found = true;
+      }
+    });
+    return found;
+  }
+
+  // Appends `suffix` to the names in `root` that are in `names` and to references to them.
+  static void Suffix(Element& root, const NameSets& names, const std::string& suffix) {
+    root.Visit([&](Element& e) {
+      std::vector<std::pair<std::string, std::string>> renamed;
+      for (const Attribute& a : e.attributes()) {
+        const document::Namespace ns =
+            a.name == "name" && e.spec() ? e.spec()->name_space : RefNamespace(e, a);
+        auto it = names.find(ns);
+        if (it != names.end() && it->second.count(a.value)) {
+          renamed.emplace_back(a.name, a.value + suffix);
+        }
+      }
+      for (auto& [k, v] : renamed) e.Set(k, v);
+    });
+  }
+
+  void Replicates() {
+    for (;;) {
+      Element* innermost = nullptr;
+      doc_.root().Visit([&](Element& e) {
+        if (innermost || e.tag() != "replicate") return;
+        bool nested = false;
+        for (const auto& c : e.children()) {
+          c->Visit([&](const Element& x) { nested = nested || x.tag() == "replicate"; });
+        }
+        if (!nested) innermost = &e;
+      });
+      if (!innermost) return;
+      Replicate(*innermost);
+    }
+  }
+
+  void Replicate(Element& r) {
+    Element* parent = r.parent();
+    const int count = r.GetInt("count").value_or(0);
+    if (count <= 0) {
+      Note("replicate.invalid", r, "<replicate> needs a positive count (MuJoCo 3.x too)");
+      parent->RemoveChild(&r);
+      return;
+    }
+    const std::string sep = r.GetOr("sep", "");
+    const Vec3 offset = ResolvedVec(r, "offset", {0, 0, 0});
+    Element probe(r.spec(), "replicate");  // its euler in the compiler's unit and sequence
+    if (const std::string* e = r.Get("euler")) probe.AddRawAttribute("euler", *e);
+    const Quat step = document::OwnOrientation(probe, compiler_).value_or(document::kIdentityQuat);
+    const int digits = static_cast<int>(std::to_string(count).size());
+    auto suffix = [&](int i) {
+      std::string n = std::to_string(i);
+      return sep + std::string(static_cast<size_t>(digits) - n.size(), '0') + n;
+    };
+    NameSets inside;
+    for (const auto& c : r.children()) DefinedNames(*c, &inside);
+    // The copies, each a <frame> at T^i.
+    const document::ElementSpec* frame_spec = parent->spec()->FindChild("frame");
+    if (!frame_spec) throw Error("dialect bridge: <frame> not allowed in <" + parent->tag() + ">");
+    size_t index = static_cast<size_t>(parent->IndexOf(&r));
+    Vec3 pos = {0, 0, 0};
+    Quat quat = document::kIdentityQuat;
+    for (int i = 0; i < count; ++i) {
+      auto f = std::make_unique<Element>(frame_spec, "frame");
+      f->set_location(r.location());
+      f->set_file_bases(r.file_bases());
+      f->set_edited(true);
+      f->SetReals("pos", pos);
+      f->SetReals("quat", quat);
+      for (const auto& c : r.children()) {
+        std::unique_ptr<Element> copy = c->Clone();
+        Suffix(*copy, inside, suffix(i));
+        f->InsertChild(f->children().size(), std::move(copy));
+      }
+      parent->InsertChild(index++, std::move(f));
+      const Vec3 d = document::QuatRotate(quat, offset);
+      pos = {pos[0] + d[0], pos[1] + d[1], pos[2] + d[2]};
+      quat = document::QuatNormalize(document::QuatMul(quat, step));
+    }
+    Note("replicate", r,
+         "<replicate count=" + std::to_string(count) + "> expanded into " + std::to_string(count) +
+             " copies of its " + std::to_string(r.children().size()) +
+             " child element(s), names suffixed '" + suffix(0) + "'..'" + suffix(count - 1) +
+             "' as MuJoCo 3.x names them");
+    parent->RemoveChild(&r);
+    // Elements outside that refer into the replicated tree are replicated with it. Tendons come
+    // first: actuators and sensors may refer to a replicated tendon.
+    for (const char* section : {"tendon", "equality", "contact", "actuator", "sensor"}) {
+      for (Element* s : Find({section})) {
+        std::vector<Element*> refs;
+        for (const auto& c : s->children()) {
+          if (RefersTo(*c, inside)) refs.push_back(c.get());
+        }
+        if (refs.empty()) continue;
+        NameSets own;  // names of the referring elements themselves (suffixed too)
+        for (Element* e : refs) DefinedNames(*e, &own);
+        NameSets both = inside;
+        for (auto& [ns, set] : own) both[ns].insert(set.begin(), set.end());
+        size_t at = static_cast<size_t>(s->IndexOf(refs.front()));
+        std::vector<std::unique_ptr<Element>> originals;
+        for (Element* e : refs) originals.push_back(s->RemoveChild(e));
+        for (int i = 0; i < count; ++i) {
+          for (const auto& o : originals) {
+            std::unique_ptr<Element> copy = o->Clone();
+            Suffix(*copy, both, suffix(i));
+            s->InsertChild(at++, std::move(copy));
+          }
+        }
+        for (const auto& o : originals) {
+          Note("replicate.reference", *o,
+               Tag(*o) + " refers into a <replicate>: copied once per replica, names suffixed");
+        }
+        for (auto& [ns, set] : own) inside[ns].insert(set.begin(), set.end());
+      }
     }
   }
 
@@ -408,8 +596,72 @@ class Bridge {
             parent->tag() + ">";
     if (moved) what += " with the frame's pose composed into theirs";
     if (!childclass.empty()) what += ", childclass='" + childclass + "' given to them";
-    Note(Kind::kTranslated, f, what);
+    Note("frame", f, what);
     parent->RemoveChild(&f);
+  }
+
+  // ---- equality constraints on sites ----
+  // 3.x connect/weld with site1/site2 hold the two sites together (position; weld also the
+  // orientation). 2.2.2 knows only bodies, and derives the second anchor (and the weld's relative
+  // pose) from qpos0; the body constraint is written here and its data set from the compiled
+  // sites after compilation (ApplySiteEqualities), which is exact wherever the sites start.
+  void SiteEqualities() {
+    int unnamed = 0;
+    for (Element* e : Find({"connect", "weld"})) {
+      if (!e->parent() || e->parent()->tag() != "equality") continue;
+      const std::string* a = e->Get("site1");
+      const std::string* b = e->Get("site2");
+      if (!a && !b) continue;
+      if (!a || !b) {
+        Note("equality.site.refused", *e,
+             Tag(*e) +
+                 " needs both site1 and site2 (MuJoCo 3.x too); nearest 2.2.2 construct: "
+                 "body1/body2 with anchor");
+        UnsetDialect(*e, "site1");
+        UnsetDialect(*e, "site2");
+        continue;
+      }
+      const std::string s1 = *a, s2 = *b;
+      const std::string b1 = SiteBody(s1), b2 = SiteBody(s2);
+      if (b1.empty() || b2.empty()) continue;  // dangling site: reported by the reader
+      std::string name = e->Name();
+      if (name.empty()) {
+        name = "site_equality" + std::to_string(unnamed++);
+        e->Set("name", name);
+      }
+      UnsetDialect(*e, "site1");
+      UnsetDialect(*e, "site2");
+      std::string ignored;
+      for (const char* n : {"anchor", "relpose"}) {
+        if (e->Unset(n)) ignored += std::string(ignored.empty() ? "; " : ", ") + n;
+      }
+      if (!ignored.empty()) ignored += " ignored with sites, as in MuJoCo 3.x";
+      e->Set("body1", b1);
+      e->Set("body2", b2);
+      if (e->tag() == "connect") e->Set("anchor", "0 0 0");  // replaced after compilation
+      report_.site_equalities.push_back({name, s1, s2});
+      Note(e->tag() == "weld" ? "equality.site.weld" : "equality.site", *e,
+           Tag(*e) + " site1='" + s1 + "' site2='" + s2 + "' -> body1='" + b1 + "' body2='" + b2 +
+               "'; anchors" + (e->tag() == "weld" ? " and relative orientation" : "") +
+               " set from the sites' frames after compilation" +
+               (e->tag() == "weld" ? "; 3.x's site weld weighs the rotational residual "
+                                     "differently (same equilibrium without load, different "
+                                     "transient and sag)"
+                                   : "") +
+               ignored);
+    }
+  }
+
+  // The name of the body holding site `site` ("world" for the world body); names an unnamed one.
+  std::string SiteBody(const std::string& site) {
+    Element* s = FindNamed(document::Namespace::kSite, site);
+    if (!s) return "";
+    Element* b = s->parent();
+    while (b && b->tag() != "body" && b->tag() != "worldbody") b = b->parent();
+    if (!b) return "";
+    if (b->tag() == "worldbody") return "world";
+    if (b->Name().empty()) b->Set("name", "body_of_" + site);
+    return b->Name();
   }
 
   // ---- actuator armature / damping (3.x) move to the transmission target ----
@@ -425,7 +677,7 @@ class Bridge {
       std::vector<double> damping = damp ? *damp : std::vector<double>{};
       if (armature == 0 && AllZero(damping)) continue;
       if (damping.size() > 1 && !AllZero({damping.begin() + 1, damping.end()})) {
-        Note(Kind::kRefused, *a,
+        Note("actuator.armature_damping.refused", *a,
              Tag(*a) + " polynomial damping (quadratic/cubic terms) has no 2.2.2 equivalent");
         continue;
       }
@@ -439,14 +691,15 @@ class Bridge {
         if (!j) continue;  // dangling reference: reported by the reader
         const std::string type = Resolve(*j, "type") ? *Resolve(*j, "type") : "hinge";
         if (type != "hinge" && type != "slide") {
-          Note(Kind::kRefused, *a, Tag(*a) + " armature/damping on a " + type + " joint");
+          Note("actuator.armature_damping.refused", *a,
+               Tag(*a) + " armature/damping on a " + type + " joint");
           continue;
         }
         const double ja = ResolveReal(*j, "armature", 0) + armature * g * g;
         const double jd = ResolveReal(*j, "damping", 0) + d * g * g;
         if (armature != 0) j->SetReal("armature", ja);
         if (d != 0) j->SetReal("damping", jd);
-        Note(Kind::kTranslated, *a,
+        Note("actuator.armature_damping", *a,
              Tag(*a) + " armature/damping moved to joint '" + *joint +
                  "' scaled by gear^2 (armature " + FormatReal(ja) + ", damping " + FormatReal(jd) +
                  "): MuJoCo 3.x adds them there the same way");
@@ -455,11 +708,11 @@ class Bridge {
         if (!t) continue;
         const double td = ResolveReal(*t, "damping", 0) + d * g * g;
         t->SetReal("damping", td);
-        Note(Kind::kTranslated, *a,
+        Note("actuator.armature_damping", *a,
              Tag(*a) + " damping moved to tendon '" + *tendon + "' scaled by gear^2 (" +
                  FormatReal(td) + ")");
       } else {
-        Note(Kind::kRefused, *a,
+        Note("actuator.armature_damping.refused", *a,
              Tag(*a) +
                  " armature/damping: only joint transmissions (and tendon damping) can "
                  "carry them in MuJoCo 2.2.2");
@@ -470,10 +723,50 @@ class Bridge {
       bool any = UnsetDialect(*d, "armature");
       any = UnsetDialect(*d, "damping") || any;
       if (any) {
-        Note(Kind::kTranslated, *d,
+        Note("actuator.armature_damping.default", *d,
              "default " + Tag(*d) + " armature/damping resolved into each actuator's target");
       }
     }
+  }
+
+  // ---- body gravcomp (computed by the runtime through mjcb_passive) ----
+  void GravityCompensation() {
+    int unnamed = 0;
+    for (Element* b : Find({"body"})) {
+      const std::string* v = b->Get("gravcomp");
+      if (!v) continue;
+      const auto g = ParseReals(*v);
+      if (!g || g->size() != 1) throw InputError(b->location(), "<body> gravcomp needs a number");
+      const std::string text = *v;
+      b->Unset("gravcomp");
+      if ((*g)[0] == 0) {
+        Note("gravcomp.zero", *b, Tag(*b) + " gravcomp=\"0\" dropped: no compensation");
+        continue;
+      }
+      std::string name = b->Name();
+      if (name.empty()) {
+        name = "gravcomp_body" + std::to_string(unnamed++);
+        b->Set("name", name);
+      }
+      report_.gravcomp.push_back({name, (*g)[0]});
+      Note("gravcomp", *b,
+           Tag(*b) + " gravcomp=\"" + text +
+               "\": the runtime adds gravcomp * mass * (-gravity) at the body's centre of mass "
+               "to qfrc_passive through mjcb_passive, as MuJoCo 3.x's mj_gravcomp does");
+    }
+    for (Element* j : Find({"joint"})) {
+      const std::string* v = Resolve(*j, "actuatorgravcomp");
+      if (!v || *v != "true") continue;
+      const bool clamped = Resolve(*j, "actuatorfrcrange") != nullptr;
+      Note(clamped ? "gravcomp.actuator.clamped" : "gravcomp.actuator", *j,
+           Tag(*j) +
+               " actuatorgravcomp=\"true\": the compensation is added to qfrc_passive, "
+               "not qfrc_actuator (same total force; qfrc_actuator and jointactuatorfrc "
+               "read it without the compensation)" +
+               (clamped ? std::string("; the joint's actuatorfrcrange does not clamp it") : ""));
+      UnsetDialect(*j, "actuatorgravcomp");
+    }
+    for (Element* d : FindDefaults({"joint"})) UnsetDialect(*d, "actuatorgravcomp");
   }
 
   // ---- actuatorfrcrange on joints and tendons ----
@@ -561,14 +854,15 @@ class Bridge {
     const std::string what = Tag(target) + " actuatorfrcrange=\"" + FormatReal(range[0]) + " " +
                              FormatReal(range[1]) + "\"";
     if (drivers.empty()) {
-      Note(Kind::kDropped, target, what + ": no actuator acts on it, so it has no effect");
+      Note("actuatorfrcrange.inactive", target,
+           what + ": no actuator acts on it, so it has no effect");
       return;
     }
     if (drivers.size() == 1 && drivers[0].direct) {
       Element& a = *drivers[0].actuator;
       const double g = scale_by_gear ? ResolveReal(a, "gear", 1) : 1;
       if (g == 0) {
-        Note(Kind::kDropped, target, what + ": its actuator has gear 0");
+        Note("actuatorfrcrange.inactive", target, what + ": its actuator has gear 0");
         return;
       }
       std::array<double, 2> r = {range[0] / g, range[1] / g};
@@ -577,7 +871,7 @@ class Bridge {
       if (auto own = ForceRange(a)) {
         const std::array<double, 2> both = {std::max(r[0], (*own)[0]), std::min(r[1], (*own)[1])};
         if (both[0] > both[1]) {
-          Note(Kind::kRefused, target,
+          Note("actuatorfrcrange.refused", target,
                what + " and the forcerange of " + Tag(a) +
                    " do not overlap: the total force would be constant");
           return;
@@ -587,7 +881,7 @@ class Bridge {
       }
       a.Set("forcelimited", "true");
       a.SetReals("forcerange", r);
-      Note(Kind::kTranslated, target,
+      Note("actuatorfrcrange.one", target,
            what + " -> forcerange=\"" + FormatReals(r) + "\" forcelimited=\"true\" on " + Tag(a) +
                (scale_by_gear ? " (scaled by 1/gear, " + how + ")" : " (" + how + ")") +
                ". Exact for the force applied to the " +
@@ -600,7 +894,7 @@ class Bridge {
     for (const Driver& d : drivers) {
       auto own = d.direct ? ForceRange(*d.actuator) : std::nullopt;
       if (!own) {
-        Note(Kind::kRefused, target,
+        Note("actuatorfrcrange.refused", target,
              what + " is shared by " + std::to_string(drivers.size()) +
                  " actuators; MuJoCo 2.2.2 cannot clamp their sum and " + Tag(*d.actuator) +
                  " has no force range that keeps the sum inside it");
@@ -611,12 +905,12 @@ class Bridge {
       hi += std::max(g * (*own)[0], g * (*own)[1]);
     }
     if (lo >= range[0] && hi <= range[1]) {
-      Note(Kind::kDropped, target,
+      Note("actuatorfrcrange.inactive", target,
            what + ": the force ranges of its " + std::to_string(drivers.size()) +
                " actuators already keep the total inside it, so it is never active");
       return;
     }
-    Note(Kind::kRefused, target,
+    Note("actuatorfrcrange.refused", target,
          what + " clamps the sum of " + std::to_string(drivers.size()) +
              " actuators, which MuJoCo 2.2.2 cannot express (per-actuator force ranges would "
              "change the physics)");
@@ -637,25 +931,27 @@ class Bridge {
       t->Unset("actuatorfrcrange");
       t->Unset("actuatorfrclimited");
       if (!limited && range_text && !compiler_.autolimits) {
-        Note(Kind::kRefused, *t,
+        Note("actuatorfrcrange.refused", *t,
              Tag(*t) +
                  " actuatorfrcrange without actuatorfrclimited while autolimits is false "
                  "(MuJoCo 3.x rejects this too)");
         continue;
       }
       if (!active) {
-        Note(Kind::kDropped, *t, Tag(*t) + " actuator force clamp disabled: no effect");
+        Note("actuatorfrcrange.inactive", *t,
+             Tag(*t) + " actuator force clamp disabled: no effect");
         continue;
       }
       auto r = range_text ? ParseReals(*range_text) : std::optional<std::vector<double>>();
       if (!r || r->size() != 2 || (*r)[0] > (*r)[1]) {
-        Note(Kind::kRefused, *t, Tag(*t) + " actuatorfrclimited without a valid actuatorfrcrange");
+        Note("actuatorfrcrange.refused", *t,
+             Tag(*t) + " actuatorfrclimited without a valid actuatorfrcrange");
         continue;
       }
       if (joint) {
         const std::string* type = Resolve(*t, "type");
         if (type && *type != "hinge" && *type != "slide") {
-          Note(Kind::kDropped, *t,
+          Note("actuatorfrcrange.inactive", *t,
                Tag(*t) + " actuatorfrcrange on a " + *type + " joint is ignored by MuJoCo 3.x");
           continue;
         }
@@ -666,7 +962,7 @@ class Bridge {
       bool any = d->Unset("actuatorfrcrange");
       any = d->Unset("actuatorfrclimited") || any;
       if (any) {
-        Note(Kind::kTranslated, *d,
+        Note("actuatorfrcrange.default", *d,
              "default " + Tag(*d) + " actuatorfrcrange resolved into each " + d->tag() +
                  " of the class (see their entries)");
       }
@@ -787,7 +1083,7 @@ class Bridge {
       const double inherit = DialectReal(*a, "inheritrange");
       for (const char* n : {"kv", "dampratio", "timeconst", "inheritrange"}) UnsetDialect(*a, n);
       if (both) {
-        Note(Kind::kRefused, *a,
+        Note("position.refused", *a,
              Tag(*a) +
                  " kv and dampratio set together (MuJoCo 3.x refuses this too: \"kv and "
                  "dampratio cannot both be defined\")");
@@ -795,28 +1091,28 @@ class Bridge {
       }
       if (kv == 0 && ratio == 0 && tau == 0 && inherit == 0) continue;
       if (kv < 0 || ratio < 0 || tau < 0 || inherit < 0) {
-        Note(Kind::kRefused, *a, Tag(*a) + " kv/dampratio/timeconst/inheritrange must be >= 0");
+        Note("position.refused", *a, Tag(*a) + " kv/dampratio/timeconst/inheritrange must be >= 0");
         continue;
       }
       if (inherit > 0) {
         const char* range_attr = position ? "ctrlrange" : "actrange";
         const char* limited_attr = position ? "ctrllimited" : "actlimited";
         if (a->Has(range_attr)) {
-          Note(Kind::kRefused, *a,
+          Note("position.refused", *a,
                Tag(*a) + " inheritrange and " + range_attr + " are exclusive (MuJoCo 3.x too)");
           continue;
         }
         std::string why;
         auto r = TargetRange(*a, &why);
         if (!r) {
-          Note(Kind::kRefused, *a, Tag(*a) + " " + why);
+          Note("position.refused", *a, Tag(*a) + " " + why);
           continue;
         }
         const double mid = ((*r)[0] + (*r)[1]) / 2, half = ((*r)[1] - (*r)[0]) / 2 * inherit;
         const std::array<double, 2> cr = {mid - half, mid + half};
         a->Set(limited_attr, "true");
         a->SetReals(range_attr, cr);
-        Note(Kind::kTranslated, *a,
+        Note("position.inheritrange", *a,
              Tag(*a) + " inheritrange=" + FormatReal(inherit) + " -> " + range_attr + "=\"" +
                  FormatReals(cr) + "\" (the target's range scaled about its midpoint)");
       }
@@ -832,7 +1128,7 @@ class Bridge {
       std::string what = Tag(g) + " (" + (position ? "position" : "intvelocity") +
                          ") written as <general> gainprm=\"" + FormatReal(kp) + "\" biasprm=\"0 " +
                          FormatReal(-kp) + " " + FormatReal(kv == 0 ? 0 : -kv) + "\"";
-      Kind kind = Kind::kTranslated;
+      const char* rule = "position.shortcut";
       if (position) {
         if (tau > 0) {
           // 3.x filterexact: act += (ctrl - act) (1 - exp(-dt/tau)); 2.2.2's Euler-integrated
@@ -844,7 +1140,7 @@ class Bridge {
                   "\": timeconst=" + FormatReal(tau) +
                   " (filterexact) re-expressed for the model's timestep " + FormatReal(dt);
           if (integrator == "RK4") {
-            kind = Kind::kApproximated;
+            rule = "position.timeconst.rk4";
             what += "; with the RK4 integrator the filter state differs at O(dt^2)";
           } else {
             what += ", exact while the timestep is unchanged";
@@ -861,13 +1157,13 @@ class Bridge {
         pending_.push_back({&g, kp, ratio});
         what += "; kv from dampratio=" + FormatReal(ratio) + " is computed below";
       }
-      Note(kind, g, what);
+      Note(rule, g, what);
     }
     for (Element* d : FindDefaults({"position", "intvelocity", "general", "motor", "velocity",
                                     "cylinder", "muscle", "adhesion", "damper"})) {
       if (DialectSet(*d, "kv") && DialectSet(*d, "dampratio") && d->Has("kv") &&
           d->Has("dampratio")) {
-        Note(Kind::kRefused, *d,
+        Note("position.refused", *d,
              "default " + Tag(*d) + " kv and dampratio set together (MuJoCo 3.x refuses this too)");
       }
       std::vector<std::string> gone;
@@ -875,7 +1171,7 @@ class Bridge {
         if (UnsetDialect(*d, n)) gone.push_back(n);
       }
       if (!gone.empty()) {
-        Note(Kind::kTranslated, *d,
+        Note("position.default", *d,
              "default " + Tag(*d) + " " + Join(gone, "/") +
                  " resolved into each actuator of the class (see their entries)");
       }
@@ -890,7 +1186,7 @@ class Bridge {
     mjModel* m = TrialCompile(WriteString(doc_), &error);
     if (!m) {
       for (PendingDampRatio& p : pending_) {
-        Note(Kind::kRefused, *p.actuator,
+        Note("position.dampratio.refused", *p.actuator,
              Tag(*p.actuator) + " dampratio needs the compiled model, which failed: " + error);
       }
       return;
@@ -913,7 +1209,7 @@ class Bridge {
         }
         const double kv = p.ratio * 2 * std::sqrt(p.kp * mass);
         p.actuator->SetReals("biasprm", std::array<double, 3>{0, -p.kp, -kv});
-        Note(Kind::kTranslated, *p.actuator,
+        Note("position.dampratio", *p.actuator,
              Tag(*p.actuator) + " dampratio=" + FormatReal(p.ratio) + " -> kv=" + FormatReal(kv) +
                  " = dampratio * 2 sqrt(kp * m), m = " + FormatReal(mass) +
                  " the transmission's inertia at qpos0 (dof_M0 / moment^2), as MuJoCo 3.x "
@@ -929,21 +1225,21 @@ class Bridge {
     for (Element* o : Find({"option"})) {
       struct Rule {
         const char* attr;
-        Kind kind;
+        const char* rule;
         const char* why;
       };
       static const Rule kRules[] = {
-          {"ls_iterations", Kind::kApproximated,
+          {"ls_iterations", "option.approximated",
            "line-search iterations of the 3.x CG/Newton solvers; 2.2.2's line search is fixed"},
-          {"ls_tolerance", Kind::kApproximated,
+          {"ls_tolerance", "option.approximated",
            "line-search tolerance of the 3.x CG/Newton solvers; 2.2.2's line search is fixed"},
-          {"sdf_initpoints", Kind::kDropped, "SDF collision (plugins) does not exist in 2.2.2"},
-          {"sdf_iterations", Kind::kDropped, "SDF collision (plugins) does not exist in 2.2.2"},
-          {"sleep_tolerance", Kind::kDropped, "island sleeping does not exist in 2.2.2"},
+          {"sdf_initpoints", "option.dropped", "SDF collision (plugins) does not exist in 2.2.2"},
+          {"sdf_iterations", "option.dropped", "SDF collision (plugins) does not exist in 2.2.2"},
+          {"sleep_tolerance", "option.dropped", "island sleeping does not exist in 2.2.2"},
       };
       for (const Rule& r : kRules) {
         if (const std::string* v = o->Get(r.attr)) {
-          Note(r.kind, *o, std::string("option ") + r.attr + "=\"" + *v + "\" dropped: " + r.why);
+          Note(r.rule, *o, std::string("option ") + r.attr + "=\"" + *v + "\" dropped: " + r.why);
           o->Unset(r.attr);
         }
       }
@@ -951,7 +1247,7 @@ class Bridge {
         if (const std::string* v = o->Get(n)) {
           const std::string mpr = std::string("mpr_") + (n + 4);
           if (!o->Has(mpr)) o->Set(mpr, *v);
-          Note(Kind::kApproximated, *o,
+          Note("option.ccd", *o,
                std::string("option ") + n + " -> " + mpr +
                    " (2.2.2 uses libccd's MPR; 3.x's native convex collider differs slightly)");
           o->Unset(n);
@@ -971,10 +1267,10 @@ class Bridge {
           }
         }
         if (hit.empty()) {
-          Note(Kind::kDropped, *o,
+          Note("option.actuatorgroupdisable", *o,
                "option actuatorgroupdisable=\"" + text + "\": no actuator is in these groups");
         } else {
-          Note(Kind::kRefused, *o,
+          Note("option.actuatorgroupdisable.refused", *o,
                "option actuatorgroupdisable=\"" + text + "\" disables actuator group(s) of " +
                    Join(hit, ", ") + ", which 2.2.2 cannot do");
         }
@@ -984,18 +1280,18 @@ class Bridge {
         const bool override_on =
             o->FirstChild("flag") && o->FirstChild("flag")->GetOr("override", "") == "enable";
         if (override_on) {
-          Note(Kind::kRefused, *o,
+          Note("option.o_friction.refused", *o,
                "option o_friction with the override flag: 2.2.2's override has no 5-number "
                "friction");
         } else {
-          Note(Kind::kDropped, *o,
+          Note("option.o_friction", *o,
                "option o_friction=\"" + *v + "\" only applies with the override flag: no effect");
         }
         o->Unset("o_friction");
       }
       if (o->GetOr("integrator", "") == "implicitfast") {
         o->Set("integrator", "implicit");
-        Note(Kind::kApproximated, *o,
+        Note("option.implicitfast", *o,
              "option integrator=\"implicitfast\" -> \"implicit\" (2.2.2's implicit integrator "
              "also treats damping and actuator velocity terms implicitly; implicitfast skips the "
              "Coriolis and centripetal derivatives that 3.x's implicit includes)");
@@ -1014,7 +1310,7 @@ class Bridge {
         if (!s->Has("nstack") && bytes > 0) {
           s->SetInt("nstack", static_cast<int>(std::min(bytes / 8, 2e9)));
         }
-        Note(Kind::kApproximated, *s,
+        Note("size.memory", *s,
              "size memory=\"" + text +
                  "\" -> nstack (2.2.2 sizes its arena in mjtNums; "
                  "njmax/nconmax keep their 2.2.2 defaults)");
@@ -1029,12 +1325,19 @@ class Bridge {
       const std::string s = spring ? *spring : "enable", d = damper ? *damper : "enable";
       if (s == d) {
         f.Set("passive", s);
-        Note(Kind::kTranslated, f,
+        Note("flag.spring_damper", f,
              "flag spring/damper=\"" + s + "\" -> 2.2.2's single passive=\"" + s + "\"");
       } else {
-        Note(Kind::kRefused, f,
+        // One of the two is off: passive stays on and the disabled forces are zeroed in the
+        // model (PassiveFlags, after every translation that sets stiffness or damping).
+        springs_off_ = s == "disable";
+        dampers_off_ = d == "disable";
+        Note("flag.spring_damper.split", f,
              "flag spring=\"" + s + "\" damper=\"" + d +
-                 "\": 2.2.2 can only enable or disable both (flag passive)");
+                 "\": 2.2.2 can only switch both (flag passive), so passive stays enabled and "
+                 "every joint and tendon gets " +
+                 (springs_off_ ? "stiffness" : "damping") +
+                 " 0 instead; exact while the flags are not changed at run time");
       }
       f.Unset("spring");
       f.Unset("damper");
@@ -1057,11 +1360,273 @@ class Bridge {
     for (const Rule& r : kRules) {
       if (const std::string* v = f.Get(r.attr)) {
         const bool is_default = *v == r.dflt;
-        Note(is_default ? Kind::kDropped : Kind::kApproximated, f,
+        Note(is_default ? "flag.default" : "flag.other", f,
              std::string("flag ") + r.attr + "=\"" + *v + "\" dropped: " + r.why);
         f.Unset(r.attr);
       }
     }
+  }
+
+  // ---- general dyntype="filterexact" ----
+  // As position timeconst: 3.x's filterexact act += (ctrl - act)(1 - exp(-dt/tau)) is 2.2.2's
+  // Euler-integrated filter with tau' = dt / (1 - exp(-dt/tau)).
+  void FilterExact() {
+    const double dt = ResolveTimestep();
+    const bool rk4 = Integrator() == "RK4";
+    for (Element* a : Find({"general"})) {
+      if (!a->parent() || a->parent()->tag() != "actuator") continue;
+      const std::string* t = Resolve(*a, "dyntype");
+      if (!t || *t != "filterexact") continue;
+      std::vector<double> prm = ResolveReals(*a, "dynprm").value_or(std::vector<double>{1});
+      if (prm.empty() || prm[0] <= 0) {
+        Note("actuator.filterexact.refused", *a, Tag(*a) + " filterexact needs dynprm[0] > 0");
+        continue;
+      }
+      const double tau = prm[0];
+      prm[0] = dt / (1 - std::exp(-dt / tau));
+      a->Set("dyntype", "filter");
+      a->SetReals("dynprm", prm);
+      Note(rk4 ? "actuator.filterexact.rk4" : "actuator.filterexact", *a,
+           Tag(*a) + " dyntype=\"filterexact\" dynprm[0]=" + FormatReal(tau) +
+               " -> dyntype=\"filter\" dynprm[0]=" + FormatReal(prm[0]) +
+               " (the same update per step for the model's timestep " + FormatReal(dt) + ")" +
+               (rk4 ? "; with RK4 the filter state differs at O(dt^2)"
+                    : ", exact while the timestep is unchanged"));
+    }
+    for (Element* d : FindDefaults({"general"})) {
+      if (d->GetOr("dyntype", "") == "filterexact") {
+        d->Set("dyntype", "filter");
+        Note("actuator.filterexact.default", *d,
+             "default " + Tag(*d) + " dyntype=\"filterexact\" resolved into each actuator");
+      }
+    }
+  }
+  double ResolveTimestep() {
+    const Element* o = doc_.root().FirstChild("option");
+    return o ? std::atof(o->GetOr("timestep", "0.002").c_str()) : 0.002;
+  }
+  std::string Integrator() {
+    const Element* o = doc_.root().FirstChild("option");
+    return o ? o->GetOr("integrator", "Euler") : "Euler";
+  }
+
+  // ---- equality polycoef with fewer than 5 numbers ----
+  void PolyCoef() {
+    for (Element* e : Find({"joint", "tendon"})) {
+      if (!e->parent() || e->parent()->tag() != "equality") continue;
+      const std::string* v = e->Get("polycoef");
+      if (!v) continue;
+      std::vector<double> c = ParseReals(*v).value_or(std::vector<double>{});
+      if (c.size() >= 5 || c.empty()) continue;
+      const double defaults[5] = {0, 1, 0, 0, 0};
+      const std::string before = *v;
+      for (size_t i = c.size(); i < 5; ++i) c.push_back(defaults[i]);
+      e->SetReals("polycoef", c);
+      Note("equality.polycoef", *e,
+           Tag(*e) + " polycoef=\"" + before + "\" -> \"" + FormatReals(c) +
+               "\" (3.x fills the missing coefficients with the defaults 0 1 0 0 0)");
+    }
+  }
+
+  // ---- tendon springlength with two numbers (a dead band) ----
+  void SpringLength() {
+    for (Element* t : Find({"fixed", "spatial"})) {
+      auto sl = ResolveReals(*t, "springlength");
+      if (!sl || sl->size() != 2) continue;
+      const double lo = (*sl)[0], hi = (*sl)[1];
+      const double k = ResolveReal(*t, "stiffness", 0);
+      const std::string desc = Tag(*t) + " springlength=\"" + FormatReals(*sl) + "\"";
+      if (lo == hi) {
+        t->SetReal("springlength", lo);
+        Note("tendon.springlength.single", *t, desc + " -> one value (no dead band)");
+        continue;
+      }
+      if (lo > hi) {
+        Note("tendon.springlength.refused", *t, desc + ": the lower bound exceeds the upper");
+        continue;
+      }
+      t->SetReal("springlength", lo);
+      if (k == 0) {
+        Note("tendon.springlength.nostiffness", *t, desc + ": no stiffness, no spring force");
+        continue;
+      }
+      std::string name = t->Name();
+      if (name.empty()) {
+        name = "deadband_tendon" + std::to_string(report_.deadband_springs.size());
+        t->Set("name", name);
+      }
+      t->SetReal("stiffness", 0);
+      report_.deadband_springs.push_back({name, k, lo, hi});
+      Note("tendon.springlength.deadband", *t,
+           desc + " (a dead band) with stiffness " + FormatReal(k) +
+               ": the tendon gets stiffness 0 and the runtime adds stiffness * (bound - length) "
+               "outside [" +
+               FormatReal(lo) + ", " + FormatReal(hi) +
+               "] through mjcb_passive, as MuJoCo 3.x does");
+    }
+    for (Element* d : FindDefaults({"tendon"})) {
+      auto sl = d->GetReals("springlength");
+      if (sl && sl->size() == 2) {
+        d->SetReal("springlength", (*sl)[0]);
+        Note("tendon.springlength.default", *d,
+             "default " + Tag(*d) + " springlength resolved into each tendon");
+      }
+    }
+  }
+
+  // ---- flag spring or damper disabled alone ----
+  void PassiveFlags() {
+    if (!springs_off_ && !dampers_off_) return;
+    const char* attr = springs_off_ ? "stiffness" : "damping";
+    int n = 0;
+    for (Element* e : Find({"joint", "fixed", "spatial"})) {
+      if (e->tag() == "joint" && (!e->parent() || e->parent()->tag() != "body")) continue;
+      if (ResolveReal(*e, attr, 0) == 0) continue;
+      e->SetReal(attr, 0);
+      ++n;
+    }
+    if (springs_off_ && !report_.deadband_springs.empty()) {
+      n += static_cast<int>(report_.deadband_springs.size());
+      report_.deadband_springs.clear();
+    }
+    Element* f = doc_.root().FirstChild("option");
+    Note("flag.spring_damper.split", f ? *f : doc_.root(),
+         std::string(attr) + " set to 0 on " + std::to_string(n) + " joint(s)/tendon(s) (flag " +
+             (springs_off_ ? "spring" : "damper") + " disabled)");
+  }
+
+  // ---- compiler discardvisual ----
+  // 3.x computes body masses and inertias with the visual geoms, then discards them (and keeps
+  // those a <pair> uses); 2.2.2 discards them first, so the bodies lose their mass, and fails on
+  // a <pair> naming one. Keeping every geom gives 3.x's physics: visual geoms (contype =
+  // conaffinity = 0) do not collide; only the model's geom (and mesh) counts are larger.
+  // Visual-only geoms (contype = conaffinity = 0) that a <pair> uses, under discardvisual.
+  std::vector<Element*> VisualPairGeoms() {
+    std::vector<Element*> out;
+    if (!DiscardVisual()) return out;
+    std::set<std::string> paired;
+    for (Element* p : Find({"pair"})) {
+      for (const char* a : {"geom1", "geom2"}) {
+        if (const std::string* g = p->Get(a)) paired.insert(*g);
+      }
+    }
+    for (Element* g : Find({"geom"})) {
+      if (paired.count(g->Name()) && ResolveReal(*g, "contype", 1) == 0 &&
+          ResolveReal(*g, "conaffinity", 1) == 0) {
+        out.push_back(g);
+      }
+    }
+    return out;
+  }
+  bool DiscardVisual() {
+    for (const auto& c : doc_.root().children()) {
+      if (c->tag() == "compiler" && c->GetOr("discardvisual", "") == "true") return true;
+    }
+    return false;
+  }
+
+  void KeepVisualGeoms() {
+    for (const auto& c : doc_.root().children()) {
+      if (c->tag() != "compiler" || c->GetOr("discardvisual", "") != "true") continue;
+      c->Set("discardvisual", "false");
+      Note("compiler.discardvisual", *c,
+           "compiler discardvisual=\"true\" -> \"false\": MuJoCo 3.x weighs bodies with their "
+           "visual geoms before discarding them (and keeps those contact pairs use), 2.2.2 "
+           "discards them first; keeping them gives 3.x's masses and contacts, with more geoms "
+           "in the model (visual geoms do not collide)");
+    }
+  }
+
+  // ---- render-only elements of 3.x ----
+  void VisualOnly() {
+    for (Element* l : Find({"layer"})) {
+      if (!l->parent() || l->parent()->tag() != "material") continue;
+      Note("material.layer", *l,
+           "<material><layer> (physically based texture layer) dropped: render-only");
+      l->parent()->RemoveChild(l);
+    }
+  }
+
+  // ---- keyframes shorter than the model ----
+  // 3.x pads a key's qpos with qpos0, qvel/act/ctrl with zeros, mpos/mquat with the mocap bodies'
+  // poses; 2.2.2 refuses a key of the wrong length. The padding needs the compiled sizes and
+  // qpos0: a trial compile without the keys.
+  // Whether every key already has the document's sizes, counted from its joints and actuators
+  // (no trial compile needed). False when unsure (composites, mocap or act values).
+  bool KeysFitTheDocument(const Element& section) {
+    int nq = 0, nv = 0, nu = 0;
+    bool unsure = false;
+    doc_.root().Visit([&](const Element& e) {
+      if (InDefault(e)) return;
+      if (e.tag() == "composite") unsure = true;
+      if (e.tag() == "freejoint") {
+        nq += 7;
+        nv += 6;
+      } else if (e.tag() == "joint" && e.parent() && e.parent()->tag() == "body") {
+        const std::string* t = Resolve(e, "type");
+        const std::string type = t ? *t : "hinge";
+        nq += type == "free" ? 7 : type == "ball" ? 4 : 1;
+        nv += type == "free" ? 6 : type == "ball" ? 3 : 1;
+      } else if (IsActuatorTag(e.tag()) && e.parent() && e.parent()->tag() == "actuator") {
+        ++nu;
+      }
+    });
+    if (unsure) return false;
+    for (const auto& k : section.children()) {
+      if (k->Has("act") || k->Has("mpos") || k->Has("mquat")) return false;
+      auto count = [&](const char* a) {
+        const std::string* v = k->Get(a);
+        return v ? static_cast<int>(ParseReals(*v).value_or(std::vector<double>{}).size()) : -1;
+      };
+      const int q = count("qpos"), v = count("qvel"), c = count("ctrl");
+      if ((q >= 0 && q != nq) || (v >= 0 && v != nv) || (c >= 0 && c != nu)) return false;
+    }
+    return true;
+  }
+
+  void PadKeyframes() {
+    Element* section = nullptr;
+    for (Element* k : Find({"keyframe"})) section = k;
+    if (!section || section->children().empty() || KeysFitTheDocument(*section)) return;
+    std::unique_ptr<Element> keys = doc_.root().RemoveChild(section);
+    std::string error;
+    mjModel* m = TrialCompile(WriteString(doc_), &error);
+    doc_.root().InsertChild(doc_.root().children().size(), std::move(keys));
+    if (!m) return;  // the real compile reports it
+    for (const auto& k : section->children()) {
+      std::vector<std::string> padded;
+      auto pad = [&](const char* attr, int size, const mjtNum* fill) {
+        const std::string* v = k->Get(attr);
+        if (!v) return;
+        std::vector<double> x = ParseReals(*v).value_or(std::vector<double>{});
+        if (static_cast<int>(x.size()) >= size) return;
+        const size_t had = x.size();
+        for (int i = static_cast<int>(had); i < size; ++i) x.push_back(fill ? fill[i] : 0.0);
+        k->SetReals(attr, x);
+        padded.push_back(std::string(attr) + " " + std::to_string(had) + " -> " +
+                         std::to_string(size));
+      };
+      std::vector<mjtNum> mpos, mquat;
+      for (int b = 0; b < m->nbody; ++b) {
+        if (m->body_mocapid[b] < 0) continue;
+        mpos.insert(mpos.end(), m->body_pos + 3 * b, m->body_pos + 3 * b + 3);
+        mquat.insert(mquat.end(), m->body_quat + 4 * b, m->body_quat + 4 * b + 4);
+      }
+      pad("qpos", m->nq, m->qpos0);
+      pad("qvel", m->nv, nullptr);
+      pad("act", m->na, nullptr);
+      pad("ctrl", m->nu, nullptr);
+      pad("mpos", 3 * m->nmocap, mpos.data());
+      pad("mquat", 4 * m->nmocap, mquat.data());
+      if (!padded.empty()) {
+        Note("keyframe.pad", *k,
+             Tag(*k) +
+                 " shorter than the model, padded as MuJoCo 3.x does (qpos with qpos0, "
+                 "mocap with the bodies' poses, the rest with zeros): " +
+                 Join(padded, ", "));
+      }
+    }
+    mj_deleteModel(m);
   }
 
   // ---- mesh inertia ----
@@ -1078,7 +1643,7 @@ class Bridge {
       const std::string* v = Resolve(*m, "inertia");
       const std::string mode = v ? *v : "legacy";
       if (mode == "shell") {
-        Note(Kind::kRefused, *m,
+        Note("mesh.shell", *m,
              Tag(*m) +
                  " inertia=\"shell\": set shellinertia on the geoms that use this mesh "
                  "instead (the bridge does not know which bodies infer inertia)");
@@ -1086,14 +1651,14 @@ class Bridge {
         ++maybe_nonconvex;
       }
       if (m->Get("inertia")) {
-        Note(Kind::kTranslated, *m,
+        Note("mesh.inertia", *m,
              Tag(*m) + " inertia=\"" + mode + "\": see the compiler's exactmeshinertia entry");
         m->Unset("inertia");
       }
     }
     for (Element* d : FindDefaults({"mesh"})) {
       if (d->Unset("inertia")) {
-        Note(Kind::kTranslated, *d, "default " + Tag(*d) + " inertia resolved into each mesh");
+        Note("mesh.inertia", *d, "default " + Tag(*d) + " inertia resolved into each mesh");
       }
     }
     if (meshes.empty()) return;
@@ -1113,9 +1678,9 @@ class Bridge {
         ": MuJoCo 3.x computes mesh masses from the mesh volume, 2.2.2's default from its "
         "inertia box";
     if (maybe_nonconvex == 0) {
-      Note(Kind::kTranslated, *doc_.root().FirstChild("compiler"), what);
+      Note("mesh.exactmeshinertia", *doc_.root().FirstChild("compiler"), what);
     } else {
-      Note(Kind::kApproximated, *doc_.root().FirstChild("compiler"),
+      Note("mesh.exactmeshinertia.nonconvex", *doc_.root().FirstChild("compiler"),
            what + "; exact for convex meshes, but " + std::to_string(maybe_nonconvex) +
                " mesh file(s) with inertia legacy/convex may be non-convex, where 3.x's legacy "
                "algorithm overcounts the volume (convex: takes the hull's) and 2.2.2's exact one "
@@ -1134,120 +1699,71 @@ class Bridge {
     });
   }
 
+  // Whether an attribute policy's `elements` list covers `e`.
+  static bool PolicyCovers(const AttributePolicy& p, const Element& e) {
+    for (std::string_view tag : Words(p.elements)) {
+      if (tag == "<sensor>" && e.parent() && e.parent()->tag() == "sensor") return true;
+      if (tag == "<actuator>" && IsActuatorTag(e.tag())) return true;
+      if (tag == e.tag()) return true;
+    }
+    return false;
+  }
+  static std::vector<std::string_view> Words(std::string_view s) {
+    std::vector<std::string_view> out;
+    while (!s.empty()) {
+      const size_t b = s.find_first_not_of(" |");
+      if (b == std::string_view::npos) break;
+      s.remove_prefix(b);
+      const size_t n = s.find_first_of(" |");
+      out.push_back(s.substr(0, n));
+      s.remove_prefix(n == std::string_view::npos ? s.size() : n);
+    }
+    return out;
+  }
+
+  // A 3.x attribute no translation function consumed: the first attribute policy (bridge_rules.cc)
+  // covering it decides; the handful that compute something have their own functions.
   void GenericAttribute(Element& e, const std::string& n) {
     if (!e.Has(n)) return;  // handled together with an earlier attribute
     const std::string value = *e.Get(n);
     const std::string& t = e.tag();
+    if (t == "light" && n == "type" && value == "directional") return LightType(e);
+    if (t == "camera" && (n == "sensorsize" || n == "focal" || n == "focalpixel" ||
+                          n == "resolution" || n == "principal" || n == "principalpixel")) {
+      return CameraIntrinsics(e);
+    }
     const std::string desc =
         (InDefault(e) ? "default " : "") + Tag(e) + " " + n + "=\"" + value + "\"";
-    auto drop = [&](const std::string& why) {
-      Note(Kind::kDropped, e, desc + " dropped: " + why);
+    for (const AttributePolicy& p : AttributePolicies()) {
+      if (!PolicyCovers(p, e)) continue;
+      const std::vector<std::string_view> attrs = Words(p.attributes);
+      if (std::find(attrs.begin(), attrs.end(), n) == attrs.end() &&
+          std::find(attrs.begin(), attrs.end(), "*") == attrs.end()) {
+        continue;
+      }
+      bool first = true;
+      if (p.condition == AttributeCondition::kZero) {
+        first = AllZero(ParseReals(value).value_or(std::vector<double>{1}));
+      } else if (p.condition == AttributeCondition::kValueIn) {
+        const std::vector<std::string_view> values = Words(p.values);
+        first = std::find(values.begin(), values.end(), value) != values.end();
+      }
+      const char* rule = first ? p.rule_if : p.rule_else;
+      const char* why = first ? p.why_if : p.why_else;
+      const bool refused = FindBridgeRule(rule).kind == Kind::kRefused;
+      Note(rule, e, desc + (refused ? ": " : " dropped: ") + why);
       e.Unset(n);
-    };
-    auto approx = [&](const std::string& why) {
-      Note(Kind::kApproximated, e, desc + " dropped: " + why);
-      e.Unset(n);
-    };
-    auto refuse = [&](const std::string& why) {
-      Note(Kind::kRefused, e, desc + ": " + why);
-      e.Unset(n);
-    };
-    auto zero = [&] { return AllZero(ParseReals(value).value_or(std::vector<double>{1})); };
-    const bool sensor = e.parent() && (e.parent()->tag() == "sensor");
-    const bool actuator = IsActuatorTag(t);
-    if (sensor) {
-      if (n == "nsample" || n == "interp") return drop("only used with delay");
-      if (n == "delay" || n == "interval") {
-        if (zero()) return drop("zero");
-        return approx(
-            "the sensor reads the current value every step (no delay or interval "
-            "in 2.2.2)");
-      }
-    }
-    if (actuator) {
-      if (n == "nsample" || n == "interp") return drop("only used with delay");
-      if (n == "delay") return zero() ? drop("zero") : refuse("actuator delay changes the physics");
-      if (n == "actearly") {
-        if (value == "false") return drop("2.2.2's behaviour");
-        return approx("forces use the current activation (one step later than actearly)");
-      }
-      if (n == "actdim")
-        return value == "1" || value == "0" ? drop("implied by dyntype")
-                                            : refuse("vector activations");
-      if (n == "actlimited" && t == "intvelocity") {
-        return value == "true" ? drop("intvelocity is always activation-limited in 2.2.2")
-                               : refuse("an unlimited intvelocity");
-      }
-      if (n == "tausmooth") return zero() ? drop("zero") : refuse("muscle tausmooth");
-      return refuse("no 2.2.2 equivalent for this actuator attribute");
-    }
-    if (t == "material" && (n == "metallic" || n == "roughness")) {
-      return drop("physically based rendering parameter; render-only");
-    }
-    if (t == "texture" && (n == "colorspace" || n == "nchannel" || n == "content_type")) {
-      return drop("texture decoding hint; render-only");
-    }
-    if ((t == "mesh" || t == "hfield") && n == "content_type") {
-      return drop("the file extension gives the format");
-    }
-    if (t == "mesh" && n == "maxhullvert") {
-      return approx("2.2.2 uses the full convex hull for collisions");
-    }
-    if (t == "mesh" && n == "material") return drop("default material for geoms; render-only");
-    if (t == "light") {
-      if (n == "type") {
-        if (value == "directional") {
-          e.Set("directional", "true");
-          Note(Kind::kTranslated, e, desc + " -> directional=\"true\"");
-          e.Unset(n);
-          return;
-        }
-        if (value == "spot") return drop("2.2.2 lights are spot lights unless directional");
-        return approx("2.2.2 has no " + value + " light; rendered as a spot light (render-only)");
-      }
-      return drop("physically based lighting parameter; render-only");
-    }
-    if (t == "camera") {
-      if (n == "sensorsize" || n == "focal" || n == "focalpixel" || n == "resolution" ||
-          n == "principal" || n == "principalpixel") {
-        return CameraIntrinsics(e);
-      }
-      if (n == "output") return drop("camera output channels; render-only");
-      if (n == "projection") {
-        return value == "perspective" ? drop("2.2.2 cameras are perspective")
-                                      : approx("orthographic cameras render in perspective");
-      }
-    }
-    if (t == "global" || t == "rgba" || t == "scale") return drop("visualisation only");
-    if (t == "body") {
-      if (n == "gravcomp") return zero() ? drop("zero") : refuse("gravity compensation");
-      if (n == "sleep" || n == "simple") return drop("a 3.x simulation optimisation hint");
-    }
-    if (t == "joint" && n == "actuatorgravcomp") {
-      return value == "false" ? drop("2.2.2's behaviour") : drop("no gravity compensation here");
-    }
-    if ((t == "fixed" || t == "spatial" || (t == "tendon" && InDefault(e))) && n == "armature") {
-      return zero() ? drop("zero") : refuse("tendon armature does not exist in 2.2.2");
-    }
-    if (t == "geom") {
-      if (n == "adhesion" || n == "surfacevel") {
-        return zero() ? drop("zero") : refuse("contact " + n + " does not exist in 2.2.2");
-      }
-    }
-    if (t == "pair" && (n == "solreffriction" || n == "adhesion")) {
-      return zero() ? drop("zero means the 2.2.2 behaviour") : refuse("no 2.2.2 equivalent");
-    }
-    if (t == "freejoint" && n == "align") {
-      return value == "false" ? drop("2.2.2's behaviour")
-                              : refuse("aligning the free body with its inertia frame");
-    }
-    if (t == "rangefinder" && n == "data") {
-      return value == "dist" ? drop("the 2.2.2 output") : refuse("rangefinder outputs");
-    }
-    if (t == "rangefinder" && n == "camera") {
-      return refuse("rangefinders mounted on cameras do not exist in 2.2.2");
+      return;
     }
     // Everything else is left for Leftovers() to refuse.
+  }
+
+  void LightType(Element& e) {
+    e.Set("directional", "true");
+    Note("light.directional", e,
+         (InDefault(e) ? "default " : "") + Tag(e) +
+             " type=\"directional\" -> directional=\"true\"");
+    e.Unset("type");
   }
 
   void CameraIntrinsics(Element& c) {
@@ -1274,7 +1790,7 @@ class Bridge {
          {"sensorsize", "focal", "focalpixel", "resolution", "principal", "principalpixel"}) {
       c.Unset(n);
     }
-    Note(principal ? Kind::kApproximated : Kind::kTranslated, c,
+    Note(principal ? "camera.principal" : "camera.intrinsics", c,
          what + (principal ? "; the principal point offset is dropped (render-only)" : ""));
   }
 
@@ -1284,14 +1800,14 @@ class Bridge {
       const bool joint = s->tag() == "jointactuatorfrc";
       const std::string* target = s->Get(joint ? "joint" : "tendon");
       if (!target) {
-        Note(Kind::kRefused, *s, Tag(*s) + " needs a " + (joint ? "joint" : "tendon"));
+        Note("sensor.refused", *s, Tag(*s) + " needs a " + (joint ? "joint" : "tendon"));
         continue;
       }
       const std::string tname = *target;
       std::string name = s->Name();
       if (name.empty()) {
         name = s->tag() + "_" + tname;
-        Note(Kind::kTranslated, *s, Tag(*s) + " is unnamed; named '" + name + "'");
+        Note("sensor.unnamed", *s, Tag(*s) + " is unnamed; named '" + name + "'");
       }
       Element& u = Retag(*s, "user");
       u.Unset(joint ? "joint" : "tendon");
@@ -1305,11 +1821,85 @@ class Bridge {
                                           joint ? BridgedSensor::Kind::kJointActuatorForce
                                                 : BridgedSensor::Kind::kTendonActuatorForce,
                                           tname});
-      Note(Kind::kTranslated, u,
+      Note("sensor.actuatorfrc", u,
            "<" + std::string(joint ? "jointactuatorfrc" : "tendonactuatorfrc") + " name='" + name +
                "'> -> <user> sensor of the same name, computed by the runtime from " +
                (joint ? "qfrc_actuator at the joint's dof"
                       : "the actuator forces of the tendon's actuators"));
+    }
+  }
+
+  // 3.x sensors the runtime computes from 2.2.2's mjData (physics/software_sensors.h): energies,
+  // insidesite and contact, as <user> sensors with the 3.x layout and stage.
+  void ComputedSensors() {
+    int unnamed = 0;
+    for (Element* s : Find({"e_kinetic", "e_potential", "insidesite", "contact"})) {
+      if (!s->parent() || s->parent()->tag() != "sensor") continue;
+      const std::string tag = s->tag();
+      std::map<std::string, std::string> params;
+      for (const char* a : {"site", "objtype", "objname", "geom1", "geom2", "body1", "body2",
+                            "subtree1", "subtree2", "num", "data", "reduce"}) {
+        if (const std::string* v = s->Get(a)) params[a] = *v;
+      }
+      int dim = 1;
+      const std::string stage = tag == "e_kinetic" ? "vel" : tag == "contact" ? "acc" : "pos";
+      const BridgedSensor::Kind kind = tag == "e_kinetic" ? BridgedSensor::Kind::kKineticEnergy
+                                       : tag == "e_potential"
+                                           ? BridgedSensor::Kind::kPotentialEnergy
+                                       : tag == "insidesite" ? BridgedSensor::Kind::kInsideSite
+                                                             : BridgedSensor::Kind::kContact;
+      if (tag == "insidesite" &&
+          (!params.count("site") || !params.count("objtype") || !params.count("objname"))) {
+        Note("sensor.refused", *s, Tag(*s) + " needs site, objtype and objname (3.x too)");
+        continue;
+      }
+      if (tag == "contact") {
+        if (params.count("reduce") && params["reduce"] == "netforce") {
+          Note("sensor.contact.netforce", *s,
+               Tag(*s) +
+                   " reduce=\"netforce\" (the net wrench of all matched contacts about their "
+                   "centroid) is not computed by the runtime; nearest: reduce=\"maxforce\"");
+          continue;
+        }
+        static const std::pair<const char*, int> kFields[] = {
+            {"found", 1}, {"force", 3},  {"torque", 3}, {"dist", 1},
+            {"pos", 3},   {"normal", 3}, {"tangent", 3}};
+        int slot = 0, last = -1;
+        bool bad = false;
+        std::istringstream words(params.count("data") ? params["data"] : "found");
+        for (std::string w; words >> w;) {
+          int i = 0;
+          while (i < 7 && w != kFields[i].first) ++i;
+          bad = bad || i == 7 || i <= last;
+          if (i < 7) slot += kFields[i].second;
+          last = i;
+        }
+        const int num = params.count("num") ? std::atoi(params["num"].c_str()) : 1;
+        if (bad || num < 1) {
+          Note("sensor.refused", *s,
+               Tag(*s) +
+                   " data/num invalid (3.x refuses it too: fields are found force torque "
+                   "dist pos normal tangent, in that order; num >= 1)");
+          continue;
+        }
+        dim = num * slot;
+      }
+      std::string name = s->Name();
+      if (name.empty()) name = tag + "_sensor" + std::to_string(unnamed++);
+      Element& u = Retag(*s, "user");
+      for (const auto& kv : params) u.Unset(kv.first);
+      u.Set("name", name);
+      // 2.2.2 requires an object: the site for insidesite, otherwise the world body.
+      u.Set("objtype", tag == "insidesite" ? "site" : "body");
+      u.Set("objname", tag == "insidesite" ? params["site"] : "world");
+      u.Set("datatype", "real");
+      u.Set("needstage", stage);
+      u.SetInt("dim", dim);
+      report_.software_sensors.push_back({name, kind, "", params});
+      Note("sensor.computed", u,
+           "<" + tag + " name='" + name + "'> -> <user> sensor of the same name (dim " +
+               std::to_string(dim) + ", stage " + stage +
+               ") computed by the runtime through mjcb_sensor with the 3.x layout");
     }
   }
 
@@ -1344,7 +1934,7 @@ class Bridge {
       for (auto& a : moved) section->InsertChild(section->children().size(), std::move(a));
       std::vector<std::string> names;
       for (Element* a : stateful) names.push_back(a->Name().empty() ? Tag(*a) : a->Name());
-      Note(Kind::kTranslated, *section,
+      Note("actuator.order", *section,
            "stateful actuators moved after the stateless ones, as MuJoCo 2.2.2 requires (" +
                Join(names, ", ") +
                "): same physics, but ctrl/act indices follow the new order; address actuators "
@@ -1354,6 +1944,16 @@ class Bridge {
 
   // ---- anything 3.x that is still there cannot be expressed ----
   void Leftovers() {
+    for (Element* g : Find({"geom"})) {
+      if (g->GetOr("type", "") == "sdf") {
+        Note("refused.sdf", *g,
+             Tag(*g) +
+                 " type=\"sdf\": signed-distance-field geoms need engine plugins, which "
+                 "MuJoCo 2.2.2 cannot load; nearest 2.2.2 construct: type=\"mesh\" (its "
+                 "convex hull collides)");
+        g->Set("type", "sphere");  // keeps the document writable for --bridge-report
+      }
+    }
     std::vector<Element*> elements;
     doc_.root().Visit([&](Element& e) {
       if (e.spec() && e.spec()->dialect) {
@@ -1365,7 +1965,7 @@ class Bridge {
         if (IsDialect(a)) names.push_back(a.name);
       }
       for (const std::string& n : names) {
-        Note(Kind::kRefused, e,
+        Note("leftover", e,
              (InDefault(e) ? "default " : "") + Tag(e) + " attribute " + n + "=\"" + *e.Get(n) +
                  "\" (MuJoCo 3.x) has no MuJoCo 2.2.2 translation");
         e.Unset(n);
@@ -1377,7 +1977,14 @@ class Bridge {
         inside = inside || std::find(elements.begin(), elements.end(), p) != elements.end();
       }
       if (inside) continue;
-      Note(Kind::kRefused, *e, Tag(*e) + " (MuJoCo 3.x) has no MuJoCo 2.2.2 translation");
+      const auto refused = RefusedElements();
+      const auto r = std::find_if(refused.begin(), refused.end(),
+                                  [&](const RefusedElement& x) { return e->tag() == x.tag; });
+      if (r != refused.end()) {
+        Note("refused.element", *e, Tag(*e) + ": " + r->why + "; " + r->nearest);
+        continue;
+      }
+      Note("leftover", *e, Tag(*e) + " (MuJoCo 3.x) has no MuJoCo 2.2.2 translation");
     }
     for (auto it = elements.rbegin(); it != elements.rend(); ++it) {
       if ((*it)->parent()) (*it)->parent()->RemoveChild(*it);
@@ -1387,6 +1994,8 @@ class Bridge {
   Document& doc_;
   BridgeReport& report_;
   CompilerSettings compiler_;
+  bool springs_off_ = false;  // flag spring disabled, damper enabled
+  bool dampers_off_ = false;  // flag damper disabled, spring enabled
   std::vector<PendingDampRatio> pending_;
 };
 
@@ -1425,8 +2034,8 @@ std::string BridgeReport::Format() const {
   std::string s;
   for (const BridgeChange& c : changes) {
     const std::string where = c.where.str();
-    s += (where.empty() ? std::string("<model>") : where) + ": " + BridgeKindName(c.kind) + ": " +
-         c.what + "\n";
+    s += (where.empty() ? std::string("<model>") : where) + ": " + BridgeKindName(c.kind) + " [" +
+         c.rule + "]: " + c.what + "\n";
   }
   return s;
 }

@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "mjcf/compose_steps.h"
 #include "skin_file.h"
 #include "urlab/document/orientation.h"
 
@@ -413,6 +414,17 @@ std::map<std::string, std::string> OptionAttributes(const Document& doc) {
 }
 
 }  // namespace
+
+void PrefixNames(Document& doc, const std::string& prefix) { ApplyPrefix(doc, prefix); }
+
+std::unique_ptr<Element> WrapDefaultsAsClass(Document& doc, const std::string& prefix) {
+  return WrapDefaults(doc, prefix);
+}
+
+void ConvertAngleUnits(Document& doc, const document::CompilerSettings& from,
+                       const document::CompilerSettings& to) {
+  ConvertAngles(doc, from, to);
+}
 
 void SetOptionAttribute(Document& doc, const std::string& key, const std::string& value) {
   Element& option = doc.Section("option");

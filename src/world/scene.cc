@@ -53,14 +53,40 @@ document::Document ReadBridged(const std::string& path, const std::string& label
   }
 }
 
-void AddSoftwareSensors(const mjcf::BridgeReport& report, const std::string& prefix,
-                        std::vector<physics::SoftwareSensorSpec>* specs) {
+}  // namespace
+
+void AddBridgeRuntime(const mjcf::BridgeReport& report, const std::string& prefix,
+                      physics::SoftwareModelSpec* spec) {
+  using B = mjcf::BridgedSensor::Kind;
+  using P = physics::SoftwareSensorKind;
+  static const std::map<B, P> kKinds = {{B::kJointActuatorForce, P::kJointActuatorForce},
+                                        {B::kTendonActuatorForce, P::kTendonActuatorForce},
+                                        {B::kKineticEnergy, P::kKineticEnergy},
+                                        {B::kPotentialEnergy, P::kPotentialEnergy},
+                                        {B::kInsideSite, P::kInsideSite},
+                                        {B::kContact, P::kContact}};
+  // Attributes naming model elements get the articulation's prefix like every name.
+  static const char* kNames[] = {"site",  "objname", "geom1",    "geom2",
+                                 "body1", "body2",   "subtree1", "subtree2"};
   for (const mjcf::BridgedSensor& b : report.software_sensors) {
-    specs->push_back({prefix + b.name, b.kind == mjcf::BridgedSensor::Kind::kJointActuatorForce
-                                           ? physics::SoftwareSensorKind::kJointActuatorForce
-                                           : physics::SoftwareSensorKind::kTendonActuatorForce});
+    std::map<std::string, std::string> params = b.params;
+    for (const char* n : kNames) {
+      if (params.count(n) && params[n] != "world") params[n] = prefix + params[n];
+    }
+    spec->sensors.push_back({prefix + b.name, kKinds.at(b.kind), std::move(params)});
+  }
+  for (const mjcf::BridgedGravcomp& g : report.gravcomp) {
+    spec->gravcomp.push_back({prefix + g.body, g.gravcomp});
+  }
+  for (const mjcf::BridgedDeadbandSpring& t : report.deadband_springs) {
+    spec->deadband_springs.push_back({prefix + t.tendon, t.stiffness, t.lo, t.hi});
+  }
+  for (const mjcf::BridgedSiteEquality& e : report.site_equalities) {
+    spec->site_equalities.push_back({prefix + e.equality, prefix + e.site1, prefix + e.site2});
   }
 }
+
+namespace {
 
 void NoteBridge(const mjcf::BridgeReport& report, const std::string& label, std::string* out) {
   if (report.changes.empty()) return;
@@ -109,14 +135,14 @@ void SaveDebug(const document::Document& doc, const mjModel* m, const std::strin
 
 CompiledScene BuildScene(const SceneConfig& scene) {
   std::vector<mjcf::ArticulationInput> inputs;
-  std::vector<physics::SoftwareSensorSpec> software;
+  physics::SoftwareModelSpec software;
   std::string bridge_text;
   for (const ArticulationConfig& a : scene.articulations) {
     mjcf::ArticulationInput in;
     in.name = a.name;
     mjcf::BridgeReport report;
     in.doc = ReadBridged(a.mjcf, a.name + ": ", &report);
-    AddSoftwareSensors(report, a.name + "_", &software);
+    AddBridgeRuntime(report, a.name + "_", &software);
     NoteBridge(report, a.name + ": ", &bridge_text);
     in.placement.pos = a.pos;
     in.placement.quat = a.quat;
@@ -130,9 +156,10 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   for (const auto& [k, v] : scene.size) composed.doc.Section("size").Set(k, v);
   CompiledScene out;
   out.model = CompileDocument(composed.doc, &composed.articulations);
+  physics::ApplySiteEqualities(out.model.get(), software);
   mjcf::ApplyArticulationKeyframes(composed.articulations, out.model.get());
   WriteKeyframeValues(composed.doc, out.model.get());
-  out.software_sensors = physics::RegisterSoftwareSensors(out.model.get(), software);
+  out.software_sensors = physics::RegisterSoftwareModel(out.model.get(), software);
   out.bridge_report = std::move(bridge_text);
   if (!scene.save_debug_xml.empty()) {
     SaveDebug(composed.doc, out.model.get(), scene.save_debug_xml, SceneInputFiles(scene));
@@ -149,9 +176,10 @@ CompiledScene BuildModel(const std::string& mjcf_path) {
   CompiledScene out;
   out.diagnostics = doc.diagnostics();
   out.model = CompileDocument(doc, nullptr);
-  std::vector<physics::SoftwareSensorSpec> software;
-  AddSoftwareSensors(report, "", &software);
-  out.software_sensors = physics::RegisterSoftwareSensors(out.model.get(), software);
+  physics::SoftwareModelSpec software;
+  AddBridgeRuntime(report, "", &software);
+  physics::ApplySiteEqualities(out.model.get(), software);
+  out.software_sensors = physics::RegisterSoftwareModel(out.model.get(), software);
   NoteBridge(report, "", &out.bridge_report);
   out.doc = std::move(doc);
   return out;
@@ -212,7 +240,8 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
       if (bridge_report) {
         for (const mjcf::BridgeChange& c : bridged.changes) {
           report.bridge.push_back(label + c.where.str() + ": " + mjcf::BridgeKindName(c.kind) +
-                                  ": " + c.what);
+                                  " [" + c.rule + "]: " + c.what);
+          ++report.bridge_rules[c.rule];
         }
       }
       // References are checked after the bridge (3.x names such as frames are flattened).

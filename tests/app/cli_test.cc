@@ -146,7 +146,12 @@ TEST(CliTest, ValidateBridgeReportListsTranslationsWithLines) {
       << out;
   EXPECT_NE(out.find("bridge: " + file + ":"), std::string::npos) << out;
   EXPECT_NE(out.find("actuatorfrcrange"), std::string::npos) << out;
+  // Every change names its rule; the applied rules are listed with their function.
+  EXPECT_NE(out.find("translated [actuatorfrcrange.one]: "), std::string::npos) << out;
+  EXPECT_NE(out.find("bridge rule: actuatorfrcrange.one (translated, "), std::string::npos) << out;
   EXPECT_NE(out.find(": OK"), std::string::npos) << out;
+  ASSERT_EQ(RunCommand(UrlabBinary() + " validate --bridge-rules", &out), 0) << out;
+  EXPECT_NE(out.find("frame\ttranslated\tFlattenFrames\t"), std::string::npos) << out;
 }
 
 TEST(CliTest, LogsGoToStderrSoJsonStaysClean) {

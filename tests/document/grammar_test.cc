@@ -446,8 +446,11 @@ TEST_F(GrammarTest, DialectKeepsThe222Rows) {
       ASSERT_NE(fa, nullptr) << e.id << " " << a.name;
       EXPECT_FALSE(fa->dialect) << e.id << " " << a.name;
       EXPECT_EQ(fa->type, a.type) << e.id << " " << a.name;
-      EXPECT_EQ(fa->min_count, a.min_count) << e.id << " " << a.name;
-      EXPECT_EQ(fa->max_count, a.max_count) << e.id << " " << a.name;
+      // A dialect row may widen the count (3.x's springlength "lo hi"); 2.2.2's is kept.
+      EXPECT_EQ(fa->dialect_count ? fa->legacy_min_count : fa->min_count, a.min_count)
+          << e.id << " " << a.name;
+      EXPECT_EQ(fa->dialect_count ? fa->legacy_max_count : fa->max_count, a.max_count)
+          << e.id << " " << a.name;
       EXPECT_EQ(fa->ref, a.ref) << e.id << " " << a.name;
       for (size_t i = 0; i < a.keywords.size(); ++i) {
         ASSERT_LT(i, fa->keywords.size()) << e.id << " " << a.name;

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <thread>
 
+#include "compiled_model_test.h"
 #include "mujoco_test.h"
 #include "urlab/core/error.h"
 #include "urlab/physics/model.h"
@@ -48,14 +49,9 @@ const SoftwareSensorSpec kSpecs[] = {{"jf", SoftwareSensorKind::kJointActuatorFo
                                      {"tf", SoftwareSensorKind::kTendonActuatorForce},
                                      {"cut", SoftwareSensorKind::kJointActuatorForce}};
 
-class SoftwareSensorsTest : public testing::MujocoTest {
+class SoftwareSensorsTest : public testing::CompiledModelTest {
  protected:
-  void SetUp() override {
-    model_ = physics::CompileXmlString(kModel);
-    data_ = physics::MakeData(model_.get());
-  }
-  physics::ModelPtr model_;
-  physics::DataPtr data_;
+  const char* Xml() const override { return kModel; }
 };
 
 TEST_F(SoftwareSensorsTest, ComputesJointAndTendonActuatorForces) {

@@ -22,8 +22,9 @@
 // dialect bridge (mjcf/bridge.h) translates: its rows are marked `dialect`, and a row whose id
 // starts with '+' extends the 2.2.2 row of that id with more children and attributes (also
 // marked `dialect`); naming an attribute the row already has adds keywords to it (listed in
-// `dialect_keywords`). The writer never emits dialect elements or attributes that the bridge has
-// not translated: compiling such a document fails with a clear message instead.
+// `dialect_keywords`) or widens its value count (`dialect_count`, the 2.2.2 counts kept). The
+// writer never emits dialect elements or attributes that the bridge has not translated: compiling
+// such a document fails with a clear message instead.
 //
 // Thread: immutable after first use; any thread may read.
 #include <cstdint>
@@ -87,6 +88,11 @@ struct AttributeSpec {
   std::vector<std::string> keywords;
   bool dialect = false;                       // MuJoCo 3.x only: the bridge must translate it
   std::vector<std::string> dialect_keywords;  // 3.x-only values of a 2.2.2 attribute
+  // 3.x accepts more (or fewer) values than 2.2.2 (a dialect row naming the attribute with
+  // another count widens it): the 2.2.2 counts, which a value outside makes a 3.x value.
+  bool dialect_count = false;
+  int legacy_min_count = 1;
+  int legacy_max_count = 1;
   // Allowed values of a number attribute (every value), from the range table; unbounded unless
   // a row names the attribute.
   double min_value = -std::numeric_limits<double>::infinity();

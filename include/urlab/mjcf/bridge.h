@@ -14,6 +14,8 @@
 //
 // Thread: plain function over a document the caller owns. Translating `dampratio` compiles a
 // trial copy of the model with MuJoCo (no global state other than MuJoCo's handlers).
+#include <map>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -27,7 +29,20 @@ struct BridgeChange {
   Kind kind = Kind::kTranslated;
   SourceLocation where;
   std::string what;
+  std::string rule;  // id of the BridgeRules() row that made this change
 };
+
+// One rule of the bridge (the rule table, src/mjcf/bridge_rules.cc): a MuJoCo 3.x construct, what
+// the bridge does with it and the function of src/mjcf/bridge.cc that does it.
+struct BridgeRule {
+  const char* id;
+  const char* construct;
+  BridgeChange::Kind kind;
+  const char* function;
+};
+
+// Every rule, in the order the bridge applies them.
+std::span<const BridgeRule> BridgeRules();
 
 // "translated", "approximated", "dropped", "refused".
 const char* BridgeKindName(BridgeChange::Kind kind);
@@ -35,21 +50,56 @@ const char* BridgeKindName(BridgeChange::Kind kind);
 // A 3.x sensor the bridge turned into a 2.2.2 <user> sensor of the same name; the runtime must
 // compute it (physics/software_sensors.h).
 struct BridgedSensor {
-  enum class Kind { kJointActuatorForce, kTendonActuatorForce };
+  enum class Kind {
+    kJointActuatorForce,
+    kTendonActuatorForce,
+    kKineticEnergy,
+    kPotentialEnergy,
+    kInsideSite,
+    kContact
+  };
   std::string name;
   Kind kind = Kind::kJointActuatorForce;
-  std::string target;  // joint or tendon name
+  std::string target;  // joint or tendon name (actuator forces)
+  // insidesite/contact: the 3.x attributes (site, objtype, objname, geom1, ..., num, data,
+  // reduce); names the runtime resolves are listed in `references`.
+  std::map<std::string, std::string> params;
+};
+
+// A body with 3.x gravity compensation; the runtime adds the force through mjcb_passive
+// (physics/software_sensors.h, GravityCompensationSpec).
+struct BridgedGravcomp {
+  std::string body;
+  double gravcomp = 0;
+};
+
+// A 3.x equality constraint on sites (connect/weld with site1/site2), written as the 2.2.2
+// body-based constraint `equality`; its anchors and relative pose are set from the compiled
+// sites' frames after compilation (physics/software_sensors.h, SiteEqualitySpec).
+struct BridgedSiteEquality {
+  std::string equality;
+  std::string site1, site2;
+};
+
+// A tendon spring with a 3.x dead band (springlength="lo hi"); the 2.2.2 tendon gets stiffness 0
+// and the runtime adds the force through mjcb_passive (physics/software_sensors.h).
+struct BridgedDeadbandSpring {
+  std::string tendon;
+  double stiffness = 0, lo = 0, hi = 0;
 };
 
 struct BridgeReport {
   bool dialect = false;  // the document used 3.x constructs (so 3.x defaults were applied)
   std::vector<BridgeChange> changes;
   std::vector<BridgedSensor> software_sensors;
+  std::vector<BridgedGravcomp> gravcomp;
+  std::vector<BridgedSiteEquality> site_equalities;
+  std::vector<BridgedDeadbandSpring> deadband_springs;
 
   bool HasRefusals() const;
   // Every refusal as an error (file:line: message).
   std::vector<InputError> Refusals() const;
-  // One line per change: "file:line: <kind>: <what>".
+  // One line per change: "file:line: <kind> [<rule id>]: <what>".
   std::string Format() const;
 };
 

@@ -3,11 +3,13 @@
 // placements, apply the option resolution (MuJoCo defaults -> the first articulation's MJCF and
 // options -> the scene's overrides), compile with MuJoCo, write the articulations' keyframes,
 // and optionally save the debug XML/MJB. Thread: main (before the physics thread starts).
+#include <map>
 #include <string>
 #include <vector>
 
 #include "urlab/core/diagnostics.h"
 #include "urlab/document/document.h"
+#include "urlab/mjcf/bridge.h"
 #include "urlab/mjcf/compose.h"
 #include "urlab/physics/model.h"
 #include "urlab/physics/software_sensors.h"
@@ -17,7 +19,8 @@ namespace urlab::world {
 
 struct CompiledScene {
   physics::ModelPtr model;
-  // Sensors 2.2.2 lacks (3.x jointactuatorfrc/tendonactuatorfrc), computed by the runtime; kept
+  // Sensors and passive forces 2.2.2 lacks (3.x jointactuatorfrc/tendonactuatorfrc, gravcomp),
+  // computed by the runtime; kept
   // registered while this lives (declared after `model`, so it is released first).
   physics::SoftwareSensorRegistration software_sensors;
   std::string bridge_report;  // what the dialect bridge changed ("" when nothing)
@@ -25,6 +28,11 @@ struct CompiledScene {
   std::vector<document::Diagnostic> diagnostics;  // warnings worth showing the user
   document::Document doc;  // the (composed) document MuJoCo compiled, e.g. for --save-xml
 };
+
+// What the runtime computes for a bridged model (software sensors, gravity compensation), with
+// every name given `prefix` (an articulation's "{name}_" in a scene), added to `spec`.
+void AddBridgeRuntime(const mjcf::BridgeReport& report, const std::string& prefix,
+                      physics::SoftwareModelSpec* spec);
 
 // Composes and compiles a scene. Throws InputError / CompileError with the articulation, element
 // and file:line of the problem.
@@ -42,9 +50,10 @@ CompiledScene BuildModel(const std::string& mjcf_path);
 // `urlab run` does them (a single MJCF file is a scene of one articulation). Starts nothing and
 // writes no file (a scene's save_debug_xml is ignored).
 struct ValidationReport {
-  Diagnostics diagnostics;          // errors and warnings, each with file:line
-  std::vector<std::string> sizes;   // "nq 28" ... when it compiled
-  std::vector<std::string> bridge;  // dialect bridge changes, when asked for
+  Diagnostics diagnostics;                  // errors and warnings, each with file:line
+  std::vector<std::string> sizes;           // "nq 28" ... when it compiled
+  std::vector<std::string> bridge;          // dialect bridge changes, when asked for
+  std::map<std::string, int> bridge_rules;  // rule id -> changes it made, when asked for
   bool ok() const { return !diagnostics.has_errors(); }
 };
 // With `bridge_report`, lists every change the MuJoCo 3.x dialect bridge makes (file and line).

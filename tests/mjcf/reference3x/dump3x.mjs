@@ -5,6 +5,7 @@
 //   node dump3x.mjs JOB.json > out.json
 //
 // JOB.json: {"module": ".../mujoco-js/dist/mujoco_wasm.js", "steps": 500, "record_every": 25,
+//            (a model may add "extended": true for passive forces and sensors, see dump),
 //            "probe": true, "probe_act_steps": 20, "strip": [{"element": "gyro", "attribute": "nsample"}, ...],
 //            "models": [{"id": "arm_servos", "file": "/abs/dir/arm_servos.xml"}, ...]}
 //
@@ -121,7 +122,7 @@ const NAME_ADR = {
   mjOBJ_BODY: 'name_bodyadr', mjOBJ_JOINT: 'name_jntadr', mjOBJ_GEOM: 'name_geomadr',
   mjOBJ_SITE: 'name_siteadr', mjOBJ_CAMERA: 'name_camadr', mjOBJ_LIGHT: 'name_lightadr',
   mjOBJ_TENDON: 'name_tendonadr', mjOBJ_EQUALITY: 'name_eqadr', mjOBJ_ACTUATOR: 'name_actuatoradr',
-  mjOBJ_KEY: 'name_keyadr', mjOBJ_HFIELD: 'name_hfieldadr',
+  mjOBJ_KEY: 'name_keyadr', mjOBJ_HFIELD: 'name_hfieldadr', mjOBJ_SENSOR: 'name_sensoradr',
 };
 
 // Body-frame bounding box (min xyz, max xyz) of a mesh geom's vertices: where the mesh is,
@@ -177,7 +178,7 @@ function dump(m, d, opts) {
   };
 
   for (const k of ['nq', 'nv', 'nu', 'na', 'nbody', 'njnt', 'ngeom', 'nsite', 'ncam', 'nlight',
-    'ntendon', 'neq', 'nkey', 'nmesh', 'nhfield']) {
+    'ntendon', 'neq', 'nkey', 'nmesh', 'nhfield', ...(opts.extended ? ['nsensordata'] : [])]) {
     put('size', 'model', k, [m[k]]);
   }
 
@@ -395,6 +396,31 @@ function dump(m, d, opts) {
     }
   }
 
+  // Models marked `extended` (the bridge corpus): the passive forces at qpos0 (gravity
+  // compensation, springs) and every named sensor along both trajectories.
+  const sensorKeys = [];
+  if (opts.extended) {
+    mj.mj_resetData(m, d);
+    mj.mj_forward(m, d);
+    for (const [j, vals] of Object.entries(perJoint(d.qfrc_passive, 'v'))) {
+      put('passive', j, 'qfrc_passive', vals);
+    }
+    // 3.x routes the gravity compensation of actuatorgravcomp joints to qfrc_actuator: the sum
+    // is what moves the joint.
+    const total = d.qfrc_passive.map((x, i) => x + d.qfrc_actuator[i]);
+    for (const [j, vals] of Object.entries(perJoint(total, 'v'))) {
+      put('passive', j, 'qfrc_passive_plus_actuator', vals);
+    }
+    for (let i = 0; i < m.nsensor; i++) sensorKeys.push(name('mjOBJ_SENSOR', i) || `sensor#${i}`);
+  }
+  const sensors = (cat, s) => {
+    for (let i = 0; i < sensorKeys.length; i++) {
+      const adr = m.sensor_adr[i];
+      put(`${cat}_sensor`, `${sensorKeys[i]}@${s}`, 'value',
+          Array.from(d.sensordata.subarray(adr, adr + m.sensor_dim[i])));
+    }
+  };
+
   // Zero-control trajectories from the reset state (qpos0): without contacts (everything but
   // collision detection and contact forces), then the full physics.
   const flags = m.opt.disableflags;
@@ -412,6 +438,7 @@ function dump(m, d, opts) {
         for (const [j, vals] of Object.entries(perJoint(d.qvel, 'v'))) {
           put(cat, `${j}@${s}`, 'qvel', vals);
         }
+        sensors(cat, s);
       }
     }
     put(cat, 'final', 'time', [d.time]);
@@ -439,7 +466,7 @@ for (const model of job.models) {
     // through libccd, as 2.2.2 does them).
     for (const flag of job.disable || []) m.opt.disableflags |= mj.mjtDisableBit[`mjDSBL_${flag}`].value;
     d = new mj.MjData(m);
-    result.models[model.id] = {data: dump(m, d, job)};
+    result.models[model.id] = {data: dump(m, d, {...job, extended: !!model.extended})};
   } catch (e) {
     result.models[model.id] = {error: String(e && e.message ? e.message : e)};
   } finally {

@@ -1,0 +1,244 @@
+#include "mjcf/bridge_attach.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include "mjcf/bridge_rules.h"
+#include "mjcf/compose_steps.h"
+#include "urlab/mjcf/reader.h"
+
+namespace urlab::mjcf {
+
+namespace {
+
+namespace fs = std::filesystem;
+using document::Document;
+using document::Element;
+using document::Namespace;
+
+constexpr int kMaxDepth = 8;
+
+void Note(BridgeReport& report, const char* rule, const Element& e, std::string what) {
+  const BridgeRule& r = FindBridgeRule(rule);
+  report.changes.push_back(BridgeChange{r.kind, e.location(), std::move(what), r.id});
+}
+
+using NameSets = std::map<Namespace, std::set<std::string>>;
+
+void DefinedNames(const Element& root, NameSets* out) {
+  root.Visit([&](const Element& e) {
+    if (!e.spec() || e.spec()->name_space == Namespace::kNone ||
+        e.spec()->name_space == Namespace::kClass) {
+      return;
+    }
+    if (const std::string* n = e.Get("name")) (*out)[e.spec()->name_space].insert(*n);
+  });
+}
+
+bool RefersTo(const Element& root, const NameSets& names) {
+  bool found = false;
+  root.Visit([&](const Element& e) {
+    for (const document::Attribute& a : e.attributes()) {
+      auto it = names.find(document::ReferencedNamespace(e, a));
+      if (it != names.end() && it->second.count(a.value)) found = true;
+    }
+  });
+  return found;
+}
+
+// The childclass `e` inherits from its ancestors in its own document ("" when none).
+std::string InheritedChildClass(const Element& e) {
+  for (const Element* p = &e; p; p = p->parent()) {
+    if (const std::string* c = p->Get("childclass")) return *c;
+  }
+  return "";
+}
+
+void AppendPrefixed(BridgeReport& into, const BridgeReport& from, const std::string& prefix) {
+  for (BridgedSensor s : from.software_sensors) {
+    s.name = prefix + s.name;
+    if (!s.target.empty()) s.target = prefix + s.target;
+    for (const char* n :
+         {"site", "objname", "geom1", "geom2", "body1", "body2", "subtree1", "subtree2"}) {
+      if (s.params.count(n) && s.params[n] != "world") s.params[n] = prefix + s.params[n];
+    }
+    into.software_sensors.push_back(std::move(s));
+  }
+  for (BridgedGravcomp g : from.gravcomp) {
+    g.body = prefix + g.body;
+    into.gravcomp.push_back(g);
+  }
+  for (BridgedSiteEquality e : from.site_equalities) {
+    e.equality = prefix + e.equality;
+    e.site1 = prefix + e.site1;
+    e.site2 = prefix + e.site2;
+    into.site_equalities.push_back(e);
+  }
+  for (BridgedDeadbandSpring t : from.deadband_springs) {
+    t.tendon = prefix + t.tendon;
+    into.deadband_springs.push_back(t);
+  }
+}
+
+void Attach(Document& doc, Element& attach, const std::map<std::string, std::string>& models,
+            BridgeReport& report, int depth) {
+  const std::string what = "<attach model='" + attach.GetOr("model", "") + "'>";
+  const std::string* model = attach.Get("model");
+  const std::string* prefix = attach.Get("prefix");
+  if (!model || !prefix) {
+    Note(report, "attach.refused", attach,
+         what +
+             " needs model and prefix (self-attachment is not supported; nearest: copy the "
+             "subtree, or <replicate>)");
+    return;
+  }
+  if (attach.Has("frame")) {
+    Note(report, "attach.refused", attach,
+         what + " frame=: attaching a frame of the child is not supported; nearest: body=");
+    return;
+  }
+  auto it = models.find(*model);
+  if (it == models.end()) {
+    throw InputError(attach.location(), what + ": no <model> asset named '" + *model + "'");
+  }
+  if (depth >= kMaxDepth) {
+    throw InputError(attach.location(), what + ": models attach each other more than " +
+                                            std::to_string(kMaxDepth) + " levels deep");
+  }
+  Document child = ReadFile(it->second);
+  BridgeOptions keep;
+  keep.throw_on_refusal = false;
+  BridgeReport child_report = ApplyBridge(child, keep);
+  ExpandAttachments(child, child_report, depth + 1);
+  for (const BridgeChange& c : child_report.changes) report.changes.push_back(c);
+  if (child.root().FirstChild("keyframe")) {
+    Note(report, "attach.refused", attach,
+         what +
+             ": the child model has keyframes, whose merge into the parent's keys is not "
+             "supported yet; nearest: keys written for the whole model in the parent");
+    return;
+  }
+  ConvertAngleUnits(child, child.Compiler(), doc.Compiler());
+  PrefixNames(child, *prefix);
+  AppendPrefixed(report, child_report, *prefix);
+  std::unique_ptr<Element> defaults = WrapDefaultsAsClass(child, *prefix);
+
+  // The subtree: the named body, or the world body's contents in a frame.
+  Element* world = child.root().FirstChild("worldbody");
+  std::vector<std::unique_ptr<Element>> moved;
+  std::string childclass;
+  if (const std::string* body = attach.Get("body")) {
+    Element* b = child.FindNamed(Namespace::kBody, *prefix + *body);
+    if (!b) {
+      throw InputError(attach.location(), what + ": the model has no body '" + *body + "'");
+    }
+    childclass = InheritedChildClass(*b);
+    moved.push_back(b->parent()->RemoveChild(b));
+    if (!childclass.empty() && !moved.back()->Has("childclass")) {
+      moved.back()->Set("childclass", childclass);
+    }
+  } else if (world) {
+    const document::ElementSpec* frame = attach.parent()->spec()->FindChild("frame");
+    auto f = std::make_unique<Element>(frame, "frame");
+    f->set_location(attach.location());
+    f->set_file_bases(attach.file_bases());
+    f->set_edited(true);
+    while (!world->children().empty()) {
+      f->InsertChild(f->children().size(), world->RemoveChild(world->children()[0].get()));
+    }
+    moved.push_back(std::move(f));
+  }
+  NameSets inside;
+  for (const auto& m : moved) DefinedNames(*m, &inside);
+  Element* parent = attach.parent();
+  size_t index = static_cast<size_t>(parent->IndexOf(&attach));
+  for (auto& m : moved) parent->InsertChild(index++, std::move(m));
+
+  // Defaults: the child's classes join the parent's top-level <default>.
+  if (defaults) {
+    Element& top = doc.Section("default");
+    top.InsertChild(top.children().size(), std::move(defaults));
+  }
+  // Assets: all of them (3.x copies every asset of the child, referenced or not).
+  int assets = 0;
+  if (Element* a = child.root().FirstChild("asset")) {
+    Element& into = doc.Section("asset");
+    while (!a->children().empty()) {
+      into.InsertChild(into.children().size(), a->RemoveChild(a->children()[0].get()));
+      ++assets;
+    }
+  }
+  // Elements outside the tree that refer into it; tendons first (actuators may use them).
+  int referring = 0;
+  for (const char* section : {"tendon", "equality", "contact", "actuator", "sensor"}) {
+    Element* s = child.root().FirstChild(section);
+    if (!s) continue;
+    std::vector<Element*> refs;
+    for (const auto& c : s->children()) {
+      if (RefersTo(*c, inside)) refs.push_back(c.get());
+    }
+    if (refs.empty()) continue;
+    Element& into = doc.Section(section);
+    for (Element* r : refs) {
+      DefinedNames(*r, &inside);
+      into.InsertChild(into.children().size(), s->RemoveChild(r));
+      ++referring;
+    }
+  }
+  Note(report, "attach", attach,
+       what + " prefix='" + *prefix + "': " +
+           (attach.Has("body") ? "body '" + attach.GetOr("body", "") + "' and its subtree"
+                               : std::string("the world body's contents (in a frame)")) +
+           " attached with its defaults (class '" + *prefix + "main'), " + std::to_string(assets) +
+           " asset(s) and " + std::to_string(referring) +
+           " referring element(s), every name prefixed, as MuJoCo 3.x's attach does");
+  if (const Element* d = doc.root().FirstChild("default")) {
+    for (const auto& c : d->children()) {
+      if (c->tag() != "default") {
+        Note(report, "attach.defaults", attach,
+             what +
+                 ": the parent's top-level defaults also apply to the attached elements where "
+                 "their own classes are silent (2.2.2 classes all descend from main); 3.x "
+                 "keeps the child's defaults apart");
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void ExpandAttachments(Document& doc, BridgeReport& report, int depth) {
+  std::map<std::string, std::string> models;  // name -> file
+  std::vector<Element*> model_elements;
+  doc.root().Visit([&](Element& e) {
+    if (e.tag() != "model" || !e.parent() || e.parent()->tag() != "asset") return;
+    const std::optional<std::string> file = e.ResolvedFile("file");
+    if (!file) throw InputError(e.location(), "<model> needs a file");
+    std::string name = e.GetOr("name", "");
+    if (name.empty()) {
+      // 3.x: the model's own name.
+      Document peek = ReadFile(*file);
+      name = peek.root().GetOr("model", "");
+    }
+    models[name] = *file;
+    model_elements.push_back(&e);
+  });
+  std::vector<Element*> attachments;
+  doc.root().Visit([&](Element& e) {
+    if (e.tag() == "attach") attachments.push_back(&e);
+  });
+  for (Element* a : attachments) {
+    Attach(doc, *a, models, report, depth);
+    a->parent()->RemoveChild(a);
+  }
+  for (Element* m : model_elements) {
+    Note(report, "attach.model", *m,
+         "<model name='" + m->GetOr("name", "") + "'> asset removed (used by <attach>)");
+    m->parent()->RemoveChild(m);
+  }
+}
+
+}  // namespace urlab::mjcf
