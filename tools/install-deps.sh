@@ -12,6 +12,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev ccache
   python3 python3-zmq python3-msgpack python3-numpy
+  libassimp-dev libembree-dev libbullet-extras-dev libbullet-dev
 )
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
