@@ -72,7 +72,7 @@ struct Context {
   Bounds box;                   // normalised mesh bounds, slightly enlarged
   Bounds mesh_box;              // normalised mesh bounds
   internal::InsideTest inside;  // exact point-in-mesh test (solid meshes)
-  // Per axis, coordinates where many vertices lie (flat features of CAD-like meshes): cutting
+  // Per axis, coordinates of flat faces (features of CAD-like meshes): cutting
   // exactly there leaves no sliver of one feature on the other side.
   std::array<std::vector<double>, 3> features;
   int threads = 1;
@@ -728,12 +728,18 @@ Prepared Prepare(TriMesh mesh, const DecomposeOptions& options) {
   p.ctx.box = ComputeBounds(p.mesh);
   p.ctx.mesh_box = p.ctx.box;
   for (int a = 0; a < 3; ++a) {
+    // Flat faces: triangles whose three corners share the coordinate.
     std::map<double, int> count;
-    for (const Vec3& v : p.mesh.vertices) ++count[v[a]];
+    for (const Triangle& t : p.mesh.triangles) {
+      const double x = p.mesh.vertices[static_cast<std::size_t>(t[0])][a];
+      if (p.mesh.vertices[static_cast<std::size_t>(t[1])][a] == x &&
+          p.mesh.vertices[static_cast<std::size_t>(t[2])][a] == x) {
+        ++count[x];
+      }
+    }
     std::vector<std::pair<int, double>> common;
-    const int enough = std::max<int>(4, static_cast<int>(p.mesh.vertices.size() / 50));
     for (const auto& [x, c] : count) {
-      if (c >= enough) common.push_back({-c, x});
+      if (c >= 2) common.push_back({-c, x});
     }
     std::sort(common.begin(), common.end());
     if (common.size() > 12) common.resize(12);
