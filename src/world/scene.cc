@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "urlab/convert/mesh_assets.h"
+#include "urlab/convert/prop.h"
 #include "urlab/core/files.h"
 #include "urlab/mjcf/bridge.h"
 #include "urlab/mjcf/reader.h"
@@ -48,6 +50,21 @@ document::Document ReadBridged(const std::string& path, const std::string& label
     document::Document doc = mjcf::ReadFile(path);
     *report = mjcf::ApplyBridge(doc);
     return doc;
+  } catch (const InputError& e) {
+    throw InputError(e.where(), label + e.message());
+  }
+}
+
+// Mesh files MuJoCo 2.2.2 cannot load are converted (cached); each step is logged, warnings
+// (a dropped visual mesh) are kept for the user.
+void PrepareMeshes(document::Document& doc, const std::string& label,
+                   std::vector<document::Diagnostic>* warnings) {
+  try {
+    const convert::MeshAssetReport r = convert::PrepareMeshAssets(doc, convert::DefaultCacheDir());
+    for (const std::string& step : r.steps) spdlog::info("{}{}", label, step);
+    for (const Diagnostic& w : r.warnings) {
+      warnings->push_back(w);
+    }
   } catch (const InputError& e) {
     throw InputError(e.where(), label + e.message());
   }
@@ -111,11 +128,13 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   std::vector<mjcf::ArticulationInput> inputs;
   std::vector<physics::SoftwareSensorSpec> software;
   std::string bridge_text;
+  std::vector<document::Diagnostic> mesh_warnings;
   for (const ArticulationConfig& a : scene.articulations) {
     mjcf::ArticulationInput in;
     in.name = a.name;
     mjcf::BridgeReport report;
     in.doc = ReadBridged(a.mjcf, a.name + ": ", &report);
+    PrepareMeshes(in.doc, a.name + ": ", &mesh_warnings);
     AddSoftwareSensors(report, a.name + "_", &software);
     NoteBridge(report, a.name + ": ", &bridge_text);
     in.placement.pos = a.pos;
@@ -139,6 +158,7 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   }
   out.articulations = std::move(composed.articulations);
   out.diagnostics = std::move(composed.diagnostics);
+  out.diagnostics.insert(out.diagnostics.end(), mesh_warnings.begin(), mesh_warnings.end());
   out.doc = std::move(composed.doc);
   return out;
 }
@@ -148,6 +168,7 @@ CompiledScene BuildModel(const std::string& mjcf_path) {
   document::Document doc = ReadBridged(mjcf_path, "", &report);
   CompiledScene out;
   out.diagnostics = doc.diagnostics();
+  PrepareMeshes(doc, "", &out.diagnostics);
   out.model = CompileDocument(doc, nullptr);
   std::vector<physics::SoftwareSensorSpec> software;
   AddSoftwareSensors(report, "", &software);
