@@ -122,7 +122,34 @@ void SaveDebug(const document::Document& doc, const mjModel* m, const std::strin
   spdlog::info("saved {} and {}", xml, mjb);
 }
 
+PropLayout PropLayoutOf(const mjModel* m, const PropConfig& p, int cache_hit) {
+  PropLayout l;
+  l.name = p.spec.name;
+  l.mode = p.spec.mode;
+  l.parts_from_cache = cache_hit;
+  const std::string prefix = p.spec.name + "_";
+  l.body = mj_name2id(m, mjOBJ_BODY, (prefix + convert::kPropBodyName).c_str());
+  l.mocap = l.body >= 0 ? m->body_mocapid[l.body] : -1;
+  l.visual_geom = mj_name2id(m, mjOBJ_GEOM, (prefix + convert::kVisualGeomName).c_str());
+  for (int i = 0;; ++i) {
+    const std::string name = prefix + convert::kPartGeomPrefix + std::to_string(i);
+    const int g = mj_name2id(m, mjOBJ_GEOM, name.c_str());
+    if (g < 0) break;
+    l.part_geoms.push_back(g);
+  }
+  return l;
+}
+
 }  // namespace
+
+bool IsConvertedPropPart(const CompiledScene& scene, int geom) {
+  for (const PropLayout& p : scene.props) {
+    if (std::find(p.part_geoms.begin(), p.part_geoms.end(), geom) != p.part_geoms.end()) {
+      return true;
+    }
+  }
+  return false;
+}
 
 CompiledScene BuildScene(const SceneConfig& scene) {
   std::vector<mjcf::ArticulationInput> inputs;
@@ -143,6 +170,25 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     in.include_world = a.include_world;
     inputs.push_back(std::move(in));
   }
+  // Quick Convert props, composed after the articulations like articulations of their own.
+  std::vector<int> prop_cache_hits;
+  for (const PropConfig& p : scene.props) {
+    convert::PropDocument built;
+    try {
+      built = convert::BuildPropDocument(p.spec, convert::DefaultCacheDir());
+    } catch (const InputError& e) {
+      throw InputError(e.where(), p.spec.name + ": " + e.message());
+    }
+    for (const std::string& line : built.report) spdlog::info("{}: {}", p.spec.name, line);
+    prop_cache_hits.push_back(built.cache_hit ? 1 : 0);
+    mjcf::ArticulationInput in;
+    in.name = p.spec.name;
+    in.doc = std::move(built.doc);
+    in.placement.pos = p.pos;
+    in.placement.quat = p.quat;
+    in.takes_scene_options = true;
+    inputs.push_back(std::move(in));
+  }
   mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs), scene.options);
   // Scene overrides: only the fields set, over whatever the articulations gave.
   for (const auto& [k, v] : scene.options) mjcf::SetOptionAttribute(composed.doc, k, v);
@@ -155,6 +201,9 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   out.bridge_report = std::move(bridge_text);
   if (!scene.save_debug_xml.empty()) {
     SaveDebug(composed.doc, out.model.get(), scene.save_debug_xml, SceneInputFiles(scene));
+  }
+  for (std::size_t i = 0; i < scene.props.size(); ++i) {
+    out.props.push_back(PropLayoutOf(out.model.get(), scene.props[i], prop_cache_hits[i]));
   }
   out.articulations = std::move(composed.articulations);
   out.diagnostics = std::move(composed.diagnostics);
@@ -188,6 +237,7 @@ std::string MjbBytes(const mjModel* m) {
 std::vector<std::string> SceneInputFiles(const SceneConfig& scene) {
   std::vector<std::string> files;
   if (!scene.path.empty()) files.push_back(scene.path);
+  for (const PropConfig& p : scene.props) files.push_back(p.spec.mesh);
   for (const ArticulationConfig& a : scene.articulations) {
     mjcf::ReadOptions lenient;
     lenient.check_files = false;

@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "urlab/convert/mesh_io.h"
 #include "urlab/core/files.h"
 #include "urlab/document/element.h"
 #include "urlab/document/grammar.h"
@@ -27,7 +28,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Top-level sections of features that do not exist yet: refused with a clear message instead of
 // "unknown key" (and never silently accepted).
 constexpr std::pair<const char*, const char*> kNotYetSupported[] = {
-    {"props", "props (static objects besides articulations)"},
     {"terrain", "terrain / heightfields"},
     {"heightfields", "terrain / heightfields"},
     {"cameras", "cameras"},
@@ -269,6 +269,116 @@ class Parser {
     return c;
   }
 
+  // The orientation of an entry: quat, euler (degrees, xyz) or axisangle (degrees), at most one.
+  std::array<double, 4> Orientation(const YAML::Node& n, const std::string& name,
+                                    std::array<double, 4> quat) const {
+    int orientations = 0;
+    if (n["quat"]) {
+      auto v = Numbers(n["quat"], "quat", 4);
+      if (v[0] == 0 && v[1] == 0 && v[2] == 0 && v[3] == 0)
+        Fail(n["quat"], "quat must not be zero");
+      quat = document::QuatNormalize({v[0], v[1], v[2], v[3]});
+      ++orientations;
+    }
+    if (n["euler"]) {
+      auto v = Numbers(n["euler"], "euler (degrees)", 3);
+      quat = document::EulerToQuat({v[0] * kPi / 180, v[1] * kPi / 180, v[2] * kPi / 180}, "xyz");
+      ++orientations;
+    }
+    if (n["axisangle"]) {
+      auto v = Numbers(n["axisangle"], "axisangle (axis, degrees)", 4);
+      const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+      if (len < 1e-12) Fail(n["axisangle"], "axisangle axis must not be zero");
+      const double h = v[3] * kPi / 360;
+      quat = {std::cos(h), std::sin(h) * v[0] / len, std::sin(h) * v[1] / len,
+              std::sin(h) * v[2] / len};
+      ++orientations;
+    }
+    if (orientations > 1) Fail(n, name + ": give at most one of quat, euler, axisangle");
+    return quat;
+  }
+
+  // A Quick Convert prop.
+  PropConfig Prop(const YAML::Node& n) const {
+    CheckKeys(n, "prop",
+              {"name", "mesh", "pos", "quat", "euler", "axisangle", "scale", "mode", "mass",
+               "density", "friction", "rgba", "threshold", "max_parts", "resolution"});
+    PropConfig p;
+    p.where = At(n);
+    if (!n["name"]) Fail(n, "a prop needs a name");
+    p.spec.name = String(n["name"], "name");
+    if (p.spec.name.empty() || p.spec.name.find_first_of(" /\t") != std::string::npos) {
+      Fail(n["name"], "prop name '" + p.spec.name + "' must be non-empty without spaces or /");
+    }
+    const std::string& name = p.spec.name;
+    if (!n["mesh"]) Fail(n, name + ": a prop needs a mesh file");
+    fs::path mesh(String(n["mesh"], "mesh"));
+    if (mesh.is_relative()) mesh = fs::path(path_).parent_path() / mesh;
+    p.spec.mesh = fs::absolute(mesh).lexically_normal().string();
+    CheckInputFile(p.spec.mesh, name + ": mesh file", At(n["mesh"]), convert::kMaxMeshFileBytes);
+    if (!convert::IsReadableMeshFormat(p.spec.mesh)) {
+      Fail(n["mesh"], name + ": unknown mesh format '" + mesh.extension().string() + "'");
+    }
+    if (n["pos"]) {
+      auto v = Numbers(n["pos"], "pos", 3);
+      p.pos = {v[0], v[1], v[2]};
+    }
+    p.quat = Orientation(n, name, p.quat);
+    if (const auto s = n["scale"]) {
+      if (s.IsSequence()) {
+        auto v = Numbers(s, name + ".scale", 3);
+        p.spec.scale = {v[0], v[1], v[2]};
+      } else {
+        const double k = Number(s, name + ".scale", kNonNegativeFinite);
+        p.spec.scale = {k, k, k};
+      }
+      for (double k : p.spec.scale) {
+        if (!(k > 0)) Fail(s, name + ".scale must be > 0");
+      }
+    }
+    if (const auto m = n["mode"]) {
+      const std::string word = String(m, name + ".mode");
+      const auto mode = convert::ParsePropMode(word);
+      if (!mode) Fail(m, name + ".mode must be static, dynamic or mocap, not '" + word + "'");
+      p.spec.mode = *mode;
+    }
+    if (n["mass"] && n["density"]) Fail(n, name + ": give mass or density, not both");
+    constexpr Range kPositive{0, std::numeric_limits<double>::max(), true};
+    if (n["mass"]) p.spec.mass = Number(n["mass"], name + ".mass", kPositive);
+    if (n["density"]) p.spec.density = Number(n["density"], name + ".density", kPositive);
+    if (const auto f = n["friction"]) {
+      if (f.IsSequence()) {
+        if (f.size() < 1 || f.size() > 3) Fail(f, name + ".friction must be 1 to 3 numbers");
+        for (std::size_t i = 0; i < f.size(); ++i) {
+          p.spec.friction[i] = Number(f[i], name + ".friction", kNonNegativeFinite);
+        }
+      } else {
+        p.spec.friction[0] = Number(f, name + ".friction", kNonNegativeFinite);
+      }
+    }
+    if (n["rgba"]) {
+      auto v = Numbers(n["rgba"], name + ".rgba", 4);
+      for (std::size_t i = 0; i < 4; ++i) {
+        if (v[i] < 0 || v[i] > 1) Fail(n["rgba"], name + ".rgba values must be 0 to 1");
+        p.spec.rgba[i] = v[i];
+      }
+    }
+    if (n["threshold"]) {
+      p.spec.decompose.threshold = Number(n["threshold"], name + ".threshold", Range{0, 1, true});
+    }
+    if (const auto m = n["max_parts"]) {
+      const double v = Number(m, name + ".max_parts", Range{1, 1024});
+      if (v != std::floor(v)) Fail(m, name + ".max_parts must be an integer");
+      p.spec.decompose.max_parts = static_cast<int>(v);
+    }
+    if (const auto r = n["resolution"]) {
+      const double v = Number(r, name + ".resolution", Range{4, 400});
+      if (v != std::floor(v)) Fail(r, name + ".resolution must be an integer");
+      p.spec.decompose.resolution = static_cast<int>(v);
+    }
+    return p;
+  }
+
   ArticulationConfig Articulation(const YAML::Node& n) const {
     CheckKeys(n, "articulation",
               {"name", "mjcf", "pos", "quat", "euler", "axisangle", "options", "control_source",
@@ -291,29 +401,8 @@ class Parser {
       auto v = Numbers(n["pos"], "pos", 3);
       a.pos = {v[0], v[1], v[2]};
     }
-    int orientations = 0;
-    if (n["quat"]) {
-      auto v = Numbers(n["quat"], "quat", 4);
-      if (v[0] == 0 && v[1] == 0 && v[2] == 0 && v[3] == 0)
-        Fail(n["quat"], "quat must not be zero");
-      a.quat = document::QuatNormalize({v[0], v[1], v[2], v[3]});
-      ++orientations;
-    }
-    if (n["euler"]) {
-      auto v = Numbers(n["euler"], "euler (degrees)", 3);
-      a.quat = document::EulerToQuat({v[0] * kPi / 180, v[1] * kPi / 180, v[2] * kPi / 180}, "xyz");
-      ++orientations;
-    }
-    if (n["axisangle"]) {
-      auto v = Numbers(n["axisangle"], "axisangle (axis, degrees)", 4);
-      const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-      if (len < 1e-12) Fail(n["axisangle"], "axisangle axis must not be zero");
-      const double h = v[3] * kPi / 360;
-      a.quat = {std::cos(h), std::sin(h) * v[0] / len, std::sin(h) * v[1] / len,
-                std::sin(h) * v[2] / len};
-      ++orientations;
-    }
-    if (orientations > 1) Fail(n, a.name + ": give at most one of quat, euler, axisangle");
+    a.quat = Orientation(n, a.name, a.quat);
+
     if (n["options"]) a.options = Options(n["options"], a.name + ".options");
     if (n["control_source"]) a.control_source = Source(n["control_source"]);
     if (n["controller"]) a.controller = Controller(n["controller"]);
@@ -339,7 +428,8 @@ class Parser {
       }
     }
     CheckKeys(root, "the scene",
-              {"articulations", "options", "size", "control_source", "network", "save_debug_xml"});
+              {"articulations", "props", "options", "size", "control_source", "network",
+               "save_debug_xml"});
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {
       Fail(arts ? arts : root, "the scene needs a non-empty list 'articulations'");
@@ -349,6 +439,16 @@ class Parser {
       s.articulations.push_back(Articulation(a));
       if (!names.insert(s.articulations.back().name).second) {
         Fail(a, "two articulations are named '" + s.articulations.back().name + "'");
+      }
+    }
+    if (const auto props = root["props"]) {
+      if (!props.IsSequence()) Fail(props, "props must be a list");
+      for (const auto& p : props) {
+        s.props.push_back(Prop(p));
+        if (!names.insert(s.props.back().spec.name).second) {
+          Fail(p, "the name '" + s.props.back().spec.name +
+                      "' is used twice (articulations and props share one namespace)");
+        }
       }
     }
     if (root["options"]) s.options = Options(root["options"], "options");

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "urlab/convert/prop.h"
 #include "urlab/core/diagnostics.h"
 #include "urlab/document/document.h"
 #include "urlab/mjcf/compose.h"
@@ -15,13 +16,27 @@
 
 namespace urlab::world {
 
+// A Quick Convert prop in the compiled model. The viewer's collision wireframes of converted
+// props (hotkey 5) draw `part_geoms` (geom group convert::kPartGroup).
+struct PropLayout {
+  std::string name;  // prefix "{name}_"
+  convert::PropMode mode = convert::PropMode::kStatic;
+  int body = -1;   // body id ("{name}_body")
+  int mocap = -1;  // mocap id (mode mocap), else -1
+  int visual_geom = -1;
+  std::vector<int> part_geoms;  // the convex parts, in order
+  int parts_from_cache = 0;     // 1 when the decomposition came from the cache
+};
+
 struct CompiledScene {
   physics::ModelPtr model;
   // Sensors 2.2.2 lacks (3.x jointactuatorfrc/tendonactuatorfrc), computed by the runtime; kept
   // registered while this lives (declared after `model`, so it is released first).
   physics::SoftwareSensorRegistration software_sensors;
   std::string bridge_report;  // what the dialect bridge changed ("" when nothing)
+  // The scene's articulations in order, then its props (their layouts follow the articulations').
   std::vector<mjcf::ArticulationLayout> articulations;
+  std::vector<PropLayout> props;
   std::vector<document::Diagnostic> diagnostics;  // warnings worth showing the user
   document::Document doc;  // the (composed) document MuJoCo compiled, e.g. for --save-xml
 };
@@ -53,6 +68,9 @@ ValidationReport Validate(const std::string& path, bool bridge_report = false);
 // Every file a scene reads: the scene file, each articulation's MJCF, its includes and asset
 // files (outputs must never overwrite one of them).
 std::vector<std::string> SceneInputFiles(const SceneConfig& scene);
+
+// True when geom `geom` of `scene`'s model is a convex part of a converted prop.
+bool IsConvertedPropPart(const CompiledScene& scene, int geom);
 
 // A compiled model as MuJoCo binary (.mjb) bytes, e.g. for WriteFileAtomic.
 std::string MjbBytes(const mjModel* m);
