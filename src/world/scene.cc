@@ -189,6 +189,26 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     in.takes_scene_options = true;
     inputs.push_back(std::move(in));
   }
+  // Terrain: heightfields sampled from meshes (cached) or PNG height maps, composed last.
+  std::vector<bool> terrain_cached;
+  for (const TerrainConfig& t : scene.terrain) {
+    convert::TerrainDocument built;
+    try {
+      built = convert::BuildTerrainDocument(t.spec, convert::DefaultCacheDir());
+    } catch (const InputError& e) {
+      throw InputError(e.where().file.empty() ? t.where : e.where(),
+                       t.spec.name + ": " + e.message());
+    }
+    for (const std::string& line : built.report) spdlog::info("{}: {}", t.spec.name, line);
+    terrain_cached.push_back(built.cache_hit);
+    mjcf::ArticulationInput in;
+    in.name = t.spec.name;
+    in.doc = std::move(built.doc);
+    in.placement.pos = t.pos;
+    in.placement.quat = t.quat;
+    in.takes_scene_options = true;
+    inputs.push_back(std::move(in));
+  }
   mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs), scene.options);
   // Scene overrides: only the fields set, over whatever the articulations gave.
   for (const auto& [k, v] : scene.options) mjcf::SetOptionAttribute(composed.doc, k, v);
@@ -204,6 +224,14 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   }
   for (std::size_t i = 0; i < scene.props.size(); ++i) {
     out.props.push_back(PropLayoutOf(out.model.get(), scene.props[i], prop_cache_hits[i]));
+  }
+  for (std::size_t i = 0; i < scene.terrain.size(); ++i) {
+    TerrainLayout t;
+    t.name = scene.terrain[i].spec.name;
+    t.geom = mj_name2id(out.model.get(), mjOBJ_GEOM, (t.name + "_geom").c_str());
+    t.hfield = mj_name2id(out.model.get(), mjOBJ_HFIELD, (t.name + "_hfield").c_str());
+    t.from_cache = terrain_cached[i];
+    out.terrain.push_back(t);
   }
   out.articulations = std::move(composed.articulations);
   out.diagnostics = std::move(composed.diagnostics);
@@ -238,6 +266,10 @@ std::vector<std::string> SceneInputFiles(const SceneConfig& scene) {
   std::vector<std::string> files;
   if (!scene.path.empty()) files.push_back(scene.path);
   for (const PropConfig& p : scene.props) files.push_back(p.spec.mesh);
+  for (const TerrainConfig& t : scene.terrain) {
+    for (const convert::TerrainMesh& m : t.spec.meshes) files.push_back(m.file);
+    if (!t.spec.png.empty()) files.push_back(t.spec.png);
+  }
   for (const ArticulationConfig& a : scene.articulations) {
     mjcf::ReadOptions lenient;
     lenient.check_files = false;

@@ -28,14 +28,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Top-level sections of features that do not exist yet: refused with a clear message instead of
 // "unknown key" (and never silently accepted).
 constexpr std::pair<const char*, const char*> kNotYetSupported[] = {
-    {"terrain", "terrain / heightfields"},
-    {"heightfields", "terrain / heightfields"},
-    {"cameras", "cameras"},
-    {"recording", "recording"},
-    {"replay", "replay"},
-    {"viewer", "the viewer"},
-    {"input", "input devices"},
-    {"debug", "debug drawing"},
+    {"cameras", "cameras"},     {"recording", "recording"}, {"replay", "replay"},
+    {"viewer", "the viewer"},   {"input", "input devices"}, {"debug", "debug drawing"},
     {"lights", "scene lights"},
 };
 
@@ -379,6 +373,97 @@ class Parser {
     return p;
   }
 
+  // A file named in the scene: absolute, relative to the scene file's folder, checked to exist.
+  std::string InputPath(const YAML::Node& n, const std::string& what,
+                        std::uintmax_t max_bytes = kMaxTextInputBytes) const {
+    fs::path p(String(n, what));
+    if (p.is_relative()) p = fs::path(path_).parent_path() / p;
+    const std::string out = fs::absolute(p).lexically_normal().string();
+    CheckInputFile(out, what, At(n), max_bytes);
+    return out;
+  }
+
+  // A terrain: meshes (file names, or {file, pos, scale}) or a png with its size.
+  TerrainConfig Terrain(const YAML::Node& n) const {
+    CheckKeys(n, "terrain",
+              {"name", "meshes", "png", "size", "resolution", "bounds", "base", "friction", "pos",
+               "quat", "euler", "axisangle"});
+    TerrainConfig t;
+    t.where = At(n);
+    if (!n["name"]) Fail(n, "a terrain needs a name");
+    t.spec.name = String(n["name"], "name");
+    if (t.spec.name.empty() || t.spec.name.find_first_of(" /\t") != std::string::npos) {
+      Fail(n["name"], "terrain name '" + t.spec.name + "' must be non-empty without spaces or /");
+    }
+    const std::string& name = t.spec.name;
+    if (!n["meshes"] == !n["png"]) Fail(n, name + ": give meshes or png (one of them)");
+    if (const auto ms = n["meshes"]) {
+      if (!ms.IsSequence() || ms.size() == 0) Fail(ms, name + ".meshes must be a list of files");
+      for (const auto& m : ms) {
+        convert::TerrainMesh tm;
+        if (m.IsMap()) {
+          CheckKeys(m, name + ".meshes entry", {"file", "pos", "scale"});
+          if (!m["file"]) Fail(m, name + ": a mesh entry needs a file");
+          tm.file = InputPath(m["file"], name + ": mesh file", convert::kMaxMeshFileBytes);
+          if (m["pos"]) {
+            auto v = Numbers(m["pos"], name + ".pos", 3);
+            tm.pos = {v[0], v[1], v[2]};
+          }
+          if (m["scale"]) {
+            const double k = Number(m["scale"], name + ".scale", Range{0, 1e6, true});
+            tm.scale = {k, k, k};
+          }
+        } else {
+          tm.file = InputPath(m, name + ": mesh file", convert::kMaxMeshFileBytes);
+        }
+        if (!convert::IsReadableMeshFormat(tm.file)) {
+          Fail(m, name + ": unknown mesh format '" + fs::path(tm.file).extension().string() + "'");
+        }
+        t.spec.meshes.push_back(tm);
+      }
+    }
+    if (const auto png = n["png"]) {
+      t.spec.png = InputPath(png, name + ": png height map");
+      if (!n["size"]) Fail(n, name + ": a png terrain needs size: [x, y, height, base] (m)");
+    }
+    if (n["size"]) {
+      if (!n["png"]) Fail(n["size"], name + ".size is for png terrain (meshes give their size)");
+      auto v = Numbers(n["size"], name + ".size", 4);
+      for (double x : v) {
+        if (!(x > 0)) Fail(n["size"], name + ".size values must be > 0");
+      }
+      t.spec.png_size = {v[0], v[1], v[2], v[3]};
+    }
+    if (n["resolution"]) {
+      t.spec.resolution = Number(n["resolution"], name + ".resolution",
+                                 Range{0, std::numeric_limits<double>::max(), true});
+    }
+    if (n["bounds"]) {
+      auto v = Numbers(n["bounds"], name + ".bounds [x min, y min, x max, y max]", 4);
+      if (!(v[2] > v[0]) || !(v[3] > v[1])) {
+        Fail(n["bounds"], name + ".bounds: x max and y max must exceed x min and y min");
+      }
+      t.spec.bounds = std::array<double, 4>{v[0], v[1], v[2], v[3]};
+    }
+    if (n["base"]) {
+      t.spec.base =
+          Number(n["base"], name + ".base", Range{0, std::numeric_limits<double>::max(), true});
+    }
+    if (const auto f = n["friction"]) {
+      auto v = Numbers(f, name + ".friction", 3);
+      for (std::size_t i = 0; i < 3; ++i) {
+        if (v[i] < 0) Fail(f, name + ".friction must be >= 0");
+        t.spec.friction[i] = v[i];
+      }
+    }
+    if (n["pos"]) {
+      auto v = Numbers(n["pos"], "pos", 3);
+      t.pos = {v[0], v[1], v[2]};
+    }
+    t.quat = Orientation(n, name, t.quat);
+    return t;
+  }
+
   ArticulationConfig Articulation(const YAML::Node& n) const {
     CheckKeys(n, "articulation",
               {"name", "mjcf", "pos", "quat", "euler", "axisangle", "options", "control_source",
@@ -428,7 +513,7 @@ class Parser {
       }
     }
     CheckKeys(root, "the scene",
-              {"articulations", "props", "options", "size", "control_source", "network",
+              {"articulations", "props", "terrain", "options", "size", "control_source", "network",
                "save_debug_xml"});
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {
@@ -448,6 +533,16 @@ class Parser {
         if (!names.insert(s.props.back().spec.name).second) {
           Fail(p, "the name '" + s.props.back().spec.name +
                       "' is used twice (articulations and props share one namespace)");
+        }
+      }
+    }
+    if (const auto terrain = root["terrain"]) {
+      if (!terrain.IsSequence()) Fail(terrain, "terrain must be a list");
+      for (const auto& t : terrain) {
+        s.terrain.push_back(Terrain(t));
+        if (!names.insert(s.terrain.back().spec.name).second) {
+          Fail(t, "the name '" + s.terrain.back().spec.name +
+                      "' is used twice (articulations, props and terrain share one namespace)");
         }
       }
     }

@@ -28,6 +28,13 @@ struct PropLayout {
   int parts_from_cache = 0;     // 1 when the decomposition came from the cache
 };
 
+// A terrain's heightfield in the compiled model.
+struct TerrainLayout {
+  std::string name;  // prefix "{name}_"
+  int geom = -1, hfield = -1;
+  bool from_cache = false;  // the sampled grid came from the cache
+};
+
 struct CompiledScene {
   physics::ModelPtr model;
   // Sensors 2.2.2 lacks (3.x jointactuatorfrc/tendonactuatorfrc), computed by the runtime; kept
@@ -37,6 +44,7 @@ struct CompiledScene {
   // The scene's articulations in order, then its props (their layouts follow the articulations').
   std::vector<mjcf::ArticulationLayout> articulations;
   std::vector<PropLayout> props;
+  std::vector<TerrainLayout> terrain;
   std::vector<document::Diagnostic> diagnostics;  // warnings worth showing the user
   document::Document doc;  // the (composed) document MuJoCo compiled, e.g. for --save-xml
 };

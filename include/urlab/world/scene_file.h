@@ -1,7 +1,8 @@
 #pragma once
 // The scene file (the "level"): YAML listing articulations with their MJCF, world transform,
 // options, control source, controller and initial keyframe, Quick Convert props (a mesh, its
-// pose, scale, mode, mass or density, friction and decomposition settings), plus scene-wide
+// pose, scale, mode, mass or density, friction and decomposition settings), terrain
+// (meshes sampled into a heightfield, or a PNG height map), plus scene-wide
 // option overrides,
 // network endpoints and the debug-XML switch. Unknown keys, duplicate keys, keys that are not
 // strings, wrong types and numbers out of range (gains, torque limits, hold/blend times, options
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "urlab/control/controller.h"
+#include "urlab/convert/heightfield.h"
 #include "urlab/convert/prop.h"
 #include "urlab/core/error.h"
 
@@ -69,6 +71,15 @@ struct PropConfig {
   SourceLocation where;
 };
 
+// A terrain (`terrain:`): meshes sampled into a heightfield by ray casts, or a PNG height map,
+// composed after the props like an articulation named `spec.name` (geom "{name}_geom").
+struct TerrainConfig {
+  convert::TerrainSpec spec;  // paths absolute
+  std::array<double, 3> pos = {0, 0, 0};
+  std::array<double, 4> quat = {1, 0, 0, 0};
+  SourceLocation where;
+};
+
 struct NetworkConfig {
   bool enabled = true;
   std::string state = "tcp://*:5555";
@@ -84,6 +95,7 @@ struct SceneConfig {
   std::string path;  // the scene file
   std::vector<ArticulationConfig> articulations;
   std::vector<PropConfig> props;
+  std::vector<TerrainConfig> terrain;
   std::map<std::string, std::string> options;  // manager overrides: only the fields set
   std::map<std::string, std::string> size;     // <size> attributes (nconmax, njmax, nstack...)
   ControlSource control_source = ControlSource::kNetwork;
