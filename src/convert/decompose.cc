@@ -218,8 +218,27 @@ constexpr int kHullSamples = 800;
 // hull point on one of the part's cut faces counting as on it), and the volume term.
 double Concavity(const Hull& hull, const std::vector<Vec3>& probes, std::size_t voxels,
                  const std::vector<Plane>& caps, const Context& ctx) {
+  // The deepest probe. A probe matters only when deeper than the deepest so far, so its scan of
+  // the planes stops at the first plane closer than that, starting from the plane that stopped
+  // the previous probe (probes come surface patch by surface patch).
   double term = 0;
-  for (const Vec3& p : probes) term = std::max(term, hull.Depth(p));
+  std::size_t hint = 0;
+  const std::size_t nplanes = hull.planes.size();
+  for (const Vec3& p : probes) {
+    double depth = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < nplanes; ++k) {
+      const std::size_t f = (hint + k) % nplanes;
+      const double v = hull.planes[f].offset - Dot(hull.planes[f].normal, p);
+      if (v < depth) {
+        depth = v;
+        if (depth <= term) {
+          hint = f;
+          break;
+        }
+      }
+    }
+    term = std::max(term, depth);
+  }
   const NearestPoint nearest(probes);
   for (const internal::SurfaceSample& s : internal::SampleSurface(hull.mesh, kHullSamples)) {
     bool on_cap = false;
