@@ -348,15 +348,51 @@ std::uint64_t EdgeKey(std::int32_t a, std::int32_t b) {
          static_cast<std::uint32_t>(b);
 }
 
+// Signed distances of the part's vertices to `plane` and their sides (-1 kept, 0 in the plane,
+// +1 the other side).
+void Classify(const Part& part, const Plane& plane, std::vector<double>* s,
+              std::vector<int>* side) {
+  s->resize(part.verts.size());
+  side->resize(part.verts.size());
+  for (std::size_t i = 0; i < part.verts.size(); ++i) {
+    const double d = Dot(plane.n, part.verts[i]) - plane.d;
+    (*s)[i] = d;
+    (*side)[i] = d < -kPlaneEps ? -1 : d > kPlaneEps ? 1 : 0;
+  }
+}
+
+struct Sides {
+  bool lo, hi;    // the polygon reaches the kept side, the other side
+  bool in_plane;  // every corner in the plane
+};
+
+// Which sides of `plane` polygon `p` reaches, given each vertex's side (-1, 0, +1). A polygon
+// in the plane bounds the side its normal faces away from.
+Sides PolygonSides(const Part& part, std::size_t p, const std::vector<int>& side,
+                   const Plane& plane) {
+  const std::uint32_t b = part.offs[p], e = part.offs[p + 1];
+  Sides s{false, false, false};
+  for (std::uint32_t i = b; i < e; ++i) {
+    s.lo |= side[static_cast<std::size_t>(part.idx[i])] < 0;
+    s.hi |= side[static_cast<std::size_t>(part.idx[i])] > 0;
+  }
+  if (!s.lo && !s.hi) {
+    const Vec3& a = part.verts[static_cast<std::size_t>(part.idx[b])];
+    const Vec3 n = Cross(part.verts[static_cast<std::size_t>(part.idx[b + 1])] - a,
+                         part.verts[static_cast<std::size_t>(part.idx[b + 2])] - a);
+    s.lo = Dot(n, plane.n) > 0;
+    s.hi = !s.lo;
+    s.in_plane = true;
+  }
+  return s;
+}
+
 // Splits `part` by `plane` into the kept side (`lo`, Dot(n,p) <= d) and the other (`hi`).
 void Split(const Part& part, const Plane& plane, const Context& ctx, Part* lo, Part* hi) {
   const std::size_t nv = part.verts.size();
-  std::vector<double> s(nv);
-  std::vector<int> side(nv);
-  for (std::size_t i = 0; i < nv; ++i) {
-    s[i] = Dot(plane.n, part.verts[i]) - plane.d;
-    side[i] = s[i] < -kPlaneEps ? -1 : s[i] > kPlaneEps ? 1 : 0;
-  }
+  std::vector<double> s;
+  std::vector<int> side;
+  Classify(part, plane, &s, &side);
   std::vector<std::int32_t> map_lo(nv, -1), map_hi(nv, -1);
   auto put = [](Part* out, std::vector<std::int32_t>& map, std::int32_t v, const Part& from) {
     std::int32_t& m = map[static_cast<std::size_t>(v)];
@@ -384,19 +420,8 @@ void Split(const Part& part, const Plane& plane, const Context& ctx, Part* lo, P
   hi->offs = {0};
   for (std::size_t p = 0; p < part.polygons(); ++p) {
     const std::uint32_t b = part.offs[p], e = part.offs[p + 1];
-    bool any_lo = false, any_hi = false;
-    for (std::uint32_t i = b; i < e; ++i) {
-      const int sd = side[static_cast<std::size_t>(part.idx[i])];
-      any_lo |= sd < 0;
-      any_hi |= sd > 0;
-    }
-    if (!any_lo && !any_hi) {
-      // In the plane: part of the boundary of the side its normal faces away from.
-      const Vec3& a = part.verts[static_cast<std::size_t>(part.idx[b])];
-      const Vec3 n = Cross(part.verts[static_cast<std::size_t>(part.idx[b + 1])] - a,
-                           part.verts[static_cast<std::size_t>(part.idx[b + 2])] - a);
-      any_lo = Dot(n, plane.n) > 0;
-      any_hi = !any_lo;
+    const auto [any_lo, any_hi, in_plane] = PolygonSides(part, p, side, plane);
+    if (in_plane) {
       Part* out = any_lo ? lo : hi;
       std::vector<std::int32_t>& map = any_lo ? map_lo : map_hi;
       for (std::uint32_t i = b; i < e; ++i) put(out, map, part.idx[i], part);
@@ -417,22 +442,17 @@ void Split(const Part& part, const Plane& plane, const Context& ctx, Part* lo, P
         hi->idx.push_back(xh);
       }
     }
-    if (any_lo) {
-      if (lo->idx.size() - lo_start >= 3) {
-        lo->offs.push_back(static_cast<std::uint32_t>(lo->idx.size()));
-        lo->tri.push_back(part.tri[p]);
+    // A polygon of three corners or more is kept; a sliver that lost its area is dropped.
+    auto finish = [&](Part* out, std::size_t start) {
+      if (out->idx.size() - start >= 3) {
+        out->offs.push_back(static_cast<std::uint32_t>(out->idx.size()));
+        out->tri.push_back(part.tri[p]);
       } else {
-        lo->idx.resize(lo_start);
+        out->idx.resize(start);
       }
-    }
-    if (any_hi) {
-      if (hi->idx.size() - hi_start >= 3) {
-        hi->offs.push_back(static_cast<std::uint32_t>(hi->idx.size()));
-        hi->tri.push_back(part.tri[p]);
-      } else {
-        hi->idx.resize(hi_start);
-      }
-    }
+    };
+    if (any_lo) finish(lo, lo_start);
+    if (any_hi) finish(hi, hi_start);
   }
   for (const Sample& smp : part.samples) {
     (Dot(plane.n, smp.p) <= plane.d ? lo : hi)->samples.push_back(smp);
@@ -564,12 +584,9 @@ std::vector<Part> Components(Part part, const Context& ctx) {
 double ScoreCut(const Part& part, const Plane& plane, const Context& ctx) {
   std::vector<Vec3> pts[2];
   const std::size_t nv = part.verts.size();
-  std::vector<double> s(nv);
-  std::vector<int> side(nv);
-  for (std::size_t i = 0; i < nv; ++i) {
-    s[i] = Dot(plane.n, part.verts[i]) - plane.d;
-    side[i] = s[i] < -kPlaneEps ? -1 : s[i] > kPlaneEps ? 1 : 0;
-  }
+  std::vector<double> s;
+  std::vector<int> side;
+  Classify(part, plane, &s, &side);
   // As Split assigns them: a polygon's vertices go to the sides the polygon reaches (a vertex
   // in the plane belongs to a side only through a polygon on that side).
   std::vector<std::uint8_t> taken(nv, 0);
@@ -581,18 +598,7 @@ double ScoreCut(const Part& part, const Plane& plane, const Context& ctx) {
   };
   for (std::size_t p = 0; p < part.polygons(); ++p) {
     const std::uint32_t b = part.offs[p], e = part.offs[p + 1];
-    bool any_lo = false, any_hi = false;
-    for (std::uint32_t i = b; i < e; ++i) {
-      any_lo |= side[static_cast<std::size_t>(part.idx[i])] < 0;
-      any_hi |= side[static_cast<std::size_t>(part.idx[i])] > 0;
-    }
-    if (!any_lo && !any_hi) {
-      const Vec3& a0 = part.verts[static_cast<std::size_t>(part.idx[b])];
-      const Vec3 n = Cross(part.verts[static_cast<std::size_t>(part.idx[b + 1])] - a0,
-                           part.verts[static_cast<std::size_t>(part.idx[b + 2])] - a0);
-      any_lo = Dot(n, plane.n) > 0;
-      any_hi = !any_lo;
-    }
+    const auto [any_lo, any_hi, in_plane] = PolygonSides(part, p, side, plane);
     for (std::uint32_t i = b; i < e; ++i) {
       const auto va = static_cast<std::size_t>(part.idx[i]);
       const auto vb = static_cast<std::size_t>(part.idx[i + 1 < e ? i + 1 : b]);

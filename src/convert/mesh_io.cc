@@ -62,6 +62,18 @@ bool ParseDouble(std::string_view s, double* out) {
   return r.ec == std::errc() && r.ptr == s.data() + s.size();
 }
 
+// The three numbers after a vertex keyword; `what` names the format in the error.
+Vec3 ReadVertex(Tokens& t, const std::string& name, int line, const char* what) {
+  Vec3 v{};
+  for (double& x : v) {
+    std::string_view num;
+    if (!t.Next(&num) || !ParseDouble(num, &x)) {
+      throw InputError({name, line}, std::string(what) + " vertex needs three numbers");
+    }
+  }
+  return v;
+}
+
 void CheckTriangleCount(std::size_t n, const std::string& name) {
   if (n > kMaxMeshTriangles) {
     throw InputError({name, 0}, fmt::format("more than {} triangles", kMaxMeshTriangles));
@@ -78,14 +90,7 @@ TriMesh ParseAsciiStl(std::string_view bytes, const std::string& name) {
     Tokens t(bytes.substr(pos, end - pos));
     std::string_view tok;
     if (t.Next(&tok) && tok == "vertex") {
-      Vec3 v{};
-      for (double& x : v) {
-        std::string_view num;
-        if (!t.Next(&num) || !ParseDouble(num, &x)) {
-          throw InputError({name, line}, "STL vertex needs three numbers");
-        }
-      }
-      m.vertices.push_back(v);
+      m.vertices.push_back(ReadVertex(t, name, line, "STL"));
       if (++corner == 3) {
         const auto n = static_cast<std::int32_t>(m.vertices.size());
         m.triangles.push_back({n - 3, n - 2, n - 1});
@@ -142,14 +147,7 @@ TriMesh ParseObj(std::string_view bytes, const std::string& name) {
     std::string_view tok;
     if (t.Next(&tok)) {
       if (tok == "v") {
-        Vec3 v{};
-        for (double& x : v) {
-          std::string_view num;
-          if (!t.Next(&num) || !ParseDouble(num, &x)) {
-            throw InputError({name, line}, "OBJ vertex needs three numbers");
-          }
-        }
-        m.vertices.push_back(v);
+        m.vertices.push_back(ReadVertex(t, name, line, "OBJ"));
         if (m.vertices.size() > 3 * kMaxMeshTriangles) {
           throw InputError({name, line}, "too many vertices");
         }

@@ -122,6 +122,20 @@ void SaveDebug(const document::Document& doc, const mjModel* m, const std::strin
   spdlog::info("saved {} and {}", xml, mjb);
 }
 
+// A document the scene generated (a prop, a terrain) as a composition input at its placement;
+// it takes the scene's options.
+mjcf::ArticulationInput GeneratedInput(const std::string& name, document::Document doc,
+                                       const std::array<double, 3>& pos,
+                                       const std::array<double, 4>& quat) {
+  mjcf::ArticulationInput in;
+  in.name = name;
+  in.doc = std::move(doc);
+  in.placement.pos = pos;
+  in.placement.quat = quat;
+  in.takes_scene_options = true;
+  return in;
+}
+
 PropLayout PropLayoutOf(const mjModel* m, const PropConfig& p, int cache_hit) {
   PropLayout l;
   l.name = p.spec.name;
@@ -181,13 +195,7 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     }
     for (const std::string& line : built.report) spdlog::info("{}: {}", p.spec.name, line);
     prop_cache_hits.push_back(built.cache_hit ? 1 : 0);
-    mjcf::ArticulationInput in;
-    in.name = p.spec.name;
-    in.doc = std::move(built.doc);
-    in.placement.pos = p.pos;
-    in.placement.quat = p.quat;
-    in.takes_scene_options = true;
-    inputs.push_back(std::move(in));
+    inputs.push_back(GeneratedInput(p.spec.name, std::move(built.doc), p.pos, p.quat));
   }
   // Terrain: heightfields sampled from meshes (cached) or PNG height maps, composed last.
   std::vector<bool> terrain_cached;
@@ -201,13 +209,7 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     }
     for (const std::string& line : built.report) spdlog::info("{}: {}", t.spec.name, line);
     terrain_cached.push_back(built.cache_hit);
-    mjcf::ArticulationInput in;
-    in.name = t.spec.name;
-    in.doc = std::move(built.doc);
-    in.placement.pos = t.pos;
-    in.placement.quat = t.quat;
-    in.takes_scene_options = true;
-    inputs.push_back(std::move(in));
+    inputs.push_back(GeneratedInput(t.spec.name, std::move(built.doc), t.pos, t.quat));
   }
   mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs), scene.options);
   // Scene overrides: only the fields set, over whatever the articulations gave.

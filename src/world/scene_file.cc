@@ -292,6 +292,16 @@ class Parser {
     return quat;
   }
 
+  // The name of a prop or terrain entry: required, non-empty, no spaces or '/'.
+  std::string EntryName(const YAML::Node& n, const std::string& kind) const {
+    if (!n["name"]) Fail(n, "a " + kind + " needs a name");
+    std::string name = String(n["name"], "name");
+    if (name.empty() || name.find_first_of(" /\t") != std::string::npos) {
+      Fail(n["name"], kind + " name '" + name + "' must be non-empty without spaces or /");
+    }
+    return name;
+  }
+
   // A Quick Convert prop.
   PropConfig Prop(const YAML::Node& n) const {
     CheckKeys(n, "prop",
@@ -299,11 +309,7 @@ class Parser {
                "density", "friction", "rgba", "threshold", "max_parts", "resolution"});
     PropConfig p;
     p.where = At(n);
-    if (!n["name"]) Fail(n, "a prop needs a name");
-    p.spec.name = String(n["name"], "name");
-    if (p.spec.name.empty() || p.spec.name.find_first_of(" /\t") != std::string::npos) {
-      Fail(n["name"], "prop name '" + p.spec.name + "' must be non-empty without spaces or /");
-    }
+    p.spec.name = EntryName(n, "prop");
     const std::string& name = p.spec.name;
     if (!n["mesh"]) Fail(n, name + ": a prop needs a mesh file");
     fs::path mesh(String(n["mesh"], "mesh"));
@@ -390,11 +396,7 @@ class Parser {
                "quat", "euler", "axisangle"});
     TerrainConfig t;
     t.where = At(n);
-    if (!n["name"]) Fail(n, "a terrain needs a name");
-    t.spec.name = String(n["name"], "name");
-    if (t.spec.name.empty() || t.spec.name.find_first_of(" /\t") != std::string::npos) {
-      Fail(n["name"], "terrain name '" + t.spec.name + "' must be non-empty without spaces or /");
-    }
+    t.spec.name = EntryName(n, "terrain");
     const std::string& name = t.spec.name;
     if (!n["meshes"] == !n["png"]) Fail(n, name + ": give meshes or png (one of them)");
     if (const auto ms = n["meshes"]) {
