@@ -194,7 +194,9 @@ class NearestPoint {
   std::array<int, 3> Cell(const Vec3& p) const {
     std::array<int, 3> c{};
     for (int k = 0; k < 3; ++k) {
-      c[k] = std::clamp(static_cast<int>(std::floor((p[k] - box_.min[k]) / cell_)), 0, n_[k] - 1);
+      // Clamped as a double: a far query would overflow int.
+      c[k] = static_cast<int>(std::clamp(std::floor((p[k] - box_.min[k]) / cell_), 0.0,
+                                         static_cast<double>(n_[k] - 1)));
     }
     return c;
   }

@@ -131,10 +131,14 @@ InsideTest::InsideTest(const TriMesh& mesh, int cells)
       y0 = std::min(y0, p[1]);
       y1 = std::max(y1, p[1]);
     }
-    const int i0 = std::clamp(static_cast<int>((x0 - origin_[0]) / h_), 0, nx_ - 1);
-    const int i1 = std::clamp(static_cast<int>((x1 - origin_[0]) / h_), 0, nx_ - 1);
-    const int j0 = std::clamp(static_cast<int>((y0 - origin_[1]) / h_), 0, ny_ - 1);
-    const int j1 = std::clamp(static_cast<int>((y1 - origin_[1]) / h_), 0, ny_ - 1);
+    const int i0 = static_cast<int>(
+        std::clamp(std::floor((x0 - origin_[0]) / h_), 0.0, static_cast<double>(nx_ - 1)));
+    const int i1 = static_cast<int>(
+        std::clamp(std::floor((x1 - origin_[0]) / h_), 0.0, static_cast<double>(nx_ - 1)));
+    const int j0 = static_cast<int>(
+        std::clamp(std::floor((y0 - origin_[1]) / h_), 0.0, static_cast<double>(ny_ - 1)));
+    const int j1 = static_cast<int>(
+        std::clamp(std::floor((y1 - origin_[1]) / h_), 0.0, static_cast<double>(ny_ - 1)));
     for (int j = j0; j <= j1; ++j) {
       for (int i = i0; i <= i1; ++i) {
         lists[static_cast<std::size_t>(j * nx_ + i)].push_back(static_cast<std::int32_t>(t));
