@@ -17,17 +17,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string Join(const std::vector<double>& v) {
-  std::string s;
-  for (double x : v) s += (s.empty() ? "" : " ") + document::FormatReal(x);
-  return s;
-}
-
 std::string Vertices(const TriMesh& m) {
   std::vector<double> v;
   v.reserve(m.vertices.size() * 3);
   for (const Vec3& p : m.vertices) v.insert(v.end(), p.begin(), p.end());
-  return Join(v);
+  return document::FormatReals(v);
 }
 
 std::string Faces(const TriMesh& m) {
@@ -144,7 +138,7 @@ PropDocument BuildPropDocument(const PropSpec& spec, const std::string& cache_di
   vgeom.SetReals("rgba", std::vector<double>(spec.rgba.begin(), spec.rgba.end()));
   for (std::size_t i = 0; i < out.decomposition.parts.size(); ++i) {
     const ConvexPart& p = out.decomposition.parts[i];
-    const std::string name = kPartGeomPrefix + std::to_string(i);
+    const std::string name = fmt::format("{}{}", kPartGeomPrefix, i);
     document::Element& m = asset.AddChild("mesh");
     m.Set("name", name);
     if (parts_dir.empty()) {
