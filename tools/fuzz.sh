@@ -4,6 +4,7 @@
 # seed corpus (fuzz/corpus/<target>; the MJCF reader also gets Debian's sample models).
 # Usage: tools/fuzz.sh [SECONDS=60] [TARGET...]
 #   targets: fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_recording
+#   fuzz_mesh
 #   (default: all)
 # Exits non-zero when a target crashes (or leaks, or times out on one input), printing the
 # reproducer's path; rerun one with: build-fuzz/fuzz/<target> <reproducer>.
@@ -12,7 +13,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_TO_RUN="${1:-60}"
 shift || true
-ALL=(fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_recording)
+ALL=(fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_recording fuzz_mesh)
 TARGETS=("$@")
 if [ ${#TARGETS[@]} -eq 0 ]; then TARGETS=("${ALL[@]}"); fi
 for t in "${TARGETS[@]}"; do

@@ -13,6 +13,7 @@ PACKAGES=(
   clang libclang-rt-14-dev ccache
   python3 python3-zmq python3-msgpack python3-numpy
   libglfw3-dev libimgui-dev libstb-dev libgl1-mesa-dri xvfb xauth ffmpeg
+  libassimp-dev libembree-dev libbullet-extras-dev libbullet-dev
 )
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq

@@ -18,6 +18,7 @@ void RegisterViewCommand(CLI::App& app, int& exit_code);
 void RegisterRecordCommand(CLI::App& app, int& exit_code);
 void RegisterReplayCommand(CLI::App& app, int& exit_code);
 void RegisterBenchCommand(CLI::App& app, int& exit_code);
+void RegisterConvertCommand(CLI::App& app, int& exit_code);
 
 // The file the running command works on: main() names it when an error arrives without a
 // location of its own. Main thread.

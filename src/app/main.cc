@@ -60,6 +60,7 @@ int main(int argc, char** argv) {
   urlab::app::RegisterRecordCommand(app, exit_code);
   urlab::app::RegisterReplayCommand(app, exit_code);
   urlab::app::RegisterBenchCommand(app, exit_code);
+  urlab::app::RegisterConvertCommand(app, exit_code);
 
   // Every error names a place: its own location, else the path it concerns, else the input the
   // command was working on.

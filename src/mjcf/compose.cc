@@ -539,7 +539,9 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs,
     std::map<std::string, std::string> options = OptionAttributes(doc);
     for (const auto& [k, v] : in.options) options[k] = v;
     layout.options = options;
-    if (i == 0) {
+    if (in.takes_scene_options) {
+      // No options of its own (a converted prop): nothing to resolve or warn about.
+    } else if (i == 0) {
       scene_options = options;
     } else {
       std::set<std::string> keys;

@@ -128,18 +128,15 @@ void ViewerCore::BuildTables() {
     tables_.body_articulation[static_cast<std::size_t>(b)] = index;
   }
   tables_.prop_geom.assign(static_cast<std::size_t>(m->ngeom), false);
+  // Hotkey 5 draws the collision parts of the scene's Quick Convert props.
+  for (const world::PropLayout& p : session_->props()) {
+    for (int g : p.part_geoms) {
+      if (g >= 0 && g < m->ngeom) tables_.prop_geom[static_cast<std::size_t>(g)] = true;
+    }
+  }
   DebugSettings::Layers own{};
   own[static_cast<std::size_t>(DebugLayer::kVisual)] = true;
   debug_.articulation.assign(arts.size(), own);
-}
-
-void ViewerCore::SetPropGeoms(const std::vector<int>& geoms) {
-  std::fill(tables_.prop_geom.begin(), tables_.prop_geom.end(), false);
-  for (int g : geoms) {
-    if (g >= 0 && static_cast<std::size_t>(g) < tables_.prop_geom.size()) {
-      tables_.prop_geom[static_cast<std::size_t>(g)] = true;
-    }
-  }
 }
 
 void ViewerCore::SelectArticulation(int index) {

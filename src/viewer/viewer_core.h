@@ -77,8 +77,6 @@ class ViewerCore : public InputHandler {
   // Takes a screenshot of the next drawn frame into `path`.
   void RequestScreenshot(std::string path) { pending_screenshot_ = std::move(path); }
   const std::string& last_screenshot() const { return last_screenshot_; }
-  // Sets the converted props' geoms (hotkey 5 draws their wireframes). Mesh conversion feeds it.
-  void SetPropGeoms(const std::vector<int>& geoms);
   // Applies physics options to the simulation (a queued command) and to the viewer's copy.
   void SetOptions(std::function<void(mjOption&)> fn, std::string label);
   // Seconds since Begin (the clock double-clicks use).

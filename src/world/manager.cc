@@ -153,7 +153,11 @@ std::optional<Pose> Manager::BodyPose(int body_id) const {
 std::optional<Pose> Manager::BodyPose(std::string_view articulation, std::string_view body) const {
   if (!session_) return std::nullopt;
   const Articulation* a = session_->FindArticulation(articulation);
-  if (!a) return std::nullopt;
+  if (!a) {
+    // A prop reports the pose of its one body (a dynamic prop's is simulated).
+    const PropLayout* p = session_->FindProp(articulation);
+    return p && body == convert::kPropBodyName ? BodyPose(p->body) : std::nullopt;
+  }
   const physics::BodyView* v = a->bindings->bodies().Find(body);
   return v ? BodyPose(v->id) : std::nullopt;
 }

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "urlab/convert/mesh_assets.h"
+#include "urlab/convert/prop.h"
 #include "urlab/core/files.h"
 #include "urlab/mjcf/bridge.h"
 #include "urlab/mjcf/reader.h"
@@ -48,6 +50,21 @@ document::Document ReadBridged(const std::string& path, const std::string& label
     document::Document doc = mjcf::ReadFile(path);
     *report = mjcf::ApplyBridge(doc);
     return doc;
+  } catch (const InputError& e) {
+    throw InputError(e.where(), label + e.message());
+  }
+}
+
+// Mesh files MuJoCo 2.2.2 cannot load are converted (cached); each step is logged, warnings
+// (a dropped visual mesh) are kept for the user.
+void PrepareMeshes(document::Document& doc, const std::string& label,
+                   std::vector<document::Diagnostic>* warnings) {
+  try {
+    const convert::MeshAssetReport r = convert::PrepareMeshAssets(doc, convert::DefaultCacheDir());
+    for (const std::string& step : r.steps) spdlog::info("{}{}", label, step);
+    for (const Diagnostic& w : r.warnings) {
+      warnings->push_back(w);
+    }
   } catch (const InputError& e) {
     throw InputError(e.where(), label + e.message());
   }
@@ -131,17 +148,60 @@ void SaveDebug(const document::Document& doc, const mjModel* m, const std::strin
   spdlog::info("saved {} and {}", xml, mjb);
 }
 
+// A document the scene generated (a prop, a terrain) as a composition input at its placement;
+// it takes the scene's options.
+mjcf::ArticulationInput GeneratedInput(const std::string& name, document::Document doc,
+                                       const std::array<double, 3>& pos,
+                                       const std::array<double, 4>& quat) {
+  mjcf::ArticulationInput in;
+  in.name = name;
+  in.doc = std::move(doc);
+  in.placement.pos = pos;
+  in.placement.quat = quat;
+  in.takes_scene_options = true;
+  return in;
+}
+
+PropLayout PropLayoutOf(const mjModel* m, const PropConfig& p, int cache_hit) {
+  PropLayout l;
+  l.name = p.spec.name;
+  l.mode = p.spec.mode;
+  l.parts_from_cache = cache_hit;
+  const std::string prefix = p.spec.name + "_";
+  l.body = mj_name2id(m, mjOBJ_BODY, (prefix + convert::kPropBodyName).c_str());
+  l.mocap = l.body >= 0 ? m->body_mocapid[l.body] : -1;
+  l.visual_geom = mj_name2id(m, mjOBJ_GEOM, (prefix + convert::kVisualGeomName).c_str());
+  for (int i = 0;; ++i) {
+    const std::string name = prefix + convert::kPartGeomPrefix + std::to_string(i);
+    const int g = mj_name2id(m, mjOBJ_GEOM, name.c_str());
+    if (g < 0) break;
+    l.part_geoms.push_back(g);
+  }
+  return l;
+}
+
 }  // namespace
+
+bool IsConvertedPropPart(const CompiledScene& scene, int geom) {
+  for (const PropLayout& p : scene.props) {
+    if (std::find(p.part_geoms.begin(), p.part_geoms.end(), geom) != p.part_geoms.end()) {
+      return true;
+    }
+  }
+  return false;
+}
 
 CompiledScene BuildScene(const SceneConfig& scene) {
   std::vector<mjcf::ArticulationInput> inputs;
   physics::SoftwareModelSpec software;
   std::string bridge_text;
+  std::vector<document::Diagnostic> mesh_warnings;
   for (const ArticulationConfig& a : scene.articulations) {
     mjcf::ArticulationInput in;
     in.name = a.name;
     mjcf::BridgeReport report;
     in.doc = ReadBridged(a.mjcf, a.name + ": ", &report);
+    PrepareMeshes(in.doc, a.name + ": ", &mesh_warnings);
     AddBridgeRuntime(report, a.name + "_", &software);
     NoteBridge(report, a.name + ": ", &bridge_text);
     in.placement.pos = a.pos;
@@ -149,6 +209,33 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     in.options = a.options;
     in.include_world = a.include_world;
     inputs.push_back(std::move(in));
+  }
+  // Quick Convert props, composed after the articulations like articulations of their own.
+  std::vector<int> prop_cache_hits;
+  for (const PropConfig& p : scene.props) {
+    convert::PropDocument built;
+    try {
+      built = convert::BuildPropDocument(p.spec, convert::DefaultCacheDir());
+    } catch (const InputError& e) {
+      throw InputError(e.where(), p.spec.name + ": " + e.message());
+    }
+    for (const std::string& line : built.report) spdlog::info("{}: {}", p.spec.name, line);
+    prop_cache_hits.push_back(built.cache_hit ? 1 : 0);
+    inputs.push_back(GeneratedInput(p.spec.name, std::move(built.doc), p.pos, p.quat));
+  }
+  // Terrain: heightfields sampled from meshes (cached) or PNG height maps, composed last.
+  std::vector<bool> terrain_cached;
+  for (const TerrainConfig& t : scene.terrain) {
+    convert::TerrainDocument built;
+    try {
+      built = convert::BuildTerrainDocument(t.spec, convert::DefaultCacheDir());
+    } catch (const InputError& e) {
+      throw InputError(e.where().file.empty() ? t.where : e.where(),
+                       t.spec.name + ": " + e.message());
+    }
+    for (const std::string& line : built.report) spdlog::info("{}: {}", t.spec.name, line);
+    terrain_cached.push_back(built.cache_hit);
+    inputs.push_back(GeneratedInput(t.spec.name, std::move(built.doc), t.pos, t.quat));
   }
   mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs), scene.options);
   // Scene overrides: only the fields set, over whatever the articulations gave.
@@ -164,8 +251,20 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   if (!scene.save_debug_xml.empty()) {
     SaveDebug(composed.doc, out.model.get(), scene.save_debug_xml, SceneInputFiles(scene));
   }
+  for (std::size_t i = 0; i < scene.props.size(); ++i) {
+    out.props.push_back(PropLayoutOf(out.model.get(), scene.props[i], prop_cache_hits[i]));
+  }
+  for (std::size_t i = 0; i < scene.terrain.size(); ++i) {
+    TerrainLayout t;
+    t.name = scene.terrain[i].spec.name;
+    t.geom = mj_name2id(out.model.get(), mjOBJ_GEOM, (t.name + "_geom").c_str());
+    t.hfield = mj_name2id(out.model.get(), mjOBJ_HFIELD, (t.name + "_hfield").c_str());
+    t.from_cache = terrain_cached[i];
+    out.terrain.push_back(t);
+  }
   out.articulations = std::move(composed.articulations);
   out.diagnostics = std::move(composed.diagnostics);
+  out.diagnostics.insert(out.diagnostics.end(), mesh_warnings.begin(), mesh_warnings.end());
   out.doc = std::move(composed.doc);
   return out;
 }
@@ -175,6 +274,7 @@ CompiledScene BuildModel(const std::string& mjcf_path) {
   document::Document doc = ReadBridged(mjcf_path, "", &report);
   CompiledScene out;
   out.diagnostics = doc.diagnostics();
+  PrepareMeshes(doc, "", &out.diagnostics);
   out.model = CompileDocument(doc, nullptr);
   physics::SoftwareModelSpec software;
   AddBridgeRuntime(report, "", &software);
@@ -195,6 +295,11 @@ std::string MjbBytes(const mjModel* m) {
 std::vector<std::string> SceneInputFiles(const SceneConfig& scene) {
   std::vector<std::string> files;
   if (!scene.path.empty()) files.push_back(scene.path);
+  for (const PropConfig& p : scene.props) files.push_back(p.spec.mesh);
+  for (const TerrainConfig& t : scene.terrain) {
+    for (const convert::TerrainMesh& m : t.spec.meshes) files.push_back(m.file);
+    if (!t.spec.png.empty()) files.push_back(t.spec.png);
+  }
   for (const ArticulationConfig& a : scene.articulations) {
     mjcf::ReadOptions lenient;
     lenient.check_files = false;

@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "urlab/convert/mesh_io.h"
 #include "urlab/core/files.h"
 #include "urlab/document/element.h"
 #include "urlab/document/grammar.h"
@@ -27,15 +28,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Top-level sections of features that do not exist yet: refused with a clear message instead of
 // "unknown key" (and never silently accepted).
 constexpr std::pair<const char*, const char*> kNotYetSupported[] = {
-    {"props", "props (static objects besides articulations)"},
-    {"terrain", "terrain / heightfields"},
-    {"heightfields", "terrain / heightfields"},
-    {"cameras", "cameras"},
-    {"recording", "recording"},
-    {"replay", "replay"},
-    {"viewer", "the viewer"},
-    {"input", "input devices"},
-    {"debug", "debug drawing"},
+    {"cameras", "cameras"},     {"recording", "recording"}, {"replay", "replay"},
+    {"viewer", "the viewer"},   {"input", "input devices"}, {"debug", "debug drawing"},
     {"lights", "scene lights"},
 };
 
@@ -269,6 +263,209 @@ class Parser {
     return c;
   }
 
+  // The orientation of an entry: quat, euler (degrees, xyz) or axisangle (degrees), at most one.
+  std::array<double, 4> Orientation(const YAML::Node& n, const std::string& name,
+                                    std::array<double, 4> quat) const {
+    int orientations = 0;
+    if (n["quat"]) {
+      auto v = Numbers(n["quat"], "quat", 4);
+      if (v[0] == 0 && v[1] == 0 && v[2] == 0 && v[3] == 0)
+        Fail(n["quat"], "quat must not be zero");
+      quat = document::QuatNormalize({v[0], v[1], v[2], v[3]});
+      ++orientations;
+    }
+    if (n["euler"]) {
+      auto v = Numbers(n["euler"], "euler (degrees)", 3);
+      quat = document::EulerToQuat({v[0] * kPi / 180, v[1] * kPi / 180, v[2] * kPi / 180}, "xyz");
+      ++orientations;
+    }
+    if (n["axisangle"]) {
+      auto v = Numbers(n["axisangle"], "axisangle (axis, degrees)", 4);
+      const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+      if (len < 1e-12) Fail(n["axisangle"], "axisangle axis must not be zero");
+      const double h = v[3] * kPi / 360;
+      quat = {std::cos(h), std::sin(h) * v[0] / len, std::sin(h) * v[1] / len,
+              std::sin(h) * v[2] / len};
+      ++orientations;
+    }
+    if (orientations > 1) Fail(n, name + ": give at most one of quat, euler, axisangle");
+    return quat;
+  }
+
+  // The name of a prop or terrain entry: required, non-empty, no spaces or '/'.
+  std::string EntryName(const YAML::Node& n, const std::string& kind) const {
+    if (!n["name"]) Fail(n, "a " + kind + " needs a name");
+    std::string name = String(n["name"], "name");
+    if (name.empty() || name.find_first_of(" /\t") != std::string::npos) {
+      Fail(n["name"], kind + " name '" + name + "' must be non-empty without spaces or /");
+    }
+    return name;
+  }
+
+  // A Quick Convert prop.
+  PropConfig Prop(const YAML::Node& n) const {
+    CheckKeys(n, "prop",
+              {"name", "mesh", "pos", "quat", "euler", "axisangle", "scale", "mode", "mass",
+               "density", "friction", "rgba", "threshold", "max_parts", "resolution"});
+    PropConfig p;
+    p.where = At(n);
+    p.spec.name = EntryName(n, "prop");
+    const std::string& name = p.spec.name;
+    if (!n["mesh"]) Fail(n, name + ": a prop needs a mesh file");
+    fs::path mesh(String(n["mesh"], "mesh"));
+    if (mesh.is_relative()) mesh = fs::path(path_).parent_path() / mesh;
+    p.spec.mesh = fs::absolute(mesh).lexically_normal().string();
+    CheckInputFile(p.spec.mesh, name + ": mesh file", At(n["mesh"]), convert::kMaxMeshFileBytes);
+    if (!convert::IsReadableMeshFormat(p.spec.mesh)) {
+      Fail(n["mesh"], name + ": unknown mesh format '" + mesh.extension().string() + "'");
+    }
+    if (n["pos"]) {
+      auto v = Numbers(n["pos"], "pos", 3);
+      p.pos = {v[0], v[1], v[2]};
+    }
+    p.quat = Orientation(n, name, p.quat);
+    if (const auto s = n["scale"]) {
+      if (s.IsSequence()) {
+        auto v = Numbers(s, name + ".scale", 3);
+        p.spec.scale = {v[0], v[1], v[2]};
+      } else {
+        const double k = Number(s, name + ".scale", kNonNegativeFinite);
+        p.spec.scale = {k, k, k};
+      }
+      for (double k : p.spec.scale) {
+        if (!(k > 0)) Fail(s, name + ".scale must be > 0");
+      }
+    }
+    if (const auto m = n["mode"]) {
+      const std::string word = String(m, name + ".mode");
+      const auto mode = convert::ParsePropMode(word);
+      if (!mode) Fail(m, name + ".mode must be static, dynamic or mocap, not '" + word + "'");
+      p.spec.mode = *mode;
+    }
+    if (n["mass"] && n["density"]) Fail(n, name + ": give mass or density, not both");
+    constexpr Range kPositive{0, std::numeric_limits<double>::max(), true};
+    if (n["mass"]) p.spec.mass = Number(n["mass"], name + ".mass", kPositive);
+    if (n["density"]) p.spec.density = Number(n["density"], name + ".density", kPositive);
+    if (const auto f = n["friction"]) {
+      if (f.IsSequence()) {
+        if (f.size() < 1 || f.size() > 3) Fail(f, name + ".friction must be 1 to 3 numbers");
+        for (std::size_t i = 0; i < f.size(); ++i) {
+          p.spec.friction[i] = Number(f[i], name + ".friction", kNonNegativeFinite);
+        }
+      } else {
+        p.spec.friction[0] = Number(f, name + ".friction", kNonNegativeFinite);
+      }
+    }
+    if (n["rgba"]) {
+      auto v = Numbers(n["rgba"], name + ".rgba", 4);
+      for (std::size_t i = 0; i < 4; ++i) {
+        if (v[i] < 0 || v[i] > 1) Fail(n["rgba"], name + ".rgba values must be 0 to 1");
+        p.spec.rgba[i] = v[i];
+      }
+    }
+    if (n["threshold"]) {
+      p.spec.decompose.threshold = Number(n["threshold"], name + ".threshold", Range{0, 1, true});
+    }
+    if (const auto m = n["max_parts"]) {
+      const double v = Number(m, name + ".max_parts", Range{1, 1024});
+      if (v != std::floor(v)) Fail(m, name + ".max_parts must be an integer");
+      p.spec.decompose.max_parts = static_cast<int>(v);
+    }
+    if (const auto r = n["resolution"]) {
+      const double v = Number(r, name + ".resolution", Range{4, 400});
+      if (v != std::floor(v)) Fail(r, name + ".resolution must be an integer");
+      p.spec.decompose.resolution = static_cast<int>(v);
+    }
+    return p;
+  }
+
+  // A file named in the scene: absolute, relative to the scene file's folder, checked to exist.
+  std::string InputPath(const YAML::Node& n, const std::string& what,
+                        std::uintmax_t max_bytes = kMaxTextInputBytes) const {
+    fs::path p(String(n, what));
+    if (p.is_relative()) p = fs::path(path_).parent_path() / p;
+    const std::string out = fs::absolute(p).lexically_normal().string();
+    CheckInputFile(out, what, At(n), max_bytes);
+    return out;
+  }
+
+  // A terrain: meshes (file names, or {file, pos, scale}) or a png with its size.
+  TerrainConfig Terrain(const YAML::Node& n) const {
+    CheckKeys(n, "terrain",
+              {"name", "meshes", "png", "size", "resolution", "bounds", "base", "friction", "pos",
+               "quat", "euler", "axisangle"});
+    TerrainConfig t;
+    t.where = At(n);
+    t.spec.name = EntryName(n, "terrain");
+    const std::string& name = t.spec.name;
+    if (!n["meshes"] == !n["png"]) Fail(n, name + ": give meshes or png (one of them)");
+    if (const auto ms = n["meshes"]) {
+      if (!ms.IsSequence() || ms.size() == 0) Fail(ms, name + ".meshes must be a list of files");
+      for (const auto& m : ms) {
+        convert::TerrainMesh tm;
+        if (m.IsMap()) {
+          CheckKeys(m, name + ".meshes entry", {"file", "pos", "scale"});
+          if (!m["file"]) Fail(m, name + ": a mesh entry needs a file");
+          tm.file = InputPath(m["file"], name + ": mesh file", convert::kMaxMeshFileBytes);
+          if (m["pos"]) {
+            auto v = Numbers(m["pos"], name + ".pos", 3);
+            tm.pos = {v[0], v[1], v[2]};
+          }
+          if (m["scale"]) {
+            const double k = Number(m["scale"], name + ".scale", Range{0, 1e6, true});
+            tm.scale = {k, k, k};
+          }
+        } else {
+          tm.file = InputPath(m, name + ": mesh file", convert::kMaxMeshFileBytes);
+        }
+        if (!convert::IsReadableMeshFormat(tm.file)) {
+          Fail(m, name + ": unknown mesh format '" + fs::path(tm.file).extension().string() + "'");
+        }
+        t.spec.meshes.push_back(tm);
+      }
+    }
+    if (const auto png = n["png"]) {
+      t.spec.png = InputPath(png, name + ": png height map");
+      if (!n["size"]) Fail(n, name + ": a png terrain needs size: [x, y, height, base] (m)");
+    }
+    if (n["size"]) {
+      if (!n["png"]) Fail(n["size"], name + ".size is for png terrain (meshes give their size)");
+      auto v = Numbers(n["size"], name + ".size", 4);
+      for (double x : v) {
+        if (!(x > 0)) Fail(n["size"], name + ".size values must be > 0");
+      }
+      t.spec.png_size = {v[0], v[1], v[2], v[3]};
+    }
+    if (n["resolution"]) {
+      t.spec.resolution = Number(n["resolution"], name + ".resolution",
+                                 Range{0, std::numeric_limits<double>::max(), true});
+    }
+    if (n["bounds"]) {
+      auto v = Numbers(n["bounds"], name + ".bounds [x min, y min, x max, y max]", 4);
+      if (!(v[2] > v[0]) || !(v[3] > v[1])) {
+        Fail(n["bounds"], name + ".bounds: x max and y max must exceed x min and y min");
+      }
+      t.spec.bounds = std::array<double, 4>{v[0], v[1], v[2], v[3]};
+    }
+    if (n["base"]) {
+      t.spec.base =
+          Number(n["base"], name + ".base", Range{0, std::numeric_limits<double>::max(), true});
+    }
+    if (const auto f = n["friction"]) {
+      auto v = Numbers(f, name + ".friction", 3);
+      for (std::size_t i = 0; i < 3; ++i) {
+        if (v[i] < 0) Fail(f, name + ".friction must be >= 0");
+        t.spec.friction[i] = v[i];
+      }
+    }
+    if (n["pos"]) {
+      auto v = Numbers(n["pos"], "pos", 3);
+      t.pos = {v[0], v[1], v[2]};
+    }
+    t.quat = Orientation(n, name, t.quat);
+    return t;
+  }
+
   ArticulationConfig Articulation(const YAML::Node& n) const {
     CheckKeys(n, "articulation",
               {"name", "mjcf", "pos", "quat", "euler", "axisangle", "options", "control_source",
@@ -291,29 +488,8 @@ class Parser {
       auto v = Numbers(n["pos"], "pos", 3);
       a.pos = {v[0], v[1], v[2]};
     }
-    int orientations = 0;
-    if (n["quat"]) {
-      auto v = Numbers(n["quat"], "quat", 4);
-      if (v[0] == 0 && v[1] == 0 && v[2] == 0 && v[3] == 0)
-        Fail(n["quat"], "quat must not be zero");
-      a.quat = document::QuatNormalize({v[0], v[1], v[2], v[3]});
-      ++orientations;
-    }
-    if (n["euler"]) {
-      auto v = Numbers(n["euler"], "euler (degrees)", 3);
-      a.quat = document::EulerToQuat({v[0] * kPi / 180, v[1] * kPi / 180, v[2] * kPi / 180}, "xyz");
-      ++orientations;
-    }
-    if (n["axisangle"]) {
-      auto v = Numbers(n["axisangle"], "axisangle (axis, degrees)", 4);
-      const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-      if (len < 1e-12) Fail(n["axisangle"], "axisangle axis must not be zero");
-      const double h = v[3] * kPi / 360;
-      a.quat = {std::cos(h), std::sin(h) * v[0] / len, std::sin(h) * v[1] / len,
-                std::sin(h) * v[2] / len};
-      ++orientations;
-    }
-    if (orientations > 1) Fail(n, a.name + ": give at most one of quat, euler, axisangle");
+    a.quat = Orientation(n, a.name, a.quat);
+
     if (n["options"]) a.options = Options(n["options"], a.name + ".options");
     if (n["control_source"]) a.control_source = Source(n["control_source"]);
     if (n["controller"]) a.controller = Controller(n["controller"]);
@@ -339,7 +515,8 @@ class Parser {
       }
     }
     CheckKeys(root, "the scene",
-              {"articulations", "options", "size", "control_source", "network", "save_debug_xml"});
+              {"articulations", "props", "terrain", "options", "size", "control_source", "network",
+               "save_debug_xml"});
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {
       Fail(arts ? arts : root, "the scene needs a non-empty list 'articulations'");
@@ -349,6 +526,26 @@ class Parser {
       s.articulations.push_back(Articulation(a));
       if (!names.insert(s.articulations.back().name).second) {
         Fail(a, "two articulations are named '" + s.articulations.back().name + "'");
+      }
+    }
+    if (const auto props = root["props"]) {
+      if (!props.IsSequence()) Fail(props, "props must be a list");
+      for (const auto& p : props) {
+        s.props.push_back(Prop(p));
+        if (!names.insert(s.props.back().spec.name).second) {
+          Fail(p, "the name '" + s.props.back().spec.name +
+                      "' is used twice (articulations and props share one namespace)");
+        }
+      }
+    }
+    if (const auto terrain = root["terrain"]) {
+      if (!terrain.IsSequence()) Fail(terrain, "terrain must be a list");
+      for (const auto& t : terrain) {
+        s.terrain.push_back(Terrain(t));
+        if (!names.insert(s.terrain.back().spec.name).second) {
+          Fail(t, "the name '" + s.terrain.back().spec.name +
+                      "' is used twice (articulations, props and terrain share one namespace)");
+        }
       }
     }
     if (root["options"]) s.options = Options(root["options"], "options");

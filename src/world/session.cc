@@ -155,7 +155,26 @@ std::uint64_t Session::QueueInitialReset(bool full) {
 // ---------------------------------------------------------------------------------------------
 // Host-driven mocap bodies
 
+const PropLayout* Session::FindProp(std::string_view name) const {
+  for (const PropLayout& p : compiled_.props) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+
 int Session::MocapOf(std::string_view articulation, std::string_view body) const {
+  if (!FindArticulation(articulation)) {
+    if (const PropLayout* p = FindProp(articulation)) {
+      if (body != convert::kPropBodyName) {
+        throw Error("prop '" + p->name + "' has one body, '" + convert::kPropBodyName + "'");
+      }
+      if (p->mocap < 0) {
+        throw Error("prop '" + p->name + "' is " + convert::PropModeName(p->mode) +
+                    ": only a mocap prop can be driven by the host");
+      }
+      return p->mocap;
+    }
+  }
   const Articulation& a = Require(articulation);
   const physics::BodyView* v = a.bindings->bodies().Find(body);
   if (!v) {

@@ -5,6 +5,7 @@
 #include "urlab/viewer/viewer.h"
 
 #include <GLFW/glfw3.h>
+#include <fmt/format.h>
 
 #include <chrono>
 #include <cmath>
@@ -111,12 +112,15 @@ class ViewerTest : public testing::MujocoTest {
     testing::MujocoTest::TearDown();
   }
 
-  // Plays `xml` as articulation "bot" with a viewer window of 640x480.
-  void Play(const char* xml, viewer::ViewerOptions vo = {}, bool paused = true) {
+  // Plays `xml` as articulation "bot" with a viewer window of 640x480; `extra` is appended to
+  // the scene file.
+  void Play(const char* xml, viewer::ViewerOptions vo = {}, bool paused = true,
+            const std::string& extra = "") {
     testing::WriteTextFile(dir_, "bot.xml", xml);
     const world::SceneConfig scene = world::ParseScene(
         "control_source: ui\narticulations:\n  - name: bot\n    mjcf: bot.xml\n"
-        "    controller: {type: passthrough}\n",
+        "    controller: {type: passthrough}\n" +
+            extra,
         dir_ + "/scene.yaml");
     world::ManagerOptions mo;
     mo.start_paused = paused;
@@ -271,6 +275,58 @@ TEST_F(ViewerTest, DebugTogglesChangeTheExpectedRegion) {
   const Image again = viewer_->ReadPixels();
   d = Compare(plain, again, centre, 1);
   EXPECT_EQ(d.inside + d.outside, 0);
+}
+
+// An L-shaped block as a Wavefront OBJ: concave, so Quick Convert splits it into parts.
+std::string LBlockObj() {
+  std::string obj;
+  const double x[2][2] = {{0, 0.3}, {0, 0.1}};  // [box][min,max] in x; box 0 is the long leg
+  const double y[2][2] = {{0, 0.1}, {0.1, 0.3}};
+  for (int b = 0; b < 2; ++b) {
+    for (int i = 0; i < 8; ++i) {
+      obj += fmt::format("v {} {} {}\n", x[b][i & 1], y[b][(i >> 1) & 1], 0.1 * ((i >> 2) & 1));
+    }
+  }
+  const int faces[12][3] = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                            {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  for (int b = 0; b < 2; ++b) {
+    for (const auto& f : faces) {
+      obj += fmt::format("f {} {} {}\n", 8 * b + f[0] + 1, 8 * b + f[1] + 1, 8 * b + f[2] + 1);
+    }
+  }
+  return obj;
+}
+
+TEST_F(ViewerTest, HotkeyFiveDrawsTheConvertedPropsParts) {
+  setenv("URLAB_CACHE_DIR", (dir_ + "/cache").c_str(), 1);
+  testing::WriteTextFile(dir_, "block.obj", LBlockObj());
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  Play(kBotXml, vo, true,
+       "props:\n  - name: block\n    mesh: block.obj\n    pos: [-0.4, -0.3, 0]\n");
+  unsetenv("URLAB_CACHE_DIR");
+  const auto& props = manager_->session().props();
+  ASSERT_EQ(props.size(), 1u);
+  ASSERT_GE(props[0].part_geoms.size(), 1u);
+  const Image plain = viewer_->ReadPixels();
+  const mjtNum corner[3] = {-0.4, -0.3, 0.05}, mid[3] = {-0.25, -0.15, 0.05};
+  const Pixel c = Project(core(), mid);
+  const Pixel k = Project(core(), corner);
+  const double radius = 2 * std::hypot(c.x - k.x, c.y - k.y);
+  ASSERT_GT(radius, 5);
+  // 3 (articulation collision wireframes) leaves the prop alone; 5 draws its parts there.
+  Key(GLFW_KEY_3);
+  const Image art_wire = viewer_->ReadPixels();
+  Key(GLFW_KEY_3);
+  Key(GLFW_KEY_5);
+  EXPECT_TRUE(core().debug().Global(viewer::internal::DebugLayer::kPropCollision));
+  const Image prop_wire = viewer_->ReadPixels();
+  Key(GLFW_KEY_5);
+  const Diff d = Compare(art_wire, prop_wire, c, radius);
+  EXPECT_GT(d.inside, 10);
+  const Diff only_prop = Compare(plain, prop_wire, c, radius);
+  EXPECT_GT(only_prop.inside, 10);
+  EXPECT_GT(only_prop.inside, 4 * only_prop.outside) << "the prop's wireframe drawn elsewhere";
 }
 
 TEST_F(ViewerTest, KeysPauseResetAndScreenshot) {

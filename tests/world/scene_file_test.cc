@@ -70,8 +70,8 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       {WithArm("size: {nconmax: 1.5}\n"), 4, "integers"},
       {WithArm("size: {nstack: [1, 2]}\n"), 4, "must be an integer"},
       // features that do not exist yet
-      {WithArm("props:\n  - {mesh: box.obj}\n"), 4, "'props:' is not supported yet"},
-      {WithArm("terrain: {file: h.png}\n"), 4, "'terrain:' is not supported yet"},
+      {WithArm("props:\n  - {mesh: box.obj}\n"), 5, "a prop needs a name"},
+      {WithArm("terrain: {file: h.png}\n"), 4, "terrain must be a list"},
       {WithArm("cameras: []\n"), 4, "'cameras:' is not supported yet"},
       {WithArm("recording: {file: r.bin}\n"), 4, "'recording:' is not supported yet"},
   };

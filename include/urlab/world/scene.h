@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "urlab/convert/prop.h"
 #include "urlab/core/diagnostics.h"
 #include "urlab/document/document.h"
 #include "urlab/mjcf/bridge.h"
@@ -17,6 +18,25 @@
 
 namespace urlab::world {
 
+// A Quick Convert prop in the compiled model. The viewer's collision wireframes of converted
+// props (hotkey 5) draw `part_geoms` (geom group convert::kPartGroup).
+struct PropLayout {
+  std::string name;  // prefix "{name}_"
+  convert::PropMode mode = convert::PropMode::kStatic;
+  int body = -1;   // body id ("{name}_body")
+  int mocap = -1;  // mocap id (mode mocap), else -1
+  int visual_geom = -1;
+  std::vector<int> part_geoms;  // the convex parts, in order
+  int parts_from_cache = 0;     // 1 when the decomposition came from the cache
+};
+
+// A terrain's heightfield in the compiled model.
+struct TerrainLayout {
+  std::string name;  // prefix "{name}_"
+  int geom = -1, hfield = -1;
+  bool from_cache = false;  // the sampled grid came from the cache
+};
+
 struct CompiledScene {
   physics::ModelPtr model;
   // Sensors and passive forces 2.2.2 lacks (3.x jointactuatorfrc/tendonactuatorfrc, gravcomp),
@@ -24,7 +44,10 @@ struct CompiledScene {
   // registered while this lives (declared after `model`, so it is released first).
   physics::SoftwareSensorRegistration software_sensors;
   std::string bridge_report;  // what the dialect bridge changed ("" when nothing)
+  // The scene's articulations in order, then its props (their layouts follow the articulations').
   std::vector<mjcf::ArticulationLayout> articulations;
+  std::vector<PropLayout> props;
+  std::vector<TerrainLayout> terrain;
   std::vector<document::Diagnostic> diagnostics;  // warnings worth showing the user
   document::Document doc;  // the (composed) document MuJoCo compiled, e.g. for --save-xml
 };
@@ -62,6 +85,9 @@ ValidationReport Validate(const std::string& path, bool bridge_report = false);
 // Every file a scene reads: the scene file, each articulation's MJCF, its includes and asset
 // files (outputs must never overwrite one of them).
 std::vector<std::string> SceneInputFiles(const SceneConfig& scene);
+
+// True when geom `geom` of `scene`'s model is a convex part of a converted prop.
+bool IsConvertedPropPart(const CompiledScene& scene, int geom);
 
 // A compiled model as MuJoCo binary (.mjb) bytes, e.g. for WriteFileAtomic.
 std::string MjbBytes(const mjModel* m);

@@ -1,10 +1,13 @@
 #pragma once
 // The scene file (the "level"): YAML listing articulations with their MJCF, world transform,
-// options, control source, controller and initial keyframe, plus scene-wide option overrides,
+// options, control source, controller and initial keyframe, Quick Convert props (a mesh, its
+// pose, scale, mode, mass or density, friction and decomposition settings), terrain
+// (meshes sampled into a heightfield, or a PNG height map), plus scene-wide
+// option overrides,
 // network endpoints and the debug-XML switch. Unknown keys, duplicate keys, keys that are not
 // strings, wrong types and numbers out of range (gains, torque limits, hold/blend times, options
 // checked against the MJCF grammar, size fields) are InputErrors with file and line; sections of
-// features that do not exist yet (props, terrain, cameras, recording...) are refused as "not
+// features that do not exist yet (cameras, recording...) are refused as "not
 // supported yet". Thread: any (pure parsing).
 #include <array>
 #include <map>
@@ -13,6 +16,8 @@
 #include <vector>
 
 #include "urlab/control/controller.h"
+#include "urlab/convert/heightfield.h"
+#include "urlab/convert/prop.h"
 #include "urlab/core/error.h"
 
 namespace urlab::world {
@@ -57,6 +62,24 @@ struct ArticulationConfig {
   SourceLocation where;
 };
 
+// A Quick Convert prop (`props:`): a mesh made a body with convex collision parts, composed
+// after the articulations like one named `spec.name` (prefix "{name}_", body "{name}_body").
+struct PropConfig {
+  convert::PropSpec spec;  // mesh path absolute
+  std::array<double, 3> pos = {0, 0, 0};
+  std::array<double, 4> quat = {1, 0, 0, 0};
+  SourceLocation where;
+};
+
+// A terrain (`terrain:`): meshes sampled into a heightfield by ray casts, or a PNG height map,
+// composed after the props like an articulation named `spec.name` (geom "{name}_geom").
+struct TerrainConfig {
+  convert::TerrainSpec spec;  // paths absolute
+  std::array<double, 3> pos = {0, 0, 0};
+  std::array<double, 4> quat = {1, 0, 0, 0};
+  SourceLocation where;
+};
+
 struct NetworkConfig {
   bool enabled = true;
   std::string state = "tcp://*:5555";
@@ -71,6 +94,8 @@ struct NetworkConfig {
 struct SceneConfig {
   std::string path;  // the scene file
   std::vector<ArticulationConfig> articulations;
+  std::vector<PropConfig> props;
+  std::vector<TerrainConfig> terrain;
   std::map<std::string, std::string> options;  // manager overrides: only the fields set
   std::map<std::string, std::string> size;     // <size> attributes (nconmax, njmax, nstack...)
   ControlSource control_source = ControlSource::kNetwork;

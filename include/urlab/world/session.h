@@ -87,6 +87,10 @@ class Session : public std::enable_shared_from_this<Session> {
   const Articulation* OwnerOf(std::string_view full_name) const;
   // Throws Error naming the articulation when absent.
   const Articulation& Require(std::string_view name) const;
+  // The scene's Quick Convert props (immutable after Create); nullptr when absent. A mocap
+  // prop's body ("body") is driven with SetHostDrivenPose(prop name, "body", pose).
+  const std::vector<PropLayout>& props() const { return compiled_.props; }
+  const PropLayout* FindProp(std::string_view name) const;
 
   // ---- Commands (any thread) ----
   void SetPaused(bool paused) { engine_->SetPaused(paused); }

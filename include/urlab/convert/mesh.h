@@ -1,0 +1,70 @@
+#pragma once
+// Triangle meshes as the convert layer sees them (MuJoCo frame, metres): plain vertex and index
+// arrays, their measures, a repair pass that reports what it changed, and content hashes used
+// as cache keys. Thread: plain values and pure functions; any thread that owns the mesh.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace urlab::convert {
+
+using Vec3 = std::array<double, 3>;
+using Triangle = std::array<std::int32_t, 3>;
+
+struct TriMesh {
+  std::vector<Vec3> vertices;
+  std::vector<Triangle> triangles;  // counter-clockwise seen from outside
+  bool empty() const { return triangles.empty(); }
+};
+
+struct Bounds {
+  Vec3 min{0, 0, 0}, max{0, 0, 0};
+  Vec3 Size() const { return {max[0] - min[0], max[1] - min[1], max[2] - min[2]}; }
+  Vec3 Center() const;
+  double Diagonal() const;
+};
+
+// Bounds of the vertices that triangles use (all zero for an empty mesh).
+Bounds ComputeBounds(const TriMesh& mesh);
+// Enclosed volume by the divergence theorem (negative when the triangles face inwards; only
+// meaningful for a closed mesh).
+double SignedVolume(const TriMesh& mesh);
+double SurfaceArea(const TriMesh& mesh);
+
+// What CleanMesh found and changed.
+struct CleanReport {
+  std::size_t input_vertices = 0, input_triangles = 0;
+  std::size_t non_finite_vertices = 0;   // triangles using them were dropped
+  std::size_t bad_indices = 0;           // triangles naming a vertex that does not exist
+  std::size_t welded_vertices = 0;       // exact duplicates merged
+  std::size_t degenerate_triangles = 0;  // repeated vertex or zero area, dropped
+  std::size_t duplicate_triangles = 0;   // same three vertices as another, dropped
+  std::size_t boundary_edges = 0;        // edges of one triangle: the mesh is open
+  std::size_t non_manifold_edges = 0;    // edges of three or more triangles
+  bool flipped = false;                  // closed mesh facing inwards, turned outwards
+  // No boundary edge: a solid (possibly several touching or overlapping closed pieces, whose
+  // shared edges count as non-manifold).
+  bool closed() const { return boundary_edges == 0; }
+  // One line: "12 degenerate triangles dropped, open (34 boundary edges)" ("clean" if nothing).
+  std::string Summary() const;
+};
+
+// Repairs `mesh` in place: drops triangles with non-finite or missing vertices, welds exactly
+// equal vertices, drops degenerate and duplicate triangles and unused vertices, and turns a
+// mesh without boundary edges and with negative volume outwards. Never throws.
+CleanReport CleanMesh(TriMesh& mesh);
+
+// Vertex clustering on a grid of `cells` cells along the longest side: a bounded-time
+// simplification for very large meshes (the result is cleaned).
+TriMesh ClusterVertices(const TriMesh& mesh, int cells);
+
+// 64-bit FNV-1a of bytes, continuing from `seed` (for cache keys, not security).
+std::uint64_t HashBytes(std::string_view bytes, std::uint64_t seed = 0xcbf29ce484222325ull);
+// Hash of a mesh's vertex and index arrays.
+std::uint64_t HashMesh(const TriMesh& mesh);
+// 16 lowercase hex digits.
+std::string HashHex(std::uint64_t hash);
+
+}  // namespace urlab::convert

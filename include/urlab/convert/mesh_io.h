@@ -1,0 +1,38 @@
+#pragma once
+// Reading and writing mesh files. STL (binary and ASCII) and OBJ (vertices and faces; faces
+// with more than three corners are fanned) are read by our own parsers, which treat the bytes as
+// untrusted (every count and index checked, sizes bounded); every other format assimp reads
+// (PLY, glTF/GLB, FBX, DAE, 3DS, ...) goes through assimp, its scene flattened with node
+// transforms applied. Errors are urlab::InputError naming the file (and line for OBJ).
+// Thread: any; no shared state.
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "urlab/convert/mesh.h"
+
+namespace urlab::convert {
+
+// Largest mesh file we read (a 2M-triangle binary STL is 100 MB).
+constexpr std::uintmax_t kMaxMeshFileBytes = 512ull << 20;
+// Most triangles one mesh may have (bounds memory on hostile files).
+constexpr std::size_t kMaxMeshTriangles = 20'000'000;
+
+// Reads a mesh file of any supported format (by extension, case-insensitive). Throws InputError
+// for a missing or unreadable file, an unknown format, or a file that holds no triangles.
+TriMesh ReadMesh(const std::string& path);
+
+// Our parsers on bytes in memory; `name` names them in errors. Throw InputError.
+TriMesh ParseStl(std::string_view bytes, const std::string& name);
+TriMesh ParseObj(std::string_view bytes, const std::string& name);
+
+// True for the formats MuJoCo 2.2.2 loads itself (.stl, .obj, .msh).
+bool IsMujocoMeshFormat(const std::string& path);
+// True when ReadMesh can read the file's extension.
+bool IsReadableMeshFormat(const std::string& path);
+
+// Binary STL and OBJ text of a mesh.
+std::string StlBytes(const TriMesh& mesh, std::string_view header = "urlab");
+std::string ObjBytes(const TriMesh& mesh);
+
+}  // namespace urlab::convert

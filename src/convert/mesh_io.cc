@@ -1,0 +1,241 @@
+#include "urlab/convert/mesh_io.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+
+#include "assimp_reader.h"
+#include "urlab/core/error.h"
+#include "urlab/core/files.h"
+
+namespace urlab::convert {
+
+namespace {
+
+std::string Lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string Extension(const std::string& path) {
+  return Lower(std::filesystem::path(path).extension().string());
+}
+
+bool IsAsciiStl(std::string_view bytes) {
+  // "solid" starts ASCII files, but also some binary headers: binary wins when its size matches.
+  if (bytes.size() >= 84) {
+    std::uint32_t n = 0;
+    std::memcpy(&n, bytes.data() + 80, 4);
+    if (84 + 50ull * n == bytes.size()) return false;
+  }
+  std::size_t i = 0;
+  while (i < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[i]))) ++i;
+  return bytes.substr(i, 5) == "solid";
+}
+
+// Whitespace-separated tokens of a line.
+class Tokens {
+ public:
+  explicit Tokens(std::string_view line) : rest_(line) {}
+  bool Next(std::string_view* tok) {
+    std::size_t i = 0;
+    while (i < rest_.size() && std::isspace(static_cast<unsigned char>(rest_[i]))) ++i;
+    std::size_t j = i;
+    while (j < rest_.size() && !std::isspace(static_cast<unsigned char>(rest_[j]))) ++j;
+    if (i == j) return false;
+    *tok = rest_.substr(i, j - i);
+    rest_ = rest_.substr(j);
+    return true;
+  }
+
+ private:
+  std::string_view rest_;
+};
+
+bool ParseDouble(std::string_view s, double* out) {
+  const auto r = std::from_chars(s.data(), s.data() + s.size(), *out);
+  return r.ec == std::errc() && r.ptr == s.data() + s.size();
+}
+
+// The three numbers after a vertex keyword; `what` names the format in the error.
+Vec3 ReadVertex(Tokens& t, const std::string& name, int line, const char* what) {
+  Vec3 v{};
+  for (double& x : v) {
+    std::string_view num;
+    if (!t.Next(&num) || !ParseDouble(num, &x)) {
+      throw InputError({name, line}, std::string(what) + " vertex needs three numbers");
+    }
+  }
+  return v;
+}
+
+void CheckTriangleCount(std::size_t n, const std::string& name) {
+  if (n > kMaxMeshTriangles) {
+    throw InputError({name, 0}, fmt::format("more than {} triangles", kMaxMeshTriangles));
+  }
+}
+
+TriMesh ParseAsciiStl(std::string_view bytes, const std::string& name) {
+  TriMesh m;
+  int line = 1, corner = 0;
+  std::size_t pos = 0;
+  while (pos < bytes.size()) {
+    std::size_t end = bytes.find('\n', pos);
+    if (end == std::string_view::npos) end = bytes.size();
+    Tokens t(bytes.substr(pos, end - pos));
+    std::string_view tok;
+    if (t.Next(&tok) && tok == "vertex") {
+      m.vertices.push_back(ReadVertex(t, name, line, "STL"));
+      if (++corner == 3) {
+        const auto n = static_cast<std::int32_t>(m.vertices.size());
+        m.triangles.push_back({n - 3, n - 2, n - 1});
+        CheckTriangleCount(m.triangles.size(), name);
+        corner = 0;
+      }
+    } else if (tok == "endfacet" && corner != 0) {
+      throw InputError({name, line}, "STL facet with other than three vertices");
+    }
+    pos = end + 1;
+    ++line;
+  }
+  return m;
+}
+
+}  // namespace
+
+TriMesh ParseStl(std::string_view bytes, const std::string& name) {
+  if (IsAsciiStl(bytes)) return ParseAsciiStl(bytes, name);
+  if (bytes.size() < 84) throw InputError({name, 0}, "not an STL file (shorter than its header)");
+  std::uint32_t n = 0;
+  std::memcpy(&n, bytes.data() + 80, 4);
+  if (84 + 50ull * n > bytes.size()) {
+    throw InputError({name, 0}, fmt::format("binary STL truncated: header says {} triangles, the "
+                                            "file holds {}",
+                                            n, (bytes.size() - 84) / 50));
+  }
+  CheckTriangleCount(n, name);
+  TriMesh m;
+  m.vertices.reserve(3ull * n);
+  m.triangles.reserve(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const char* rec = bytes.data() + 84 + 50ull * i + 12;  // skip the normal
+    for (int k = 0; k < 3; ++k) {
+      float f[3];
+      std::memcpy(f, rec + 12 * k, 12);
+      m.vertices.push_back({f[0], f[1], f[2]});
+    }
+    const auto b = static_cast<std::int32_t>(3 * i);
+    m.triangles.push_back({b, b + 1, b + 2});
+  }
+  return m;
+}
+
+TriMesh ParseObj(std::string_view bytes, const std::string& name) {
+  TriMesh m;
+  int line = 1;
+  std::size_t pos = 0;
+  std::vector<std::int32_t> face;
+  while (pos < bytes.size()) {
+    std::size_t end = bytes.find('\n', pos);
+    if (end == std::string_view::npos) end = bytes.size();
+    Tokens t(bytes.substr(pos, end - pos));
+    std::string_view tok;
+    if (t.Next(&tok)) {
+      if (tok == "v") {
+        m.vertices.push_back(ReadVertex(t, name, line, "OBJ"));
+        if (m.vertices.size() > 3 * kMaxMeshTriangles) {
+          throw InputError({name, line}, "too many vertices");
+        }
+      } else if (tok == "f") {
+        face.clear();
+        std::string_view corner;
+        while (t.Next(&corner)) {
+          // v, v/vt, v//vn, v/vt/vn: the vertex index is the first field; negative is relative.
+          const std::string_view idx = corner.substr(0, corner.find('/'));
+          long long v = 0;
+          const auto r = std::from_chars(idx.data(), idx.data() + idx.size(), v);
+          if (r.ec != std::errc() || r.ptr != idx.data() + idx.size() || v == 0) {
+            throw InputError({name, line}, fmt::format("bad face index '{}'", corner));
+          }
+          const long long count = static_cast<long long>(m.vertices.size());
+          const long long abs = v > 0 ? v - 1 : count + v;
+          if (abs < 0 || abs >= count) {
+            throw InputError({name, line}, fmt::format("face index {} out of range (the file "
+                                                       "has {} vertices so far)",
+                                                       v, count));
+          }
+          face.push_back(static_cast<std::int32_t>(abs));
+        }
+        if (face.size() < 3) throw InputError({name, line}, "a face needs three vertices");
+        for (std::size_t k = 1; k + 1 < face.size(); ++k) {
+          m.triangles.push_back({face[0], face[k], face[k + 1]});
+        }
+        CheckTriangleCount(m.triangles.size(), name);
+      }
+    }
+    pos = end + 1;
+    ++line;
+  }
+  return m;
+}
+
+bool IsMujocoMeshFormat(const std::string& path) {
+  const std::string e = Extension(path);
+  return e == ".stl" || e == ".obj" || e == ".msh";
+}
+
+bool IsReadableMeshFormat(const std::string& path) {
+  const std::string e = Extension(path);
+  return e == ".stl" || e == ".obj" || internal::AssimpCanRead(e);
+}
+
+TriMesh ReadMesh(const std::string& path) {
+  const std::string e = Extension(path);
+  CheckInputFile(path, "mesh file", {}, kMaxMeshFileBytes);
+  TriMesh m;
+  if (e == ".stl" || e == ".obj") {
+    const std::string bytes = ReadInputFile(path, "mesh file", {}, kMaxMeshFileBytes);
+    m = e == ".stl" ? ParseStl(bytes, path) : ParseObj(bytes, path);
+  } else if (internal::AssimpCanRead(e)) {
+    m = internal::AssimpRead(path);
+  } else {
+    throw InputError({path, 0}, "unknown mesh format '" + e +
+                                    "' (readable: .stl .obj .ply .gltf .glb .fbx .dae .3ds ...)");
+  }
+  if (m.triangles.empty()) throw InputError({path, 0}, "the mesh has no triangles");
+  return m;
+}
+
+std::string StlBytes(const TriMesh& mesh, std::string_view header) {
+  std::string out(84 + 50 * mesh.triangles.size(), '\0');
+  std::memcpy(out.data(), header.data(), std::min<std::size_t>(header.size(), 80));
+  const auto n = static_cast<std::uint32_t>(mesh.triangles.size());
+  std::memcpy(out.data() + 80, &n, 4);
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    char* rec = out.data() + 84 + 50 * i;
+    float f[12] = {};
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& v = mesh.vertices[static_cast<std::size_t>(mesh.triangles[i][k])];
+      for (int c = 0; c < 3; ++c) f[3 + 3 * k + c] = static_cast<float>(v[c]);
+    }
+    std::memcpy(rec, f, 48);
+  }
+  return out;
+}
+
+std::string ObjBytes(const TriMesh& mesh) {
+  std::string out;
+  out.reserve(mesh.vertices.size() * 40 + mesh.triangles.size() * 24);
+  for (const Vec3& v : mesh.vertices) out += fmt::format("v {} {} {}\n", v[0], v[1], v[2]);
+  for (const Triangle& t : mesh.triangles) {
+    out += fmt::format("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+  }
+  return out;
+}
+
+}  // namespace urlab::convert
