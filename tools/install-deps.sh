@@ -12,6 +12,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev ccache
   python3 python3-zmq python3-msgpack python3-numpy
+  # cameras: off-screen rendering (EGL surfaceless on Mesa, OSMesa fallback) and video
+  libegl-dev libegl1-mesa-dev libgl1-mesa-dri libosmesa6-dev ffmpeg
 )
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
