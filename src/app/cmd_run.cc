@@ -15,6 +15,7 @@
 
 #include "app/commands.h"
 #include "app/signals.h"
+#include "urlab/camera/camera_subsystem.h"
 #include "urlab/core/mujoco_handlers.h"
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/net/network.h"
@@ -38,6 +39,7 @@ struct RunArgs {
   bool paused = false;
   bool reset_on_divergence = false;
   bool no_network = false;
+  bool no_cameras = false;
   // `urlab record` (and `run --record`): the file to record to, and how.
   std::string record;
   bool no_compress = false;
@@ -75,6 +77,15 @@ int Run(const RunArgs& args) {
     recorder = sub.get();
     manager.AddSubsystem(std::move(sub));
   }
+  world::CameraStreams* cameras = nullptr;
+  if (!args.no_cameras) {
+    // Added before the network, whose discovery and step server read its streams.
+    auto cam_options = camera::CameraOptionsFromScene(scene);
+    cam_options.publish = !args.no_network && scene.network.enabled;
+    auto sub = std::make_unique<camera::CameraSubsystem>(std::move(cam_options));
+    cameras = sub.get();
+    manager.AddSubsystem(std::move(sub));
+  }
   if (!args.no_network && scene.network.enabled) {
     // An idle recorder costs the physics thread nothing; the step server's recording operations
     // use it (added first: it begins before the network and ends after it).
@@ -85,6 +96,7 @@ int Run(const RunArgs& args) {
     auto network =
         std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network));
     network->SetRecorder(recorder);
+    network->SetCameras(cameras);
     manager.AddSubsystem(std::move(network));
   }
   manager.BeginPlay(scene);
@@ -251,6 +263,9 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
   speed->excludes(max_speed);
   cmd->add_flag("--paused", args.paused,
                 "start paused (SIGUSR1 resumes; so does a step server client's set_paused)");
+  cmd->add_flag("--no-cameras", args.no_cameras,
+                "render no camera (by default the cameras the scene streams render off-screen and "
+                "publish from network.camera_base_port, 5558, upward)");
   cmd->add_flag("--no-network", args.no_network,
                 "no ZeroMQ sockets (by default the streaming topics and the step server of "
                 "protocol.md are served on the scene's endpoints or the defaults 5555-5557, 5559)");

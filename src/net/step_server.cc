@@ -8,6 +8,7 @@
 #include <zmq_addon.hpp>
 
 #include "net/base64.h"
+#include "net/camera_list.h"
 #include "net/model_assets.h"
 #include "net/observation.h"
 #include "net/request_fields.h"
@@ -474,7 +475,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
           Json{{"name", t.sensor_names[i]}, {"id", t.sensors[i].id}, {"dim", t.sensors[i].dim}});
     }
     a["sensors"] = std::move(sensors);
-    a["camera_topics"] = Json::array();
+    a["camera_topics"] = CameraList(cameras_, t.name);
     arts.push_back(std::move(a));
   }
   Json capabilities = Json::array();

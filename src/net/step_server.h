@@ -28,6 +28,7 @@
 #include "urlab/replay/player.h"
 #include "urlab/replay/recorder.h"
 #include "urlab/replay/recording.h"
+#include "urlab/world/camera_streams.h"
 #include "urlab/world/session.h"
 
 namespace urlab::net {
@@ -64,6 +65,9 @@ class StepServer {
   // The recorder the recording operations use (nullptr: none; they answer not_ready). Main
   // thread, before the I/O thread starts.
   void SetRecorder(replay::RecorderSubsystem* recorder) { recorder_ = recorder; }
+  // The cameras hello lists and `include_cameras` reads (nullptr: none). Main thread, before the
+  // I/O thread starts.
+  void SetCameras(world::CameraStreams* cameras) { cameras_ = cameras; }
 
   // Requests answered with an error, per code (I/O thread).
   const std::map<std::string, std::uint64_t>& errors() const { return errors_; }
@@ -187,6 +191,7 @@ class StepServer {
   std::optional<ModelWithAssets> assets_;  // for hello's include_assets, built on first use
   MsgpackWriter writer_;                   // reply bytes, reused
   replay::RecorderSubsystem* recorder_ = nullptr;
+  world::CameraStreams* cameras_ = nullptr;
   // Recordings loaded for replay ("r1", "r2", ...), in load order; never unloaded while playing.
   struct ReplaySession {
     std::string id;
