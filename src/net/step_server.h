@@ -92,6 +92,9 @@ class StepServer {
   struct ObsSpec {
     ObsLevel level;
     bool binary;
+    // include_cameras: streams (indices into cameras_->Streams()) and whether the reply waits
+    // for a frame rendered from its own state ("sync") or takes the newest one ("latest").
+    std::vector<std::pair<std::size_t, bool>> cameras;
   };
   // What an operation handler decided: a reply now, or one once command `seq` took effect.
   struct Outcome {
@@ -124,6 +127,9 @@ class StepServer {
   void Dispatch(Request& r);
   void Send(const std::vector<zmq::message_t>& envelope, Json& reply, bool json,
             const std::optional<ObsSpec>& observation = std::nullopt);
+  // The reply's `cameras` map ({art: {stream: frame}}) for the streams `spec` names, showing
+  // `frame` (sync) or the newest rendered (latest).
+  void AddCameras(Json& reply, const ObsSpec& spec, const physics::StateFrame& frame);
   // The observation of a request's client (its level unless the request names one).
   std::optional<ObsSpec> ObservationFor(const Request& r) const;
   void SendError(const std::vector<zmq::message_t>& envelope, const Json& seq, bool json,
