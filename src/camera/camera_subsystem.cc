@@ -2,9 +2,6 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <condition_variable>
@@ -21,6 +18,7 @@
 #include "camera/camera_plan.h"
 #include "render/camera_renderer.h"
 #include "render/gl_context.h"
+#include "render/render_thread.h"
 #include "urlab/core/error.h"
 #include "urlab/world/session.h"
 
@@ -119,18 +117,7 @@ struct CameraSubsystem::Impl {
 };
 
 void CameraSubsystem::Impl::Init(const CameraOptions& options) {
-  if (options.render_nice > 0) {
-    // Threads created from here on (llvmpipe's rasterisers) inherit the nice value, so under
-    // contention the physics thread keeps its rate.
-    setpriority(
-        PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)),
-        getpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid))) + options.render_nice);
-  }
-  if (!std::getenv("LP_NUM_THREADS")) {
-    // llvmpipe otherwise starts one rasteriser per core, all competing with the physics thread.
-    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-    setenv("LP_NUM_THREADS", std::to_string(std::max(1u, cores - 1)).c_str(), 0);
-  }
+  render::PrepareRenderThread(options.render_nice);
   gl = render::OffscreenGl::Create(backend);
   backend_name = gl->Describe();
   renderer = std::make_unique<render::CameraRenderer>(model, max_width, max_height, settings);
@@ -144,7 +131,11 @@ void CameraSubsystem::Impl::Init(const CameraOptions& options) {
     s.set(zmq::sockopt::linger, 0);
     s.set(zmq::sockopt::sndhwm, kSendHighWaterMark);
     std::string bound;
-    for (int t = 0; t < kBindTries && bound.empty(); ++t, ++port) {
+    if (options.base_port == 0) {  // ephemeral ports (tests, benchmarks)
+      s.bind(fmt::format("tcp://{}:*", options.bind_host));
+      bound = s.get(zmq::sockopt::last_endpoint);
+    }
+    for (int t = 0; options.base_port != 0 && t < kBindTries && bound.empty(); ++t, ++port) {
       if (std::find(options.reserved_ports.begin(), options.reserved_ports.end(), port) !=
           options.reserved_ports.end()) {
         continue;

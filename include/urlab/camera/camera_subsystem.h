@@ -27,7 +27,7 @@ namespace urlab::camera {
 
 struct CameraOptions {
   world::CamerasConfig config;
-  int base_port = 5558;
+  int base_port = 5558;                      // 0: ephemeral ports on bind_host
   std::string bind_host = "*";               // sockets bind tcp://{bind_host}:{port}
   std::string advertise_host = "127.0.0.1";  // what discovery tells clients to connect to
   bool publish = true;                       // false: render only (video, the step server)
