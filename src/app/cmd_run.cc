@@ -16,6 +16,7 @@
 #include "app/commands.h"
 #include "app/signals.h"
 #include "urlab/camera/camera_subsystem.h"
+#include "urlab/camera/video_recorder.h"
 #include "urlab/core/mujoco_handlers.h"
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/net/network.h"
@@ -40,6 +41,7 @@ struct RunArgs {
   bool reset_on_divergence = false;
   bool no_network = false;
   bool no_cameras = false;
+  std::vector<std::string> video;  // --video CAM OUT: a camera's frames to MP4/WebM
   // `urlab record` (and `run --record`): the file to record to, and how.
   std::string record;
   bool no_compress = false;
@@ -63,7 +65,11 @@ int Run(const RunArgs& args) {
   options.reset_on_divergence = args.reset_on_divergence;
   world::Manager manager(options);
   // Loading and compiling: a signal ends the process at once (nothing runs, nothing is written).
-  const world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
+  world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
+  if (!args.video.empty()) {
+    CheckOutputs({{args.video[1], "--video"}}, world::SceneInputFiles(scene));
+    camera::RequestVideoCamera(scene, args.video[0]);
+  }
   replay::RecorderSubsystem* recorder = nullptr;
   if (!args.record.empty()) {
     CheckOutputs({{args.record, "--output"}}, world::SceneInputFiles(scene));
@@ -78,7 +84,7 @@ int Run(const RunArgs& args) {
     manager.AddSubsystem(std::move(sub));
   }
   world::CameraStreams* cameras = nullptr;
-  if (!args.no_cameras) {
+  if (!args.no_cameras || !args.video.empty()) {
     // Added before the network, whose discovery and step server read its streams.
     auto cam_options = camera::CameraOptionsFromScene(scene);
     cam_options.publish = !args.no_network && scene.network.enabled;
@@ -100,6 +106,10 @@ int Run(const RunArgs& args) {
     manager.AddSubsystem(std::move(network));
   }
   manager.BeginPlay(scene);
+  std::unique_ptr<camera::CameraVideo> video;
+  if (!args.video.empty()) {
+    video = std::make_unique<camera::CameraVideo>(*cameras, args.video[0], args.video[1]);
+  }
   SetImmediateExit(false);  // playing: a signal stops the loop, which ends cleanly
   // MuJoCo errors reach us as engine events (delivered inside Tick, on this thread).
   std::optional<physics::EngineEvent> error;
@@ -126,6 +136,7 @@ int Run(const RunArgs& args) {
   std::optional<physics::EngineEvent> fatal;
   while (StopSignal() == 0) {
     manager.Tick();
+    if (video) video->Poll();
     if (TakePauseToggle()) {
       manager.session().SetPaused(!engine.paused());
       spdlog::info("{} by SIGUSR1", engine.paused() ? "paused" : "resumed");
@@ -178,8 +189,14 @@ int Run(const RunArgs& args) {
       recorded = recorder->recorder()->status();
     }
   }
+  if (video) video->Poll();
   manager.EndPlay();
   FlushMujocoWarningCounts();
+  if (video) {
+    const int status = video->Close();
+    std::printf("video: %s frames=%d%s\n", args.video[1].c_str(), video->frames(),
+                status == 0 ? "" : " (ffmpeg failed)");
+  }
   if (recorded) {
     std::printf(
         "recording: %s steps=%llu sim=%.3f s bytes=%llu (%.1f bytes/step, %.1f before "
@@ -298,9 +315,19 @@ void RegisterRecordCommand(CLI::App& app, int& exit_code) {
       "`urlab replay` plays, checks and exports it.");
   static RunArgs args;
   AddRunOptions(cmd, args);
-  cmd->add_option("-o,--output", args.record, "the recording to write (.urrec)")->required();
+  cmd->add_option("-o,--output", args.record, "the recording to write (.urrec)");
+  cmd->add_option("--video", args.video,
+                  "CAM OUT: also (or only) write camera CAM (articulation/camera, an MJCF camera) "
+                  "to OUT (.mp4 H.264 or .webm VP9) through ffmpeg, at the camera's rate and size "
+                  "(the scene's cameras: section)")
+      ->expected(2);
   AddRecordOptions(cmd, args);
-  cmd->callback([&exit_code] { exit_code = Run(args); });
+  cmd->callback([&exit_code] {
+    if (args.record.empty() && args.video.empty()) {
+      throw CLI::RequiredError("--output (or --video)");
+    }
+    exit_code = Run(args);
+  });
 }
 
 void RegisterRunCommand(CLI::App& app, int& exit_code) {
