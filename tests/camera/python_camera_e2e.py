@@ -6,24 +6,16 @@ include_cameras: "sync" frames show exactly the step of the reply.
 Usage: python_camera_e2e.py URLAB_BINARY SOURCE_DIR
 """
 import os
-import re
 import subprocess
 import sys
 import tempfile
-import time
 
 URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
+sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 import numpy as np  # noqa: E402
+from urlab_process import fail, start_urlab  # noqa: E402
 from urlab_client import CameraClient, StepClient, StreamClient  # noqa: E402
-
-
-def fail(message, proc=None):
-    if proc:
-        proc.kill()
-        print(proc.stderr.read() if proc.stderr else "", file=sys.stderr)
-    print("FAIL:", message)
-    sys.exit(1)
 
 
 def main():
@@ -49,19 +41,7 @@ cameras:
   streams:
     rig/top: {{modes: [rgb, depth, segmentation]}}
 """)
-    proc = subprocess.Popen([URLAB, "run", scene, "--duration", "60"], stderr=subprocess.PIPE,
-                            stdout=subprocess.PIPE, text=True)
-    endpoints = None
-    deadline = time.monotonic() + 30
-    while endpoints is None and time.monotonic() < deadline:
-        line = proc.stderr.readline()
-        if not line:
-            fail("urlab exited before serving the network", proc)
-        m = re.search(r"network: state (\S+) \| control (\S+) \| info (\S+) \| rpc (\S+)", line)
-        if m:
-            endpoints = m.groups()
-    if endpoints is None:
-        fail("no network line in urlab's log", proc)
+    proc, endpoints = start_urlab(URLAB, scene)
     try:
         with StreamClient(state=endpoints[0], control=endpoints[1], info=endpoints[2]) as client:
             robots = client.discover(timeout=10, expect=["rig"])
