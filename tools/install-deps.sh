@@ -14,6 +14,8 @@ PACKAGES=(
   python3 python3-zmq python3-msgpack python3-numpy
   libglfw3-dev libimgui-dev libstb-dev libgl1-mesa-dri xvfb xauth ffmpeg
   libassimp-dev libembree-dev libbullet-extras-dev libbullet-dev
+  # cameras: off-screen rendering (EGL surfaceless on Mesa, OSMesa fallback)
+  libegl-dev libegl1-mesa-dev libosmesa6-dev
 )
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq

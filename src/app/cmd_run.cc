@@ -15,6 +15,8 @@
 
 #include "app/commands.h"
 #include "app/signals.h"
+#include "urlab/camera/camera_subsystem.h"
+#include "urlab/camera/video_recorder.h"
 #include "urlab/core/mujoco_handlers.h"
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/net/network.h"
@@ -39,6 +41,8 @@ struct RunArgs {
   bool paused = false;
   bool reset_on_divergence = false;
   bool no_network = false;
+  bool no_cameras = false;
+  std::vector<std::string> video;  // --video CAM OUT: a camera's frames to MP4/WebM
   // `urlab record` (and `run --record`): the file to record to, and how.
   std::string record;
   bool no_compress = false;
@@ -65,7 +69,11 @@ int Run(const RunArgs& args) {
   options.reset_on_divergence = args.reset_on_divergence;
   world::Manager manager(options);
   // Loading and compiling: a signal ends the process at once (nothing runs, nothing is written).
-  const world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
+  world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
+  if (!args.video.empty()) {
+    CheckOutputs({{args.video[1], "--video"}}, world::SceneInputFiles(scene));
+    camera::RequestVideoCamera(scene, args.video[0]);
+  }
   replay::RecorderSubsystem* recorder = nullptr;
   if (!args.record.empty()) {
     CheckOutputs({{args.record, "--output"}}, world::SceneInputFiles(scene));
@@ -79,6 +87,15 @@ int Run(const RunArgs& args) {
     recorder = sub.get();
     manager.AddSubsystem(std::move(sub));
   }
+  world::CameraStreams* cameras = nullptr;
+  if (!args.no_cameras || !args.video.empty()) {
+    // Added before the network, whose discovery and step server read its streams.
+    auto cam_options = camera::CameraOptionsFromScene(scene);
+    cam_options.publish = !args.no_network && scene.network.enabled;
+    auto sub = std::make_unique<camera::CameraSubsystem>(std::move(cam_options));
+    cameras = sub.get();
+    manager.AddSubsystem(std::move(sub));
+  }
   if (!args.no_network && scene.network.enabled) {
     // An idle recorder costs the physics thread nothing; the step server's recording operations
     // use it (added first: it begins before the network and ends after it).
@@ -89,6 +106,7 @@ int Run(const RunArgs& args) {
     auto network =
         std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network));
     network->SetRecorder(recorder);
+    network->SetCameras(cameras);
     manager.AddSubsystem(std::move(network));
   }
   if (args.view) {
@@ -97,6 +115,10 @@ int Run(const RunArgs& args) {
     manager.AddSubsystem(std::move(view));
   }
   manager.BeginPlay(scene);
+  std::unique_ptr<camera::CameraVideo> video;
+  if (!args.video.empty()) {
+    video = std::make_unique<camera::CameraVideo>(*cameras, args.video[0], args.video[1]);
+  }
   SetImmediateExit(false);  // playing: a signal stops the loop, which ends cleanly
   // MuJoCo errors reach us as engine events (delivered inside Tick, on this thread).
   std::optional<physics::EngineEvent> error;
@@ -123,6 +145,7 @@ int Run(const RunArgs& args) {
   std::optional<physics::EngineEvent> fatal;
   while (StopSignal() == 0) {
     manager.Tick();
+    if (video) video->Poll();
     if (TakePauseToggle()) {
       manager.session().SetPaused(!engine.paused());
       spdlog::info("{} by SIGUSR1", engine.paused() ? "paused" : "resumed");
@@ -176,8 +199,14 @@ int Run(const RunArgs& args) {
       recorded = recorder->recorder()->status();
     }
   }
+  if (video) video->Poll();
   manager.EndPlay();
   FlushMujocoWarningCounts();
+  if (video) {
+    const int status = video->Close();
+    std::printf("video: %s frames=%d%s\n", args.video[1].c_str(), video->frames(),
+                status == 0 ? "" : " (ffmpeg failed)");
+  }
   if (recorded) {
     std::printf(
         "recording: %s steps=%llu sim=%.3f s bytes=%llu (%.1f bytes/step, %.1f before "
@@ -261,6 +290,9 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
   speed->excludes(max_speed);
   cmd->add_flag("--paused", args.paused,
                 "start paused (SIGUSR1 resumes; so does a step server client's set_paused)");
+  cmd->add_flag("--no-cameras", args.no_cameras,
+                "render no camera (by default the cameras the scene streams render off-screen and "
+                "publish from network.camera_base_port, 5558, upward)");
   cmd->add_flag("--no-network", args.no_network,
                 "no ZeroMQ sockets (by default the streaming topics and the step server of "
                 "protocol.md are served on the scene's endpoints or the defaults 5555-5557, 5559)");
@@ -313,9 +345,19 @@ void RegisterRecordCommand(CLI::App& app, int& exit_code) {
       "`urlab replay` plays, checks and exports it.");
   static RunArgs args;
   AddRunOptions(cmd, args);
-  cmd->add_option("-o,--output", args.record, "the recording to write (.urrec)")->required();
+  cmd->add_option("-o,--output", args.record, "the recording to write (.urrec)");
+  cmd->add_option("--video", args.video,
+                  "CAM OUT: also (or only) write camera CAM (articulation/camera, an MJCF camera) "
+                  "to OUT (.mp4 H.264 or .webm VP9) through ffmpeg, at the camera's rate and size "
+                  "(the scene's cameras: section)")
+      ->expected(2);
   AddRecordOptions(cmd, args);
-  cmd->callback([&exit_code] { exit_code = Run(args); });
+  cmd->callback([&exit_code] {
+    if (args.record.empty() && args.video.empty()) {
+      throw CLI::RequiredError("--output (or --video)");
+    }
+    exit_code = Run(args);
+  });
 }
 
 void RegisterViewCommand(CLI::App& app, int& exit_code) {

@@ -17,6 +17,7 @@
 #include <zmq_addon.hpp>
 
 #include "core/spin_wait.h"
+#include "net/camera_list.h"
 #include "net/msgpack_codec.h"
 #include "net/observation.h"
 #include "net/port_owner.h"
@@ -43,7 +44,7 @@ constexpr auto kDropLogPeriod = std::chrono::seconds(1);
 // Frames the I/O thread may fall behind the physics thread before it skips to the newest.
 constexpr std::size_t kMaxBacklog = 16;
 
-std::string InfoJson(const ArticulationTopics& t) {
+std::string InfoJson(const ArticulationTopics& t, const world::CameraStreams* cameras) {
   nlohmann::ordered_json j;
   j["type"] = "actuator_list";
   j["robot"] = t.name;
@@ -51,7 +52,7 @@ std::string InfoJson(const ArticulationTopics& t) {
   j["ids"] = t.actuator_ids;
   j["mins"] = t.mins;
   j["maxs"] = t.maxs;
-  j["camera_list"] = nlohmann::ordered_json::array();
+  j["camera_list"] = CameraList(cameras, t.name);
   return j.dump();
 }
 
@@ -447,7 +448,7 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
   for (std::size_t i = 0; i < impl_->tables.size(); ++i) {
     impl_->routes[impl_->tables[i].control_topic] = {i, Impl::Kind::kControl};
     impl_->routes[impl_->tables[i].set_gains_topic] = {i, Impl::Kind::kSetGains};
-    impl_->info_messages.push_back(InfoJson(impl_->tables[i]));
+    impl_->info_messages.push_back(InfoJson(impl_->tables[i], cameras_));
   }
   impl_->frame = physics::StateFrame::SizedFor(impl_->model, session.engine().command_layout());
   if (!options_.full_state.empty()) {
@@ -467,6 +468,7 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
     impl_->server = std::make_unique<StepServer>(
         session, impl_->tables, session.engine().SubscribeState("step_server"), so);
     impl_->server->SetRecorder(recorder_);
+    impl_->server->SetCameras(cameras_);
   }
   std::promise<Endpoints> ready;
   std::future<Endpoints> bound = ready.get_future();

@@ -8,6 +8,7 @@
 #include <zmq_addon.hpp>
 
 #include "net/base64.h"
+#include "net/camera_list.h"
 #include "net/model_assets.h"
 #include "net/observation.h"
 #include "net/request_fields.h"
@@ -20,6 +21,9 @@ namespace urlab::net {
 using namespace request;
 
 namespace {
+
+// How long a reply waits for a camera frame of its own step ("sync").
+constexpr auto kCameraSyncTimeout = std::chrono::milliseconds(2000);
 
 std::string NewSessionId(std::uint64_t n) {
   static std::mt19937_64 rng{std::random_device{}()};
@@ -190,6 +194,7 @@ void StepServer::Send(const std::vector<zmq::message_t>& envelope, Json& reply, 
     socket_->send(zmq::buffer(f.data(), f.size()), zmq::send_flags::sndmore);
   }
   const physics::StateFrame* frame = observation ? state_->Latest() : nullptr;
+  if (frame && !observation->cameras.empty()) AddCameras(reply, *observation, *frame);
   if (json) {
     if (frame) AddObservation(&reply, tables_, *frame, observation->level, observation->binary);
     BinaryToBase64(reply);  // bytes travel as <field>_base64 in JSON text
@@ -217,7 +222,64 @@ std::optional<StepServer::ObsSpec> StepServer::ObservationFor(const Request& r) 
     if (!level) Fail("bad_value", "observations must be minimal, standard or full");
     spec.level = *level;
   }
+  if (const auto it = r.body.find("include_cameras"); it != r.body.end() && !it->is_null()) {
+    const std::vector<world::CameraStreamInfo> none;
+    const auto& streams = cameras_ ? cameras_->Streams() : none;
+    if (it->is_boolean()) {
+      if (it->get<bool>()) {
+        for (std::size_t i = 0; i < streams.size(); ++i) spec.cameras.emplace_back(i, false);
+      }
+    } else if (it->is_object()) {
+      for (const auto& [name, how] : it->items()) {
+        if (!how.is_string() || (how != "sync" && how != "latest")) {
+          Fail("bad_value", "include_cameras." + name + " must be \"sync\" or \"latest\"");
+        }
+        // "{art}/{stream}", or a stream name only one articulation has.
+        std::vector<std::size_t> found;
+        for (std::size_t i = 0; i < streams.size(); ++i) {
+          if (streams[i].stream == name ||
+              streams[i].articulation + "/" + streams[i].stream == name) {
+            found.push_back(i);
+          }
+        }
+        if (found.size() != 1) {
+          Fail("bad_value", "include_cameras: " +
+                                std::string(found.empty() ? "no camera stream '"
+                                                          : "several articulations stream '") +
+                                name +
+                                "' (name it \"articulation/stream\"; see hello's camera_topics)");
+        }
+        spec.cameras.emplace_back(found[0], how == "sync");
+      }
+    } else {
+      Fail("bad_value", "include_cameras must be true, false or {stream: \"sync\"|\"latest\"}");
+    }
+  }
   return spec;
+}
+
+void StepServer::AddCameras(Json& reply, const ObsSpec& spec, const physics::StateFrame& frame) {
+  Json cameras = Json::object();
+  for (const auto& [index, sync] : spec.cameras) {
+    const world::CameraStreamInfo& info = cameras_->Streams()[index];
+    world::CameraFrame f;
+    Json entry{{"mode", info.mode}, {"width", info.width}, {"height", info.height}};
+    // A sync frame is rendered from this reply's state (the I/O thread waits for the render
+    // thread; the physics thread never waits).
+    const bool ok = sync ? cameras_->WaitForStep(index, frame.step, kCameraSyncTimeout, f)
+                         : cameras_->Latest(index, f);
+    if (ok) {
+      entry["frame_id"] = f.frame_id;
+      entry["step"] = f.step;
+      entry["sim_time"] = f.sim_time;
+      entry["render_ms"] = f.render_ms;
+      entry["data"] = Json::binary(*f.bytes);
+    } else {
+      entry["error"] = sync ? "no frame of this step within the timeout" : "no frame yet";
+    }
+    cameras[info.articulation][info.stream] = std::move(entry);
+  }
+  reply["cameras"] = std::move(cameras);
 }
 
 void StepServer::SendError(const std::vector<zmq::message_t>& envelope, const Json& seq, bool json,
@@ -474,7 +536,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
           Json{{"name", t.sensor_names[i]}, {"id", t.sensors[i].id}, {"dim", t.sensors[i].dim}});
     }
     a["sensors"] = std::move(sensors);
-    a["camera_topics"] = Json::array();
+    a["camera_topics"] = CameraList(cameras_, t.name);
     arts.push_back(std::move(a));
   }
   Json capabilities = Json::array();

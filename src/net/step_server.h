@@ -28,6 +28,7 @@
 #include "urlab/replay/player.h"
 #include "urlab/replay/recorder.h"
 #include "urlab/replay/recording.h"
+#include "urlab/world/camera_streams.h"
 #include "urlab/world/session.h"
 
 namespace urlab::net {
@@ -64,6 +65,9 @@ class StepServer {
   // The recorder the recording operations use (nullptr: none; they answer not_ready). Main
   // thread, before the I/O thread starts.
   void SetRecorder(replay::RecorderSubsystem* recorder) { recorder_ = recorder; }
+  // The cameras hello lists and `include_cameras` reads (nullptr: none). Main thread, before the
+  // I/O thread starts.
+  void SetCameras(world::CameraStreams* cameras) { cameras_ = cameras; }
 
   // Requests answered with an error, per code (I/O thread).
   const std::map<std::string, std::uint64_t>& errors() const { return errors_; }
@@ -88,6 +92,9 @@ class StepServer {
   struct ObsSpec {
     ObsLevel level;
     bool binary;
+    // include_cameras: streams (indices into cameras_->Streams()) and whether the reply waits
+    // for a frame rendered from its own state ("sync") or takes the newest one ("latest").
+    std::vector<std::pair<std::size_t, bool>> cameras;
   };
   // What an operation handler decided: a reply now, or one once command `seq` took effect.
   struct Outcome {
@@ -120,6 +127,9 @@ class StepServer {
   void Dispatch(Request& r);
   void Send(const std::vector<zmq::message_t>& envelope, Json& reply, bool json,
             const std::optional<ObsSpec>& observation = std::nullopt);
+  // The reply's `cameras` map ({art: {stream: frame}}) for the streams `spec` names, showing
+  // `frame` (sync) or the newest rendered (latest).
+  void AddCameras(Json& reply, const ObsSpec& spec, const physics::StateFrame& frame);
   // The observation of a request's client (its level unless the request names one).
   std::optional<ObsSpec> ObservationFor(const Request& r) const;
   void SendError(const std::vector<zmq::message_t>& envelope, const Json& seq, bool json,
@@ -192,6 +202,7 @@ class StepServer {
   std::optional<ModelWithAssets> assets_;  // for hello's include_assets, built on first use
   MsgpackWriter writer_;                   // reply bytes, reused
   replay::RecorderSubsystem* recorder_ = nullptr;
+  world::CameraStreams* cameras_ = nullptr;
   // Recordings loaded for replay ("r1", "r2", ...), in load order; never unloaded while playing.
   struct ReplaySession {
     std::string id;

@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -28,9 +29,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Top-level sections of features that do not exist yet: refused with a clear message instead of
 // "unknown key" (and never silently accepted).
 constexpr std::pair<const char*, const char*> kNotYetSupported[] = {
-    {"cameras", "cameras"},     {"recording", "recording"}, {"replay", "replay"},
-    {"viewer", "the viewer"},   {"input", "input devices"}, {"debug", "debug drawing"},
-    {"lights", "scene lights"},
+    {"recording", "recording"}, {"replay", "replay"},       {"viewer", "the viewer"},
+    {"input", "input devices"}, {"debug", "debug drawing"}, {"lights", "scene lights"},
 };
 
 // A closed or half-open interval a number must lie in; NaN never does.
@@ -46,6 +46,9 @@ struct Range {
     if (max == kInf) return std::string(min_exclusive ? "> " : ">= ") + document::FormatReal(min);
     if (max == std::numeric_limits<double>::max()) {
       return std::string(min_exclusive ? "> " : ">= ") + document::FormatReal(min) + " and finite";
+    }
+    if (min_exclusive) {
+      return "> " + document::FormatReal(min) + " and <= " + document::FormatReal(max);
     }
     return document::FormatReal(min) + " to " + document::FormatReal(max);
   }
@@ -469,7 +472,7 @@ class Parser {
   ArticulationConfig Articulation(const YAML::Node& n) const {
     CheckKeys(n, "articulation",
               {"name", "mjcf", "pos", "quat", "euler", "axisangle", "options", "control_source",
-               "controller", "keyframe", "hold_keyframe", "include_world"});
+               "controller", "keyframe", "hold_keyframe", "include_world", "cameras"});
     ArticulationConfig a;
     a.where = At(n);
     if (!n["name"]) Fail(n, "an articulation needs a name");
@@ -496,7 +499,87 @@ class Parser {
     if (n["keyframe"]) a.keyframe = String(n["keyframe"], "keyframe");
     if (n["hold_keyframe"]) a.hold_keyframe = Bool(n["hold_keyframe"], "hold_keyframe");
     if (n["include_world"]) a.include_world = Bool(n["include_world"], "include_world");
+    if (const auto c = n["cameras"]) {
+      if (c.IsSequence()) {
+        a.cameras = Names(c, a.name + ".cameras");
+      } else {
+        a.all_cameras = Bool(c, a.name + ".cameras (true, false or a list of camera names)");
+      }
+    }
     return a;
+  }
+
+  std::vector<std::string> Names(const YAML::Node& n, const std::string& what) const {
+    if (!n.IsSequence()) Fail(n, what + " must be a list of names");
+    std::vector<std::string> out;
+    for (const auto& v : n) out.push_back(String(v, what));
+    return out;
+  }
+
+  int Pixels(const YAML::Node& n, const std::string& what) const {
+    return static_cast<int>(Number(n, what, Range{1, 8192}));
+  }
+
+  std::vector<std::string> Modes(const YAML::Node& n, const std::string& what) const {
+    std::vector<std::string> modes =
+        n.IsScalar() ? std::vector<std::string>{String(n, what)} : Names(n, what);
+    if (modes.empty()) Fail(n, what + " must name at least one mode");
+    std::set<std::string> seen;
+    for (const auto& m : modes) {
+      if (std::find_if(std::begin(kCameraModes), std::end(kCameraModes),
+                       [&](const char* k) { return m == k; }) == std::end(kCameraModes)) {
+        Fail(n, what + ": unknown mode '" + m + "' (expected rgb, depth, segmentation, instance)");
+      }
+      if (!seen.insert(m).second) Fail(n, what + ": mode '" + m + "' is listed twice");
+    }
+    return modes;
+  }
+
+  CamerasConfig Cameras(const YAML::Node& n) const {
+    CamerasConfig c;
+    c.where = At(n);
+    if (!n.IsMap()) Fail(n, "cameras must be a mapping");
+    CheckKeys(n, "cameras",
+              {"enabled", "width", "height", "rate", "modes", "shadows", "reflections", "samples",
+               "gl", "streams"});
+    if (n["enabled"]) c.enabled = Bool(n["enabled"], "cameras.enabled");
+    if (n["width"]) c.width = Pixels(n["width"], "cameras.width");
+    if (n["height"]) c.height = Pixels(n["height"], "cameras.height");
+    if (n["rate"]) c.rate = Number(n["rate"], "cameras.rate", Range{0, 1000, true});
+    if (n["modes"]) c.modes = Modes(n["modes"], "cameras.modes");
+    if (n["shadows"]) c.shadows = Bool(n["shadows"], "cameras.shadows");
+    if (n["reflections"]) c.reflections = Bool(n["reflections"], "cameras.reflections");
+    if (n["samples"])
+      c.samples = static_cast<int>(Number(n["samples"], "cameras.samples", {0, 16}));
+    if (n["gl"]) {
+      c.gl = String(n["gl"], "cameras.gl");
+      if (c.gl != "auto" && c.gl != "egl" && c.gl != "osmesa") {
+        Fail(n["gl"], "cameras.gl must be auto, egl or osmesa");
+      }
+    }
+    if (const auto streams = n["streams"]) {
+      if (!streams.IsMap())
+        Fail(streams, "cameras.streams must map \"articulation/camera\" to settings");
+      for (const auto& [key, v] : Entries(streams, "cameras.streams")) {
+        const std::string what = "cameras.streams." + key;
+        if (std::count(key.begin(), key.end(), '/') != 1 || key.front() == '/' ||
+            key.back() == '/') {
+          Fail(v, what + ": the key must be \"articulation/camera\"");
+        }
+        CameraSettings cs;
+        cs.where = At(v);
+        if (!v.IsNull()) {
+          if (!v.IsMap()) Fail(v, what + " must be a mapping (width, height, rate, modes)");
+          CheckKeys(v, what, {"width", "height", "rate", "modes"});
+          if (v["width"]) cs.width = Pixels(v["width"], what + ".width");
+          if (v["height"]) cs.height = Pixels(v["height"], what + ".height");
+          if (v["rate"]) cs.rate = Number(v["rate"], what + ".rate", Range{0, 1000, true});
+          if (v["modes"]) cs.modes = Modes(v["modes"], what + ".modes");
+        }
+        c.cameras[key] = cs;
+      }
+    }
+    return c;
   }
 
   SceneConfig Scene(const YAML::Node& root) const {
@@ -516,7 +599,7 @@ class Parser {
     }
     CheckKeys(root, "the scene",
               {"articulations", "props", "terrain", "options", "size", "control_source", "network",
-               "save_debug_xml"});
+               "save_debug_xml", "cameras"});
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {
       Fail(arts ? arts : root, "the scene needs a non-empty list 'articulations'");
@@ -559,6 +642,14 @@ class Parser {
       }
     }
     if (root["control_source"]) s.control_source = Source(root["control_source"]);
+    if (root["cameras"]) s.cameras = Cameras(root["cameras"]);
+    for (const auto& [key, settings] : s.cameras.cameras) {
+      const std::string art = key.substr(0, key.find('/'));
+      if (!names.count(art)) {
+        throw InputError(settings.where,
+                         "cameras.streams." + key + ": no articulation '" + art + "' in the scene");
+      }
+    }
     if (const auto n = root["network"]) {
       CheckKeys(n, "network",
                 {"enabled", "state", "control", "info", "rpc", "step_mode", "full_state",

@@ -6,7 +6,6 @@ joint back from the streaming topics until it arrives, and leaves the process to
 Usage: python_client_e2e.py URLAB_BINARY SOURCE_DIR
 """
 import os
-import re
 import signal
 import subprocess
 import sys
@@ -15,15 +14,9 @@ import time
 
 URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
+sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 from urlab_client import StepClient, StreamClient, UrlabEnv, UrlabError  # noqa: E402
-
-
-def fail(message, proc=None):
-    if proc:
-        proc.kill()
-        print(proc.stderr.read() if proc.stderr else "", file=sys.stderr)
-    print("FAIL:", message)
-    sys.exit(1)
+from urlab_process import fail, start_urlab  # noqa: E402
 
 
 def main():
@@ -42,19 +35,7 @@ articulations:
     mjcf: {model}
     controller: {{type: pd, kp: 400, kv: 20}}
 """)
-    proc = subprocess.Popen([URLAB, "run", scene, "--duration", "60"], stderr=subprocess.PIPE,
-                            stdout=subprocess.PIPE, text=True)
-    endpoints = None
-    deadline = time.monotonic() + 30
-    while endpoints is None and time.monotonic() < deadline:
-        line = proc.stderr.readline()
-        if not line:
-            fail("urlab exited before serving the network", proc)
-        m = re.search(r"network: state (\S+) \| control (\S+) \| info (\S+) \| rpc (\S+)", line)
-        if m:
-            endpoints = m.groups()
-    if endpoints is None:
-        fail("no network line in urlab's log", proc)
+    proc, endpoints = start_urlab(URLAB, scene)
     try:
         with StreamClient(state=endpoints[0], control=endpoints[1], info=endpoints[2]) as client:
             robots = client.discover(timeout=10, expect=["arm"])

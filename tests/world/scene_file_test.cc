@@ -72,7 +72,18 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       // features that do not exist yet
       {WithArm("props:\n  - {mesh: box.obj}\n"), 5, "a prop needs a name"},
       {WithArm("terrain: {file: h.png}\n"), 4, "terrain must be a list"},
-      {WithArm("cameras: []\n"), 4, "'cameras:' is not supported yet"},
+      // cameras (issue 11)
+      {WithArm("cameras: []\n"), 4, "cameras must be a mapping"},
+      {WithArm("cameras: {modes: [rgb, infrared]}\n"), 4, "unknown mode 'infrared'"},
+      {WithArm("cameras: {modes: [rgb, rgb]}\n"), 4, "listed twice"},
+      {WithArm("cameras: {width: 0}\n"), 4, "cameras.width must be 1 to 8192"},
+      {WithArm("cameras: {rate: 0}\n"), 4, "cameras.rate must be > 0"},
+      {WithArm("cameras: {gl: glx}\n"), 4, "cameras.gl must be auto, egl or osmesa"},
+      {WithArm("cameras: {fps: 30}\n"), 4, "unknown key 'fps' in cameras"},
+      {WithArm("cameras:\n  streams:\n    ghost/head: {rate: 5}\n"), 6, "no articulation 'ghost'"},
+      {WithArm("cameras:\n  streams:\n    head: {rate: 5}\n"), 6, "\"articulation/camera\""},
+      {WithArm("cameras:\n  streams:\n    a/head: {zoom: 5}\n"), 6, "unknown key 'zoom'"},
+      {WithArm("    cameras: maybe\n"), 4, "true, false or a list of camera names"},
       {WithArm("recording: {file: r.bin}\n"), 4, "'recording:' is not supported yet"},
   };
   for (const Case& c : cases) {
@@ -98,6 +109,24 @@ TEST_F(SceneFileTest, GoodValuesStillPass) {
   EXPECT_EQ(s.options.at("timestep"), "0.001");
   EXPECT_EQ(s.options.at("flag.gravity"), "disable");
   EXPECT_FALSE(s.network.enabled);  // network: is parsed and used: not refused
+}
+
+TEST_F(SceneFileTest, CamerasSectionAndArticulationCameras) {
+  const world::SceneConfig s = world::ParseScene(
+      WithArm("    cameras: [head, wrist]\n"
+              "cameras:\n  enabled: true\n  width: 320\n  height: 240\n  rate: 15\n"
+              "  modes: depth\n  streams:\n    a/head: {width: 64, modes: [rgb, instance]}\n"),
+      dir_ + "/s.yaml");
+  EXPECT_EQ(s.articulations[0].cameras, (std::vector<std::string>{"head", "wrist"}));
+  EXPECT_FALSE(s.articulations[0].all_cameras);
+  EXPECT_EQ(s.cameras.width, 320);
+  EXPECT_EQ(s.cameras.rate, 15);
+  EXPECT_EQ(s.cameras.modes, std::vector<std::string>{"depth"});
+  const world::CameraSettings& head = s.cameras.cameras.at("a/head");
+  EXPECT_EQ(head.width, 64);
+  EXPECT_FALSE(head.height.has_value());
+  EXPECT_EQ(*head.modes, (std::vector<std::string>{"rgb", "instance"}));
+  EXPECT_EQ(head.where.line, 12);
 }
 
 TEST_F(SceneFileTest, ScenePathsMustBeRegularFiles) {

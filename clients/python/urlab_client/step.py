@@ -12,6 +12,8 @@ import msgpack
 import numpy as np
 import zmq
 
+from urlab_client.camera import decode_frame
+
 
 class UrlabError(RuntimeError):
     """An error reply: `code` is protocol.md's error code."""
@@ -83,9 +85,16 @@ class StepClient:
         self.session_id = reply["session_id"]
         return reply
 
-    def step(self, n_steps=1, controls=None, observations=None, force=False):
-        """Runs n_steps (direct mode) with controls {articulation: [all values] or {name: v}}."""
+    def step(self, n_steps=1, controls=None, observations=None, force=False,
+             include_cameras=None):
+        """Runs n_steps (direct mode) with controls {articulation: [all values] or {name: v}}.
+
+        include_cameras: True (every stream's newest frame), or {stream: "sync" | "latest"}
+        ("sync" waits for a frame rendered from this step's state). The reply's
+        cameras[art][stream]["image"] is a numpy array (see urlab_client.camera)."""
         fields = {"n_steps": n_steps}
+        if include_cameras is not None:
+            fields["include_cameras"] = include_cameras
         if controls:
             per = {}
             for art, c in controls.items():
@@ -96,7 +105,17 @@ class StepClient:
             fields["observations"] = observations
         if force:
             fields["force"] = True
-        return _arrays(self.call("step", **fields))
+        reply = self.call("step", **fields)
+        cameras = reply.pop("cameras", None)
+        reply = _arrays(reply)
+        if cameras is not None:
+            for streams in cameras.values():
+                for frame in streams.values():
+                    if "data" in frame:
+                        frame["image"] = decode_frame(frame.pop("data"), frame["mode"],
+                                                      frame["width"], frame["height"])
+            reply["cameras"] = cameras
+        return reply
 
     def reset(self, keyframe=None, qpos=None):
         """Resets to a keyframe (full name) or the scene's initial state; qpos {art: {joint: v}}."""

@@ -27,6 +27,9 @@
 namespace urlab::replay {
 class RecorderSubsystem;
 }
+namespace urlab::world {
+class CameraStreams;
+}
 
 namespace urlab::net {
 
@@ -85,12 +88,17 @@ class NetworkSubsystem : public world::Subsystem {
   // request comes; add it to the Manager before this subsystem). nullptr: none. Main thread,
   // before BeginPlay.
   void SetRecorder(replay::RecorderSubsystem* recorder) { recorder_ = recorder; }
+  // The cameras discovery lists and the step server's include_cameras reads (add their subsystem
+  // to the Manager before this one, so its streams are bound when this begins). nullptr: none.
+  // Main thread, before BeginPlay.
+  void SetCameras(world::CameraStreams* cameras) { cameras_ = cameras; }
 
  private:
   struct Impl;
   NetworkOptions options_;
   Endpoints bound_;
   replay::RecorderSubsystem* recorder_ = nullptr;
+  world::CameraStreams* cameras_ = nullptr;
   std::unique_ptr<Impl> impl_;
 };
 

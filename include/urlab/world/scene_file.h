@@ -7,7 +7,7 @@
 // network endpoints and the debug-XML switch. Unknown keys, duplicate keys, keys that are not
 // strings, wrong types and numbers out of range (gains, torque limits, hold/blend times, options
 // checked against the MJCF grammar, size fields) are InputErrors with file and line; sections of
-// features that do not exist yet (cameras, recording...) are refused as "not
+// features that do not exist yet (recording, lights...) are refused as "not
 // supported yet". Thread: any (pure parsing).
 #include <array>
 #include <map>
@@ -59,6 +59,10 @@ struct ArticulationConfig {
   // lights, world cameras): for composing many copies of a model that brings its own floor.
   bool include_world = true;
   bool hold_keyframe = false;
+  // Which of its MJCF cameras stream (the scene's `cameras:` section says how): none by default,
+  // `cameras: true` all of them, or a list of camera names (as written in its MJCF).
+  bool all_cameras = false;
+  std::vector<std::string> cameras;
   SourceLocation where;
 };
 
@@ -80,6 +84,33 @@ struct TerrainConfig {
   SourceLocation where;
 };
 
+// How one camera streams; unset fields take the `cameras:` section's defaults.
+struct CameraSettings {
+  std::optional<int> width, height;
+  std::optional<double> rate;                     // frames per second
+  std::optional<std::vector<std::string>> modes;  // rgb | depth | segmentation | instance
+  SourceLocation where;
+};
+
+// The scene's `cameras:` section (issue 11): the global streaming toggle, the defaults every
+// streamed camera takes, and per-camera settings keyed "{articulation}/{camera}" (naming a camera
+// there also streams it).
+struct CamerasConfig {
+  bool enabled = true;  // false: no camera renders or streams, whatever articulations ask
+  int width = 640, height = 480;
+  double rate = 30;
+  std::vector<std::string> modes = {"rgb"};
+  // Off-screen rendering (software rendering pays dearly for each: off by default).
+  bool shadows = false, reflections = false;
+  int samples = 0;
+  std::string gl = "auto";  // auto | egl | osmesa
+  std::map<std::string, CameraSettings> cameras;
+  SourceLocation where;
+};
+
+// The camera modes a scene may ask for, in wire order.
+inline constexpr const char* kCameraModes[] = {"rgb", "depth", "segmentation", "instance"};
+
 struct NetworkConfig {
   bool enabled = true;
   std::string state = "tcp://*:5555";
@@ -100,6 +131,7 @@ struct SceneConfig {
   std::map<std::string, std::string> size;     // <size> attributes (nconmax, njmax, nstack...)
   ControlSource control_source = ControlSource::kNetwork;
   NetworkConfig network;
+  CamerasConfig cameras;
   std::string save_debug_xml;  // folder for scene_compiled.xml/.mjb ("" = off)
 };
 
