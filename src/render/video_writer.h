@@ -1,8 +1,7 @@
 #pragma once
 // Writing camera frames to a video through an ffmpeg process reading raw frames on a pipe
-// (H.264 .mp4 or VP9 .webm). The same API as the viewer's VideoWriter (src/viewer/image_io.h on
-// the viewer branch), plus the input layout: the viewer hands bottom-up RGB rows, cameras hand
-// top-down BGRA rows (the wire's).
+// (H.264 .mp4 or VP9 .webm), for the viewer (bottom-up RGB rows, as mjr_readPixels gives them)
+// and the cameras (top-down BGRA rows, the wire's).
 //
 // Threading contract: each object on one thread.
 #include <cstdint>

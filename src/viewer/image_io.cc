@@ -4,41 +4,13 @@
 #include <spdlog/spdlog.h>
 #include <stb_image.h>
 #include <stb_image_write.h>
-#include <sys/wait.h>
 
 #include <algorithm>
-#include <csignal>
 #include <filesystem>
 
 #include "urlab/core/error.h"
 
 namespace urlab::viewer::internal {
-
-namespace {
-
-// The encoder per container: the one table of what the video writer accepts.
-struct VideoFormat {
-  const char* extension;
-  const char* codec_args;
-};
-constexpr VideoFormat kVideoFormats[] = {
-    {".mp4", "-c:v libx264 -preset veryfast -pix_fmt yuv420p"},
-    {".webm", "-c:v libvpx-vp9 -deadline realtime -cpu-used 8 -pix_fmt yuv420p"},
-};
-
-std::string ShellQuote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) {
-    if (c == '\'') {
-      out += "'\\''";
-    } else {
-      out += c;
-    }
-  }
-  return out + "'";
-}
-
-}  // namespace
 
 Image FromBottomUp(int width, int height, const std::uint8_t* rgb) {
   Image img;
@@ -75,43 +47,6 @@ Image ReadImage(const std::string& path) {
   img.rgb.assign(data, data + static_cast<std::size_t>(3 * w * h));
   stbi_image_free(data);
   return img;
-}
-
-VideoWriter::VideoWriter(const std::string& path, int width, int height, int fps)
-    : path_(path), width_(width), height_(height) {
-  const std::string ext = std::filesystem::path(path).extension().string();
-  const auto* format = std::find_if(std::begin(kVideoFormats), std::end(kVideoFormats),
-                                    [&](const VideoFormat& f) { return ext == f.extension; });
-  if (format == std::end(kVideoFormats)) {
-    throw Error(path + ": the video must be .mp4 (H.264) or .webm (VP9)");
-  }
-  const std::string command = fmt::format(
-      "ffmpeg -y -loglevel error -f rawvideo -pix_fmt rgb24 -s {}x{} -r {} -i - -vf vflip {} {}",
-      width, height, fps, format->codec_args, ShellQuote(path));
-  std::signal(SIGPIPE, SIG_IGN);  // a dead ffmpeg makes fwrite fail instead of killing us
-  pipe_ = ::popen(command.c_str(), "w");
-  if (!pipe_) throw Error(path + ": cannot start ffmpeg (is the ffmpeg package installed?)");
-}
-
-VideoWriter::~VideoWriter() { Close(); }
-
-bool VideoWriter::Write(const std::uint8_t* rgb) {
-  if (!pipe_ || failed_) return false;
-  const std::size_t n = static_cast<std::size_t>(3 * width_ * height_);
-  if (std::fwrite(rgb, 1, n, pipe_) != n) {
-    failed_ = true;
-    spdlog::error("{}: ffmpeg stopped taking frames after {}", path_, frames_);
-    return false;
-  }
-  ++frames_;
-  return true;
-}
-
-int VideoWriter::Close() {
-  if (!pipe_) return 0;
-  const int status = ::pclose(pipe_);
-  pipe_ = nullptr;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 1;
 }
 
 }  // namespace urlab::viewer::internal

@@ -1,19 +1,9 @@
 #include "viewer/scene_view.h"
 
-#include <algorithm>
-
+#include "render/frame_data.h"
 #include "urlab/core/error.h"
 
 namespace urlab::viewer::internal {
-
-namespace {
-
-template <typename T>
-void CopyInto(const std::vector<T>& from, mjtNum* to, std::size_t n) {
-  if (from.size() == n) std::copy(from.begin(), from.end(), to);
-}
-
-}  // namespace
 
 SceneView::SceneView(const mjModel* source, int maxgeom) {
   model_.reset(mj_copyModel(nullptr, source));
@@ -43,21 +33,9 @@ void SceneView::MakeContext() {
 void SceneView::Update(const physics::StateFrame& f) {
   const mjModel* m = model_.get();
   mjData* d = data_.get();
-  d->time = f.time;
-  CopyInto(f.qpos, d->qpos, static_cast<std::size_t>(m->nq));
-  CopyInto(f.qvel, d->qvel, static_cast<std::size_t>(m->nv));
-  CopyInto(f.act, d->act, static_cast<std::size_t>(m->na));
-  CopyInto(f.ctrl, d->ctrl, static_cast<std::size_t>(m->nu));
-  CopyInto(f.mocap_pos, d->mocap_pos, static_cast<std::size_t>(3 * m->nmocap));
-  CopyInto(f.mocap_quat, d->mocap_quat, static_cast<std::size_t>(4 * m->nmocap));
-  CopyInto(f.xfrc_applied, d->xfrc_applied, static_cast<std::size_t>(6 * m->nbody));
   // Positions only: what drawing, selection and perturbation read (no dynamics, no collision:
   // contacts come from the physics thread's debug capture).
-  mj_kinematics(m, d);
-  mj_comPos(m, d);
-  mj_camlight(m, d);
-  mj_tendon(m, d);
-  mj_transmission(m, d);
+  render::CopyFrameToData(m, d, f);
   frame_ = f.frame;
   paused_ = f.paused;
 }

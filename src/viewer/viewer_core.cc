@@ -77,7 +77,7 @@ void ViewerCore::Begin(world::Session& session) {
   if (!options_.video.empty()) {
     int w = 0, h = 0;
     window_->FramebufferSize(&w, &h);
-    video_ = std::make_unique<VideoWriter>(options_.video, w, h, options_.video_fps);
+    video_ = std::make_unique<render::VideoWriter>(options_.video, w, h, options_.video_fps);
     next_video_frame_ = Clock::now();
   }
   state_ = engine.SubscribeState("viewer");

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "render/video_writer.h"
 #include "urlab/physics/engine.h"
 #include "urlab/viewer/viewer.h"
 #include "urlab/world/session.h"
@@ -113,7 +114,7 @@ class ViewerCore : public InputHandler {
   std::string last_screenshot_;
   bool screenshot_done_ = false;
   bool lowered_ = false;  // the main thread's priority was lowered (first Present)
-  std::unique_ptr<VideoWriter> video_;
+  std::unique_ptr<render::VideoWriter> video_;
   std::chrono::steady_clock::time_point next_video_frame_;
   std::vector<std::uint8_t> pixels_;  // scratch for read-backs
   bool keep_frame_ = false;           // ReadPixels: keep the frame being drawn in kept_
