@@ -70,12 +70,16 @@ void TwistController::Apply(const mjModel* m, mjData* d) {
     const mjtNum dx = d->xipos[3 * b] - com[0], dy = d->xipos[3 * b + 1] - com[1];
     izz += m->body_inertia[3 * b + 2] + m->body_mass[b] * (dx * dx + dy * dy);
   }
-  row[0] = mass * settings_.linear_gain * (vx - v[0]);
-  row[1] = mass * settings_.linear_gain * (vy - v[1]);
-  row[2] = 0;
-  row[3] = 0;
-  row[4] = 0;
-  row[5] = izz * settings_.yaw_gain * (t.yaw_rate - wz);
+  // The force acts at the articulation's centre of mass (xfrc_applied acts at the root body's:
+  // the lever between them is added as torque), so it neither pitches nor turns the robot.
+  const mjtNum force[3] = {mass * settings_.linear_gain * (vx - v[0]),
+                           mass * settings_.linear_gain * (vy - v[1]), 0};
+  mjtNum lever[3], torque[3];
+  mju_sub3(lever, com, d->xipos + 3 * root_);
+  mju_cross(torque, lever, force);
+  torque[2] += izz * settings_.yaw_gain * (t.yaw_rate - wz);
+  mju_copy3(row, force);
+  mju_copy3(row + 3, torque);
 }
 
 }  // namespace urlab::control

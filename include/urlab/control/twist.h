@@ -8,7 +8,8 @@
 // where M is the articulation's mass, v_cmd is (vx, vy) turned from the base's heading frame
 // (the yaw of the root body's x axis) into the world, v and wz are the free joint's linear and
 // yaw velocities, and Izz is the articulation's inertia about the vertical through its centre of
-// mass (each body's own z inertia plus m * horizontal distance^2, recomputed every step). The
+// mass (each body's own z inertia plus m * horizontal distance^2, recomputed every step); the
+// force acts at that centre of mass (its lever to the root body's is added as torque). The
 // gains are decay rates (1/s) of the velocity errors. The legs' actuators keep following their own
 // control source: this moves the base like a hovercraft; a walking policy reads the same twist
 // from the `{art}/twist` topic. While attached the root body's xfrc_applied row belongs to the
