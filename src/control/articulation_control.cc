@@ -132,6 +132,7 @@ const CommandFrame& ArticulationControl::ApplyControls(const mjModel* m, mjData*
   const CommandFrame& frame = channel(EffectiveSource(global)).Read();
   controller_->UseFrameGains(frame.kp, frame.kv);
   controller_->ComputeAndApply(m, d, frame.targets);
+  if (twist_) twist_->Apply(m, d);
   return frame;
 }
 

@@ -105,6 +105,7 @@ struct NetworkSubsystem::Impl {
   std::set<std::string> prefixes;
   bool wanted_dirty = true;
   std::vector<std::vector<char>> joint_wanted, sensor_wanted;  // per articulation, per topic
+  std::vector<char> twist_wanted, actions_wanted;              // per articulation
   bool full_wanted = false;
   SpinWait spin;              // for parked replies (gives up under CPU contention)
   physics::StateFrame frame;  // the newest frame taken from the ring
@@ -192,13 +193,36 @@ struct NetworkSubsystem::Impl {
     wanted_dirty = false;
     joint_wanted.assign(tables.size(), {});
     sensor_wanted.assign(tables.size(), {});
+    twist_wanted.assign(tables.size(), 0);
+    actions_wanted.assign(tables.size(), 0);
     for (std::size_t i = 0; i < tables.size(); ++i) {
       for (const JointTopicEntry& j : tables[i].joints) joint_wanted[i].push_back(Wanted(j.topic));
       for (const SensorTopicEntry& x : tables[i].sensors) {
         sensor_wanted[i].push_back(Wanted(x.topic));
       }
+      twist_wanted[i] = Wanted(tables[i].twist_topic);
+      actions_wanted[i] = Wanted(tables[i].actions_topic);
     }
     full_wanted = Wanted(wire::kFullStateTopic);
+  }
+
+  // {art}/twist while a twist controller is attached, {art}/actions while a bit is held: read
+  // from the controller (any thread), as the description's broadcaster reads GetTwist().
+  void PublishTwist(std::size_t ti) {
+    const ArticulationTopics& t = tables[ti];
+    if (!t.twist || !t.twist->attached()) return;
+    if (twist_wanted[ti]) {
+      const control::Twist tw = t.twist->twist();
+      payload.clear();
+      wire::AppendTwist(&payload, tw.vx, tw.vy, tw.yaw_rate);
+      SendState(t.twist_topic, payload);
+    }
+    const std::uint32_t actions = t.twist->actions();
+    if (actions != 0 && actions_wanted[ti]) {
+      payload.clear();
+      wire::AppendActions(&payload, static_cast<std::int32_t>(actions));
+      SendState(t.actions_topic, payload);
+    }
   }
 
   void PublishState(const physics::StateFrame& f) {
@@ -234,6 +258,7 @@ struct NetworkSubsystem::Impl {
                            std::span(f.sensordata.data() + s.adr, static_cast<std::size_t>(s.dim)));
         SendState(s.topic, payload);
       }
+      PublishTwist(ti);
     }
     if (full_state && full_wanted) {  // state/full: the step server's observation map, msgpack
       full_writer.Clear();

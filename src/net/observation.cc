@@ -82,8 +82,12 @@ void WriteEntries(Out& out, const std::vector<ArticulationTopics>& tables,
   out.Map(tables.size());
   const std::size_t fields = level == ObsLevel::kMinimal ? 2 : level == ObsLevel::kStandard ? 5 : 8;
   for (const ArticulationTopics& t : tables) {
+    // standard and full: the twist and held actions while a twist controller is attached.
+    const bool twist = level != ObsLevel::kMinimal && t.twist && t.twist->attached();
+    const control::Twist tw = twist ? t.twist->twist() : control::Twist{};
+    const std::uint32_t actions = twist ? t.twist->actions() : 0;
     out.Key(t.name);
-    out.Map(fields);
+    out.Map(fields + (twist ? 2 : 0));
     out.Key("qpos");
     gather(f.qpos, t.qpos_adrs);
     out.Key("qvel");
@@ -100,6 +104,13 @@ void WriteEntries(Out& out, const std::vector<ArticulationTopics>& tables,
         out.Key(t.sensor_names[i]);
         out.Doubles(f.sensordata.data() + s.adr, static_cast<std::size_t>(s.dim), binary);
       }
+    }
+    if (twist) {
+      const double v[3] = {tw.vx, tw.vy, tw.yaw_rate};
+      out.Key("twist");
+      out.Doubles(v, 3, binary);
+      out.Key("actions");
+      out.Int(actions);
     }
     if (level == ObsLevel::kFull) {
       out.Key("xpos");

@@ -223,9 +223,19 @@ StepServer::Outcome StepServer::GetCounters(Request&) {
 
 StepServer::Outcome StepServer::SetTwist(Request& r) {
   const ArticulationTopics& t = Articulation(r.body["articulation"]);
-  // No controller of this runtime follows a body twist yet (the description's twist controller
-  // belongs to the input subsystem): refused as protocol.md says, nothing is changed.
-  Fail("no_twist_controller", t.name + " has no twist controller");
+  if (!t.twist) Fail("no_twist_controller", t.name + " has no twist controller (no free base)");
+  // linear [vx, vy, vz] in the base's heading frame, angular [wx, wy, yaw rate]: the planar parts
+  // drive the twist controller (twist.h), which attaches; the rest must be given but is unused.
+  const std::vector<double> linear = Numbers(Require(r.body, "linear"), "linear");
+  const std::vector<double> angular = Numbers(Require(r.body, "angular"), "angular");
+  if (linear.size() != 3) Fail("dim_mismatch", "linear needs 3 values");
+  if (angular.size() != 3) Fail("dim_mismatch", "angular needs 3 values");
+  t.twist->Attach(true);
+  const control::Twist applied = t.twist->SetTwist({linear[0], linear[1], angular[2]});
+  return {Json{{"op", "set_twist_ok"},
+               {"articulation", t.name},
+               {"linear", {applied.vx, applied.vy, 0.0}},
+               {"angular", {0.0, 0.0, applied.yaw_rate}}}};
 }
 
 StepServer::Outcome StepServer::ConfigureController(Request& r) {

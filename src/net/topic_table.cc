@@ -13,6 +13,9 @@ std::vector<ArticulationTopics> BuildTopicTables(world::Session& session) {
     t.control = a.control;
     t.control_topic = wire::ControlTopic(t.name);
     t.set_gains_topic = wire::SetGainsTopic(t.name);
+    t.twist = a.control->twist();
+    t.twist_topic = wire::TwistTopic(t.name);
+    t.actions_topic = wire::ActionsTopic(t.name);
     const physics::ArticulationBindings& b = *a.bindings;
     for (std::size_t i = 0; i < b.joints().size(); ++i) {
       const physics::JointView& j = b.joints().all()[i];

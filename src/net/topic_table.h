@@ -38,6 +38,10 @@ struct ArticulationTopics {
   // set_gains: short or prefixed actuator names, and joint names (the actuator driving it).
   std::unordered_map<std::string, int> gain_index;
   control::ArticulationControl* control = nullptr;
+  // The twist controller (free bases only, else nullptr): {art}/twist every step while attached,
+  // {art}/actions while an action bit is held.
+  control::TwistController* twist = nullptr;
+  std::string twist_topic, actions_topic;
   // For observations: the articulation's state addresses (joint order), activations, bodies,
   // and sensors by short name.
   std::vector<int> qpos_adrs, dof_adrs, act_adrs, body_ids;

@@ -1,5 +1,5 @@
 #pragma once
-// Filling a renderer's own mjData from a published state frame (the viewer and the cameras)
+// Filling a renderer's own mjData from a published state frame (the viewer and the cameras):
 // (time, qpos, qvel, act, ctrl, mocap poses, applied forces), then positions only (kinematics,
 // camera and light poses, tendons): what drawing reads, never dynamics or collision.
 //

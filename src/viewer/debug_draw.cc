@@ -347,9 +347,11 @@ int AddDebugGeoms(const mjModel* m, const mjData* d, const DebugSettings& settin
     p.Sphere(d->site_xpos + 3 * s, std::max<mjtNum>(m->site_size[3 * s], 0.01), kSiteColor);
   }
   // Contacts: a point, and the contact force (world frame) as an arrow scaled like MuJoCo's own
-  // (vis.map.force per mean body mass).
+  // (vis.map.force per mean body mass, vis.scale.forcewidth thick).
   const mjtNum scale = m->vis.map.force / std::max<mjtNum>(m->stat.meanmass, mjMINVAL);
   const mjtNum radius = 0.04 * m->stat.meansize;
+  // As thick as MuJoCo's own force arrows (vis.scale.forcewidth of the mean body size).
+  const mjtNum width = m->vis.scale.forcewidth * m->stat.meansize;
   for (const CapturedContact& c : contacts) {
     if (c.geom1 < 0 || c.geom1 >= m->ngeom || c.geom2 < 0 || c.geom2 >= m->ngeom) continue;
     const bool on = settings.On(DebugLayer::kContacts, art_of_body(m->geom_bodyid[c.geom1])) ||
@@ -360,7 +362,7 @@ int AddDebugGeoms(const mjModel* m, const mjData* d, const DebugSettings& settin
     mju_mulMatTVec(world, c.frame, c.force, 3, 3);  // frame rows are the contact axes
     mjtNum tip[3];
     mju_addScl3(tip, c.pos, world, scale);
-    if (mju_dist3(tip, c.pos) > radius) p.Arrow(c.pos, tip, 0.5 * radius, kContactColor);
+    if (mju_dist3(tip, c.pos) > radius) p.Arrow(c.pos, tip, width, kContactColor);
   }
   return p.added();
 }

@@ -87,7 +87,7 @@ void Panel::DrawOptions(ViewerCore& core) {
 }
 
 void Panel::DrawArticulation(ViewerCore& core) {
-  slider_centres_.clear();
+  sliders_.clear();
   world::Session& session = core.session();
   const auto& arts = session.articulations();
   if (arts.empty() || !ImGui::CollapsingHeader("Articulation", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -140,12 +140,13 @@ void Panel::DrawArticulation(ViewerCore& core) {
       const char* full = mj_id2name(m, mjOBJ_ACTUATOR, id);
       std::string label = full ? full : fmt::format("actuator {}", id);
       if (label.starts_with(art.prefix)) label.erase(0, art.prefix.size());
+      const float frame_width = ImGui::CalcItemWidth();
       if (ImGui::SliderScalar(label.c_str(), ImGuiDataType_Double, &value, &lo, &hi, "%.3f") &&
           editable) {
         ctl.SetTarget(control::ControlSource::kUi, i, value);
       }
       const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
-      slider_centres_.emplace_back((a.x + b.x) / 2, (a.y + b.y) / 2);
+      sliders_.push_back({a.x, a.x + frame_width, (a.y + b.y) / 2});
     }
     ImGui::EndDisabled();
     ImGui::TreePop();
@@ -199,7 +200,16 @@ void Panel::DrawArticulation(ViewerCore& core) {
     }
     ImGui::TreePop();
   }
-  if (ImGui::Button("Possess (Tab)")) core.Perform(Action::kTogglePossess);
+  const Possession& possession = core.possession();
+  if (possession.active()) {
+    const control::Twist t = possession.twist();
+    Text(fmt::format("driving '{}': vx {:+.2f} vy {:+.2f} yaw {:+.2f} actions {:#x}",
+                     arts[static_cast<std::size_t>(possession.articulation())].name(), t.vx, t.vy,
+                     t.yaw_rate, possession.actions()));
+    if (ImGui::Button("Release (Tab)")) core.Perform(Action::kTogglePossess);
+  } else if (ImGui::Button("Possess (Tab)")) {
+    core.Perform(Action::kTogglePossess);
+  }
 }
 
 void Panel::DrawDebug(ViewerCore& core) {

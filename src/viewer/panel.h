@@ -10,7 +10,6 @@
 // Threading contract: main thread only, between Window::BeginImGui and EndImGui.
 #include <optional>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "urlab/physics/state.h"
@@ -25,8 +24,12 @@ class Panel {
 
   void Draw(ViewerCore& core);
   // Where each actuator slider of the selected articulation was last drawn (window
-  // coordinates of its centre), for tests that click them.
-  const std::vector<std::pair<float, float>>& slider_centres() const { return slider_centres_; }
+  // coordinates: the slider's frame from x0 to x1, without its label, at height y), for tests
+  // that drag them.
+  struct SliderRect {
+    float x0 = 0, x1 = 0, y = 0;
+  };
+  const std::vector<SliderRect>& sliders() const { return sliders_; }
 
  private:
   void DrawSimulation(ViewerCore& core);
@@ -42,7 +45,7 @@ class Panel {
   std::optional<physics::PhysicsState> snapshot_;
   std::string record_path_ = "viewer.urrec";
   std::string message_;
-  std::vector<std::pair<float, float>> slider_centres_;
+  std::vector<SliderRect> sliders_;
 };
 
 }  // namespace urlab::viewer::internal

@@ -52,6 +52,7 @@ void ViewerCore::Begin(world::Session& session) {
   session_ = session.shared_from_this();
   physics::PhysicsEngine& engine = session.engine();
   start_ = last_present_ = fps_window_start_ = Clock::now();
+  input_.Build(session);  // scene errors before a window opens
   // The window first: without a display nothing else is set up.
   window_ = std::make_unique<Window>(options_.width, options_.height, options_.title, this,
                                      options_.panel);
@@ -89,6 +90,7 @@ void ViewerCore::Begin(world::Session& session) {
 void ViewerCore::End() {
   if (!session_) return;
   physics::PhysicsEngine& engine = session_->engine();
+  possession_.Release();
   const double seconds = Now();
   if (window_) {
     int w = 0, h = 0;
@@ -161,11 +163,18 @@ bool ViewerCore::stop_requested() const {
 void ViewerCore::Input() {
   if (!window_) return;
   window_->PollEvents();
+  possession_.Update();
+  input_.Update();
 }
 
 void ViewerCore::OnKey(int key, int action, int /*mods*/) {
+  // Releases always reach the possessed robot (a key let go over the panel must not stick).
+  if (action == GLFW_RELEASE && (possession_.OnKey(key, action) || input_.OnKey(key, action))) {
+    return;
+  }
   if (action != GLFW_PRESS) return;
   if (window_ && window_->imgui_wants_keyboard()) return;
+  if (possession_.OnKey(key, action) || input_.OnKey(key, action)) return;
   if (const Hotkey* h = FindHotkey(key)) Perform(h->action);
 }
 
@@ -212,16 +221,43 @@ void ViewerCore::Perform(Action action) {
       break;
     }
     case Action::kFreeCamera:
+      if (possession_.active()) TogglePossess();
       view_->camera().type = mjCAMERA_FREE;
+      break;
+    case Action::kTogglePossess:
+      TogglePossess();
       break;
     case Action::kToggleCinematic:
     case Action::kFireLaunchers:
-    case Action::kTogglePossess:
       spdlog::info("viewer: nothing to do for this key in this scene");
       break;
     default:
       break;
   }
+}
+
+void ViewerCore::TogglePossess() {
+  if (possession_.active()) {
+    const std::string name =
+        session_->articulations()[static_cast<std::size_t>(possession_.articulation())].name();
+    possession_.Release();
+    view_->camera().type = mjCAMERA_FREE;
+    spdlog::info("viewer: released '{}'", name);
+    return;
+  }
+  const world::Articulation& art =
+      session_->articulations()[static_cast<std::size_t>(selected_articulation_)];
+  control::TwistController* twist = art.control->twist();
+  if (!twist) {
+    spdlog::warn("viewer: '{}' has no free base to drive: nothing to possess", art.name());
+    return;
+  }
+  possession_.Possess(selected_articulation_, twist);
+  const control::TwistSettings& s = twist->settings();
+  spdlog::info(
+      "viewer: possessing '{}' (W/S, A/D, Q/E or a gamepad; 0-9 actions; max {} m/s, {} m/s, {} "
+      "rad/s)",
+      art.name(), s.max_vx, s.max_vy, s.max_yaw_rate);
 }
 
 void ViewerCore::SetOptions(std::function<void(mjOption&)> fn, std::string label) {
@@ -282,6 +318,7 @@ void ViewerCore::Present() {
   // while they are drawn (MuJoCo's own transparency flag).
   view_->option().flags[mjVIS_TRANSPARENT] = want_contacts;
   ApplyPerturbation();
+  possession_.UpdateCamera(view_->data(), &view_->camera());
   view_->UpdateScene();
   HideVisualGeoms(view_->model(), debug_, tables_, &view_->scene());
   AddDebugGeoms(view_->model(), view_->data(), debug_, tables_, contacts_, &view_->scene());

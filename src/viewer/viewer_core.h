@@ -23,7 +23,9 @@
 #include "viewer/debug_draw.h"
 #include "viewer/hotkeys.h"
 #include "viewer/image_io.h"
+#include "viewer/input_mapping.h"
 #include "viewer/mouse.h"
+#include "viewer/possess.h"
 #include "viewer/scene_view.h"
 #include "viewer/window.h"
 
@@ -60,6 +62,8 @@ class ViewerCore : public InputHandler {
   Image ReadPixels();
   SceneView& view() { return *view_; }
   Window& window() { return *window_; }
+  // The simulate panel, nullptr without one (ViewerOptions::panel off).
+  Panel* panel() { return window_ && window_->has_imgui() ? panel_.get() : nullptr; }
   world::Session& session() { return *session_; }
   DebugSettings& debug() { return debug_; }
   const DebugTables& tables() const { return tables_; }
@@ -73,6 +77,8 @@ class ViewerCore : public InputHandler {
   // The articulation the panel shows (index into session().articulations()).
   int selected_articulation() const { return selected_articulation_; }
   void SelectArticulation(int index);
+  // Possession of the selected articulation (Tab, the panel's Possess button).
+  const Possession& possession() const { return possession_; }
   // The window's size in screen coordinates (input events use them).
   void WindowSize(int* w, int* h) const;
   // Takes a screenshot of the next drawn frame into `path`.
@@ -86,6 +92,7 @@ class ViewerCore : public InputHandler {
  private:
   void BuildTables();
   void ApplyPerturbation();
+  void TogglePossess();
   void Capture();  // screenshots and video frames of the frame just drawn
 
   ViewerOptions options_;
@@ -102,6 +109,8 @@ class ViewerCore : public InputHandler {
   DebugTables tables_;
   std::vector<CapturedContact> contacts_;
   MouseControl mouse_;
+  Possession possession_;
+  InputMapping input_;
   double cursor_x_ = 0, cursor_y_ = 0;
   int selected_articulation_ = 0;
   std::chrono::steady_clock::time_point start_;

@@ -155,6 +155,13 @@ void Window::BeginImGui() {
   ImGui::SetCurrentContext(imgui_);
   ImGui_ImplOpenGL2_NewFrame();
   ImGui_ImplGlfw_NewFrame();
+  if (injected_mouse_) {
+    // After the backend read the real cursor: the injected one wins (ImGui 1.86 reads io's
+    // mouse fields in NewFrame).
+    ImGuiIO& io = ImGui::GetIO();
+    io.MousePos = ImVec2(injected_mouse_->x, injected_mouse_->y);
+    io.MouseDown[0] = injected_mouse_->down;
+  }
   ImGui::NewFrame();
 }
 

@@ -4,6 +4,7 @@
 // events go to an InputHandler; tests call the handler directly to inject events.
 //
 // Threading contract: main thread only (GLFW requires it for windows and events).
+#include <optional>
 #include <string>
 
 struct GLFWwindow;
@@ -45,6 +46,13 @@ class Window {
   // True while ImGui uses the mouse / keyboard (over the panel, typing in a field).
   bool imgui_wants_mouse() const;
   bool imgui_wants_keyboard() const;
+  // Tests: the mouse ImGui sees from the next BeginImGui on (window coordinates, left button
+  // down or up), in place of the real cursor; std::nullopt gives the real cursor back.
+  struct InjectedMouse {
+    float x = 0, y = 0;
+    bool down = false;
+  };
+  void InjectImGuiMouse(std::optional<InjectedMouse> mouse) { injected_mouse_ = mouse; }
   void SwapBuffers();
   void FramebufferSize(int* width, int* height) const;
   void WindowSize(int* width, int* height) const;
@@ -59,6 +67,7 @@ class Window {
   GLFWwindow* window_ = nullptr;
   ImGuiContext* imgui_ = nullptr;
   InputHandler* handler_;
+  std::optional<InjectedMouse> injected_mouse_;
 };
 
 }  // namespace urlab::viewer::internal

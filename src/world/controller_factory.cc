@@ -112,4 +112,19 @@ void InstallController(const ArticulationConfig& config, control::ArticulationCo
   }
 }
 
+void InstallTwist(const ArticulationConfig& config, const physics::ArticulationBindings& bindings,
+                  control::ArticulationControl& control, const mjModel* m) {
+  for (const physics::JointView& j : bindings.joints().all()) {
+    if (j.type != mjJNT_FREE) continue;
+    auto twist = std::make_unique<control::TwistController>(config.twist);
+    twist->Bind(m, j.id);
+    control.SetTwistController(std::move(twist));
+    return;
+  }
+  if (config.twist_given) {
+    throw InputError(config.where,
+                     config.name + ": twist needs a free base (a freejoint on the root body)");
+  }
+}
+
 }  // namespace urlab::world

@@ -128,6 +128,13 @@ class Parser {
     return v;
   }
 
+  // A whole number 0..max.
+  int Index(const YAML::Node& n, const std::string& what, int max) const {
+    const double v = Number(n, what, {0, static_cast<double>(max)});
+    if (v != std::floor(v)) Fail(n, what + " must be a whole number, not " + n.Scalar());
+    return static_cast<int>(v);
+  }
+
   std::vector<double> Numbers(const YAML::Node& n, const std::string& what, size_t count) const {
     if (!n.IsSequence() || n.size() != count) {
       Fail(n, what + " must be a list of " + std::to_string(count) + " numbers");
@@ -201,7 +208,8 @@ class Parser {
     const std::string s = String(n, "control_source");
     if (s == "network" || s == "zmq") return ControlSource::kNetwork;
     if (s == "ui") return ControlSource::kUi;
-    Fail(n, "control_source must be 'network' or 'ui', not '" + s + "'");
+    if (s == "input") return ControlSource::kInput;
+    Fail(n, "control_source must be 'network', 'ui' or 'input', not '" + s + "'");
   }
 
   // kp, kv: >= 0 and finite; torque_limit: >= 0 (.inf for no limit).
@@ -469,10 +477,55 @@ class Parser {
     return t;
   }
 
+  // The twist block: every field a positive finite number.
+  control::TwistSettings Twist(const YAML::Node& n, const std::string& where) const {
+    if (!n.IsMap()) Fail(n, where + " must be a map (max_vx, max_vy, max_yaw_rate, gains)");
+    struct Field {
+      const char* key;
+      double control::TwistSettings::*value;
+    };
+    static constexpr Field kFields[] = {
+        {"max_vx", &control::TwistSettings::max_vx},
+        {"max_vy", &control::TwistSettings::max_vy},
+        {"max_yaw_rate", &control::TwistSettings::max_yaw_rate},
+        {"linear_gain", &control::TwistSettings::linear_gain},
+        {"yaw_gain", &control::TwistSettings::yaw_gain},
+    };
+    std::set<std::string> keys;
+    for (const Field& f : kFields) keys.insert(f.key);
+    CheckKeys(n, where, keys);
+    control::TwistSettings t;
+    for (const Field& f : kFields) {
+      if (n[f.key]) t.*f.value = Number(n[f.key], where + "." + f.key, kNonNegativeFinite);
+    }
+    return t;
+  }
+
+  // {actuator, key | gamepad_axis | gamepad_button, scale}.
+  InputBindingConfig InputBinding(const YAML::Node& n, const std::string& where) const {
+    if (!n.IsMap()) Fail(n, where + " entries must be maps (actuator, key or gamepad_*, scale)");
+    CheckKeys(n, where, {"actuator", "key", "gamepad_axis", "gamepad_button", "scale"});
+    InputBindingConfig b;
+    b.where = At(n);
+    if (!n["actuator"]) Fail(n, where + ": a binding needs an actuator");
+    b.actuator = String(n["actuator"], where + ".actuator");
+    const int sources =
+        (n["key"] ? 1 : 0) + (n["gamepad_axis"] ? 1 : 0) + (n["gamepad_button"] ? 1 : 0);
+    if (sources != 1) Fail(n, where + ": give exactly one of key, gamepad_axis, gamepad_button");
+    if (n["key"]) b.key = String(n["key"], where + ".key");
+    if (n["gamepad_axis"]) b.gamepad_axis = Index(n["gamepad_axis"], where + ".gamepad_axis", 5);
+    if (n["gamepad_button"]) {
+      b.gamepad_button = Index(n["gamepad_button"], where + ".gamepad_button", 14);
+    }
+    if (n["scale"]) b.scale = Number(n["scale"], where + ".scale");
+    return b;
+  }
+
   ArticulationConfig Articulation(const YAML::Node& n) const {
-    CheckKeys(n, "articulation",
-              {"name", "mjcf", "pos", "quat", "euler", "axisangle", "options", "control_source",
-               "controller", "keyframe", "hold_keyframe", "include_world", "cameras"});
+    CheckKeys(
+        n, "articulation",
+        {"name", "mjcf", "pos", "quat", "euler", "axisangle", "options", "control_source",
+         "controller", "keyframe", "hold_keyframe", "include_world", "cameras", "twist", "input"});
     ArticulationConfig a;
     a.where = At(n);
     if (!n["name"]) Fail(n, "an articulation needs a name");
@@ -505,6 +558,14 @@ class Parser {
       } else {
         a.all_cameras = Bool(c, a.name + ".cameras (true, false or a list of camera names)");
       }
+    }
+    if (n["twist"]) {
+      a.twist = Twist(n["twist"], a.name + ".twist");
+      a.twist_given = true;
+    }
+    if (const auto in = n["input"]) {
+      if (!in.IsSequence()) Fail(in, a.name + ".input must be a list of bindings");
+      for (const auto& b : in) a.input.push_back(InputBinding(b, a.name + ".input"));
     }
     return a;
   }

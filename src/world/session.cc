@@ -54,6 +54,7 @@ void Session::Build(const SceneConfig& scene) {
       a.control = &controls_->Add(std::make_unique<control::ArticulationControl>(*a.bindings));
       a.control->SetSourceOverride(ac.control_source);
       InstallController(ac, *a.control, m);
+      InstallTwist(ac, *a.bindings, *a.control, m);
       if (!ac.keyframe.empty()) {
         a.initial_key = mj_name2id(m, mjOBJ_KEY, (a.prefix + ac.keyframe).c_str());
         if (a.initial_key < 0) {

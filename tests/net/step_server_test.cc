@@ -325,7 +325,8 @@ TEST_F(StepServerTest, ConfigureControllerPatchesGainsAndEchoesThemAll) {
   const Json same =
       c.Op("configure_controller", {{"articulation", "arm"}, {"params", Json::object()}});
   EXPECT_EQ(same["params"]["gains"]["arm_motor"]["kv"], 3.0);
-  EXPECT_EQ(c.Op("set_twist", {{"articulation", "arm"}})["code"], "no_twist_controller");
+  EXPECT_EQ(c.Op("set_twist", {{"articulation", "arm"}})["code"], "no_twist_controller")
+      << "a fixed base has no twist controller";
   EXPECT_EQ(c.Op("set_twist", {{"articulation", "leg"}})["code"], "unknown_articulation");
 }
 
@@ -411,6 +412,29 @@ constexpr const char* kBoxXml = R"(<mujoco model="box">
   </worldbody>
 </mujoco>
 )";
+
+TEST_F(StepServerTest, SetTwistDrivesTheFreeBase) {
+  urlab::testing::WriteTextFile(dir_, "box.xml", kBoxXml);
+  Play(5000ms, "direct", "", "box.xml");
+  Client c(ctx_, rpc());
+  c.Hello();
+  EXPECT_EQ(c.Op("set_twist", {{"articulation", "arm"}, {"linear", {0.5, 0, 0}}})["code"],
+            "missing_field");
+  EXPECT_EQ(c.Op("set_twist",
+                 {{"articulation", "arm"}, {"linear", {0.5, 0}}, {"angular", {0, 0, 0}}})["code"],
+            "dim_mismatch");
+  // Clamped to the default maxima (1 m/s forward, 1.5 rad/s) and echoed.
+  const Json r =
+      c.Op("set_twist", {{"articulation", "arm"}, {"linear", {5.0, 0, 0}}, {"angular", {0, 0, 0}}});
+  ASSERT_EQ(r["op"], "set_twist_ok") << r.dump();
+  EXPECT_EQ(r["linear"], Json::array({1.0, 0.0, 0.0}));
+  const Json s = c.Op("step", {{"n_steps", 1000}});
+  ASSERT_EQ(s["op"], "step_ok");
+  // Observations carry the twist while the controller is attached (the box, 2 kg on the floor,
+  // does not slide: the controller's force, 2 kg * 4/s * 1 m/s, is below its friction).
+  EXPECT_EQ(s["per_articulation"]["arm"]["twist"], Json::array({1.0, 0.0, 0.0})) << s.dump();
+  EXPECT_EQ(s["per_articulation"]["arm"]["actions"], 0);
+}
 
 TEST_F(StepServerTest, GetContactsListsForcesWithFilterAndLimit) {
   urlab::testing::WriteTextFile(dir_, "box.xml", kBoxXml);

@@ -69,6 +69,17 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       {WithArm("size: {njmax: -2}\n"), 4, "out of range"},
       {WithArm("size: {nconmax: 1.5}\n"), 4, "integers"},
       {WithArm("size: {nstack: [1, 2]}\n"), 4, "must be an integer"},
+      // twist and input bindings
+      {WithArm("    twist: {max_vx: -1}\n"), 4, "a.twist.max_vx must be >= 0"},
+      {WithArm("    twist: {max_vz: 1}\n"), 4, "max_vz"},
+      {WithArm("    input:\n      - {actuator: shoulder, key: J, gamepad_axis: 1}\n"), 5,
+       "exactly one of key, gamepad_axis, gamepad_button"},
+      {WithArm("    input:\n      - {key: J}\n"), 5, "a binding needs an actuator"},
+      {WithArm("    input:\n      - {actuator: shoulder, gamepad_axis: 6}\n"), 5,
+       "gamepad_axis must be"},
+      {WithArm("    input:\n      - {actuator: shoulder, gamepad_button: 1.5}\n"), 5,
+       "whole number"},
+      {WithArm("    input: {actuator: shoulder}\n"), 4, "must be a list"},
       // features that do not exist yet
       {WithArm("props:\n  - {mesh: box.obj}\n"), 5, "a prop needs a name"},
       {WithArm("terrain: {file: h.png}\n"), 4, "terrain must be a list"},
@@ -109,6 +120,22 @@ TEST_F(SceneFileTest, GoodValuesStillPass) {
   EXPECT_EQ(s.options.at("timestep"), "0.001");
   EXPECT_EQ(s.options.at("flag.gravity"), "disable");
   EXPECT_FALSE(s.network.enabled);  // network: is parsed and used: not refused
+  const world::SceneConfig t =
+      world::ParseScene(WithArm("    control_source: input\n    twist: {max_vx: 2, yaw_gain: 1}\n"
+                                "    input:\n      - {actuator: shoulder, key: J, scale: -0.5}\n"
+                                "      - {actuator: shoulder, gamepad_axis: 3}\n"),
+                        dir_ + "/t.yaml");
+  const world::ArticulationConfig& a = t.articulations.at(0);
+  EXPECT_EQ(a.control_source, world::ControlSource::kInput);
+  EXPECT_TRUE(a.twist_given);
+  EXPECT_EQ(a.twist.max_vx, 2);
+  EXPECT_EQ(a.twist.yaw_gain, 1);
+  EXPECT_EQ(a.twist.max_vy, control::TwistSettings{}.max_vy);
+  ASSERT_EQ(a.input.size(), 2u);
+  EXPECT_EQ(a.input[0].key, "J");
+  EXPECT_EQ(a.input[0].scale, -0.5);
+  EXPECT_EQ(a.input[1].gamepad_axis, 3);
+  EXPECT_EQ(a.input[1].where.line, 8);
 }
 
 TEST_F(SceneFileTest, CamerasSectionAndArticulationCameras) {

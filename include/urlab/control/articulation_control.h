@@ -24,6 +24,7 @@
 
 #include "urlab/control/command_frame.h"
 #include "urlab/control/controller.h"
+#include "urlab/control/twist.h"
 #include "urlab/core/error.h"
 #include "urlab/physics/engine.h"
 #include "urlab/physics/views.h"
@@ -55,6 +56,10 @@ class ArticulationControl {
     return ref;
   }
   Controller* controller() const { return controller_.get(); }
+  // The twist controller (twist.h), applied after the controller every step while attached;
+  // nullptr when the articulation has none (no free base). Main thread, before the engine runs.
+  void SetTwistController(std::unique_ptr<TwistController> twist) { twist_ = std::move(twist); }
+  TwistController* twist() const { return twist_.get(); }
 
   // The frame channel of a source (any thread: publish whole frames there).
   FrameChannel& channel(ControlSource source) const;
@@ -114,6 +119,7 @@ class ArticulationControl {
   std::vector<int> body_ids_;
 
   std::unique_ptr<Controller> controller_;
+  std::unique_ptr<TwistController> twist_;
   std::array<std::unique_ptr<FrameChannel>, kNumControlSources> channels_;
   std::atomic<int> override_{-1};  // -1: none, else ControlSource
   std::atomic<bool> holding_{false};

@@ -7,6 +7,7 @@
 #include "urlab/control/articulation_control.h"
 #include "urlab/control/controllers.h"
 #include "urlab/core/diagnostics.h"
+#include "urlab/physics/views.h"
 #include "urlab/world/scene_file.h"
 
 namespace urlab::world {
@@ -27,5 +28,11 @@ void CheckController(const ArticulationConfig& config, const mjModel* m, const s
 // CheckController (InputError at the controller's file:line).
 void InstallController(const ArticulationConfig& config, control::ArticulationControl& control,
                        const mjModel* m);
+
+// Gives an articulation with a free base its twist controller (detached until possessed or
+// driven by set_twist) with the scene's maxima and gains (config.twist). Throws InputError at the
+// articulation's file:line for a twist block on an articulation without a free base.
+void InstallTwist(const ArticulationConfig& config, const physics::ArticulationBindings& bindings,
+                  control::ArticulationControl& control, const mjModel* m);
 
 }  // namespace urlab::world

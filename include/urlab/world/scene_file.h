@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "urlab/control/controller.h"
+#include "urlab/control/twist.h"
 #include "urlab/convert/heightfield.h"
 #include "urlab/convert/prop.h"
 #include "urlab/core/error.h"
@@ -46,6 +47,19 @@ struct ControllerConfig {
   SourceLocation where;
 };
 
+// Input mapping (the description's MjInputMapping): a key or gamepad axis/button drives one
+// actuator's target on the `input` control source, as value * scale (a key or button is 1 while
+// held, an axis -1..1). Exactly one of key, gamepad_axis, gamepad_button. The viewer resolves the
+// key name and the actuator when it starts (errors at the binding's file:line).
+struct InputBindingConfig {
+  std::string actuator;     // short name in the articulation
+  std::string key;          // "J", "7", "Space", "Up", ... ("" when a gamepad drives it)
+  int gamepad_axis = -1;    // GLFW gamepad axis 0..5
+  int gamepad_button = -1;  // GLFW gamepad button 0..14
+  double scale = 1;
+  SourceLocation where;
+};
+
 struct ArticulationConfig {
   std::string name;
   std::string mjcf;  // absolute path
@@ -63,6 +77,11 @@ struct ArticulationConfig {
   // `cameras: true` all of them, or a list of camera names (as written in its MJCF).
   bool all_cameras = false;
   std::vector<std::string> cameras;
+  // The twist controller's maxima and gains (control/twist.h); every articulation with a free
+  // base gets one (detached until possessed or set_twist), with these or the defaults.
+  control::TwistSettings twist;
+  bool twist_given = false;  // the scene gave a twist block (refused without a free base)
+  std::vector<InputBindingConfig> input;
   SourceLocation where;
 };
 
