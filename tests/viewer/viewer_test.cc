@@ -347,304 +347,302 @@ TEST_F(ViewerTest, HotkeyFiveDrawsTheConvertedPropsParts) {
   const Diff only_prop = Compare(plain, prop_wire, c, radius);
   EXPECT_GT(only_prop.inside, 10);
   EXPECT_GT(only_prop.inside, 4 * only_prop.outside) << "the prop's wireframe drawn elsewhere";
+}
 
-  TEST_F(ViewerTest, ContactForceArrowsPointAlongTheForce) {
-    viewer::ViewerOptions vo;
-    vo.panel = false;
-    Play(kBotXml, vo, /*paused=*/false);
-    core().debug().Global(viewer::internal::DebugLayer::kContacts) = true;
-    // Forces exist once the physics stepped; paused after, the captured contact stays the same.
-    ASSERT_TRUE(TickUntil([&] { return core().frame()->time > 0.2; }));
-    Key(GLFW_KEY_P);
-    ASSERT_TRUE(TickUntil([&] { return core().frame()->paused; }));
-    const std::uint64_t captures = core().capture().captures();
-    ASSERT_TRUE(TickUntil([&] { return core().capture().captures() > captures; }));
-    manager_->Tick();
-    ASSERT_EQ(core().contacts().size(), 1u) << "the ball touches the floor at one point";
-    const viewer::internal::CapturedContact c = core().contacts()[0];
-    mjtNum force[3];
-    mju_mulMatTVec(force, c.frame, c.force, 3, 3);
-    const mjtNum magnitude = mju_norm3(force);
-    ASSERT_GT(force[2], 0.9 * magnitude) << "the floor pushes the ball up";
-    // The arrow's scale is MuJoCo's (vis.map.force per mean body mass): a scale too small for an
-    // arrow leaves the contact point alone; one that makes it 0.8 m long draws it above the ball.
-    mjModel* m = core().view().model();
-    core().view().camera().distance *= 1.6;  // room above the ball
-    m->vis.map.force = 1e-9f;
-    const Image points = viewer_->ReadPixels();
-    const mjtNum length = 0.8;
-    m->vis.map.force = static_cast<float>(length * m->stat.meanmass / magnitude);
-    const Image arrows = viewer_->ReadPixels();
-    mjtNum tip[3];
-    mju_addScl3(tip, c.pos, force, length / magnitude);
-    const Pixel a = Project(core(), c.pos), b = Project(core(), tip);
-    ASSERT_GT(std::hypot(b.x - a.x, b.y - a.y), 30) << "the arrow is long on screen";
-    int near = 0, far = 0;
-    for (int y = 0; y < arrows.height; ++y) {
-      for (int x = 0; x < arrows.width; ++x) {
-        int sum = 0;
-        for (int k = 0; k < 3; ++k)
-          sum += std::abs(int(points.at(x, y)[k]) - int(arrows.at(x, y)[k]));
-        if (sum < 60) continue;
-        (DistToSegment({double(x), double(y)}, a, b) < 12 ? near : far)++;
-      }
-    }
-    EXPECT_GT(near, 50);
-    EXPECT_GT(near, 4 * far) << "the arrow drawn away from the force's line";
-    // Above the ball, along the force's line, the arrow's own colour (orange-red; the ball is
-    // pure red and the stick blue): looked for in a few pixels around each point of the line.
-    int orange = 0;
-    for (mjtNum z = 0.22; z <= length; z += 0.02) {
-      const mjtNum p[3] = {c.pos[0], c.pos[1], c.pos[2] + z};
-      const Pixel u = Project(core(), p);
-      bool found = false;
-      for (int y = static_cast<int>(u.y) - 3; y <= static_cast<int>(u.y) + 3 && !found; ++y) {
-        for (int x = static_cast<int>(u.x) - 3; x <= static_cast<int>(u.x) + 3 && !found; ++x) {
-          if (x < 0 || y < 0 || x >= arrows.width || y >= arrows.height) continue;
-          const std::uint8_t* px = arrows.at(x, y);
-          const std::uint8_t* before = points.at(x, y);
-          found = px[0] > 150 && px[1] > 30 && px[0] > px[1] + 60 && px[0] > px[2] + 60 &&
-                  (px[0] != before[0] || px[1] != before[1] || px[2] != before[2]);
-        }
-      }
-      orange += found;
-    }
-    EXPECT_GE(orange, 2) << "no arrow colour above the ball";
-  }
-
-  TEST_F(ViewerTest, PanelSliderMovesTheActuator) {
-    Play(kBotXml, {}, /*paused=*/false);
-    manager_->Tick();
-    viewer::internal::Panel* panel = core().panel();
-    ASSERT_NE(panel, nullptr);
-    ASSERT_EQ(panel->sliders().size(), 1u) << "one slider for the servo";
-    const viewer::internal::Panel::SliderRect s = panel->sliders()[0];
-    // Press on the slider at 90 % of its width, through ImGui's own input: the slider publishes
-    // the value on the UI control source, and the servo carries the hinge there.
-    const float x = s.x0 + 0.9f * (s.x1 - s.x0);
-    using Mouse = viewer::internal::Window::InjectedMouse;
-    core().window().InjectImGuiMouse(Mouse{x, s.y, false});
-    manager_->Tick();
-    core().window().InjectImGuiMouse(Mouse{x, s.y, true});
-    manager_->Tick();
-    manager_->Tick();
-    core().window().InjectImGuiMouse(Mouse{x, s.y, false});
-    manager_->Tick();
-    core().window().InjectImGuiMouse(std::nullopt);
-    control::ArticulationControl& ctl = *manager_->session().articulations()[0].control;
-    const double target = ctl.GetTarget(control::ControlSource::kUi, 0);
-    EXPECT_GT(target, 0.5);
-    EXPECT_LE(target, 1.0);
-    const int hinge = mj_name2id(core().view().model(), mjOBJ_JOINT, "bot_hinge");
-    ASSERT_GE(hinge, 0);
-    const int adr = core().view().model()->jnt_qposadr[hinge];
-    // (The hinge's range is +-1 degree, a soft limit the servo presses into: it moves toward the
-    // target, not to it.)
-    EXPECT_TRUE(TickUntil([&] { return core().view().data()->qpos[adr] > 0.1; }))
-        << "the hinge did not follow the slider: q=" << core().view().data()->qpos[adr];
-    EXPECT_TRUE(TickUntil([&] { return std::abs(core().frame()->ctrl[0] - target) < 1e-9; }));
-  }
-
-  // The twist a `{art}/twist` message carries.
-  control::Twist DecodeTwist(const std::string& payload) {
-    float v[3] = {0, 0, 0};
-    if (payload.size() == sizeof v) std::memcpy(v, payload.data(), sizeof v);
-    return {v[0], v[1], v[2]};
-  }
-
-  TEST_F(ViewerTest, PossessDrivesTheTwistTopicFromKeys) {
-    net::NetworkOptions no;
-    no.state = no.control = no.info = no.rpc = "tcp://127.0.0.1:*";
-    auto network = std::make_unique<net::NetworkSubsystem>(no);
-    net::NetworkSubsystem* net = network.get();
-    more_.push_back(std::move(network));
-    viewer::ViewerOptions vo;
-    vo.panel = false;
-    Play(kBotXml, vo, /*paused=*/false,
-         "    twist: {max_vx: 0.8, max_vy: 0.4, max_yaw_rate: 1.0}\n");
-    zmq::context_t ctx;
-    zmq::socket_t sub(ctx, zmq::socket_type::sub);
-    sub.set(zmq::sockopt::subscribe, "bot/twist");
-    sub.set(zmq::sockopt::subscribe, "bot/actions");
-    sub.set(zmq::sockopt::rcvtimeo, 100);
-    sub.connect(net->endpoints().state);
-    // Receives until a message on `topic` satisfies `pred` (ticking the viewer meanwhile).
-    const auto receive = [&](const std::string& topic,
-                             const std::function<bool(std::string)>& pred) {
-      const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-      while (std::chrono::steady_clock::now() < end) {
-        manager_->Tick();
-        std::vector<zmq::message_t> parts;
-        if (!zmq::recv_multipart(sub, std::back_inserter(parts))) continue;
-        if (parts.size() == 2 && parts[0].to_string() == topic && pred(parts[1].to_string())) {
-          return true;
-        }
-      }
-      return false;
-    };
-    control::TwistController* twist = manager_->session().articulations()[0].control->twist();
-    ASSERT_NE(twist, nullptr) << "a free base gets a twist controller";
-    EXPECT_FALSE(twist->attached());
-    EXPECT_EQ(twist->settings().max_vx, 0.8);
-
-    Key(GLFW_KEY_TAB);
-    ASSERT_TRUE(core().possession().active());
-    EXPECT_TRUE(twist->attached());
-    manager_->Tick();
-    EXPECT_EQ(core().view().camera().type, mjCAMERA_TRACKING) << "the chase camera";
-    EXPECT_EQ(core().view().camera().trackbodyid, Body("base"));
-    const mjtNum start[3] = {BodyPos("base")[0], BodyPos("base")[1], BodyPos("base")[2]};
-
-    // W forward, Q turn left, D right at once: clamped to the scene's maxima; digit 3 is action 3.
-    Press(GLFW_KEY_W);
-    Press(GLFW_KEY_Q);
-    Press(GLFW_KEY_D);
-    Press(GLFW_KEY_3);
-    EXPECT_FALSE(core().debug().Global(viewer::internal::DebugLayer::kJoints))
-        << "while possessed, digits are action keys";
-    const control::Twist want{0.8, -0.4, 1.0};
-    EXPECT_TRUE(receive("bot/twist", [&](const std::string& p) {
-      const control::Twist t = DecodeTwist(p);
-      return std::abs(t.vx - want.vx) < 1e-6 && std::abs(t.vy - want.vy) < 1e-6 &&
-             std::abs(t.yaw_rate - want.yaw_rate) < 1e-6;
-    })) << "the twist topic never carried the keys' twist";
-    EXPECT_TRUE(receive("bot/actions", [](const std::string& p) {
-      std::int32_t mask = 0;
-      if (p.size() == sizeof mask) std::memcpy(&mask, p.data(), sizeof mask);
-      return mask == (1 << 3);
-    }));
-    // The twist controller pushes the base.
-    EXPECT_TRUE(TickUntil([&] {
-      return std::hypot(BodyPos("base")[0] - start[0], BodyPos("base")[1] - start[1]) > 0.05;
-    })) << "the base did not move";
-
-    // Keys up: a zero twist; Tab releases (no more twist messages are published).
-    for (int k : {GLFW_KEY_W, GLFW_KEY_Q, GLFW_KEY_D, GLFW_KEY_3}) Release(k);
-    EXPECT_TRUE(receive("bot/twist",
-                        [](const std::string& p) { return DecodeTwist(p) == control::Twist{}; }));
-    Key(GLFW_KEY_TAB);
-    EXPECT_FALSE(core().possession().active());
-    EXPECT_FALSE(twist->attached());
-    Key(GLFW_KEY_4);
-    EXPECT_TRUE(core().debug().Global(viewer::internal::DebugLayer::kJoints)) << "hotkeys again";
-  }
-
-  TEST_F(ViewerTest, InputMappingDrivesTheActuatorFromKeys) {
-    viewer::ViewerOptions vo;
-    vo.panel = false;
-    Play(kBotXml, vo, /*paused=*/false,
-         "    control_source: input\n    input:\n"
-         "      - {actuator: servo, key: J, scale: 0.6}\n"
-         "      - {actuator: servo, key: k, scale: -0.6}\n");
-    control::ArticulationControl& ctl = *manager_->session().articulations()[0].control;
-    const int hinge = mj_name2id(core().view().model(), mjOBJ_JOINT, "bot_hinge");
-    const int adr = core().view().model()->jnt_qposadr[hinge];
-    // The servo presses the hinge into its soft +-1 degree range, toward the target's side.
-    const auto hinge_toward = [&](double q) {
-      return TickUntil([&] { return core().view().data()->qpos[adr] * q > 0.1 * std::abs(q); });
-    };
-    Press(GLFW_KEY_J);
-    manager_->Tick();
-    EXPECT_DOUBLE_EQ(ctl.GetTarget(control::ControlSource::kInput, 0), 0.6);
-    EXPECT_TRUE(hinge_toward(0.6)) << "J drives the servo toward 0.6";
-    Press(GLFW_KEY_K);  // both held: they cancel
-    manager_->Tick();
-    EXPECT_DOUBLE_EQ(ctl.GetTarget(control::ControlSource::kInput, 0), 0.0);
-    Release(GLFW_KEY_J);
-    manager_->Tick();
-    EXPECT_DOUBLE_EQ(ctl.GetTarget(control::ControlSource::kInput, 0), -0.6);
-    EXPECT_TRUE(hinge_toward(-0.6));
-    Release(GLFW_KEY_K);
-    manager_->Tick();
-    EXPECT_DOUBLE_EQ(ctl.GetTarget(control::ControlSource::kInput, 0), 0.0);
-    // A mapped key is consumed: mapping R would not reset; here unmapped hotkeys still work.
-    Key(GLFW_KEY_4);
-    EXPECT_TRUE(core().debug().Global(viewer::internal::DebugLayer::kJoints));
-  }
-
-  TEST_F(ViewerTest, InputMappingErrorsNameTheBinding) {
-    viewer::ViewerOptions vo;
-    vo.panel = false;
-    testing::WriteTextFile(dir_, "bot.xml", kBotXml);
-    for (const auto& [binding, message] :
-         {std::pair<std::string, std::string>{"{actuator: servo, key: Hyper}",
-                                              "unknown key 'Hyper'"},
-          {"{actuator: nope, key: J}", "no actuator 'nope'"}}) {
-      const world::SceneConfig scene = world::ParseScene(
-          "articulations:\n  - name: bot\n    mjcf: bot.xml\n    input:\n      - " + binding + "\n",
-          dir_ + "/scene.yaml");
-      world::Manager manager;
-      auto v = std::make_unique<viewer::ViewerSubsystem>(vo);
-      manager.AddSubsystem(std::move(v));
-      try {
-        manager.BeginPlay(scene);
-        ADD_FAILURE() << "accepted " << binding;
-      } catch (const InputError& e) {
-        EXPECT_EQ(e.where().line, 5) << e.what();
-        EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
-      }
+TEST_F(ViewerTest, ContactForceArrowsPointAlongTheForce) {
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  Play(kBotXml, vo, /*paused=*/false);
+  core().debug().Global(viewer::internal::DebugLayer::kContacts) = true;
+  // Forces exist once the physics stepped; paused after, the captured contact stays the same.
+  ASSERT_TRUE(TickUntil([&] { return core().frame()->time > 0.2; }));
+  Key(GLFW_KEY_P);
+  ASSERT_TRUE(TickUntil([&] { return core().frame()->paused; }));
+  const std::uint64_t captures = core().capture().captures();
+  ASSERT_TRUE(TickUntil([&] { return core().capture().captures() > captures; }));
+  manager_->Tick();
+  ASSERT_EQ(core().contacts().size(), 1u) << "the ball touches the floor at one point";
+  const viewer::internal::CapturedContact c = core().contacts()[0];
+  mjtNum force[3];
+  mju_mulMatTVec(force, c.frame, c.force, 3, 3);
+  const mjtNum magnitude = mju_norm3(force);
+  ASSERT_GT(force[2], 0.9 * magnitude) << "the floor pushes the ball up";
+  // The arrow's scale is MuJoCo's (vis.map.force per mean body mass): a scale too small for an
+  // arrow leaves the contact point alone; one that makes it 0.8 m long draws it above the ball.
+  mjModel* m = core().view().model();
+  core().view().camera().distance *= 1.6;  // room above the ball
+  m->vis.map.force = 1e-9f;
+  const Image points = viewer_->ReadPixels();
+  const mjtNum length = 0.8;
+  m->vis.map.force = static_cast<float>(length * m->stat.meanmass / magnitude);
+  const Image arrows = viewer_->ReadPixels();
+  mjtNum tip[3];
+  mju_addScl3(tip, c.pos, force, length / magnitude);
+  const Pixel a = Project(core(), c.pos), b = Project(core(), tip);
+  ASSERT_GT(std::hypot(b.x - a.x, b.y - a.y), 30) << "the arrow is long on screen";
+  int near = 0, far = 0;
+  for (int y = 0; y < arrows.height; ++y) {
+    for (int x = 0; x < arrows.width; ++x) {
+      int sum = 0;
+      for (int k = 0; k < 3; ++k)
+        sum += std::abs(int(points.at(x, y)[k]) - int(arrows.at(x, y)[k]));
+      if (sum < 60) continue;
+      (DistToSegment({double(x), double(y)}, a, b) < 12 ? near : far)++;
     }
   }
-
-  TEST_F(ViewerTest, KeysPauseResetAndScreenshot) {
-    Play(kBotXml, {}, /*paused=*/false);
-    ASSERT_TRUE(TickUntil([&] { return core().frame()->time > 0.1; }));
-    Key(GLFW_KEY_P);
-    EXPECT_TRUE(engine().paused());
-    ASSERT_TRUE(TickUntil([&] { return core().frame()->paused; }));
-    const double t = core().frame()->time;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    manager_->Tick();
-    EXPECT_EQ(core().frame()->time, t) << "paused";
-    Key(GLFW_KEY_R);
-    EXPECT_TRUE(TickUntil([&] { return core().frame()->time < t; })) << "reset to the start";
-    Key(GLFW_KEY_P);
-    EXPECT_FALSE(engine().paused());
-    // F12 writes a PNG of the window (here with the name the test asks for).
-    const std::string shot = dir_ + "/shot.png";
-    core().RequestScreenshot(shot);
-    manager_->Tick();
-    ASSERT_TRUE(std::filesystem::exists(shot));
-    const Image png = viewer::internal::ReadImage(shot);
-    EXPECT_EQ(png.width, 640);
-    EXPECT_EQ(png.height, 480);
+  EXPECT_GT(near, 50);
+  EXPECT_GT(near, 4 * far) << "the arrow drawn away from the force's line";
+  // Above the ball, along the force's line, the arrow's own colour (orange-red; the ball is
+  // pure red and the stick blue): looked for in a few pixels around each point of the line.
+  int orange = 0;
+  for (mjtNum z = 0.22; z <= length; z += 0.02) {
+    const mjtNum p[3] = {c.pos[0], c.pos[1], c.pos[2] + z};
+    const Pixel u = Project(core(), p);
+    bool found = false;
+    for (int y = static_cast<int>(u.y) - 3; y <= static_cast<int>(u.y) + 3 && !found; ++y) {
+      for (int x = static_cast<int>(u.x) - 3; x <= static_cast<int>(u.x) + 3 && !found; ++x) {
+        if (x < 0 || y < 0 || x >= arrows.width || y >= arrows.height) continue;
+        const std::uint8_t* px = arrows.at(x, y);
+        const std::uint8_t* before = points.at(x, y);
+        found = px[0] > 150 && px[1] > 30 && px[0] > px[1] + 60 && px[0] > px[2] + 60 &&
+                (px[0] != before[0] || px[1] != before[1] || px[2] != before[2]);
+      }
+    }
+    orange += found;
   }
+  EXPECT_GE(orange, 2) << "no arrow colour above the ball";
+}
 
-  TEST_F(ViewerTest, MouseRotatesSelectsAndPerturbs) {
-    viewer::ViewerOptions vo;
-    vo.panel = false;
-    Play(kFloatXml, vo, /*paused=*/false);
-    manager_->Tick();
-    // Left drag rotates the camera.
-    const double azimuth = core().view().camera().azimuth;
-    core().OnCursor(300, 200);
+TEST_F(ViewerTest, PanelSliderMovesTheActuator) {
+  Play(kBotXml, {}, /*paused=*/false);
+  manager_->Tick();
+  viewer::internal::Panel* panel = core().panel();
+  ASSERT_NE(panel, nullptr);
+  ASSERT_EQ(panel->sliders().size(), 1u) << "one slider for the servo";
+  const viewer::internal::Panel::SliderRect s = panel->sliders()[0];
+  // Press on the slider at 90 % of its width, through ImGui's own input: the slider publishes
+  // the value on the UI control source, and the servo carries the hinge there.
+  const float x = s.x0 + 0.9f * (s.x1 - s.x0);
+  using Mouse = viewer::internal::Window::InjectedMouse;
+  core().window().InjectImGuiMouse(Mouse{x, s.y, false});
+  manager_->Tick();
+  core().window().InjectImGuiMouse(Mouse{x, s.y, true});
+  manager_->Tick();
+  manager_->Tick();
+  core().window().InjectImGuiMouse(Mouse{x, s.y, false});
+  manager_->Tick();
+  core().window().InjectImGuiMouse(std::nullopt);
+  control::ArticulationControl& ctl = *manager_->session().articulations()[0].control;
+  const double target = ctl.GetTarget(control::ControlSource::kUi, 0);
+  EXPECT_GT(target, 0.5);
+  EXPECT_LE(target, 1.0);
+  const int hinge = mj_name2id(core().view().model(), mjOBJ_JOINT, "bot_hinge");
+  ASSERT_GE(hinge, 0);
+  const int adr = core().view().model()->jnt_qposadr[hinge];
+  // (The hinge's range is +-1 degree, a soft limit the servo presses into: it moves toward the
+  // target, not to it.)
+  EXPECT_TRUE(TickUntil([&] { return core().view().data()->qpos[adr] > 0.1; }))
+      << "the hinge did not follow the slider: q=" << core().view().data()->qpos[adr];
+  EXPECT_TRUE(TickUntil([&] { return std::abs(core().frame()->ctrl[0] - target) < 1e-9; }));
+}
+
+// The twist a `{art}/twist` message carries.
+control::Twist DecodeTwist(const std::string& payload) {
+  float v[3] = {0, 0, 0};
+  if (payload.size() == sizeof v) std::memcpy(v, payload.data(), sizeof v);
+  return {v[0], v[1], v[2]};
+}
+
+TEST_F(ViewerTest, PossessDrivesTheTwistTopicFromKeys) {
+  net::NetworkOptions no;
+  no.state = no.control = no.info = no.rpc = "tcp://127.0.0.1:*";
+  auto network = std::make_unique<net::NetworkSubsystem>(no);
+  net::NetworkSubsystem* net = network.get();
+  more_.push_back(std::move(network));
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  Play(kBotXml, vo, /*paused=*/false, "    twist: {max_vx: 0.8, max_vy: 0.4, max_yaw_rate: 1.0}\n");
+  zmq::context_t ctx;
+  zmq::socket_t sub(ctx, zmq::socket_type::sub);
+  sub.set(zmq::sockopt::subscribe, "bot/twist");
+  sub.set(zmq::sockopt::subscribe, "bot/actions");
+  sub.set(zmq::sockopt::rcvtimeo, 100);
+  sub.connect(net->endpoints().state);
+  // Receives until a message on `topic` satisfies `pred` (ticking the viewer meanwhile).
+  const auto receive = [&](const std::string& topic, const std::function<bool(std::string)>& pred) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (std::chrono::steady_clock::now() < end) {
+      manager_->Tick();
+      std::vector<zmq::message_t> parts;
+      if (!zmq::recv_multipart(sub, std::back_inserter(parts))) continue;
+      if (parts.size() == 2 && parts[0].to_string() == topic && pred(parts[1].to_string())) {
+        return true;
+      }
+    }
+    return false;
+  };
+  control::TwistController* twist = manager_->session().articulations()[0].control->twist();
+  ASSERT_NE(twist, nullptr) << "a free base gets a twist controller";
+  EXPECT_FALSE(twist->attached());
+  EXPECT_EQ(twist->settings().max_vx, 0.8);
+
+  Key(GLFW_KEY_TAB);
+  ASSERT_TRUE(core().possession().active());
+  EXPECT_TRUE(twist->attached());
+  manager_->Tick();
+  EXPECT_EQ(core().view().camera().type, mjCAMERA_TRACKING) << "the chase camera";
+  EXPECT_EQ(core().view().camera().trackbodyid, Body("base"));
+  const mjtNum start[3] = {BodyPos("base")[0], BodyPos("base")[1], BodyPos("base")[2]};
+
+  // W forward, Q turn left, D right at once: clamped to the scene's maxima; digit 3 is action 3.
+  Press(GLFW_KEY_W);
+  Press(GLFW_KEY_Q);
+  Press(GLFW_KEY_D);
+  Press(GLFW_KEY_3);
+  EXPECT_FALSE(core().debug().Global(viewer::internal::DebugLayer::kJoints))
+      << "while possessed, digits are action keys";
+  const control::Twist want{0.8, -0.4, 1.0};
+  EXPECT_TRUE(receive("bot/twist", [&](const std::string& p) {
+    const control::Twist t = DecodeTwist(p);
+    return std::abs(t.vx - want.vx) < 1e-6 && std::abs(t.vy - want.vy) < 1e-6 &&
+           std::abs(t.yaw_rate - want.yaw_rate) < 1e-6;
+  })) << "the twist topic never carried the keys' twist";
+  EXPECT_TRUE(receive("bot/actions", [](const std::string& p) {
+    std::int32_t mask = 0;
+    if (p.size() == sizeof mask) std::memcpy(&mask, p.data(), sizeof mask);
+    return mask == (1 << 3);
+  }));
+  // The twist controller pushes the base.
+  EXPECT_TRUE(TickUntil([&] {
+    return std::hypot(BodyPos("base")[0] - start[0], BodyPos("base")[1] - start[1]) > 0.05;
+  })) << "the base did not move";
+
+  // Keys up: a zero twist; Tab releases (no more twist messages are published).
+  for (int k : {GLFW_KEY_W, GLFW_KEY_Q, GLFW_KEY_D, GLFW_KEY_3}) Release(k);
+  EXPECT_TRUE(receive("bot/twist",
+                      [](const std::string& p) { return DecodeTwist(p) == control::Twist{}; }));
+  Key(GLFW_KEY_TAB);
+  EXPECT_FALSE(core().possession().active());
+  EXPECT_FALSE(twist->attached());
+  Key(GLFW_KEY_4);
+  EXPECT_TRUE(core().debug().Global(viewer::internal::DebugLayer::kJoints)) << "hotkeys again";
+}
+
+TEST_F(ViewerTest, InputMappingDrivesTheActuatorFromKeys) {
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  Play(kBotXml, vo, /*paused=*/false,
+       "    control_source: input\n    input:\n"
+       "      - {actuator: servo, key: J, scale: 0.6}\n"
+       "      - {actuator: servo, key: k, scale: -0.6}\n");
+  control::ArticulationControl& ctl = *manager_->session().articulations()[0].control;
+  const int hinge = mj_name2id(core().view().model(), mjOBJ_JOINT, "bot_hinge");
+  const int adr = core().view().model()->jnt_qposadr[hinge];
+  // The servo presses the hinge into its soft +-1 degree range, toward the target's side.
+  const auto hinge_toward = [&](double q) {
+    return TickUntil([&] { return core().view().data()->qpos[adr] * q > 0.1 * std::abs(q); });
+  };
+  Press(GLFW_KEY_J);
+  manager_->Tick();
+  EXPECT_DOUBLE_EQ(ctl.GetTarget(control::ControlSource::kInput, 0), 0.6);
+  EXPECT_TRUE(hinge_toward(0.6)) << "J drives the servo toward 0.6";
+  Press(GLFW_KEY_K);  // both held: they cancel
+  manager_->Tick();
+  EXPECT_DOUBLE_EQ(ctl.GetTarget(control::ControlSource::kInput, 0), 0.0);
+  Release(GLFW_KEY_J);
+  manager_->Tick();
+  EXPECT_DOUBLE_EQ(ctl.GetTarget(control::ControlSource::kInput, 0), -0.6);
+  EXPECT_TRUE(hinge_toward(-0.6));
+  Release(GLFW_KEY_K);
+  manager_->Tick();
+  EXPECT_DOUBLE_EQ(ctl.GetTarget(control::ControlSource::kInput, 0), 0.0);
+  // A mapped key is consumed: mapping R would not reset; here unmapped hotkeys still work.
+  Key(GLFW_KEY_4);
+  EXPECT_TRUE(core().debug().Global(viewer::internal::DebugLayer::kJoints));
+}
+
+TEST_F(ViewerTest, InputMappingErrorsNameTheBinding) {
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  testing::WriteTextFile(dir_, "bot.xml", kBotXml);
+  for (const auto& [binding, message] :
+       {std::pair<std::string, std::string>{"{actuator: servo, key: Hyper}", "unknown key 'Hyper'"},
+        {"{actuator: nope, key: J}", "no actuator 'nope'"}}) {
+    const world::SceneConfig scene = world::ParseScene(
+        "articulations:\n  - name: bot\n    mjcf: bot.xml\n    input:\n      - " + binding + "\n",
+        dir_ + "/scene.yaml");
+    world::Manager manager;
+    auto v = std::make_unique<viewer::ViewerSubsystem>(vo);
+    manager.AddSubsystem(std::move(v));
+    try {
+      manager.BeginPlay(scene);
+      ADD_FAILURE() << "accepted " << binding;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where().line, 5) << e.what();
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST_F(ViewerTest, KeysPauseResetAndScreenshot) {
+  Play(kBotXml, {}, /*paused=*/false);
+  ASSERT_TRUE(TickUntil([&] { return core().frame()->time > 0.1; }));
+  Key(GLFW_KEY_P);
+  EXPECT_TRUE(engine().paused());
+  ASSERT_TRUE(TickUntil([&] { return core().frame()->paused; }));
+  const double t = core().frame()->time;
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  manager_->Tick();
+  EXPECT_EQ(core().frame()->time, t) << "paused";
+  Key(GLFW_KEY_R);
+  EXPECT_TRUE(TickUntil([&] { return core().frame()->time < t; })) << "reset to the start";
+  Key(GLFW_KEY_P);
+  EXPECT_FALSE(engine().paused());
+  // F12 writes a PNG of the window (here with the name the test asks for).
+  const std::string shot = dir_ + "/shot.png";
+  core().RequestScreenshot(shot);
+  manager_->Tick();
+  ASSERT_TRUE(std::filesystem::exists(shot));
+  const Image png = viewer::internal::ReadImage(shot);
+  EXPECT_EQ(png.width, 640);
+  EXPECT_EQ(png.height, 480);
+}
+
+TEST_F(ViewerTest, MouseRotatesSelectsAndPerturbs) {
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  Play(kFloatXml, vo, /*paused=*/false);
+  manager_->Tick();
+  // Left drag rotates the camera.
+  const double azimuth = core().view().camera().azimuth;
+  core().OnCursor(300, 200);
+  core().OnMouseButton(GLFW_MOUSE_BUTTON_LEFT, GLFW_PRESS, 0);
+  core().OnCursor(400, 200);
+  core().OnMouseButton(GLFW_MOUSE_BUTTON_LEFT, GLFW_RELEASE, 0);
+  EXPECT_NE(core().view().camera().azimuth, azimuth);
+  manager_->Tick();
+  // Double-click on the box selects it.
+  const mjtNum start[3] = {BodyPos("box")[0], BodyPos("box")[1], BodyPos("box")[2]};
+  const Pixel p = Project(core(), start);
+  int ww = 0, wh = 0, fw = 0, fh = 0;
+  core().WindowSize(&ww, &wh);
+  core().window().FramebufferSize(&fw, &fh);
+  const double sx = p.x * ww / fw, sy = p.y * wh / fh;  // window coordinates
+  core().OnCursor(sx, sy);
+  for (int i = 0; i < 2; ++i) {
     core().OnMouseButton(GLFW_MOUSE_BUTTON_LEFT, GLFW_PRESS, 0);
-    core().OnCursor(400, 200);
     core().OnMouseButton(GLFW_MOUSE_BUTTON_LEFT, GLFW_RELEASE, 0);
-    EXPECT_NE(core().view().camera().azimuth, azimuth);
-    manager_->Tick();
-    // Double-click on the box selects it.
-    const mjtNum start[3] = {BodyPos("box")[0], BodyPos("box")[1], BodyPos("box")[2]};
-    const Pixel p = Project(core(), start);
-    int ww = 0, wh = 0, fw = 0, fh = 0;
-    core().WindowSize(&ww, &wh);
-    core().window().FramebufferSize(&fw, &fh);
-    const double sx = p.x * ww / fw, sy = p.y * wh / fh;  // window coordinates
-    core().OnCursor(sx, sy);
-    for (int i = 0; i < 2; ++i) {
-      core().OnMouseButton(GLFW_MOUSE_BUTTON_LEFT, GLFW_PRESS, 0);
-      core().OnMouseButton(GLFW_MOUSE_BUTTON_LEFT, GLFW_RELEASE, 0);
-    }
-    ASSERT_EQ(core().view().perturb().select, Body("box"));
-    // Ctrl + right drag pulls it: the physics thread moves the body.
-    core().OnMouseButton(GLFW_MOUSE_BUTTON_RIGHT, GLFW_PRESS, GLFW_MOD_CONTROL);
-    EXPECT_EQ(core().view().perturb().active, mjPERT_TRANSLATE);
-    core().OnCursor(sx + 120, sy);
-    EXPECT_TRUE(TickUntil([&] { return mju_dist3(BodyPos("box"), start) > 0.05; }))
-        << "the perturbation force did not move the box";
-    core().OnMouseButton(GLFW_MOUSE_BUTTON_RIGHT, GLFW_RELEASE, GLFW_MOD_CONTROL);
-    EXPECT_EQ(core().view().perturb().active, 0);
   }
+  ASSERT_EQ(core().view().perturb().select, Body("box"));
+  // Ctrl + right drag pulls it: the physics thread moves the body.
+  core().OnMouseButton(GLFW_MOUSE_BUTTON_RIGHT, GLFW_PRESS, GLFW_MOD_CONTROL);
+  EXPECT_EQ(core().view().perturb().active, mjPERT_TRANSLATE);
+  core().OnCursor(sx + 120, sy);
+  EXPECT_TRUE(TickUntil([&] { return mju_dist3(BodyPos("box"), start) > 0.05; }))
+      << "the perturbation force did not move the box";
+  core().OnMouseButton(GLFW_MOUSE_BUTTON_RIGHT, GLFW_RELEASE, GLFW_MOD_CONTROL);
+  EXPECT_EQ(core().view().perturb().active, 0);
+}
 
 }  // namespace
 }  // namespace urlab
