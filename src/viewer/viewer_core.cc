@@ -139,6 +139,18 @@ void ViewerCore::BuildTables() {
   DebugSettings::Layers own{};
   own[static_cast<std::size_t>(DebugLayer::kVisual)] = true;
   debug_.articulation.assign(arts.size(), own);
+  // The orbit camera circles every articulation's root body (its first child of the world).
+  std::vector<int> roots;
+  for (std::size_t a = 0; a < arts.size(); ++a) {
+    for (int b = 1; b < m->nbody; ++b) {
+      if (m->body_parentid[b] == 0 &&
+          tables_.body_articulation[static_cast<std::size_t>(b)] == static_cast<int>(a)) {
+        roots.push_back(b);
+        break;
+      }
+    }
+  }
+  cinematic_.Configure(session_->scene_config().cinematic, std::move(roots));
 }
 
 void ViewerCore::SelectArticulation(int index) {
@@ -222,12 +234,19 @@ void ViewerCore::Perform(Action action) {
     }
     case Action::kFreeCamera:
       if (possession_.active()) TogglePossess();
+      cinematic_.Stop();
       view_->camera().type = mjCAMERA_FREE;
       break;
     case Action::kTogglePossess:
       TogglePossess();
       break;
-    case Action::kToggleCinematic:
+    case Action::kToggleCinematic: {
+      const CinematicMode mode = cinematic_.Next();
+      if (mode != CinematicMode::kOff && possession_.active()) TogglePossess();
+      if (mode == CinematicMode::kOff) view_->camera().type = mjCAMERA_FREE;
+      spdlog::info("viewer: cinematic camera {}", ToString(mode));
+      break;
+    }
     case Action::kFireLaunchers:
       spdlog::info("viewer: nothing to do for this key in this scene");
       break;
@@ -245,6 +264,7 @@ void ViewerCore::TogglePossess() {
     spdlog::info("viewer: released '{}'", name);
     return;
   }
+  cinematic_.Stop();  // the chase camera takes over
   const world::Articulation& art =
       session_->articulations()[static_cast<std::size_t>(selected_articulation_)];
   control::TwistController* twist = art.control->twist();
@@ -319,6 +339,7 @@ void ViewerCore::Present() {
   view_->option().flags[mjVIS_TRANSPARENT] = want_contacts;
   ApplyPerturbation();
   possession_.UpdateCamera(view_->data(), &view_->camera());
+  cinematic_.Apply(view_->model(), view_->data(), frame_ ? frame_->time : 0.0, &view_->camera());
   view_->UpdateScene();
   HideVisualGeoms(view_->model(), debug_, tables_, &view_->scene());
   AddDebugGeoms(view_->model(), view_->data(), debug_, tables_, contacts_, &view_->scene());

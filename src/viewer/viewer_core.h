@@ -19,6 +19,7 @@
 #include "urlab/physics/engine.h"
 #include "urlab/viewer/viewer.h"
 #include "urlab/world/session.h"
+#include "viewer/cinematic.h"
 #include "viewer/debug_capture.h"
 #include "viewer/debug_draw.h"
 #include "viewer/hotkeys.h"
@@ -79,6 +80,8 @@ class ViewerCore : public InputHandler {
   void SelectArticulation(int index);
   // Possession of the selected articulation (Tab, the panel's Possess button).
   const Possession& possession() const { return possession_; }
+  // The cinematic camera (O).
+  const Cinematic& cinematic() const { return cinematic_; }
   // The window's size in screen coordinates (input events use them).
   void WindowSize(int* w, int* h) const;
   // Takes a screenshot of the next drawn frame into `path`.
@@ -110,6 +113,7 @@ class ViewerCore : public InputHandler {
   std::vector<CapturedContact> contacts_;
   MouseControl mouse_;
   Possession possession_;
+  Cinematic cinematic_;
   InputMapping input_;
   double cursor_x_ = 0, cursor_y_ = 0;
   int selected_articulation_ = 0;

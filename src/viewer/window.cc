@@ -18,6 +18,7 @@
 #include <string>
 #include <thread>
 
+#include "render/render_thread.h"
 #include "urlab/core/error.h"
 
 namespace urlab::viewer::internal {
@@ -66,24 +67,13 @@ class LowerPriorityScope {
   bool lowered_ = false;
 };
 
-void LimitSoftwareRasterThreads() {
-  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  const std::string n = std::to_string(std::max(1u, cores - 1));
-  setenv("LP_NUM_THREADS", n.c_str(), /*overwrite=*/0);  // the user's setting wins
-}
-
 InputHandler* HandlerOf(GLFWwindow* w) {
   return static_cast<InputHandler*>(glfwGetWindowUserPointer(w));
 }
 
 }  // namespace
 
-bool LowerRenderThreadPriority() {
-  errno = 0;
-  const int now = getpriority(PRIO_PROCESS, static_cast<id_t>(gettid()));
-  return errno == 0 &&
-         setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), now + kRenderNice) == 0;
-}
+bool LowerRenderThreadPriority() { return render::LowerThreadPriority(kRenderNice); }
 
 Window::Window(int width, int height, const std::string& title, InputHandler* handler, bool imgui)
     : handler_(handler) {
@@ -97,7 +87,7 @@ Window::Window(int width, int height, const std::string& title, InputHandler* ha
   // Default hints: a compatibility context, as MuJoCo's fixed-function renderer needs.
   glfwDefaultWindowHints();
   glfwWindowHint(GLFW_SAMPLES, 0);
-  LimitSoftwareRasterThreads();
+  render::LimitSoftwareRasterThreads();
   {
     LowerPriorityScope lower;
     window_ = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);

@@ -521,6 +521,49 @@ class Parser {
     return b;
   }
 
+  // cinematic: {orbit_period, orbit_elevation, orbit_distance, loop, path: [{t, pos, look_at}]}.
+  CinematicConfig Cinematic(const YAML::Node& n) const {
+    if (!n.IsMap()) Fail(n, "cinematic must be a map");
+    CheckKeys(n, "cinematic",
+              {"orbit_period", "orbit_elevation", "orbit_distance", "loop", "path"});
+    CinematicConfig c;
+    c.where = At(n);
+    if (n["orbit_period"]) {
+      c.orbit_period = Number(n["orbit_period"], "cinematic.orbit_period",
+                              Range{0, std::numeric_limits<double>::max(), true});
+    }
+    if (n["orbit_elevation"]) {
+      c.orbit_elevation = Number(n["orbit_elevation"], "cinematic.orbit_elevation", Range{-90, 90});
+    }
+    if (n["orbit_distance"]) {
+      c.orbit_distance =
+          Number(n["orbit_distance"], "cinematic.orbit_distance", kNonNegativeFinite);
+    }
+    if (n["loop"]) c.loop = Bool(n["loop"], "cinematic.loop");
+    if (const auto path = n["path"]) {
+      if (!path.IsSequence()) Fail(path, "cinematic.path must be a list of keys {t, pos, look_at}");
+      for (const auto& k : path) {
+        if (!k.IsMap()) Fail(k, "cinematic.path keys must be maps {t, pos, look_at}");
+        CheckKeys(k, "cinematic.path key", {"t", "pos", "look_at"});
+        if (!k["t"] || !k["pos"] || !k["look_at"]) {
+          Fail(k, "a cinematic.path key needs t, pos and look_at");
+        }
+        CameraKey key;
+        key.time = Number(k["t"], "cinematic.path.t", kNonNegativeFinite);
+        const auto p = Numbers(k["pos"], "cinematic.path.pos", 3);
+        const auto l = Numbers(k["look_at"], "cinematic.path.look_at", 3);
+        key.pos = {p[0], p[1], p[2]};
+        key.look_at = {l[0], l[1], l[2]};
+        if (!c.path.empty() && key.time <= c.path.back().time) {
+          Fail(k["t"], "cinematic.path times must increase");
+        }
+        if (key.pos == key.look_at) Fail(k, "cinematic.path: pos and look_at must differ");
+        c.path.push_back(key);
+      }
+    }
+    return c;
+  }
+
   ArticulationConfig Articulation(const YAML::Node& n) const {
     CheckKeys(
         n, "articulation",
@@ -660,7 +703,7 @@ class Parser {
     }
     CheckKeys(root, "the scene",
               {"articulations", "props", "terrain", "options", "size", "control_source", "network",
-               "save_debug_xml", "cameras"});
+               "save_debug_xml", "cameras", "cinematic"});
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {
       Fail(arts ? arts : root, "the scene needs a non-empty list 'articulations'");
@@ -703,6 +746,7 @@ class Parser {
       }
     }
     if (root["control_source"]) s.control_source = Source(root["control_source"]);
+    if (const auto n = root["cinematic"]) s.cinematic = Cinematic(n);
     if (root["cameras"]) s.cameras = Cameras(root["cameras"]);
     for (const auto& [key, settings] : s.cameras.cameras) {
       const std::string art = key.substr(0, key.find('/'));

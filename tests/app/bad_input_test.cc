@@ -253,9 +253,9 @@ TEST_F(CliBadInputTest, ErrorsAlwaysHaveALocation) {
   EXPECT_TRUE(Has(out, "urlab: error: " + scene + ":3: keys in the scene must be names")) << out;
   EXPECT_FALSE(Has(out, "unexpected")) << out;
   const std::string future = Write(
-      "f.yaml", "articulations:\n  - {name: a, mjcf: " + kArm + "}\ncameras: {file: h.png}\n");
+      "f.yaml", "articulations:\n  - {name: a, mjcf: " + kArm + "}\nlights: [{pos: [0, 0, 3]}]\n");
   EXPECT_EQ(Urlab("validate " + future, &out), 1) << out;
-  EXPECT_TRUE(Has(out, future + ":3: 'cameras:' is not supported yet")) << out;
+  EXPECT_TRUE(Has(out, future + ":3: 'lights:' is not supported yet")) << out;
 }
 
 TEST_F(CliBadInputTest, SignalsDuringALongCompileStopAtOnce) {

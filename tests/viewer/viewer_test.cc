@@ -584,6 +584,43 @@ TEST_F(ViewerTest, InputMappingErrorsNameTheBinding) {
   }
 }
 
+TEST_F(ViewerTest, OCyclesOrbitAndKeyframeCameras) {
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  // The path looks at the ball from two sides (the ball rests at 0.5 0.4 0.1).
+  Play(kBotXml, vo, true,
+       "cinematic:\n  orbit_period: 8\n  path:\n"
+       "    - {t: 0, pos: [2.5, 0.4, 1.0], look_at: [0.5, 0.4, 0.1]}\n"
+       "    - {t: 10, pos: [0.5, 2.4, 1.0], look_at: [0.5, 0.4, 0.1]}\n");
+  using viewer::internal::CinematicMode;
+  const mjtNum* ball = BodyPos("base");
+  int w = 0, h = 0;
+  core().window().FramebufferSize(&w, &h);
+  // O: the orbit camera looks at the robot's root body.
+  Key(GLFW_KEY_O);
+  EXPECT_EQ(core().cinematic().mode(), CinematicMode::kOrbit);
+  viewer_->ReadPixels();  // draws a frame
+  const mjvCamera& cam = core().view().camera();
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(cam.lookat[c], ball[c], 1e-9);
+  // O again: the keyframe path; at t=0 the camera is at the first key, the ball in the middle
+  // of the image and drawn there (red).
+  Key(GLFW_KEY_O);
+  EXPECT_EQ(core().cinematic().mode(), CinematicMode::kPath);
+  const Image path = viewer_->ReadPixels();
+  EXPECT_NEAR(cam.distance, std::sqrt(2.0 * 2.0 + 0.9 * 0.9), 1e-6);
+  EXPECT_NEAR(std::abs(cam.azimuth), 180, 1e-6);  // looking from +x along -x at the ball
+  EXPECT_LT(cam.elevation, 0);                      // and down
+  const Pixel p = Project(core(), ball);
+  EXPECT_NEAR(p.x, w / 2.0, 3);
+  EXPECT_NEAR(p.y, h / 2.0, 3);
+  const auto* centre = path.at(w / 2, h / 2);
+  EXPECT_GT(centre[0], 2 * centre[2]) << "the red ball at the image centre";
+  // O again: off, the free camera keeps the last shot.
+  Key(GLFW_KEY_O);
+  EXPECT_EQ(core().cinematic().mode(), CinematicMode::kOff);
+  EXPECT_EQ(cam.type, mjCAMERA_FREE);
+}
+
 TEST_F(ViewerTest, KeysPauseResetAndScreenshot) {
   Play(kBotXml, {}, /*paused=*/false);
   ASSERT_TRUE(TickUntil([&] { return core().frame()->time > 0.1; }));

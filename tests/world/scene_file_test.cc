@@ -95,6 +95,18 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       {WithArm("cameras:\n  streams:\n    head: {rate: 5}\n"), 6, "\"articulation/camera\""},
       {WithArm("cameras:\n  streams:\n    a/head: {zoom: 5}\n"), 6, "unknown key 'zoom'"},
       {WithArm("    cameras: maybe\n"), 4, "true, false or a list of camera names"},
+      // cinematic cameras (the viewer's O)
+      {WithArm("cinematic: []\n"), 4, "cinematic must be a map"},
+      {WithArm("cinematic: {orbit_period: 0}\n"), 4, "cinematic.orbit_period"},
+      {WithArm("cinematic: {orbit_elevation: 95}\n"), 4, "cinematic.orbit_elevation"},
+      {WithArm("cinematic: {zoom: 2}\n"), 4, "unknown key 'zoom'"},
+      {WithArm("cinematic:\n  path:\n    - {t: 0, pos: [1, 0, 0]}\n"), 6,
+       "needs t, pos and look_at"},
+      {WithArm("cinematic:\n  path:\n    - {t: 1, pos: [1, 0, 0], look_at: [0, 0, 0]}\n"
+               "    - {t: 1, pos: [2, 0, 0], look_at: [0, 0, 0]}\n"),
+       7, "times must increase"},
+      {WithArm("cinematic:\n  path:\n    - {t: 0, pos: [1, 0, 0], look_at: [1, 0, 0]}\n"), 6,
+       "pos and look_at must differ"},
       {WithArm("recording: {file: r.bin}\n"), 4, "'recording:' is not supported yet"},
   };
   for (const Case& c : cases) {

@@ -130,6 +130,22 @@ struct CamerasConfig {
 // The camera modes a scene may ask for, in wire order.
 inline constexpr const char* kCameraModes[] = {"rgb", "depth", "segmentation", "instance"};
 
+// Cinematic cameras (the viewer's O key): an orbit around every articulation's root body, and a
+// keyframe camera path (positions and look-at targets at simulation times, interpolated smoothly).
+struct CameraKey {
+  double time = 0;
+  std::array<double, 3> pos{}, look_at{};
+};
+
+struct CinematicConfig {
+  double orbit_period = 30;      // seconds of simulation time per turn
+  double orbit_elevation = -20;  // degrees
+  double orbit_distance = 0;     // metres; 0 frames every robot
+  std::vector<CameraKey> path;   // strictly increasing times
+  bool loop = true;              // the path repeats (else it holds its last pose)
+  SourceLocation where;
+};
+
 struct NetworkConfig {
   bool enabled = true;
   std::string state = "tcp://*:5555";
@@ -151,6 +167,7 @@ struct SceneConfig {
   ControlSource control_source = ControlSource::kNetwork;
   NetworkConfig network;
   CamerasConfig cameras;
+  CinematicConfig cinematic;
   std::string save_debug_xml;  // folder for scene_compiled.xml/.mjb ("" = off)
 };
 
