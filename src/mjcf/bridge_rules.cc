@@ -30,10 +30,10 @@ constexpr BridgeRule kRules[] = {
     {"compiler.conflict",               "compiler conflict",                                 kD, "Compiler"},
     {"compiler.discardvisual",          "compiler discardvisual=\"true\"",                   kT, "KeepVisualGeoms"},
     {"compiler.lengthrange.interval",   "lengthrange interval",                              kT, "Compiler"},
-    {"attach",                          "<attach model body prefix> of a <model> asset",     kT, "ExpandAttachments (bridge_attach.cc)"},
-    {"attach.model",                    "<model> asset",                                     kT, "ExpandAttachments (bridge_attach.cc)"},
-    {"attach.defaults",                 "<attach> under a parent with top-level defaults",   kA, "ExpandAttachments (bridge_attach.cc)"},
-    {"attach.refused",                  "self-attachment, frame=, child keyframes",          kR, "ExpandAttachments (bridge_attach.cc)"},
+    {"attach",                          "<attach model body prefix> of a <model> asset",     kT, "src/mjcf/bridge_attach.cc ExpandAttachments"},
+    {"attach.model",                    "<model> asset",                                     kT, "src/mjcf/bridge_attach.cc ExpandAttachments"},
+    {"attach.defaults",                 "<attach> under a parent with top-level defaults",   kA, "src/mjcf/bridge_attach.cc ExpandAttachments"},
+    {"attach.refused",                  "self-attachment, frame=, child keyframes",          kR, "src/mjcf/bridge_attach.cc ExpandAttachments"},
     {"replicate",                       "<replicate> count/offset/euler/sep",                kT, "Replicate"},
     {"replicate.reference",             "element referring into a <replicate>",              kT, "Replicate"},
     {"replicate.invalid",               "<replicate> without a positive count",              kR, "Replicate"},
@@ -88,6 +88,7 @@ constexpr BridgeRule kRules[] = {
     {"mesh.inertia",                    "mesh inertia legacy/convex/exact",                  kT, "MeshInertia"},
     {"mesh.exactmeshinertia",           "mesh volumes (all exact or inline)",                kT, "MeshInertia"},
     {"mesh.exactmeshinertia.nonconvex", "mesh volumes (files that may be non-convex)",       kA, "MeshInertia"},
+    {"mesh.orientation",                "mesh file whose faces disagree (or face inwards)",  kT, "src/convert/mesh_assets.cc OrientedFile"},
     {"light.directional",               "light type=\"directional\"",                        kT, "LightType"},
     {"camera.intrinsics",               "camera sensorsize/focal/focalpixel/resolution",     kT, "CameraIntrinsics"},
     {"camera.principal",                "camera principal/principalpixel",                   kA, "CameraIntrinsics"},
@@ -154,6 +155,14 @@ constexpr RefusedElement kRefused[] = {
 std::span<const RefusedElement> RefusedElements() { return kRefused; }
 
 std::span<const BridgeRule> BridgeRules() { return kRules; }
+
+std::string BridgeRuleFunction(const BridgeRule& rule) {
+  const std::string f = rule.function;
+  if (f.find(".cc ") != std::string::npos) return f;
+  std::string out = "src/mjcf/bridge.cc ";  // no "literal" + string: GCC 12 -O3 -Wrestrict
+  out += f;
+  return out;
+}
 
 std::span<const AttributePolicy> AttributePolicies() { return kPolicies; }
 

@@ -26,6 +26,7 @@
 #include <sstream>
 
 #include "mujoco_test.h"
+#include "urlab/convert/mesh_assets.h"
 #include "urlab/mjcf/bridge.h"
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
@@ -115,6 +116,7 @@ enum class When {
   kMeshGeom,                   // a mesh geom
   kHfieldGeom,                 // a height field geom
   kBodyWithMesh,               // a body with a mesh geom (mass properties may come from it)
+  kDofMovesMesh,               // a joint's dofs move a body with a mesh geom (its subtree has one)
 };
 
 // Tolerances: the first row whose quantity ("category.field", a category, or "*") matches and
@@ -137,6 +139,7 @@ constexpr Tolerance kTolerances[] = {
      "carries float rounding (~5e-8 relative); render-only"},
     {"geom", When::kMeshGeom, 1e-6, 1e-9, kFloatMesh},
     {"body", When::kBodyWithMesh, 1e-6, 1e-12, kFloatMesh},
+    {"dof.M0", When::kDofMovesMesh, 1e-6, 1e-12, kFloatMesh},
     {"trajectory", When::kAlways, 1e-6, 1e-9,
      "zero-control trajectory without contacts, 500 steps: the same equations of motion "
      "(actuators, limits, passive forces, equalities, integrator) in both engines; round-off "
@@ -766,6 +769,19 @@ class Comparison {
         return cat == "geom" && ref_["geom"][ent].value("type", "") == "hfield";
       case urlab::When::kImplicitFast:
         return ref_["option"]["opt"].value("integrator", "") == "implicitfast";
+      case urlab::When::kDofMovesMesh: {
+        if (cat != "dof" || !ref_.contains("geom") || !ref_["joint"].contains(ent)) return false;
+        const std::string body = ref_["joint"][ent].value("body", "");
+        for (const auto& [g, fields] : ref_["geom"].items()) {
+          if (fields.value("type", "") != "mesh") continue;
+          // Up from the mesh's body: is the joint's body one of its ancestors (or itself)?
+          for (std::string b = fields.value("body", "world"); b != "world";
+               b = ref_["body"][b].value("parent", "world")) {
+            if (b == body) return true;
+          }
+        }
+        return false;
+      }
       case urlab::When::kBodyWithMesh:
         if (cat != "body" || !ref_.contains("geom")) return false;
         for (const auto& [g, fields] : ref_["geom"].items()) {
@@ -958,6 +974,7 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
   std::cout << "MuJoCo 3.x reference: " << ref["version"].get<std::string>() << " (mujoco-js in "
             << js_dir << "); MuJoCo " << mj_versionString() << " here\n";
 
+  const std::string mesh_cache = testing::MakeTempDir("reference3x_meshes");
   std::map<std::string, Stat> stats;
   std::map<std::string, std::map<std::string, Stat>> per_model;  // bridge corpus: model -> quantity
   std::set<std::string> compared;
@@ -965,14 +982,18 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
     SCOPED_TRACE(id);
     const json& r = ref["models"][id];
     ASSERT_FALSE(r.contains("error")) << id << ": MuJoCo 3.x could not load it: " << r["error"];
-    // Our side: the single-file path of `urlab compile` (world::BuildModel's steps).
+    // Our side: the single-file path of `urlab compile` (world::BuildModel's steps: reader,
+    // bridge, mesh preparation with the face orientation repair, writer, compile).
     document::Document doc = mjcf::ReadFile(path);
     doc.root().Visit([](document::Element& e) {
       for (const NewerAttribute& n : kNewerThanReference) {
         if (n.affects_physics && e.tag() == n.element) e.Unset(n.attribute);
       }
     });
-    const mjcf::BridgeReport report = mjcf::ApplyBridge(doc);
+    mjcf::BridgeReport report = mjcf::ApplyBridge(doc);
+    const convert::MeshAssetReport meshes = convert::PrepareMeshAssets(doc, mesh_cache);
+    report.changes.insert(report.changes.end(), meshes.bridge_changes.begin(),
+                          meshes.bridge_changes.end());
     physics::ModelPtr model = physics::CompileXmlString(mjcf::WriteString(doc));
     physics::DataPtr data = physics::MakeData(model.get());
     // The runtime's share of the bridge (software sensors, gravity compensation), as urlab runs.
@@ -1017,6 +1038,10 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
            "bridge3x/sensors|contact_trajectory_sensor.value|kinetic@100",      // e_kinetic
            "bridge3x/sensors|contact_trajectory_sensor.value|potential@100",    // e_potential
            "bridge3x/gravcomp|trajectory.qpos|ball_free@500",                   // over-compensated
+           "bridge3x/mesh_orientation|body.mass|crate",     // OBJ with disagreeing faces
+           "bridge3x/mesh_orientation|body.inertia|wedge",  // STL with a facet turned inwards
+           "bridge3x/mesh_orientation|trajectory.qpos|swing@500",
+           "bridge3x/mesh_orientation|contact_trajectory.qpos|crate_free@500",
        }) {
     EXPECT_TRUE(compared.count(must)) << "not compared: " << must;
   }
