@@ -605,12 +605,24 @@ class Bridge {
   // orientation). 2.2.2 knows only bodies, and derives the second anchor (and the weld's relative
   // pose) from qpos0; the body constraint is written here and its data set from the compiled
   // sites after compilation (ApplySiteEqualities), which is exact wherever the sites start.
+  // Every weld, on bodies too, differs from 3.x's in two ways 2.2.2 offers no hook for
+  // (reference3x_test SiteWeldDiffersOnlyByTwoWeldChangesOfMujoco3 pins both).
+  static constexpr const char* kWeldSince3 =
+      "MuJoCo 3.x changed the weld after 2.2.2: 2.2.2's efc_diagApprox gives all six rows the "
+      "bodies' translational inverse weight (3.0.0: the rotational rows get the rotational "
+      "one), so the orientation part is regularised, hence softened, differently; and with "
+      "torquescale != 1 2.2.2 scales the rotational Jacobian but not the angular residual "
+      "(3.0.1 scales both). Same constraint (same pose held), different stiffness under load "
+      "and transient";
   void SiteEqualities() {
     int unnamed = 0;
     for (Element* e : Find({"connect", "weld"})) {
       if (!e->parent() || e->parent()->tag() != "equality") continue;
       const std::string* a = e->Get("site1");
       const std::string* b = e->Get("site2");
+      if (!a && !b && e->tag() == "weld") {
+        Note("equality.weld", *e, Tag(*e) + " kept as it is: " + kWeldSince3);
+      }
       if (!a && !b) continue;
       if (!a || !b) {
         Note("equality.site.refused", *e,
@@ -644,11 +656,7 @@ class Bridge {
            Tag(*e) + " site1='" + s1 + "' site2='" + s2 + "' -> body1='" + b1 + "' body2='" + b2 +
                "'; anchors" + (e->tag() == "weld" ? " and relative orientation" : "") +
                " set from the sites' frames after compilation" +
-               (e->tag() == "weld" ? "; 3.x's site weld weighs the rotational residual "
-                                     "differently (same equilibrium without load, different "
-                                     "transient and sag)"
-                                   : "") +
-               ignored);
+               (e->tag() == "weld" ? std::string("; ") + kWeldSince3 : std::string()) + ignored);
     }
   }
 

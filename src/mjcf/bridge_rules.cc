@@ -41,6 +41,7 @@ constexpr BridgeRule kRules[] = {
     {"frame.child",                     "element that cannot move inside a posed <frame>",   kR, "FlattenFrames"},
     {"equality.site",                   "equality connect site1/site2",                      kT, "SiteEqualities"},
     {"equality.site.weld",              "equality weld site1/site2",                         kA, "SiteEqualities"},
+    {"equality.weld",                   "equality weld on bodies (3.x's weld rows)",         kA, "SiteEqualities"},
     {"equality.site.refused",           "equality with only one of site1/site2",             kR, "SiteEqualities"},
     {"actuator.armature_damping",       "actuator armature/damping on a joint or tendon",    kT, "ActuatorArmatureDamping"},
     {"actuator.armature_damping.default", "default actuator armature/damping",               kT, "ActuatorArmatureDamping"},

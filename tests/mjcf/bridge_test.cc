@@ -776,6 +776,30 @@ TEST_F(BridgeTest, ReplicateFollowsTheReferenceExample) {
   EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "refers into a <replicate>"));
 }
 
+// A weld in a 3.x document is kept but reported as approximated (2.2.2's weld rows differ from
+// 3.x's: reference3x_test SiteWeldDiffersOnlyByTwoWeldChangesOfMujoco3); a 2.2.2 document's is
+// not touched.
+TEST_F(BridgeTest, WeldsOf3xDocumentsAreApproximated) {
+  const std::string model = R"(<mujoco>
+  <worldbody>
+    <body name="a" pos="0 0 1" GRAVCOMP><freejoint/><geom size="0.1"/></body>
+  </worldbody>
+  <equality><weld body1="a" torquescale="0.5"/></equality>
+</mujoco>)";
+  std::string x3 = model;
+  x3.replace(x3.find("GRAVCOMP"), 8, R"(gravcomp="0.5")");
+  const Bridged b = Load(x3);
+  EXPECT_TRUE(Mentions(b.report, Kind::kApproximated, "efc_diagApprox"));
+  for (const BridgeChange& c : b.report.changes) {
+    if (c.rule == "equality.weld") {
+      EXPECT_EQ(c.where.line, 5);
+    }
+  }
+  std::string x2 = model;
+  x2.replace(x2.find("GRAVCOMP"), 8, "");
+  EXPECT_TRUE(Load(x2).report.changes.empty());
+}
+
 // What cannot be expressed in 2.2.2 is refused with where, why and the nearest 2.2.2 construct
 // (reference3x_test checks that MuJoCo 3.x loads these models).
 TEST_F(BridgeTest, InexpressibleConstructsAreRefusedWithReasonAndNearestConstruct) {
