@@ -10,9 +10,11 @@
 #include <memory>
 #include <set>
 #include <sstream>
+#include <type_traits>
 
 #include "mjcf/bridge_attach.h"
 #include "mjcf/bridge_rules.h"
+#include "mjcf/trial_compile.h"
 #include "urlab/document/orientation.h"
 #include "urlab/mjcf/writer.h"
 
@@ -71,23 +73,6 @@ bool AllZero(const std::vector<double>& v) {
   return std::all_of(v.begin(), v.end(), [](double x) { return x == 0; });
 }
 
-// mj_loadXML of `xml` from a VFS (the trial compile for dampratio). nullptr + message on failure.
-mjModel* TrialCompile(const std::string& xml, std::string* error) {
-  mjVFS vfs;
-  mj_defaultVFS(&vfs);
-  const char* name = "urlab_bridge_trial.xml";
-  if (mj_makeEmptyFileVFS(&vfs, name, static_cast<int>(xml.size())) != 0) {
-    *error = "could not allocate the in-memory model";
-    return nullptr;
-  }
-  std::memcpy(vfs.filedata[mj_findFileVFS(&vfs, name)], xml.data(), xml.size());
-  char buf[1024] = "";
-  mjModel* m = mj_loadXML(name, &vfs, buf, sizeof(buf));
-  mj_deleteVFS(&vfs);
-  if (!m) *error = buf;
-  return m;
-}
-
 class Bridge {
  public:
   Bridge(Document& doc, BridgeReport& report) : doc_(doc), report_(report) {}
@@ -98,7 +83,7 @@ class Bridge {
     compiler_ = doc_.Compiler();
     Compiler();
     compiler_ = doc_.Compiler();
-    ExpandAttachments(doc_, report_);
+    ExpandAttachments(doc_, report_, &attached_keys_);
     Replicates();
     FlattenFrames();
     SiteEqualities();
@@ -1592,15 +1577,68 @@ class Bridge {
     return true;
   }
 
+  // An attached model's keyframe (bridge_attach.h) as a key of the whole model: qpos0, zero
+  // velocities, controls and activations, mocap bodies at their poses, then the child's values
+  // at its elements' addresses.
+  void WriteAttachedKey(const mjModel* m, const AttachedKey& k) {
+    std::vector<double> qpos(m->qpos0, m->qpos0 + m->nq), qvel(static_cast<size_t>(m->nv));
+    std::vector<double> ctrl(static_cast<size_t>(m->nu)), act(static_cast<size_t>(m->na));
+    std::vector<double> mpos(static_cast<size_t>(3 * m->nmocap));
+    std::vector<double> mquat(static_cast<size_t>(4 * m->nmocap));
+    for (int b = 0; b < m->nbody; ++b) {
+      if (const int id = m->body_mocapid[b]; id >= 0) {
+        std::copy_n(m->body_pos + 3 * b, 3, mpos.begin() + 3 * id);
+        std::copy_n(m->body_quat + 4 * b, 4, mquat.begin() + 4 * id);
+      }
+    }
+    auto place = [&](mjtObj type, const auto& values, auto address, std::vector<double>& into) {
+      for (const auto& [name, v] : values) {
+        const int id = mj_name2id(m, type, name.c_str());
+        const int at = id < 0 ? -1 : address(id);
+        if (at < 0) continue;  // not attached (outside the subtree, or stayed in the child)
+        if constexpr (std::is_same_v<std::decay_t<decltype(v)>, double>) {
+          into[static_cast<size_t>(at)] = v;
+        } else {
+          std::copy(v.begin(), v.end(), into.begin() + at);
+        }
+      }
+    };
+    place(
+        mjOBJ_JOINT, k.qpos, [&](int j) { return m->jnt_qposadr[j]; }, qpos);
+    place(
+        mjOBJ_JOINT, k.qvel, [&](int j) { return m->jnt_dofadr[j]; }, qvel);
+    place(
+        mjOBJ_ACTUATOR, k.ctrl, [](int a) { return a; }, ctrl);
+    place(
+        mjOBJ_ACTUATOR, k.act,
+        [&](int a) { return m->actuator_dyntype[a] == mjDYN_NONE ? -1 : a - (m->nu - m->na); },
+        act);
+    place(
+        mjOBJ_BODY, k.mpos, [&](int b) { return 3 * m->body_mocapid[b]; }, mpos);
+    place(
+        mjOBJ_BODY, k.mquat, [&](int b) { return 4 * m->body_mocapid[b]; }, mquat);
+    if (k.time != 0) k.key->SetReals("time", std::vector<double>{k.time});
+    k.key->SetReals("qpos", qpos);
+    if (m->nv) k.key->SetReals("qvel", qvel);
+    if (m->nu) k.key->SetReals("ctrl", ctrl);
+    if (m->na) k.key->SetReals("act", act);
+    if (m->nmocap) {
+      k.key->SetReals("mpos", mpos);
+      k.key->SetReals("mquat", mquat);
+    }
+  }
+
   void PadKeyframes() {
     Element* section = nullptr;
     for (Element* k : Find({"keyframe"})) section = k;
-    if (!section || section->children().empty() || KeysFitTheDocument(*section)) return;
+    if (!section || section->children().empty()) return;
+    if (attached_keys_.empty() && KeysFitTheDocument(*section)) return;
     std::unique_ptr<Element> keys = doc_.root().RemoveChild(section);
     std::string error;
     mjModel* m = TrialCompile(WriteString(doc_), &error);
     doc_.root().InsertChild(doc_.root().children().size(), std::move(keys));
     if (!m) return;  // the real compile reports it
+    for (const AttachedKey& k : attached_keys_) WriteAttachedKey(m, k);
     for (const auto& k : section->children()) {
       std::vector<std::string> padded;
       auto pad = [&](const char* attr, int size, const mjtNum* fill) {
@@ -2001,6 +2039,7 @@ class Bridge {
 
   Document& doc_;
   BridgeReport& report_;
+  std::vector<AttachedKey> attached_keys_;  // keyframes of attached models (ExpandAttachments)
   CompilerSettings compiler_;
   bool springs_off_ = false;  // flag spring disabled, damper enabled
   bool dampers_off_ = false;  // flag damper disabled, spring enabled

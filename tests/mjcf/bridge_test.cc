@@ -776,6 +776,50 @@ TEST_F(BridgeTest, ReplicateFollowsTheReferenceExample) {
   EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "refers into a <replicate>"));
 }
 
+// Keyframes of an attached model join the parent's as "{prefix}{name}": the attached joints',
+// actuators' (activations included) values from the child's key, everything else (a joint and
+// a mocap body of the child outside the attached subtree, the parent's own) as qpos0 / zero /
+// the body's pose (reference3x_test compares parent.xml's merged keys with MuJoCo 3.3.8).
+TEST_F(BridgeTest, AttachedModelsKeyframesAreMergedByName) {
+  Write("child.xml", R"(<mujoco model="child">
+  <worldbody>
+    <body name="outside"><joint name="out" type="slide"/><geom size="0.1"/></body>
+    <body name="target" mocap="true" pos="1 0 0"><geom size="0.05" contype="0" conaffinity="0"/></body>
+    <body name="arm" pos="0 0 1"><joint name="j" axis="0 1 0"/><geom size="0.1"/></body>
+  </worldbody>
+  <actuator><general name="filt" joint="j" dyntype="filter" dynprm="0.1"/></actuator>
+  <keyframe>
+    <key name="k" time="2" qpos="0.7 0.4" qvel="0.1 0.2" act="0.25" ctrl="0.5" mpos="1 2 3" mquat="0 1 0 0"/>
+  </keyframe>
+</mujoco>)");
+  const Bridged b = Load(R"(<mujoco>
+  <asset><model name="c" file="child.xml"/></asset>
+  <worldbody>
+    <body name="m" mocap="true" pos="0 1 0"/>
+    <body name="p"><joint name="pj" type="slide" ref="0.05"/><geom size="0.1"/>
+      <attach model="c" body="arm" prefix="c_"/>
+    </body>
+  </worldbody>
+</mujoco>)");
+  EXPECT_FALSE(b.report.HasRefusals()) << b.report.Format();
+  const mjModel* m = b.model.get();
+  ASSERT_EQ(m->nkey, 1);
+  EXPECT_STREQ(mj_id2name(m, mjOBJ_KEY, 0), "c_k");
+  EXPECT_EQ(m->key_time[0], 2);
+  const int pj = Id(m, mjOBJ_JOINT, "pj"), j = Id(m, mjOBJ_JOINT, "c_j");
+  EXPECT_EQ(m->key_qpos[m->jnt_qposadr[pj]], 0.05);  // the parent's joint at qpos0
+  EXPECT_EQ(m->key_qpos[m->jnt_qposadr[j]], 0.4);
+  EXPECT_EQ(m->key_qvel[m->jnt_dofadr[pj]], 0);
+  EXPECT_EQ(m->key_qvel[m->jnt_dofadr[j]], 0.2);
+  ASSERT_EQ(m->nu, 1);
+  EXPECT_EQ(m->key_ctrl[0], 0.5);
+  EXPECT_EQ(m->key_act[0], 0.25);
+  ASSERT_EQ(m->nmocap, 1);  // the parent's; the child's target stayed behind
+  EXPECT_EQ(m->key_mpos[1], 1);
+  EXPECT_EQ(m->key_mquat[0], 1);
+  EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "keyframe(s) added after the parent's keys"));
+}
+
 // A weld in a 3.x document is kept but reported as approximated (2.2.2's weld rows differ from
 // 3.x's: reference3x_test SiteWeldDiffersOnlyByTwoWeldChangesOfMujoco3); a 2.2.2 document's is
 // not touched.

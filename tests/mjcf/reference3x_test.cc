@@ -1045,12 +1045,18 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
            "bridge3x/attach/parent|body.pos|right_base",                    // attach in a frame
            "bridge3x/attach/parent|actuator.biasprm|left_elbow_servo",      // attached actuator
            "bridge3x/attach/parent|trajectory_sensor.value|right_tip_pos@500",  // and sensor
-           "bridge3x/sensors|contact_trajectory_sensor.value|ball_any@100",     // contact, data
-           "bridge3x/sensors|contact_trajectory_sensor.value|floor_box@100",    // body1/body2
-           "bridge3x/sensors|contact_trajectory_sensor.value|in_zone@100",      // insidesite
-           "bridge3x/sensors|contact_trajectory_sensor.value|kinetic@100",      // e_kinetic
-           "bridge3x/sensors|contact_trajectory_sensor.value|potential@100",    // e_potential
-           "bridge3x/gravcomp|trajectory.qpos|ball_free@500",                   // over-compensated
+           "bridge3x/attach/parent|key.qpos|left_bent/left_shoulder",  // attached keyframes
+           "bridge3x/attach/parent|key.qpos|left_bent/right_elbow",    // the rest at qpos0
+           "bridge3x/attach/parent|key.qvel|right_/right_elbow",       // unnamed: the prefix
+           "bridge3x/attach/parent|key.time|right_",
+           "bridge3x/attach/parent|key.ctrl|right_bent/right_elbow_servo",
+           "bridge3x/attach/parent|key.qpos|home/left_shoulder",              // parent's key first
+           "bridge3x/sensors|contact_trajectory_sensor.value|ball_any@100",   // contact, data
+           "bridge3x/sensors|contact_trajectory_sensor.value|floor_box@100",  // body1/body2
+           "bridge3x/sensors|contact_trajectory_sensor.value|in_zone@100",    // insidesite
+           "bridge3x/sensors|contact_trajectory_sensor.value|kinetic@100",    // e_kinetic
+           "bridge3x/sensors|contact_trajectory_sensor.value|potential@100",  // e_potential
+           "bridge3x/gravcomp|trajectory.qpos|ball_free@500",                 // over-compensated
            "bridge3x/mesh_orientation|body.mass|crate",     // OBJ with disagreeing faces
            "bridge3x/mesh_orientation|body.inertia|wedge",  // STL with a facet turned inwards
            "bridge3x/mesh_orientation|trajectory.qpos|swing@500",
