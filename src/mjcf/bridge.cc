@@ -86,6 +86,7 @@ class Bridge {
     ExpandAttachments(doc_, report_, &attached_keys_);
     Replicates();
     FlattenFrames();
+    FreeJointAlign();
     SiteEqualities();
     ActuatorArmatureDamping();
     GravityCompensation();
@@ -104,6 +105,7 @@ class Bridge {
     ComputedSensors();
     OrderActuators();
     Leftovers();
+    if (!report_.HasRefusals()) AlignFreeBodies();
     if (!report_.HasRefusals()) DampRatio();
     if (!report_.HasRefusals()) PadKeyframes();
   }
@@ -293,9 +295,10 @@ class Bridge {
       }
       if (const std::string* v = c.Get("alignfree")) {
         if (*v == "true") {
+          align_free_ = true;
           Note("compiler.alignfree", c,
-               "compiler alignfree=\"true\" re-expresses free bodies in their inertial frame, "
-               "which MuJoCo 2.2.2 cannot do; the body poses and qpos would differ");
+               "compiler alignfree=\"true\": free bodies without child bodies are aligned with "
+               "their inertial frame (see the freejoint align entries)");
         } else {
           Note("compiler.alignfree.false", c, "compiler alignfree=\"false\" is 2.2.2's behaviour");
         }
@@ -583,6 +586,115 @@ class Bridge {
     if (!childclass.empty()) what += ", childclass='" + childclass + "' given to them";
     Note("frame", f, what);
     parent->RemoveChild(&f);
+  }
+
+  // ---- free joint alignment ----
+  // 3.x can align a "simple free body" (a free joint, no child bodies) with its inertial frame
+  // at compile time (freejoint align="true", or "auto" under compiler alignfree="true"): the body
+  // frame moves to the centre of mass along the principal axes, its children are re-expressed in
+  // it, and ipos/iquat become zero/identity. That is a change of the model's description, so
+  // 2.2.2 gets the aligned document: FreeJointAlign picks the bodies, AlignFreeBodies (after a
+  // trial compile gives the inertial frames) rewrites them. Keyframes keep their numbers, which
+  // 3.x also reads as the aligned body's pose.
+  void FreeJointAlign() {
+    for (Element* j : Find({"freejoint", "joint"})) {
+      const std::string* a = j->Get("align");
+      if (j->tag() == "joint") {
+        const std::string* type = Resolve(*j, "type");
+        if (!type || *type != "free") continue;
+      }
+      const std::string mode = a ? *a : "auto";
+      if (mode != "true" && mode != "auto") continue;  // "false": the attribute policy drops it
+      const bool align = mode == "true" || align_free_;
+      Element* body = j->parent();
+      if (a) UnsetDialect(*j, "align");
+      if (!align || !body || body->tag() != "body") continue;
+      if (body->FirstChild("body")) {
+        Note("freejoint.align.nochildren", *j,
+             Tag(*j) +
+                 " align: no effect on a body with child bodies (MuJoCo 3.x aligns only "
+                 "free bodies without children)");
+        continue;
+      }
+      const std::string name = body->Name();
+      const Element* anchored = nullptr;
+      for (Element* e : Find({"connect", "weld"})) {
+        if (!name.empty() && (e->GetOr("body1", "") == name || e->GetOr("body2", "") == name)) {
+          anchored = e;
+        }
+      }
+      if (anchored) {
+        Note("freejoint.align.refused", *j,
+             Tag(*j) + " align: the body's equality " + Tag(*anchored) +
+                 " gives anchors in the body frame, which alignment moves; nearest 2.2.2 "
+                 "construct: align=\"false\" (or site1/site2 on the equality)");
+        continue;
+      }
+      to_align_.push_back(body);
+    }
+  }
+
+  void AlignFreeBodies() {
+    if (to_align_.empty()) return;
+    int unnamed = 0;
+    for (Element* b : to_align_) {
+      if (b->Name().empty()) b->Set("name", "aligned_body" + std::to_string(unnamed++));
+    }
+    std::string error;
+    mjModel* m = TrialCompile(WriteString(doc_), &error);
+    if (!m) {
+      for (Element* b : to_align_) {
+        Note(
+            "freejoint.align.refused", *b,
+            Tag(*b) + ": aligning its free joint needs the compiled model, which failed: " + error);
+      }
+      return;
+    }
+    for (Element* b : to_align_) {
+      const int id = mj_name2id(m, mjOBJ_BODY, b->Name().c_str());
+      if (id < 0) continue;
+      const Vec3 ip = {m->body_ipos[3 * id], m->body_ipos[3 * id + 1], m->body_ipos[3 * id + 2]};
+      const Quat iq = {m->body_iquat[4 * id], m->body_iquat[4 * id + 1], m->body_iquat[4 * id + 2],
+                       m->body_iquat[4 * id + 3]};
+      // The body moves to its inertial frame: pos + R(quat) ip, quat * iquat.
+      const Vec3 p = ResolvedVec(*b, "pos", {0, 0, 0});
+      const Quat q = ResolvedQuat(*b).value_or(document::kIdentityQuat);
+      const Vec3 d = document::QuatRotate(q, ip);
+      b->SetReals("pos", Vec3{p[0] + d[0], p[1] + d[1], p[2] + d[2]});
+      SetQuat(*b, document::QuatMul(q, iq));
+      // Its children move the other way: (-R(iquat)^T ipos, iquat^-1).
+      const Quat inv = {iq[0], -iq[1], -iq[2], -iq[3]};
+      const Vec3 r = document::QuatRotate(inv, ip);
+      std::vector<Element*> kids;
+      for (const auto& c : b->children()) kids.push_back(c.get());
+      for (Element* c : kids) {
+        if (c->tag() == "inertial") {
+          b->RemoveChild(c);
+          continue;
+        }
+        TransformChild(*c, {-r[0], -r[1], -r[2]}, inv, true);
+      }
+      // The inertia, explicit in the aligned frame (what 3.x compiles: ipos 0, iquat identity).
+      const document::ElementSpec* spec = b->spec()->FindChild("inertial");
+      auto inertial = std::make_unique<Element>(spec, "inertial");
+      inertial->set_location(b->location());
+      inertial->set_edited(true);
+      inertial->SetReals("pos", Vec3{0, 0, 0});
+      inertial->SetReals("quat", document::kIdentityQuat);
+      inertial->SetReals("mass", std::vector<double>{m->body_mass[id]});
+      inertial->SetReals("diaginertia", std::vector<double>(m->body_inertia + 3 * id,
+                                                            m->body_inertia + 3 * id + 3));
+      b->InsertChild(0, std::move(inertial));
+      Note("freejoint.align", *b,
+           Tag(*b) +
+               " aligned with its inertial frame as MuJoCo 3.x does (freejoint align): "
+               "the body moved by ipos " +
+               FormatReals(ip) + " and iquat " + FormatReals(iq) + ", its " +
+               std::to_string(kids.size()) +
+               " child element(s) re-expressed in the new frame, the inertia written explicitly "
+               "(ipos 0, iquat identity); the free joint's qpos is the aligned frame's pose");
+    }
+    mj_deleteModel(m);
   }
 
   // ---- equality constraints on sites ----
@@ -2039,6 +2151,8 @@ class Bridge {
 
   Document& doc_;
   BridgeReport& report_;
+  bool align_free_ = false;                 // compiler alignfree="true"
+  std::vector<Element*> to_align_;          // simple free bodies to align (FreeJointAlign)
   std::vector<AttachedKey> attached_keys_;  // keyframes of attached models (ExpandAttachments)
   CompilerSettings compiler_;
   bool springs_off_ = false;  // flag spring disabled, damper enabled

@@ -24,7 +24,7 @@ constexpr BridgeRule kRules[] = {
     // id                                construct                                            kind  function
     {"compiler.autolimits",             "compiler autolimits (3.x default true)",            kT, "Compiler"},
     {"compiler.assetdir",               "compiler assetdir",                                 kT, "Compiler"},
-    {"compiler.alignfree",              "compiler alignfree=\"true\"",                       kR, "Compiler"},
+    {"compiler.alignfree",              "compiler alignfree=\"true\"",                       kT, "Compiler, FreeJointAlign"},
     {"compiler.alignfree.false",        "compiler alignfree=\"false\"",                      kD, "Compiler"},
     {"compiler.saveinertial",           "compiler saveinertial",                             kD, "Compiler"},
     {"compiler.conflict",               "compiler conflict",                                 kD, "Compiler"},
@@ -42,6 +42,9 @@ constexpr BridgeRule kRules[] = {
     {"frame.child",                     "element that cannot move inside a posed <frame>",   kR, "FlattenFrames"},
     {"equality.site",                   "equality connect site1/site2",                      kT, "SiteEqualities"},
     {"equality.site.weld",              "equality weld site1/site2",                         kA, "SiteEqualities"},
+    {"freejoint.align",                 "freejoint align (simple free body)",                kT, "FreeJointAlign, AlignFreeBodies"},
+    {"freejoint.align.nochildren",      "freejoint align on a body with child bodies",       kD, "FreeJointAlign"},
+    {"freejoint.align.refused",         "freejoint align with body-frame equality anchors",  kR, "FreeJointAlign, AlignFreeBodies"},
     {"equality.weld",                   "equality weld on bodies (3.x's weld rows)",         kA, "SiteEqualities"},
     {"equality.site.refused",           "equality with only one of site1/site2",             kR, "SiteEqualities"},
     {"actuator.armature_damping",       "actuator armature/damping on a joint or tendon",    kT, "ActuatorArmatureDamping"},
@@ -136,7 +139,7 @@ constexpr AttributePolicy kPolicies[] = {
     {"fixed spatial tendon",         "armature",       AttributeCondition::kZero,      nullptr,      "attr.dropped",     "zero",                                          "attr.refused",       "tendon armature (3.3+: inertia on the tendon's length) does not exist in 2.2.2; nearest 2.2.2 construct: armature on the tendon's joints (a fixed tendon over one joint with coef c: c^2 x armature)"},
     {"geom",                         "adhesion surfacevel", AttributeCondition::kZero, nullptr,      "attr.dropped",     "zero",                                          "attr.refused",       "this contact feature does not exist in 2.2.2"},
     {"pair",                         "solreffriction adhesion", AttributeCondition::kZero, nullptr,  "attr.dropped",     "zero means the 2.2.2 behaviour",                "attr.refused",       "no 2.2.2 equivalent"},
-    {"freejoint",                    "align",          AttributeCondition::kValueIn,   "false",      "attr.dropped",     "2.2.2's behaviour",                             "attr.refused",       "aligning the free body with its inertia frame"},
+    {"freejoint joint",              "align",          AttributeCondition::kValueIn,   "false",      "attr.dropped",     "2.2.2's behaviour",                             "attr.refused",       "not a value of align (true, false, auto)"},
     {"rangefinder",                  "data",           AttributeCondition::kValueIn,   "dist",       "attr.dropped",     "the 2.2.2 output",                              "attr.refused",       "rangefinder outputs"},
     {"rangefinder",                  "camera",         AttributeCondition::kAlways,    nullptr,      "attr.refused",     "rangefinders mounted on cameras do not exist in 2.2.2", nullptr,       nullptr},
 };

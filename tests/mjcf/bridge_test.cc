@@ -820,6 +820,20 @@ TEST_F(BridgeTest, AttachedModelsKeyframesAreMergedByName) {
   EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "keyframe(s) added after the parent's keys"));
 }
 
+// freejoint align moves the body frame; a body-frame equality anchor on that body would then
+// mean another point, so that alignment is refused with the nearest 2.2.2 construct.
+TEST_F(BridgeTest, FreeJointAlignWithBodyAnchoredEqualityIsRefused) {
+  const mjcf::BridgeReport r = ReportOf(R"(<mujoco>
+  <worldbody>
+    <body name="b" pos="0 0 1"><freejoint align="true"/><geom size="0.1" pos="0.1 0 0"/></body>
+  </worldbody>
+  <equality><connect body1="b" anchor="0 0 0.1"/></equality>
+</mujoco>)");
+  ASSERT_TRUE(r.HasRefusals());
+  EXPECT_TRUE(Mentions(r, Kind::kRefused, "nearest 2.2.2 construct: align=\"false\""));
+  EXPECT_EQ(r.Refusals()[0].where().line, 3);
+}
+
 // A weld in a 3.x document is kept but reported as approximated (2.2.2's weld rows differ from
 // 3.x's: reference3x_test SiteWeldDiffersOnlyByTwoWeldChangesOfMujoco3); a 2.2.2 document's is
 // not touched.

@@ -1050,7 +1050,14 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
            "bridge3x/attach/parent|key.qvel|right_/right_elbow",       // unnamed: the prefix
            "bridge3x/attach/parent|key.time|right_",
            "bridge3x/attach/parent|key.ctrl|right_bent/right_elbow_servo",
-           "bridge3x/attach/parent|key.qpos|home/left_shoulder",              // parent's key first
+           "bridge3x/attach/parent|key.qpos|home/left_shoulder",  // parent's key first
+           "bridge3x/freejoint_align|body.pos|tray",              // alignfree (auto)
+           "bridge3x/freejoint_align|body.quat|crate",            // align="true"
+           "bridge3x/freejoint_align|body.ipos|tray",             // now zero
+           "bridge3x/freejoint_align|geom.pos|weight",            // children moved
+           "bridge3x/freejoint_align|body.pos|plate",             // align="false"
+           "bridge3x/freejoint_align|contact_trajectory.qpos|tray_free@500",
+           "bridge3x/freejoint_align|key.qpos|lifted/tray_free",
            "bridge3x/sensors|contact_trajectory_sensor.value|ball_any@100",   // contact, data
            "bridge3x/sensors|contact_trajectory_sensor.value|floor_box@100",  // body1/body2
            "bridge3x/sensors|contact_trajectory_sensor.value|in_zone@100",    // insidesite
