@@ -184,6 +184,23 @@ constexpr Approximation kApproximations[] = {
     {"bridge3x/site_weld",
      {"contact_trajectory_sensor", When::kAlways, 5e-3, 1e-9, "as trajectory_sensor"}},
     {"bridge3x/site_weld", {"*trajectory*", When::kAlways, 1.0, 1e-9, kSiteWeld}},
+    {"bridge3x/approx_filter_rk4",
+     {"probe.act", When::kAlways, 2e-3, 1e-9,
+      "filterexact / position timeconst under RK4: the bridge's re-timed Euler filter "
+      "tau' = dt / (1 - exp(-dt/tau)) gives 3.x's exact per-step update only for the Euler and "
+      "implicit integrators; RK4 integrates it in four stages. After 20 steps of full control "
+      "(dt = 0.004, tau = 0.02 and 0.015) the activations differ by 1.0e-3 and 7.9e-4 of 1 "
+      "(measured); the trajectories (zero control) are exact"}},
+    {"bridge3x/approx_gravcomp_clamp",
+     {"*trajectory*", When::kAlways, 1.0, 1e-9,
+      "joint actuatorgravcomp with an actuatorfrcrange below the compensation: 3.x clamps "
+      "motor + compensation to the range, so the arm sags (0.32 rad after 500 steps); the "
+      "bridge's compensation (mjcb_passive) is not clamped and holds it: the whole motion "
+      "(measured: 100% of the range of motion)"}},
+    {"bridge3x/approx_gravcomp_clamp",
+     {"passive.qfrc_passive_plus_actuator", When::kAlways, 0.1, 1e-9,
+      "the same at qpos0: 3.x's total is the clamp (2), the bridge's the full compensation "
+      "(2.207): 9.4% (measured)"}},
 };
 
 // Known differences: a quantity of a model's entity that is not compared, with the reason (also
@@ -251,6 +268,12 @@ constexpr KnownDifference kKnownDifferences[] = {
      "passive.qfrc_passive_plus_actuator, and the trajectories"},
     {"bridge3x/gravcomp", "probe.qfrc_actuator", "*/shoulder", When::kAlways,
      "same as passive.qfrc_passive (the compensation is in 3.x's qfrc_actuator)"},
+    {"bridge3x/approx_gravcomp_clamp", "passive.qfrc_passive", "shoulder", When::kAlways,
+     "as for bridge3x/gravcomp: the compensation is in 3.x's qfrc_actuator (clamped there), in "
+     "the bridge's qfrc_passive; compared through their sum (an approximation) and the "
+     "trajectories"},
+    {"bridge3x/approx_gravcomp_clamp", "probe.qfrc_actuator", "*/shoulder", When::kAlways,
+     "the same (3.x's qfrc_actuator holds the clamped compensation)"},
     {"*", "option.integrator", "*", When::kImplicitFast,
      "implicitfast (3.x) becomes 2.2.2's implicit, which also includes the Coriolis/centripetal "
      "derivatives (the bridge's documented approximation)"},
@@ -741,7 +764,7 @@ class Comparison {
     for (const Approximation& a : kApproximations) {
       const std::string q = a.tolerance.quantity;
       const bool all = q == "*trajectory*" && cat.find("trajectory") != std::string::npos;
-      if (model_ == a.model && (all || q == cat)) return a.tolerance;
+      if (model_ == a.model && (all || q == cat || q == quantity)) return a.tolerance;
     }
     for (const Tolerance& t : kTolerances) {
       const std::string q = t.quantity;
@@ -1058,6 +1081,10 @@ TEST_F(Reference3xTest, BridgedCorpusMatchesMujoco3) {
            "bridge3x/freejoint_align|body.pos|plate",             // align="false"
            "bridge3x/freejoint_align|contact_trajectory.qpos|tray_free@500",
            "bridge3x/freejoint_align|key.qpos|lifted/tray_free",
+           "bridge3x/approx_filter_rk4|probe.act|hi/filtered",  // filterexact, RK4
+           "bridge3x/approx_filter_rk4|probe.act|hi/servo",     // timeconst, RK4
+           "bridge3x/approx_gravcomp_clamp|trajectory.qpos|shoulder@500",
+           "bridge3x/approx_gravcomp_clamp|passive.qfrc_passive_plus_actuator|shoulder",
            "bridge3x/sensors|contact_trajectory_sensor.value|ball_any@100",   // contact, data
            "bridge3x/sensors|contact_trajectory_sensor.value|floor_box@100",  // body1/body2
            "bridge3x/sensors|contact_trajectory_sensor.value|in_zone@100",    // insidesite
