@@ -58,6 +58,17 @@ std::string InheritedChildClass(const Element& e) {
   return "";
 }
 
+// The elements a <frame> holds, through nested frames (which the bridge flattens into them).
+void FrameContents(Element& frame, std::vector<Element*>* out) {
+  for (const auto& c : frame.children()) {
+    if (c->tag() == "frame") {
+      FrameContents(*c, out);
+    } else {
+      out->push_back(c.get());
+    }
+  }
+}
+
 void AppendPrefixed(BridgeReport& into, const BridgeReport& from, const std::string& prefix) {
   for (BridgedSensor s : from.software_sensors) {
     s.name = prefix + s.name;
@@ -158,9 +169,9 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
              "subtree, or <replicate>)");
     return;
   }
-  if (attach.Has("frame")) {
+  if (attach.Has("frame") && attach.Has("body")) {
     Note(report, "attach.refused", attach,
-         what + " frame=: attaching a frame of the child is not supported; nearest: body=");
+         what + ": body and frame are exclusive (MuJoCo 3.x too); nearest: one of them");
     return;
   }
   auto it = models.find(*model);
@@ -172,6 +183,34 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
                                             std::to_string(kMaxDepth) + " levels deep");
   }
   Document child = ReadFile(it->second);
+  // frame=: the frame moves to the child's world body before the child is bridged, so that its
+  // flattening composes the frame's own pose (only) into its contents, which are then attached.
+  std::vector<Element*> frame_contents;
+  if (const std::string* name = attach.Get("frame")) {
+    Element* frame = nullptr;
+    bool nested_macro = false;
+    child.root().Visit([&](Element& e) {
+      if (!frame && e.tag() == "frame" && e.Name() == *name) frame = &e;
+    });
+    if (!frame) {
+      throw InputError(attach.location(), what + ": the model has no frame '" + *name + "'");
+    }
+    frame->Visit([&](const Element& e) {
+      nested_macro = nested_macro || e.tag() == "replicate" || e.tag() == "attach";
+    });
+    if (nested_macro) {
+      Note(report, "attach.refused", attach,
+           what + " frame='" + *name +
+               "': a frame holding <replicate> or <attach> cannot be attached by the bridge; "
+               "nearest: body=");
+      return;
+    }
+    const std::string childclass = InheritedChildClass(*frame);
+    if (!childclass.empty() && !frame->Has("childclass")) frame->Set("childclass", childclass);
+    FrameContents(*frame, &frame_contents);
+    Element* world = child.root().FirstChild("worldbody");
+    world->InsertChild(world->children().size(), frame->parent()->RemoveChild(frame));
+  }
   BridgeOptions keep;
   keep.throw_on_refusal = false;
   BridgeReport child_report = ApplyBridge(child, keep);
@@ -216,6 +255,8 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
     if (!childclass.empty() && !moved.back()->Has("childclass")) {
       moved.back()->Set("childclass", childclass);
     }
+  } else if (attach.Has("frame")) {
+    for (Element* e : frame_contents) moved.push_back(e->parent()->RemoveChild(e));
   } else if (world) {
     const document::ElementSpec* frame = attach.parent()->spec()->FindChild("frame");
     auto f = std::make_unique<Element>(frame, "frame");
@@ -287,7 +328,9 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
   Note(report, "attach", attach,
        what + " prefix='" + *prefix + "': " +
            (attach.Has("body") ? "body '" + attach.GetOr("body", "") + "' and its subtree"
-                               : std::string("the world body's contents (in a frame)")) +
+            : attach.Has("frame")
+                ? "frame '" + attach.GetOr("frame", "") + "' (its contents with its pose composed)"
+                : std::string("the world body's contents (in a frame)")) +
            " attached with its defaults (class '" + *prefix + "main'), " + std::to_string(assets) +
            " asset(s) and " + std::to_string(referring) +
            " referring element(s), every name prefixed, as MuJoCo 3.x's attach does");
