@@ -111,7 +111,7 @@ int Validate(const ValidateArgs& args) {
     auto it = r.bridge_rules.find(rule.id);
     if (it == r.bridge_rules.end()) continue;
     std::cout << "bridge rule: " << rule.id << " (" << mjcf::BridgeKindName(rule.kind) << ", "
-              << rule.construct << ", src/mjcf/bridge.cc " << rule.function << "): " << it->second
+              << rule.construct << ", " << mjcf::BridgeRuleFunction(rule) << "): " << it->second
               << " change(s)\n";
   }
   for (const auto& w : r.diagnostics.warnings()) std::cout << "warning: " << w.str() << "\n";

@@ -211,6 +211,52 @@ TriMesh ReadMesh(const std::string& path) {
   return m;
 }
 
+std::string ReverseObjFaces(std::string_view obj, const std::vector<bool>& flip,
+                            const std::string& name) {
+  std::string out;
+  out.reserve(obj.size());
+  std::size_t pos = 0, triangle = 0;
+  int line = 1;
+  std::vector<std::string_view> corners;
+  while (pos < obj.size()) {
+    std::size_t end = obj.find('\n', pos);
+    const bool newline = end != std::string_view::npos;
+    if (!newline) end = obj.size();
+    std::string_view text = obj.substr(pos, end - pos);
+    Tokens t(text);
+    std::string_view tok;
+    if (t.Next(&tok) && tok == "f") {
+      corners.clear();
+      std::string_view corner;
+      while (t.Next(&corner)) corners.push_back(corner);
+      if (corners.size() < 3 || triangle + corners.size() - 2 > flip.size()) {
+        throw InputError({name, line}, "face lines do not match the parsed triangles");
+      }
+      if (flip[triangle]) {
+        out += "f ";
+        out += corners[0];
+        for (std::size_t k = corners.size() - 1; k >= 1; --k) {
+          out += ' ';
+          out += corners[k];
+        }
+        if (!text.empty() && text.back() == '\r') out += '\r';
+      } else {
+        out += text;
+      }
+      triangle += corners.size() - 2;
+    } else {
+      out += text;
+    }
+    if (newline) out += '\n';
+    pos = end + 1;
+    ++line;
+  }
+  if (triangle != flip.size()) {
+    throw InputError({name, 0}, "face lines do not match the parsed triangles");
+  }
+  return out;
+}
+
 std::string StlBytes(const TriMesh& mesh, std::string_view header) {
   std::string out(84 + 50 * mesh.triangles.size(), '\0');
   std::memcpy(out.data(), header.data(), std::min<std::size_t>(header.size(), 80));

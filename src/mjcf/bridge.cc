@@ -10,9 +10,11 @@
 #include <memory>
 #include <set>
 #include <sstream>
+#include <type_traits>
 
 #include "mjcf/bridge_attach.h"
 #include "mjcf/bridge_rules.h"
+#include "mjcf/trial_compile.h"
 #include "urlab/document/orientation.h"
 #include "urlab/mjcf/writer.h"
 
@@ -71,23 +73,6 @@ bool AllZero(const std::vector<double>& v) {
   return std::all_of(v.begin(), v.end(), [](double x) { return x == 0; });
 }
 
-// mj_loadXML of `xml` from a VFS (the trial compile for dampratio). nullptr + message on failure.
-mjModel* TrialCompile(const std::string& xml, std::string* error) {
-  mjVFS vfs;
-  mj_defaultVFS(&vfs);
-  const char* name = "urlab_bridge_trial.xml";
-  if (mj_makeEmptyFileVFS(&vfs, name, static_cast<int>(xml.size())) != 0) {
-    *error = "could not allocate the in-memory model";
-    return nullptr;
-  }
-  std::memcpy(vfs.filedata[mj_findFileVFS(&vfs, name)], xml.data(), xml.size());
-  char buf[1024] = "";
-  mjModel* m = mj_loadXML(name, &vfs, buf, sizeof(buf));
-  mj_deleteVFS(&vfs);
-  if (!m) *error = buf;
-  return m;
-}
-
 class Bridge {
  public:
   Bridge(Document& doc, BridgeReport& report) : doc_(doc), report_(report) {}
@@ -98,9 +83,10 @@ class Bridge {
     compiler_ = doc_.Compiler();
     Compiler();
     compiler_ = doc_.Compiler();
-    ExpandAttachments(doc_, report_);
+    ExpandAttachments(doc_, report_, &attached_keys_);
     Replicates();
     FlattenFrames();
+    FreeJointAlign();
     SiteEqualities();
     ActuatorArmatureDamping();
     GravityCompensation();
@@ -119,6 +105,7 @@ class Bridge {
     ComputedSensors();
     OrderActuators();
     Leftovers();
+    if (!report_.HasRefusals()) AlignFreeBodies();
     if (!report_.HasRefusals()) DampRatio();
     if (!report_.HasRefusals()) PadKeyframes();
   }
@@ -308,9 +295,10 @@ class Bridge {
       }
       if (const std::string* v = c.Get("alignfree")) {
         if (*v == "true") {
+          align_free_ = true;
           Note("compiler.alignfree", c,
-               "compiler alignfree=\"true\" re-expresses free bodies in their inertial frame, "
-               "which MuJoCo 2.2.2 cannot do; the body poses and qpos would differ");
+               "compiler alignfree=\"true\": free bodies without child bodies are aligned with "
+               "their inertial frame (see the freejoint align entries)");
         } else {
           Note("compiler.alignfree.false", c, "compiler alignfree=\"false\" is 2.2.2's behaviour");
         }
@@ -600,17 +588,138 @@ class Bridge {
     parent->RemoveChild(&f);
   }
 
+  // ---- free joint alignment ----
+  // 3.x can align a "simple free body" (a free joint, no child bodies) with its inertial frame
+  // at compile time (freejoint align="true", or "auto" under compiler alignfree="true"): the body
+  // frame moves to the centre of mass along the principal axes, its children are re-expressed in
+  // it, and ipos/iquat become zero/identity. That is a change of the model's description, so
+  // 2.2.2 gets the aligned document: FreeJointAlign picks the bodies, AlignFreeBodies (after a
+  // trial compile gives the inertial frames) rewrites them. Keyframes keep their numbers, which
+  // 3.x also reads as the aligned body's pose.
+  void FreeJointAlign() {
+    for (Element* j : Find({"freejoint", "joint"})) {
+      const std::string* a = j->Get("align");
+      if (j->tag() == "joint") {
+        const std::string* type = Resolve(*j, "type");
+        if (!type || *type != "free") continue;
+      }
+      const std::string mode = a ? *a : "auto";
+      if (mode != "true" && mode != "auto") continue;  // "false": the attribute policy drops it
+      const bool align = mode == "true" || align_free_;
+      Element* body = j->parent();
+      if (a) UnsetDialect(*j, "align");
+      if (!align || !body || body->tag() != "body") continue;
+      if (body->FirstChild("body")) {
+        Note("freejoint.align.nochildren", *j,
+             Tag(*j) +
+                 " align: no effect on a body with child bodies (MuJoCo 3.x aligns only "
+                 "free bodies without children)");
+        continue;
+      }
+      const std::string name = body->Name();
+      const Element* anchored = nullptr;
+      for (Element* e : Find({"connect", "weld"})) {
+        if (!name.empty() && (e->GetOr("body1", "") == name || e->GetOr("body2", "") == name)) {
+          anchored = e;
+        }
+      }
+      if (anchored) {
+        Note("freejoint.align.refused", *j,
+             Tag(*j) + " align: the body's equality " + Tag(*anchored) +
+                 " gives anchors in the body frame, which alignment moves; nearest 2.2.2 "
+                 "construct: align=\"false\" (or site1/site2 on the equality)");
+        continue;
+      }
+      to_align_.push_back(body);
+    }
+  }
+
+  void AlignFreeBodies() {
+    if (to_align_.empty()) return;
+    int unnamed = 0;
+    for (Element* b : to_align_) {
+      if (b->Name().empty()) b->Set("name", "aligned_body" + std::to_string(unnamed++));
+    }
+    std::string error;
+    mjModel* m = TrialCompile(WriteString(doc_), &error);
+    if (!m) {
+      for (Element* b : to_align_) {
+        Note(
+            "freejoint.align.refused", *b,
+            Tag(*b) + ": aligning its free joint needs the compiled model, which failed: " + error);
+      }
+      return;
+    }
+    for (Element* b : to_align_) {
+      const int id = mj_name2id(m, mjOBJ_BODY, b->Name().c_str());
+      if (id < 0) continue;
+      const Vec3 ip = {m->body_ipos[3 * id], m->body_ipos[3 * id + 1], m->body_ipos[3 * id + 2]};
+      const Quat iq = {m->body_iquat[4 * id], m->body_iquat[4 * id + 1], m->body_iquat[4 * id + 2],
+                       m->body_iquat[4 * id + 3]};
+      // The body moves to its inertial frame: pos + R(quat) ip, quat * iquat.
+      const Vec3 p = ResolvedVec(*b, "pos", {0, 0, 0});
+      const Quat q = ResolvedQuat(*b).value_or(document::kIdentityQuat);
+      const Vec3 d = document::QuatRotate(q, ip);
+      b->SetReals("pos", Vec3{p[0] + d[0], p[1] + d[1], p[2] + d[2]});
+      SetQuat(*b, document::QuatMul(q, iq));
+      // Its children move the other way: (-R(iquat)^T ipos, iquat^-1).
+      const Quat inv = {iq[0], -iq[1], -iq[2], -iq[3]};
+      const Vec3 r = document::QuatRotate(inv, ip);
+      std::vector<Element*> kids;
+      for (const auto& c : b->children()) kids.push_back(c.get());
+      for (Element* c : kids) {
+        if (c->tag() == "inertial") {
+          b->RemoveChild(c);
+          continue;
+        }
+        TransformChild(*c, {-r[0], -r[1], -r[2]}, inv, true);
+      }
+      // The inertia, explicit in the aligned frame (what 3.x compiles: ipos 0, iquat identity).
+      const document::ElementSpec* spec = b->spec()->FindChild("inertial");
+      auto inertial = std::make_unique<Element>(spec, "inertial");
+      inertial->set_location(b->location());
+      inertial->set_edited(true);
+      inertial->SetReals("pos", Vec3{0, 0, 0});
+      inertial->SetReals("quat", document::kIdentityQuat);
+      inertial->SetReals("mass", std::vector<double>{m->body_mass[id]});
+      inertial->SetReals("diaginertia", std::vector<double>(m->body_inertia + 3 * id,
+                                                            m->body_inertia + 3 * id + 3));
+      b->InsertChild(0, std::move(inertial));
+      Note("freejoint.align", *b,
+           Tag(*b) +
+               " aligned with its inertial frame as MuJoCo 3.x does (freejoint align): "
+               "the body moved by ipos " +
+               FormatReals(ip) + " and iquat " + FormatReals(iq) + ", its " +
+               std::to_string(kids.size()) +
+               " child element(s) re-expressed in the new frame, the inertia written explicitly "
+               "(ipos 0, iquat identity); the free joint's qpos is the aligned frame's pose");
+    }
+    mj_deleteModel(m);
+  }
+
   // ---- equality constraints on sites ----
   // 3.x connect/weld with site1/site2 hold the two sites together (position; weld also the
   // orientation). 2.2.2 knows only bodies, and derives the second anchor (and the weld's relative
   // pose) from qpos0; the body constraint is written here and its data set from the compiled
   // sites after compilation (ApplySiteEqualities), which is exact wherever the sites start.
+  // Every weld, on bodies too, differs from 3.x's in two ways 2.2.2 offers no hook for
+  // (reference3x_test SiteWeldDiffersOnlyByTwoWeldChangesOfMujoco3 pins both).
+  static constexpr const char* kWeldSince3 =
+      "MuJoCo 3.x changed the weld after 2.2.2: 2.2.2's efc_diagApprox gives all six rows the "
+      "bodies' translational inverse weight (3.0.0: the rotational rows get the rotational "
+      "one), so the orientation part is regularised, hence softened, differently; and with "
+      "torquescale != 1 2.2.2 scales the rotational Jacobian but not the angular residual "
+      "(3.0.1 scales both). Same constraint (same pose held), different stiffness under load "
+      "and transient";
   void SiteEqualities() {
     int unnamed = 0;
     for (Element* e : Find({"connect", "weld"})) {
       if (!e->parent() || e->parent()->tag() != "equality") continue;
       const std::string* a = e->Get("site1");
       const std::string* b = e->Get("site2");
+      if (!a && !b && e->tag() == "weld") {
+        Note("equality.weld", *e, Tag(*e) + " kept as it is: " + kWeldSince3);
+      }
       if (!a && !b) continue;
       if (!a || !b) {
         Note("equality.site.refused", *e,
@@ -644,11 +753,7 @@ class Bridge {
            Tag(*e) + " site1='" + s1 + "' site2='" + s2 + "' -> body1='" + b1 + "' body2='" + b2 +
                "'; anchors" + (e->tag() == "weld" ? " and relative orientation" : "") +
                " set from the sites' frames after compilation" +
-               (e->tag() == "weld" ? "; 3.x's site weld weighs the rotational residual "
-                                     "differently (same equilibrium without load, different "
-                                     "transient and sag)"
-                                   : "") +
-               ignored);
+               (e->tag() == "weld" ? std::string("; ") + kWeldSince3 : std::string()) + ignored);
     }
   }
 
@@ -1584,15 +1689,68 @@ class Bridge {
     return true;
   }
 
+  // An attached model's keyframe (bridge_attach.h) as a key of the whole model: qpos0, zero
+  // velocities, controls and activations, mocap bodies at their poses, then the child's values
+  // at its elements' addresses.
+  void WriteAttachedKey(const mjModel* m, const AttachedKey& k) {
+    std::vector<double> qpos(m->qpos0, m->qpos0 + m->nq), qvel(static_cast<size_t>(m->nv));
+    std::vector<double> ctrl(static_cast<size_t>(m->nu)), act(static_cast<size_t>(m->na));
+    std::vector<double> mpos(static_cast<size_t>(3 * m->nmocap));
+    std::vector<double> mquat(static_cast<size_t>(4 * m->nmocap));
+    for (int b = 0; b < m->nbody; ++b) {
+      if (const int id = m->body_mocapid[b]; id >= 0) {
+        std::copy_n(m->body_pos + 3 * b, 3, mpos.begin() + 3 * id);
+        std::copy_n(m->body_quat + 4 * b, 4, mquat.begin() + 4 * id);
+      }
+    }
+    auto place = [&](mjtObj type, const auto& values, auto address, std::vector<double>& into) {
+      for (const auto& [name, v] : values) {
+        const int id = mj_name2id(m, type, name.c_str());
+        const int at = id < 0 ? -1 : address(id);
+        if (at < 0) continue;  // not attached (outside the subtree, or stayed in the child)
+        if constexpr (std::is_same_v<std::decay_t<decltype(v)>, double>) {
+          into[static_cast<size_t>(at)] = v;
+        } else {
+          std::copy(v.begin(), v.end(), into.begin() + at);
+        }
+      }
+    };
+    place(
+        mjOBJ_JOINT, k.qpos, [&](int j) { return m->jnt_qposadr[j]; }, qpos);
+    place(
+        mjOBJ_JOINT, k.qvel, [&](int j) { return m->jnt_dofadr[j]; }, qvel);
+    place(
+        mjOBJ_ACTUATOR, k.ctrl, [](int a) { return a; }, ctrl);
+    place(
+        mjOBJ_ACTUATOR, k.act,
+        [&](int a) { return m->actuator_dyntype[a] == mjDYN_NONE ? -1 : a - (m->nu - m->na); },
+        act);
+    place(
+        mjOBJ_BODY, k.mpos, [&](int b) { return 3 * m->body_mocapid[b]; }, mpos);
+    place(
+        mjOBJ_BODY, k.mquat, [&](int b) { return 4 * m->body_mocapid[b]; }, mquat);
+    if (k.time != 0) k.key->SetReals("time", std::vector<double>{k.time});
+    k.key->SetReals("qpos", qpos);
+    if (m->nv) k.key->SetReals("qvel", qvel);
+    if (m->nu) k.key->SetReals("ctrl", ctrl);
+    if (m->na) k.key->SetReals("act", act);
+    if (m->nmocap) {
+      k.key->SetReals("mpos", mpos);
+      k.key->SetReals("mquat", mquat);
+    }
+  }
+
   void PadKeyframes() {
     Element* section = nullptr;
     for (Element* k : Find({"keyframe"})) section = k;
-    if (!section || section->children().empty() || KeysFitTheDocument(*section)) return;
+    if (!section || section->children().empty()) return;
+    if (attached_keys_.empty() && KeysFitTheDocument(*section)) return;
     std::unique_ptr<Element> keys = doc_.root().RemoveChild(section);
     std::string error;
     mjModel* m = TrialCompile(WriteString(doc_), &error);
     doc_.root().InsertChild(doc_.root().children().size(), std::move(keys));
     if (!m) return;  // the real compile reports it
+    for (const AttachedKey& k : attached_keys_) WriteAttachedKey(m, k);
     for (const auto& k : section->children()) {
       std::vector<std::string> padded;
       auto pad = [&](const char* attr, int size, const mjtNum* fill) {
@@ -1993,6 +2151,9 @@ class Bridge {
 
   Document& doc_;
   BridgeReport& report_;
+  bool align_free_ = false;                 // compiler alignfree="true"
+  std::vector<Element*> to_align_;          // simple free bodies to align (FreeJointAlign)
+  std::vector<AttachedKey> attached_keys_;  // keyframes of attached models (ExpandAttachments)
   CompilerSettings compiler_;
   bool springs_off_ = false;  // flag spring disabled, damper enabled
   bool dampers_off_ = false;  // flag damper disabled, spring enabled

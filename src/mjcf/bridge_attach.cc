@@ -7,7 +7,9 @@
 
 #include "mjcf/bridge_rules.h"
 #include "mjcf/compose_steps.h"
+#include "mjcf/trial_compile.h"
 #include "urlab/mjcf/reader.h"
+#include "urlab/mjcf/writer.h"
 
 namespace urlab::mjcf {
 
@@ -56,6 +58,17 @@ std::string InheritedChildClass(const Element& e) {
   return "";
 }
 
+// The elements a <frame> holds, through nested frames (which the bridge flattens into them).
+void FrameContents(Element& frame, std::vector<Element*>* out) {
+  for (const auto& c : frame.children()) {
+    if (c->tag() == "frame") {
+      FrameContents(*c, out);
+    } else {
+      out->push_back(c.get());
+    }
+  }
+}
+
 void AppendPrefixed(BridgeReport& into, const BridgeReport& from, const std::string& prefix) {
   for (BridgedSensor s : from.software_sensors) {
     s.name = prefix + s.name;
@@ -82,8 +95,70 @@ void AppendPrefixed(BridgeReport& into, const BridgeReport& from, const std::str
   }
 }
 
+// The child's compiled keyframes, values by element name (not yet prefixed). The child's
+// unnamed elements are named first (the composer's own naming), so that every value has an
+// element to go to. Empty, with the compiler's message, when the child alone does not compile.
+std::vector<AttachedKey> ChildKeys(Document& child, std::string* error) {
+  NameUnnamed(child);
+  mjModel* m = TrialCompile(WriteString(child), error);
+  if (!m) return {};
+  auto name = [&](mjtObj type, int id) {
+    const char* n = mj_id2name(m, type, id);
+    return std::string(n ? n : "");
+  };
+  std::vector<AttachedKey> keys(static_cast<size_t>(m->nkey));
+  for (int k = 0; k < m->nkey; ++k) {
+    AttachedKey& out = keys[static_cast<size_t>(k)];
+    out.time = m->key_time[k];
+    const mjtNum* qpos = m->key_qpos + static_cast<size_t>(k) * m->nq;
+    const mjtNum* qvel = m->key_qvel + static_cast<size_t>(k) * m->nv;
+    for (int j = 0; j < m->njnt; ++j) {
+      const int t = m->jnt_type[j];
+      const int nq = t == mjJNT_FREE ? 7 : t == mjJNT_BALL ? 4 : 1;
+      const int nv = t == mjJNT_FREE ? 6 : t == mjJNT_BALL ? 3 : 1;
+      const std::string n = name(mjOBJ_JOINT, j);
+      out.qpos[n].assign(qpos + m->jnt_qposadr[j], qpos + m->jnt_qposadr[j] + nq);
+      out.qvel[n].assign(qvel + m->jnt_dofadr[j], qvel + m->jnt_dofadr[j] + nv);
+    }
+    for (int a = 0; a < m->nu; ++a) {
+      out.ctrl[name(mjOBJ_ACTUATOR, a)] = m->key_ctrl[k * m->nu + a];
+      // 2.2.2 keeps stateful actuators last (the child's bridge ordered them).
+      if (m->actuator_dyntype[a] != mjDYN_NONE) {
+        out.act[name(mjOBJ_ACTUATOR, a)] = m->key_act[k * m->na + a - (m->nu - m->na)];
+      }
+    }
+    for (int b = 0; b < m->nbody; ++b) {
+      const int mocap = m->body_mocapid[b];
+      if (mocap < 0) continue;
+      const mjtNum* p = m->key_mpos + static_cast<size_t>(k) * 3 * m->nmocap + 3 * mocap;
+      const mjtNum* q = m->key_mquat + static_cast<size_t>(k) * 4 * m->nmocap + 4 * mocap;
+      out.mpos[name(mjOBJ_BODY, b)].assign(p, p + 3);
+      out.mquat[name(mjOBJ_BODY, b)].assign(q, q + 4);
+    }
+  }
+  mj_deleteModel(m);
+  return keys;
+}
+
+// `key` with every name prefixed.
+AttachedKey Prefixed(const AttachedKey& key, const std::string& prefix) {
+  AttachedKey out;
+  out.key = key.key;
+  out.time = key.time;
+  auto each = [&](const auto& from, auto& to) {
+    for (const auto& [n, v] : from) to[prefix + n] = v;
+  };
+  each(key.qpos, out.qpos);
+  each(key.qvel, out.qvel);
+  each(key.ctrl, out.ctrl);
+  each(key.act, out.act);
+  each(key.mpos, out.mpos);
+  each(key.mquat, out.mquat);
+  return out;
+}
+
 void Attach(Document& doc, Element& attach, const std::map<std::string, std::string>& models,
-            BridgeReport& report, int depth) {
+            BridgeReport& report, std::vector<AttachedKey>* keys, int depth) {
   const std::string what = "<attach model='" + attach.GetOr("model", "") + "'>";
   const std::string* model = attach.Get("model");
   const std::string* prefix = attach.Get("prefix");
@@ -94,9 +169,9 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
              "subtree, or <replicate>)");
     return;
   }
-  if (attach.Has("frame")) {
+  if (attach.Has("frame") && attach.Has("body")) {
     Note(report, "attach.refused", attach,
-         what + " frame=: attaching a frame of the child is not supported; nearest: body=");
+         what + ": body and frame are exclusive (MuJoCo 3.x too); nearest: one of them");
     return;
   }
   auto it = models.find(*model);
@@ -108,17 +183,58 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
                                             std::to_string(kMaxDepth) + " levels deep");
   }
   Document child = ReadFile(it->second);
+  // frame=: the frame moves to the child's world body before the child is bridged, so that its
+  // flattening composes the frame's own pose (only) into its contents, which are then attached.
+  std::vector<Element*> frame_contents;
+  if (const std::string* name = attach.Get("frame")) {
+    Element* frame = nullptr;
+    bool nested_macro = false;
+    child.root().Visit([&](Element& e) {
+      if (!frame && e.tag() == "frame" && e.Name() == *name) frame = &e;
+    });
+    if (!frame) {
+      throw InputError(attach.location(), what + ": the model has no frame '" + *name + "'");
+    }
+    frame->Visit([&](const Element& e) {
+      nested_macro = nested_macro || e.tag() == "replicate" || e.tag() == "attach";
+    });
+    if (nested_macro) {
+      Note(report, "attach.refused", attach,
+           what + " frame='" + *name +
+               "': a frame holding <replicate> or <attach> cannot be attached by the bridge; "
+               "nearest: body=");
+      return;
+    }
+    const std::string childclass = InheritedChildClass(*frame);
+    if (!childclass.empty() && !frame->Has("childclass")) frame->Set("childclass", childclass);
+    FrameContents(*frame, &frame_contents);
+    Element* world = child.root().FirstChild("worldbody");
+    world->InsertChild(world->children().size(), frame->parent()->RemoveChild(frame));
+  }
   BridgeOptions keep;
   keep.throw_on_refusal = false;
   BridgeReport child_report = ApplyBridge(child, keep);
-  ExpandAttachments(child, child_report, depth + 1);
+  std::vector<AttachedKey> nested;  // the child's own attachments' keys: in its keys already
+  ExpandAttachments(child, child_report, &nested, depth + 1);
   for (const BridgeChange& c : child_report.changes) report.changes.push_back(c);
-  if (child.root().FirstChild("keyframe")) {
-    Note(report, "attach.refused", attach,
-         what +
-             ": the child model has keyframes, whose merge into the parent's keys is not "
-             "supported yet; nearest: keys written for the whole model in the parent");
-    return;
+  // The child's keyframes, read from the child compiled alone (its own bridge padded them).
+  std::vector<AttachedKey> child_keys;
+  std::vector<std::string> key_names;
+  if (Element* section = child.root().FirstChild("keyframe")) {
+    for (const auto& k : section->children()) key_names.push_back(k->Name());
+    std::string error;
+    child_keys = ChildKeys(child, &error);
+    if (child_keys.size() < key_names.size()) {
+      Note(report, "attach.refused", attach,
+           what +
+               ": the child model's keyframes cannot be merged: the child does not compile "
+               "alone (" +
+               error +
+               "); nearest: keys written for the whole model in the "
+               "parent");
+      return;
+    }
+    child.root().RemoveChild(section);
   }
   ConvertAngleUnits(child, child.Compiler(), doc.Compiler());
   PrefixNames(child, *prefix);
@@ -139,6 +255,8 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
     if (!childclass.empty() && !moved.back()->Has("childclass")) {
       moved.back()->Set("childclass", childclass);
     }
+  } else if (attach.Has("frame")) {
+    for (Element* e : frame_contents) moved.push_back(e->parent()->RemoveChild(e));
   } else if (world) {
     const document::ElementSpec* frame = attach.parent()->spec()->FindChild("frame");
     auto f = std::make_unique<Element>(frame, "frame");
@@ -187,10 +305,32 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
       ++referring;
     }
   }
+  // Keyframes: after the parent's own, named "{prefix}{name}" (an unnamed one: the prefix).
+  if (!child_keys.empty()) {
+    Element& section = doc.Section("keyframe");
+    const document::ElementSpec* spec = section.spec()->FindChild("key");
+    for (size_t k = 0; k < child_keys.size(); ++k) {
+      auto key = std::make_unique<Element>(spec, "key");
+      key->set_location(attach.location());
+      key->set_edited(true);
+      key->Set("name", *prefix + (k < key_names.size() ? key_names[k] : std::string()));
+      keys->push_back(Prefixed(child_keys[k], *prefix));
+      keys->back().key = key.get();
+      section.InsertChild(section.children().size(), std::move(key));
+    }
+    Note(report, "attach.keyframe", attach,
+         what + " prefix='" + *prefix + "': the child's " + std::to_string(child_keys.size()) +
+             " keyframe(s) added after the parent's keys as '" + *prefix +
+             "<name>': the attached joints', actuators' and mocap bodies' values from the child's "
+             "keys, the rest of the model at qpos0 (velocities, controls, activations zero), as "
+             "MuJoCo 3.x merges them");
+  }
   Note(report, "attach", attach,
        what + " prefix='" + *prefix + "': " +
            (attach.Has("body") ? "body '" + attach.GetOr("body", "") + "' and its subtree"
-                               : std::string("the world body's contents (in a frame)")) +
+            : attach.Has("frame")
+                ? "frame '" + attach.GetOr("frame", "") + "' (its contents with its pose composed)"
+                : std::string("the world body's contents (in a frame)")) +
            " attached with its defaults (class '" + *prefix + "main'), " + std::to_string(assets) +
            " asset(s) and " + std::to_string(referring) +
            " referring element(s), every name prefixed, as MuJoCo 3.x's attach does");
@@ -210,7 +350,8 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
 
 }  // namespace
 
-void ExpandAttachments(Document& doc, BridgeReport& report, int depth) {
+void ExpandAttachments(Document& doc, BridgeReport& report, std::vector<AttachedKey>* keys,
+                       int depth) {
   std::map<std::string, std::string> models;  // name -> file
   std::vector<Element*> model_elements;
   doc.root().Visit([&](Element& e) {
@@ -231,7 +372,7 @@ void ExpandAttachments(Document& doc, BridgeReport& report, int depth) {
     if (e.tag() == "attach") attachments.push_back(&e);
   });
   for (Element* a : attachments) {
-    Attach(doc, *a, models, report, depth);
+    Attach(doc, *a, models, report, keys, depth);
     a->parent()->RemoveChild(a);
   }
   for (Element* m : model_elements) {

@@ -24,16 +24,17 @@ constexpr BridgeRule kRules[] = {
     // id                                construct                                            kind  function
     {"compiler.autolimits",             "compiler autolimits (3.x default true)",            kT, "Compiler"},
     {"compiler.assetdir",               "compiler assetdir",                                 kT, "Compiler"},
-    {"compiler.alignfree",              "compiler alignfree=\"true\"",                       kR, "Compiler"},
+    {"compiler.alignfree",              "compiler alignfree=\"true\"",                       kT, "Compiler, FreeJointAlign"},
     {"compiler.alignfree.false",        "compiler alignfree=\"false\"",                      kD, "Compiler"},
     {"compiler.saveinertial",           "compiler saveinertial",                             kD, "Compiler"},
     {"compiler.conflict",               "compiler conflict",                                 kD, "Compiler"},
     {"compiler.discardvisual",          "compiler discardvisual=\"true\"",                   kT, "KeepVisualGeoms"},
     {"compiler.lengthrange.interval",   "lengthrange interval",                              kT, "Compiler"},
-    {"attach",                          "<attach model body prefix> of a <model> asset",     kT, "ExpandAttachments (bridge_attach.cc)"},
-    {"attach.model",                    "<model> asset",                                     kT, "ExpandAttachments (bridge_attach.cc)"},
-    {"attach.defaults",                 "<attach> under a parent with top-level defaults",   kA, "ExpandAttachments (bridge_attach.cc)"},
-    {"attach.refused",                  "self-attachment, frame=, child keyframes",          kR, "ExpandAttachments (bridge_attach.cc)"},
+    {"attach",                          "<attach model body|frame prefix> of a <model>",    kT, "src/mjcf/bridge_attach.cc ExpandAttachments"},
+    {"attach.model",                    "<model> asset",                                     kT, "src/mjcf/bridge_attach.cc ExpandAttachments"},
+    {"attach.defaults",                 "<attach> under a parent with top-level defaults",   kA, "src/mjcf/bridge_attach.cc ExpandAttachments"},
+    {"attach.keyframe",                 "keyframes of an attached model",                    kT, "src/mjcf/bridge_attach.cc Attach, src/mjcf/bridge.cc WriteAttachedKey"},
+    {"attach.refused",                  "self-attachment, keys of a child that fails alone", kR, "src/mjcf/bridge_attach.cc ExpandAttachments"},
     {"replicate",                       "<replicate> count/offset/euler/sep",                kT, "Replicate"},
     {"replicate.reference",             "element referring into a <replicate>",              kT, "Replicate"},
     {"replicate.invalid",               "<replicate> without a positive count",              kR, "Replicate"},
@@ -41,6 +42,10 @@ constexpr BridgeRule kRules[] = {
     {"frame.child",                     "element that cannot move inside a posed <frame>",   kR, "FlattenFrames"},
     {"equality.site",                   "equality connect site1/site2",                      kT, "SiteEqualities"},
     {"equality.site.weld",              "equality weld site1/site2",                         kA, "SiteEqualities"},
+    {"freejoint.align",                 "freejoint align (simple free body)",                kT, "FreeJointAlign, AlignFreeBodies"},
+    {"freejoint.align.nochildren",      "freejoint align on a body with child bodies",       kD, "FreeJointAlign"},
+    {"freejoint.align.refused",         "freejoint align with body-frame equality anchors",  kR, "FreeJointAlign, AlignFreeBodies"},
+    {"equality.weld",                   "equality weld on bodies (3.x's weld rows)",         kA, "SiteEqualities"},
     {"equality.site.refused",           "equality with only one of site1/site2",             kR, "SiteEqualities"},
     {"actuator.armature_damping",       "actuator armature/damping on a joint or tendon",    kT, "ActuatorArmatureDamping"},
     {"actuator.armature_damping.default", "default actuator armature/damping",               kT, "ActuatorArmatureDamping"},
@@ -88,6 +93,7 @@ constexpr BridgeRule kRules[] = {
     {"mesh.inertia",                    "mesh inertia legacy/convex/exact",                  kT, "MeshInertia"},
     {"mesh.exactmeshinertia",           "mesh volumes (all exact or inline)",                kT, "MeshInertia"},
     {"mesh.exactmeshinertia.nonconvex", "mesh volumes (files that may be non-convex)",       kA, "MeshInertia"},
+    {"mesh.orientation",                "mesh file whose faces disagree (or face inwards)",  kT, "src/convert/mesh_assets.cc OrientedFile"},
     {"light.directional",               "light type=\"directional\"",                        kT, "LightType"},
     {"camera.intrinsics",               "camera sensorsize/focal/focalpixel/resolution",     kT, "CameraIntrinsics"},
     {"camera.principal",                "camera principal/principalpixel",                   kA, "CameraIntrinsics"},
@@ -133,7 +139,7 @@ constexpr AttributePolicy kPolicies[] = {
     {"fixed spatial tendon",         "armature",       AttributeCondition::kZero,      nullptr,      "attr.dropped",     "zero",                                          "attr.refused",       "tendon armature (3.3+: inertia on the tendon's length) does not exist in 2.2.2; nearest 2.2.2 construct: armature on the tendon's joints (a fixed tendon over one joint with coef c: c^2 x armature)"},
     {"geom",                         "adhesion surfacevel", AttributeCondition::kZero, nullptr,      "attr.dropped",     "zero",                                          "attr.refused",       "this contact feature does not exist in 2.2.2"},
     {"pair",                         "solreffriction adhesion", AttributeCondition::kZero, nullptr,  "attr.dropped",     "zero means the 2.2.2 behaviour",                "attr.refused",       "no 2.2.2 equivalent"},
-    {"freejoint",                    "align",          AttributeCondition::kValueIn,   "false",      "attr.dropped",     "2.2.2's behaviour",                             "attr.refused",       "aligning the free body with its inertia frame"},
+    {"freejoint joint",              "align",          AttributeCondition::kValueIn,   "false",      "attr.dropped",     "2.2.2's behaviour",                             "attr.refused",       "not a value of align (true, false, auto)"},
     {"rangefinder",                  "data",           AttributeCondition::kValueIn,   "dist",       "attr.dropped",     "the 2.2.2 output",                              "attr.refused",       "rangefinder outputs"},
     {"rangefinder",                  "camera",         AttributeCondition::kAlways,    nullptr,      "attr.refused",     "rangefinders mounted on cameras do not exist in 2.2.2", nullptr,       nullptr},
 };
@@ -154,6 +160,14 @@ constexpr RefusedElement kRefused[] = {
 std::span<const RefusedElement> RefusedElements() { return kRefused; }
 
 std::span<const BridgeRule> BridgeRules() { return kRules; }
+
+std::string BridgeRuleFunction(const BridgeRule& rule) {
+  const std::string f = rule.function;
+  if (f.find(".cc ") != std::string::npos) return f;
+  std::string out = "src/mjcf/bridge.cc ";  // no "literal" + string: GCC 12 -O3 -Wrestrict
+  out += f;
+  return out;
+}
 
 std::span<const AttributePolicy> AttributePolicies() { return kPolicies; }
 

@@ -44,6 +44,8 @@ std::vector<double> RealsOr(const Element& e, std::string_view name, std::vector
 
 // ---- naming ----
 
+}  // namespace
+
 // Gives unnamed bodies, joints, sites, tendons, actuators and sensors a stable generated name
 // "{tag}{index}" (index = MuJoCo id order of that kind within the articulation), made unique with
 // _1, _2 when a real name already uses it.
@@ -104,6 +106,8 @@ void NameUnnamed(Document& doc) {
     if (s->tag() == "worldbody") joints(*s);
   }
 }
+
+namespace {
 
 // Skins from SKN files name their bone bodies inside the binary file, where the prefix cannot
 // reach: they are written inline (the same data) so that their bones get prefixed.

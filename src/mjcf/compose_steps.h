@@ -1,7 +1,7 @@
 #pragma once
 // Steps of the composer (compose.cc) that the dialect bridge reuses for MuJoCo 3.x <attach>
 // (bridge_attach.cc): the same prefixing, default-class wrapping and angle conversion a scene
-// applies to each articulation. Internal to the mjcf module.
+// applies to each articulation, and its naming of unnamed elements. Internal to the mjcf module.
 //
 // Thread: pure functions over documents the caller owns.
 #include <memory>
@@ -10,6 +10,10 @@
 #include "urlab/document/document.h"
 
 namespace urlab::mjcf {
+
+// Gives unnamed bodies, joints, sites, tendons, actuators and sensors a stable generated name
+// "{tag}{index}" (made unique with _1, _2 when a real name already uses it).
+void NameUnnamed(document::Document& doc);
 
 // Gives every name and every attribute naming another element the prefix (references to the
 // world body excepted).

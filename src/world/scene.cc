@@ -56,15 +56,17 @@ document::Document ReadBridged(const std::string& path, const std::string& label
 }
 
 // Mesh files MuJoCo 2.2.2 cannot load are converted (cached); each step is logged, warnings
-// (a dropped visual mesh) are kept for the user.
+// (a dropped visual mesh) are kept for the user; face orientation repairs join the bridge report
+// (rule mesh.orientation).
 void PrepareMeshes(document::Document& doc, const std::string& label,
-                   std::vector<document::Diagnostic>* warnings) {
+                   std::vector<document::Diagnostic>* warnings, mjcf::BridgeReport* bridge) {
   try {
     const convert::MeshAssetReport r = convert::PrepareMeshAssets(doc, convert::DefaultCacheDir());
     for (const std::string& step : r.steps) spdlog::info("{}{}", label, step);
     for (const Diagnostic& w : r.warnings) {
       warnings->push_back(w);
     }
+    bridge->changes.insert(bridge->changes.end(), r.bridge_changes.begin(), r.bridge_changes.end());
   } catch (const InputError& e) {
     throw InputError(e.where(), label + e.message());
   }
@@ -201,7 +203,7 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     in.name = a.name;
     mjcf::BridgeReport report;
     in.doc = ReadBridged(a.mjcf, a.name + ": ", &report);
-    PrepareMeshes(in.doc, a.name + ": ", &mesh_warnings);
+    PrepareMeshes(in.doc, a.name + ": ", &mesh_warnings, &report);
     AddBridgeRuntime(report, a.name + "_", &software);
     NoteBridge(report, a.name + ": ", &bridge_text);
     in.placement.pos = a.pos;
@@ -274,7 +276,7 @@ CompiledScene BuildModel(const std::string& mjcf_path) {
   document::Document doc = ReadBridged(mjcf_path, "", &report);
   CompiledScene out;
   out.diagnostics = doc.diagnostics();
-  PrepareMeshes(doc, "", &out.diagnostics);
+  PrepareMeshes(doc, "", &out.diagnostics, &report);
   out.model = CompileDocument(doc, nullptr);
   physics::SoftwareModelSpec software;
   AddBridgeRuntime(report, "", &software);
@@ -340,8 +342,19 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
       mjcf::FindMissingFiles(doc, sink, label);
       mjcf::BridgeOptions list_all;
       list_all.throw_on_refusal = false;
-      const mjcf::BridgeReport bridged = mjcf::ApplyBridge(doc, list_all);
+      mjcf::BridgeReport bridged = mjcf::ApplyBridge(doc, list_all);
       for (const InputError& e : bridged.Refusals()) sink.Add(e, label);
+      if (bridge_report) {
+        // Mesh repairs are bridge changes too; a mesh that cannot be read is reported by
+        // FindMissingFiles above and by the composition below.
+        try {
+          const convert::MeshAssetReport meshes =
+              convert::PrepareMeshAssets(doc, convert::DefaultCacheDir());
+          bridged.changes.insert(bridged.changes.end(), meshes.bridge_changes.begin(),
+                                 meshes.bridge_changes.end());
+        } catch (const InputError&) {
+        }
+      }
       if (bridge_report) {
         for (const mjcf::BridgeChange& c : bridged.changes) {
           report.bridge.push_back(label + c.where.str() + ": " + mjcf::BridgeKindName(c.kind) +

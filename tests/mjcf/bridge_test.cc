@@ -776,6 +776,88 @@ TEST_F(BridgeTest, ReplicateFollowsTheReferenceExample) {
   EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "refers into a <replicate>"));
 }
 
+// Keyframes of an attached model join the parent's as "{prefix}{name}": the attached joints',
+// actuators' (activations included) values from the child's key, everything else (a joint and
+// a mocap body of the child outside the attached subtree, the parent's own) as qpos0 / zero /
+// the body's pose (reference3x_test compares parent.xml's merged keys with MuJoCo 3.3.8).
+TEST_F(BridgeTest, AttachedModelsKeyframesAreMergedByName) {
+  Write("child.xml", R"(<mujoco model="child">
+  <worldbody>
+    <body name="outside"><joint name="out" type="slide"/><geom size="0.1"/></body>
+    <body name="target" mocap="true" pos="1 0 0"><geom size="0.05" contype="0" conaffinity="0"/></body>
+    <body name="arm" pos="0 0 1"><joint name="j" axis="0 1 0"/><geom size="0.1"/></body>
+  </worldbody>
+  <actuator><general name="filt" joint="j" dyntype="filter" dynprm="0.1"/></actuator>
+  <keyframe>
+    <key name="k" time="2" qpos="0.7 0.4" qvel="0.1 0.2" act="0.25" ctrl="0.5" mpos="1 2 3" mquat="0 1 0 0"/>
+  </keyframe>
+</mujoco>)");
+  const Bridged b = Load(R"(<mujoco>
+  <asset><model name="c" file="child.xml"/></asset>
+  <worldbody>
+    <body name="m" mocap="true" pos="0 1 0"/>
+    <body name="p"><joint name="pj" type="slide" ref="0.05"/><geom size="0.1"/>
+      <attach model="c" body="arm" prefix="c_"/>
+    </body>
+  </worldbody>
+</mujoco>)");
+  EXPECT_FALSE(b.report.HasRefusals()) << b.report.Format();
+  const mjModel* m = b.model.get();
+  ASSERT_EQ(m->nkey, 1);
+  EXPECT_STREQ(mj_id2name(m, mjOBJ_KEY, 0), "c_k");
+  EXPECT_EQ(m->key_time[0], 2);
+  const int pj = Id(m, mjOBJ_JOINT, "pj"), j = Id(m, mjOBJ_JOINT, "c_j");
+  EXPECT_EQ(m->key_qpos[m->jnt_qposadr[pj]], 0.05);  // the parent's joint at qpos0
+  EXPECT_EQ(m->key_qpos[m->jnt_qposadr[j]], 0.4);
+  EXPECT_EQ(m->key_qvel[m->jnt_dofadr[pj]], 0);
+  EXPECT_EQ(m->key_qvel[m->jnt_dofadr[j]], 0.2);
+  ASSERT_EQ(m->nu, 1);
+  EXPECT_EQ(m->key_ctrl[0], 0.5);
+  EXPECT_EQ(m->key_act[0], 0.25);
+  ASSERT_EQ(m->nmocap, 1);  // the parent's; the child's target stayed behind
+  EXPECT_EQ(m->key_mpos[1], 1);
+  EXPECT_EQ(m->key_mquat[0], 1);
+  EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "keyframe(s) added after the parent's keys"));
+}
+
+// freejoint align moves the body frame; a body-frame equality anchor on that body would then
+// mean another point, so that alignment is refused with the nearest 2.2.2 construct.
+TEST_F(BridgeTest, FreeJointAlignWithBodyAnchoredEqualityIsRefused) {
+  const mjcf::BridgeReport r = ReportOf(R"(<mujoco>
+  <worldbody>
+    <body name="b" pos="0 0 1"><freejoint align="true"/><geom size="0.1" pos="0.1 0 0"/></body>
+  </worldbody>
+  <equality><connect body1="b" anchor="0 0 0.1"/></equality>
+</mujoco>)");
+  ASSERT_TRUE(r.HasRefusals());
+  EXPECT_TRUE(Mentions(r, Kind::kRefused, "nearest 2.2.2 construct: align=\"false\""));
+  EXPECT_EQ(r.Refusals()[0].where().line, 3);
+}
+
+// A weld in a 3.x document is kept but reported as approximated (2.2.2's weld rows differ from
+// 3.x's: reference3x_test SiteWeldDiffersOnlyByTwoWeldChangesOfMujoco3); a 2.2.2 document's is
+// not touched.
+TEST_F(BridgeTest, WeldsOf3xDocumentsAreApproximated) {
+  const std::string model = R"(<mujoco>
+  <worldbody>
+    <body name="a" pos="0 0 1" GRAVCOMP><freejoint/><geom size="0.1"/></body>
+  </worldbody>
+  <equality><weld body1="a" torquescale="0.5"/></equality>
+</mujoco>)";
+  std::string x3 = model;
+  x3.replace(x3.find("GRAVCOMP"), 8, R"(gravcomp="0.5")");
+  const Bridged b = Load(x3);
+  EXPECT_TRUE(Mentions(b.report, Kind::kApproximated, "efc_diagApprox"));
+  for (const BridgeChange& c : b.report.changes) {
+    if (c.rule == "equality.weld") {
+      EXPECT_EQ(c.where.line, 5);
+    }
+  }
+  std::string x2 = model;
+  x2.replace(x2.find("GRAVCOMP"), 8, "");
+  EXPECT_TRUE(Load(x2).report.changes.empty());
+}
+
 // What cannot be expressed in 2.2.2 is refused with where, why and the nearest 2.2.2 construct
 // (reference3x_test checks that MuJoCo 3.x loads these models).
 TEST_F(BridgeTest, InexpressibleConstructsAreRefusedWithReasonAndNearestConstruct) {

@@ -56,6 +56,25 @@ struct CleanReport {
 // mesh without boundary edges and with negative volume outwards. Never throws.
 CleanReport CleanMesh(TriMesh& mesh);
 
+// Consistent face orientation (the repair MuJoCo 2.2.2 needs for meshes 3.x loads): two
+// triangles sharing an edge must run along it in opposite directions. Triangles are connected
+// through edges of exactly two triangles; each connected piece is oriented like its first
+// triangle, then turned outwards when it is closed (no boundary edge) and encloses a negative
+// volume, or else kept the way most of its triangles already face. Vertices are the mesh's
+// indices, or with `weld_equal_vertices` exactly equal coordinates (an STL file's corners).
+struct OrientationPlan {
+  std::vector<bool> flip;           // per triangle: reverse its winding
+  std::size_t flipped = 0;          // triangles to reverse
+  std::size_t pieces = 0;           // connected pieces
+  std::size_t closed_pieces = 0;    // pieces without boundary edges
+  std::size_t turned_outwards = 0;  // closed pieces turned as a whole (they faced inwards)
+  std::size_t repeated_edges = 0;   // directed edges used twice before the repair
+  std::size_t repeated_after = 0;   // ... and after it (non-manifold or non-orientable)
+  std::size_t non_orientable = 0;   // pieces whose triangles cannot all agree (Moebius)
+  bool needed() const { return flipped > 0; }
+};
+OrientationPlan PlanConsistentOrientation(const TriMesh& mesh, bool weld_equal_vertices);
+
 // Vertex clustering on a grid of `cells` cells along the longest side: a bounded-time
 // simplification for very large meshes (the result is cleaned).
 TriMesh ClusterVertices(const TriMesh& mesh, int cells);

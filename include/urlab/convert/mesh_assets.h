@@ -10,21 +10,33 @@
 // (contype and conaffinity 0): then those geoms and the mesh are dropped with a warning and the
 // collision geometry stays (the description's fallback).
 //
+// Face orientation (the dialect bridge's rule `mesh.orientation`): MuJoCo 2.2.2 rejects an OBJ
+// mesh whose faces run an edge the same way twice ("faces have inconsistent orientation") as
+// soon as a body's inertia uses it, and with `compiler exactmeshinertia="true"` (which the bridge
+// sets for 3.x documents) weighs an STL or OBJ by signed volumes, so a flipped face subtracts.
+// MuJoCo 3.x's default (legacy) inertia accepts both. Such meshes get their faces oriented
+// consistently and outwards (PlanConsistentOrientation) in a copy in the cache folder
+// (<stem>-<hash>-oriented.obj/.stl; OBJ: only the face lines' corner order changes, texture
+// coordinates and normals stay), reported as bridge changes with the <mesh> element's file:line.
+// Files found consistent leave a marker (<stem>-<hash>.oriented-ok) so they are parsed once.
+//
 // Thread: any thread owning the document; the cache files are written atomically.
 #include <string>
 #include <vector>
 
 #include "urlab/core/diagnostics.h"
 #include "urlab/document/document.h"
+#include "urlab/mjcf/bridge.h"
 
 namespace urlab::convert {
 
 struct MeshAssetReport {
   std::vector<std::string> steps;    // one line per conversion, rename or cache hit
-  std::vector<Diagnostic> warnings;  // dropped visual meshes, with file:line
+  std::vector<Diagnostic> warnings;  // dropped visual meshes, meshes that cannot be oriented
+  std::vector<mjcf::BridgeChange> bridge_changes;  // orientation repairs (rule mesh.orientation)
 };
 
-// Converts, renames and drops as described above. Throws InputError.
+// Converts, renames, orients and drops as described above. Throws InputError.
 MeshAssetReport PrepareMeshAssets(document::Document& doc, const std::string& cache_dir);
 
 }  // namespace urlab::convert

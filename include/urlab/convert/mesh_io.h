@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "urlab/convert/mesh.h"
 
@@ -30,6 +31,12 @@ TriMesh ParseObj(std::string_view bytes, const std::string& name);
 bool IsMujocoMeshFormat(const std::string& path);
 // True when ReadMesh can read the file's extension.
 bool IsReadableMeshFormat(const std::string& path);
+
+// The OBJ text with the faces ParseObj turned into the triangles `flip` marks reversed: such a
+// face line keeps its first corner and lists the others backwards (a fanned polygon keeps its
+// diagonals), everything else byte for byte. Throws InputError when `flip` does not match.
+std::string ReverseObjFaces(std::string_view obj, const std::vector<bool>& flip,
+                            const std::string& name);
 
 // Binary STL and OBJ text of a mesh.
 std::string StlBytes(const TriMesh& mesh, std::string_view header = "urlab");

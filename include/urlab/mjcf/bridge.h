@@ -33,13 +33,17 @@ struct BridgeChange {
 };
 
 // One rule of the bridge (the rule table, src/mjcf/bridge_rules.cc): a MuJoCo 3.x construct, what
-// the bridge does with it and the function of src/mjcf/bridge.cc that does it.
+// the bridge does with it and the function that does it (of src/mjcf/bridge.cc, or "FILE Function"
+// for the few rules applied elsewhere: attachments, mesh face orientation).
 struct BridgeRule {
   const char* id;
   const char* construct;
   BridgeChange::Kind kind;
   const char* function;
 };
+
+// "src/mjcf/bridge.cc Function", or the rule's own "FILE Function".
+std::string BridgeRuleFunction(const BridgeRule& rule);
 
 // Every rule, in the order the bridge applies them.
 std::span<const BridgeRule> BridgeRules();

@@ -5,7 +5,8 @@
 //   node dump3x.mjs JOB.json > out.json
 //
 // JOB.json: {"module": ".../mujoco-js/dist/mujoco_wasm.js", "steps": 500, "record_every": 25,
-//            (a model may add "extended": true for passive forces and sensors, see dump),
+//            (a model may add "extended": true for passive forces and sensors, see dump, and
+//            "weld_diag_as_222": true, see below),
 //            "probe": true, "probe_act_steps": 20, "strip": [{"element": "gyro", "attribute": "nsample"}, ...],
 //            "models": [{"id": "arm_servos", "file": "/abs/dir/arm_servos.xml"}, ...]}
 //
@@ -465,6 +466,20 @@ for (const model of job.models) {
     // Disable flags set on the compiled reference model (e.g. NATIVECCD: convex collisions
     // through libccd, as 2.2.2 does them).
     for (const flag of job.disable || []) m.opt.disableflags |= mj.mjtDisableBit[`mjDSBL_${flag}`].value;
+    // A diagnosis, not a reference: "weld_diag_as_222" gives the welded bodies' rotational
+    // inverse weight their translational one, which is what MuJoCo 2.2.2's efc_diagApprox uses
+    // for all six rows of a weld (fixed in 3.0.0). Only meaningful for a model whose welded
+    // bodies have no other constraint rows (body_invweight0 serves contacts too).
+    if (model.weld_diag_as_222) {
+      const w = m.body_invweight0;
+      for (let i = 0; i < m.neq; i++) {
+        if (m.eq_type[i] !== mj.mjtEq.mjEQ_WELD.value) continue;
+        for (const obj of [m.eq_obj1id[i], m.eq_obj2id[i]]) {
+          const b = m.eq_objtype[i] === OBJ.mjOBJ_SITE ? m.site_bodyid[obj] : obj;
+          w[2 * b + 1] = w[2 * b];
+        }
+      }
+    }
     d = new mj.MjData(m);
     result.models[model.id] = {data: dump(m, d, {...job, extended: !!model.extended})};
   } catch (e) {
