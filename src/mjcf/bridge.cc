@@ -1,5 +1,6 @@
 #include "urlab/mjcf/bridge.h"
 
+#include <fmt/format.h>
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
@@ -638,7 +639,7 @@ class Bridge {
     if (to_align_.empty()) return;
     int unnamed = 0;
     for (Element* b : to_align_) {
-      if (b->Name().empty()) b->Set("name", "aligned_body" + std::to_string(unnamed++));
+      if (b->Name().empty()) b->Set("name", fmt::format("aligned_body{}", unnamed++));
     }
     std::string error;
     mjModel* m = TrialCompile(WriteString(doc_), &error);
