@@ -33,6 +33,7 @@ class Panel {
 
  private:
   void DrawSimulation(ViewerCore& core);
+  void DrawLaunchers(ViewerCore& core);
   void DrawOptions(ViewerCore& core);
   void DrawArticulation(ViewerCore& core);
   void DrawDebug(ViewerCore& core);

@@ -205,6 +205,12 @@ void ViewerCore::Perform(Action action) {
     spdlog::info("viewer: {} {}", DebugLayerName(*layer), on ? "on" : "off");
     return;
   }
+  if (action == Action::kFireLaunchers) {  // every launcher once
+    const std::size_t launchers = session_->launchers().size();
+    if (launchers == 0) spdlog::info("viewer: this scene has no launchers");
+    for (std::size_t i = 0; i < launchers; ++i) session_->FireLauncher(i);
+    return;
+  }
   physics::PhysicsEngine& engine = session_->engine();
   switch (action) {
     case Action::kTogglePause:

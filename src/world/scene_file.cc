@@ -477,6 +477,58 @@ class Parser {
     return t;
   }
 
+  // An impulse launcher: pose (+x fires), projectile shape, size, mass, speed, pool, colour.
+  LauncherConfig Launcher(const YAML::Node& n) const {
+    CheckKeys(n, "launcher",
+              {"name", "pos", "quat", "euler", "axisangle", "shape", "size", "mass", "speed",
+               "pool", "rgba"});
+    LauncherConfig l;
+    l.where = At(n);
+    LauncherSpec& spec = l.spec;
+    spec.name = EntryName(n, "launcher");
+    const std::string& name = spec.name;
+    if (n["pos"]) {
+      auto v = Numbers(n["pos"], name + ".pos", 3);
+      spec.pos = {v[0], v[1], v[2]};
+    }
+    spec.quat = Orientation(n, name, spec.quat);
+    if (n["shape"]) {
+      spec.shape = String(n["shape"], name + ".shape");
+      if (!FindProjectileShape(spec.shape)) {
+        Fail(n["shape"], name + ".shape must be sphere, box or capsule, not '" + spec.shape + "'");
+      }
+    }
+    const ProjectileShape& shape = *FindProjectileShape(spec.shape);
+    constexpr Range kPositive{0, std::numeric_limits<double>::max(), true};
+    if (const auto sz = n["size"]) {
+      if (sz.IsSequence()) {
+        for (const auto& v : sz) spec.size.push_back(Number(v, name + ".size", kPositive));
+      } else {
+        spec.size.push_back(Number(sz, name + ".size", kPositive));
+      }
+      if (static_cast<int>(spec.size.size()) != shape.size_count) {
+        Fail(sz, name + ".size: a " + shape.name + " needs " + std::to_string(shape.size_count) +
+                     " number(s) (" + shape.size_help + "), not " +
+                     std::to_string(spec.size.size()));
+      }
+    }
+    if (n["mass"]) spec.mass = Number(n["mass"], name + ".mass", kPositive);
+    if (n["speed"]) spec.speed = Number(n["speed"], name + ".speed", Range{0, 1000});
+    if (n["pool"]) {
+      const double v = Number(n["pool"], name + ".pool", Range{1, kMaxLauncherPool});
+      if (v != std::floor(v)) Fail(n["pool"], name + ".pool must be a whole number");
+      spec.pool = static_cast<int>(v);
+    }
+    if (n["rgba"]) {
+      auto v = Numbers(n["rgba"], name + ".rgba", 4);
+      for (std::size_t i = 0; i < 4; ++i) {
+        if (v[i] < 0 || v[i] > 1) Fail(n["rgba"], name + ".rgba values must be 0 to 1");
+        spec.rgba[i] = v[i];
+      }
+    }
+    return l;
+  }
+
   // The twist block: every field a positive finite number.
   control::TwistSettings Twist(const YAML::Node& n, const std::string& where) const {
     if (!n.IsMap()) Fail(n, where + " must be a map (max_vx, max_vy, max_yaw_rate, gains)");
@@ -659,8 +711,8 @@ class Parser {
       }
     }
     CheckKeys(root, "the scene",
-              {"articulations", "props", "terrain", "options", "size", "control_source", "network",
-               "save_debug_xml", "cameras"});
+              {"articulations", "props", "terrain", "launchers", "options", "size",
+               "control_source", "network", "save_debug_xml", "cameras"});
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {
       Fail(arts ? arts : root, "the scene needs a non-empty list 'articulations'");
@@ -689,6 +741,17 @@ class Parser {
         if (!names.insert(s.terrain.back().spec.name).second) {
           Fail(t, "the name '" + s.terrain.back().spec.name +
                       "' is used twice (articulations, props and terrain share one namespace)");
+        }
+      }
+    }
+    if (const auto launchers = root["launchers"]) {
+      if (!launchers.IsSequence()) Fail(launchers, "launchers must be a list");
+      for (const auto& l : launchers) {
+        s.launchers.push_back(Launcher(l));
+        if (!names.insert(s.launchers.back().spec.name).second) {
+          Fail(l, "the name '" + s.launchers.back().spec.name +
+                      "' is used twice (articulations, props, terrain and launchers share one "
+                      "namespace)");
         }
       }
     }
