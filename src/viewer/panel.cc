@@ -65,10 +65,16 @@ void Panel::DrawSimulation(ViewerCore& core) {
 
 void Panel::DrawLaunchers(ViewerCore& core) {
   const std::vector<world::LauncherLayout>& launchers = core.session().launchers();
-  if (launchers.empty() || !ImGui::CollapsingHeader("Launchers (F fires all)")) return;
+  fire_buttons_.clear();
+  if (launchers.empty() ||
+      !ImGui::CollapsingHeader("Launchers (F fires all)", ImGuiTreeNodeFlags_DefaultOpen)) {
+    return;
+  }
   for (std::size_t i = 0; i < launchers.size(); ++i) {
     ImGui::PushID(static_cast<int>(i));
     if (ImGui::Button("Fire")) core.session().FireLauncher(i);
+    const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
+    fire_buttons_.push_back({(a.x + b.x) / 2, (a.y + b.y) / 2});
     ImGui::SameLine();
     Text(fmt::format("{}   {:.1f} m/s, {} projectiles", launchers[i].name, launchers[i].speed,
                      launchers[i].bodies.size()));

@@ -631,6 +631,30 @@ TEST_F(ViewerTest, HotkeyFFiresTheLaunchers) {
   EXPECT_TRUE(TickUntil([&] { return xpos[3 * second] > l.muzzle[0] + 0.3; }));
 }
 
+TEST_F(ViewerTest, PanelFireButtonLaunches) {
+  Play(kBotXml, {}, /*paused=*/false,
+       "launchers:\n  - name: gun\n    pos: [-0.5, -0.5, 0.5]\n    speed: 3\n    pool: 1\n");
+  manager_->Tick();
+  viewer::internal::Panel* panel = core().panel();
+  ASSERT_NE(panel, nullptr);
+  ASSERT_EQ(panel->fire_buttons().size(), 1u);
+  const viewer::internal::Panel::Point b = panel->fire_buttons()[0];
+  const world::LauncherLayout& l = manager_->session().launchers()[0];
+  const mjtNum* xpos = core().view().data()->xpos;
+  EXPECT_LT(xpos[3 * l.bodies[0]], l.muzzle[0]);
+  // A click through ImGui's own input: press, then release on the button.
+  using Mouse = viewer::internal::Window::InjectedMouse;
+  core().window().InjectImGuiMouse(Mouse{b.x, b.y, false});
+  manager_->Tick();
+  core().window().InjectImGuiMouse(Mouse{b.x, b.y, true});
+  manager_->Tick();
+  core().window().InjectImGuiMouse(Mouse{b.x, b.y, false});
+  manager_->Tick();
+  core().window().InjectImGuiMouse(std::nullopt);
+  EXPECT_TRUE(TickUntil([&] { return xpos[3 * l.bodies[0]] > l.muzzle[0] + 0.3; }))
+      << "x " << xpos[3 * l.bodies[0]];
+}
+
 TEST_F(ViewerTest, MouseRotatesSelectsAndPerturbs) {
   viewer::ViewerOptions vo;
   vo.panel = false;
