@@ -367,13 +367,7 @@ class Parser {
         p.spec.friction[0] = Number(f, name + ".friction", kNonNegativeFinite);
       }
     }
-    if (n["rgba"]) {
-      auto v = Numbers(n["rgba"], name + ".rgba", 4);
-      for (std::size_t i = 0; i < 4; ++i) {
-        if (v[i] < 0 || v[i] > 1) Fail(n["rgba"], name + ".rgba values must be 0 to 1");
-        p.spec.rgba[i] = v[i];
-      }
-    }
+    if (n["rgba"]) p.spec.rgba = Rgba(n["rgba"], name + ".rgba");
     if (n["threshold"]) {
       p.spec.decompose.threshold = Number(n["threshold"], name + ".threshold", Range{0, 1, true});
     }
@@ -477,6 +471,17 @@ class Parser {
     return t;
   }
 
+  // A colour: four numbers 0 to 1.
+  std::array<double, 4> Rgba(const YAML::Node& n, const std::string& what) const {
+    const std::vector<double> v = Numbers(n, what, 4);
+    std::array<double, 4> out{};
+    for (std::size_t i = 0; i < 4; ++i) {
+      if (v[i] < 0 || v[i] > 1) Fail(n, what + " values must be 0 to 1");
+      out[i] = v[i];
+    }
+    return out;
+  }
+
   // An impulse launcher: pose (+x fires), projectile shape, size, mass, speed, pool, colour.
   LauncherConfig Launcher(const YAML::Node& n) const {
     CheckKeys(n, "launcher",
@@ -519,13 +524,7 @@ class Parser {
       if (v != std::floor(v)) Fail(n["pool"], name + ".pool must be a whole number");
       spec.pool = static_cast<int>(v);
     }
-    if (n["rgba"]) {
-      auto v = Numbers(n["rgba"], name + ".rgba", 4);
-      for (std::size_t i = 0; i < 4; ++i) {
-        if (v[i] < 0 || v[i] > 1) Fail(n["rgba"], name + ".rgba values must be 0 to 1");
-        spec.rgba[i] = v[i];
-      }
-    }
+    if (n["rgba"]) spec.rgba = Rgba(n["rgba"], name + ".rgba");
     return l;
   }
 
@@ -695,6 +694,24 @@ class Parser {
     return c;
   }
 
+  // The list section `key` of entries parsed by `parse` into `out`; each name (spec.name) must be
+  // new in `names`, the scene's one namespace.
+  template <typename T>
+  void NamedList(const YAML::Node& root, const char* key, std::vector<T>* out,
+                 T (Parser::*parse)(const YAML::Node&) const, std::set<std::string>* names) const {
+    const YAML::Node list = root[key];
+    if (!list) return;
+    if (!list.IsSequence()) Fail(list, std::string(key) + " must be a list");
+    for (const auto& entry : list) {
+      out->push_back((this->*parse)(entry));
+      if (!names->insert(out->back().spec.name).second) {
+        Fail(entry, "the name '" + out->back().spec.name +
+                        "' is used twice (articulations, props, terrain and launchers share one "
+                        "namespace)");
+      }
+    }
+  }
+
   SceneConfig Scene(const YAML::Node& root) const {
     SceneConfig s;
     s.path = path_;
@@ -724,37 +741,10 @@ class Parser {
         Fail(a, "two articulations are named '" + s.articulations.back().name + "'");
       }
     }
-    if (const auto props = root["props"]) {
-      if (!props.IsSequence()) Fail(props, "props must be a list");
-      for (const auto& p : props) {
-        s.props.push_back(Prop(p));
-        if (!names.insert(s.props.back().spec.name).second) {
-          Fail(p, "the name '" + s.props.back().spec.name +
-                      "' is used twice (articulations and props share one namespace)");
-        }
-      }
-    }
-    if (const auto terrain = root["terrain"]) {
-      if (!terrain.IsSequence()) Fail(terrain, "terrain must be a list");
-      for (const auto& t : terrain) {
-        s.terrain.push_back(Terrain(t));
-        if (!names.insert(s.terrain.back().spec.name).second) {
-          Fail(t, "the name '" + s.terrain.back().spec.name +
-                      "' is used twice (articulations, props and terrain share one namespace)");
-        }
-      }
-    }
-    if (const auto launchers = root["launchers"]) {
-      if (!launchers.IsSequence()) Fail(launchers, "launchers must be a list");
-      for (const auto& l : launchers) {
-        s.launchers.push_back(Launcher(l));
-        if (!names.insert(s.launchers.back().spec.name).second) {
-          Fail(l, "the name '" + s.launchers.back().spec.name +
-                      "' is used twice (articulations, props, terrain and launchers share one "
-                      "namespace)");
-        }
-      }
-    }
+    // Props, terrain and launchers share the articulations' namespace.
+    NamedList(root, "props", &s.props, &Parser::Prop, &names);
+    NamedList(root, "terrain", &s.terrain, &Parser::Terrain, &names);
+    NamedList(root, "launchers", &s.launchers, &Parser::Launcher, &names);
     if (root["options"]) s.options = Options(root["options"], "options");
     if (const auto n = root["size"]) {
       CheckKeys(n, "size", {"njmax", "nconmax", "nstack", "nuserdata"});

@@ -17,30 +17,24 @@ namespace {
 
 using namespace std::chrono_literals;
 
-constexpr const char* kGround = R"(<mujoco model="ground">
-  <option timestep="0.002"/>
-  <worldbody>
-    <geom name="floor" type="plane" size="10 10 0.1"/>
-  </worldbody>
-</mujoco>)";
-
 class LaunchRecordingTest : public urlab::testing::MujocoTest {
  protected:
   std::string dir_ = urlab::testing::MakeTempDir("launch_recording");
 };
 
 TEST_F(LaunchRecordingTest, LaunchesReSimulateBitForBit) {
-  urlab::testing::WriteTextFile(dir_, "ground.xml", kGround);
+  // The bundled arm (its floor catches the projectiles) beside a launcher.
   const world::SceneConfig scene = world::ParseScene(
-      "articulations:\n  - name: ground\n    mjcf: ground.xml\n"
-      "launchers:\n  - {name: gun, pos: [0, 0, 0.4], euler: [0, -20, 0], pool: 2, speed: 3}\n",
+      "articulations:\n  - name: arm\n    mjcf: " URLAB_SOURCE_DIR
+      "/examples/models/pendulum_arm.xml\n"
+      "launchers:\n  - {name: gun, pos: [-1.5, 1, 0.4], euler: [0, -20, 0], pool: 2, speed: 3}\n",
       dir_ + "/scene.yaml");
   world::SessionOptions o;
   o.as_fast_as_possible = true;
   auto session = world::Session::Create(scene, o);
   physics::PhysicsEngine& engine = session->engine();
   // A deep ring: a starved writer must not drop frames (a gap ends bit-exact re-simulation).
-  Recorder recorder(engine, {{"ground"}, "<mujoco/>", scene.path}, 1 << 17);
+  Recorder recorder(engine, {{"arm"}, "<mujoco/>", scene.path}, 1 << 17);
   session->Start();
   RecorderOptions ro;
   ro.path = dir_ + "/launch.urrec";
