@@ -34,7 +34,8 @@ Extents ExtentsOf(const std::string& shape, const std::vector<double>& s) {
 
 std::vector<double> SizeOf(const LauncherSpec& spec, const ProjectileShape& shape) {
   if (spec.size.empty()) {
-    return {shape.default_size.begin(), shape.default_size.begin() + shape.size_count};
+    return std::vector<double>(shape.default_size.begin(),
+                               shape.default_size.begin() + shape.size_count);
   }
   if (static_cast<int>(spec.size.size()) != shape.size_count) {
     throw InputError(
