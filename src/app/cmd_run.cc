@@ -364,8 +364,9 @@ void RegisterViewCommand(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "view",
       "Play a scene like `urlab run`, in a window: MuJoCo's renderer with the simulate panel, "
-      "debug drawing (keys 1-5), pause (P), reset (R), mouse camera (left drag rotate, right "
-      "drag move, wheel zoom, double-click select, Ctrl+right double-click track) and Ctrl+drag "
+      "debug drawing (keys 1-5), pause (P), reset (R), cinematic cameras (O), launchers (F), "
+      "possession (Tab, then WASD/QE or a gamepad), mouse camera (left drag rotate, right drag "
+      "move, wheel zoom, double-click select, Ctrl+right double-click track) and Ctrl+drag "
       "perturbation. Closing the window stops it (exit 0). Needs a display (xvfb-run works).");
   static RunArgs args;
   args.view = true;

@@ -487,9 +487,10 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs,
              "articulation's mass; remove it or set the masses in the MJCF");
       }
     }
-    if (i > 0) {
+    if (i > 0 && !in.takes_scene_options) {
       // Compiler settings are scene-wide: the first articulation's apply (paths and angle units
-      // are normalised per articulation, so those may differ).
+      // are normalised per articulation, so those may differ). A generated document (a prop, a
+      // launcher) takes the scene's, like its options.
       static const std::set<std::string> kPerArticulation = {"meshdir",   "texturedir", "assetdir",
                                                              "strippath", "angle",      "eulerseq"};
       std::map<std::string, std::string> mine, first;

@@ -163,6 +163,7 @@ class StepServer {
   Outcome SetSimOptions(Request& r);
   Outcome GetCounters(Request& r);
   Outcome SetTwist(Request& r);
+  Outcome FireLauncher(Request& r);
   Outcome ConfigureController(Request& r);
   // Recorder, snapshot and replay operations (step_server_recorder_ops.cc).
   replay::Recorder& RequireRecorder();

@@ -238,6 +238,19 @@ StepServer::Outcome StepServer::SetTwist(Request& r) {
                {"angular", {0.0, 0.0, applied.yaw_rate}}}};
 }
 
+StepServer::Outcome StepServer::FireLauncher(Request& r) {
+  const std::string name = String(r.body["launcher"], "launcher");
+  if (!session_.FindLauncher(name)) {
+    Fail("unknown_launcher", "no launcher '" + name + "' in the scene");
+  }
+  const world::Session::Launch launch = session_.FireLauncher(name);
+  Outcome out;
+  out.reply =
+      Json{{"op", "fire_launcher_ok"}, {"launcher", name}, {"projectile", launch.projectile}};
+  out.wait_for = launch.seq;  // answered once the projectile is on its way
+  return out;
+}
+
 StepServer::Outcome StepServer::ConfigureController(Request& r) {
   const ArticulationTopics& t = Articulation(r.body["articulation"]);
   const Json& params = r.body["params"];

@@ -36,6 +36,7 @@ void Panel::Draw(ViewerCore& core) {
   ImGui::Begin("URLab simulate", nullptr,
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   DrawSimulation(core);
+  DrawLaunchers(core);
   DrawOptions(core);
   DrawArticulation(core);
   DrawDebug(core);
@@ -60,6 +61,25 @@ void Panel::DrawSimulation(ViewerCore& core) {
   if (ImGui::SliderInt("speed %", &speed, 5, 100)) engine.SetSpeedPercent(speed);
   bool fast = engine.as_fast_as_possible();
   if (ImGui::Checkbox("as fast as possible", &fast)) engine.SetAsFastAsPossible(fast);
+}
+
+void Panel::DrawLaunchers(ViewerCore& core) {
+  const std::vector<world::LauncherLayout>& launchers = core.session().launchers();
+  fire_buttons_.clear();
+  if (launchers.empty() ||
+      !ImGui::CollapsingHeader("Launchers (F fires all)", ImGuiTreeNodeFlags_DefaultOpen)) {
+    return;
+  }
+  for (std::size_t i = 0; i < launchers.size(); ++i) {
+    ImGui::PushID(static_cast<int>(i));
+    if (ImGui::Button("Fire")) core.session().FireLauncher(i);
+    const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
+    fire_buttons_.push_back({(a.x + b.x) / 2, (a.y + b.y) / 2});
+    ImGui::SameLine();
+    Text(fmt::format("{}   {:.1f} m/s, {} projectiles", launchers[i].name, launchers[i].speed,
+                     launchers[i].bodies.size()));
+    ImGui::PopID();
+  }
 }
 
 void Panel::DrawOptions(ViewerCore& core) {

@@ -30,9 +30,15 @@ class Panel {
     float x0 = 0, x1 = 0, y = 0;
   };
   const std::vector<SliderRect>& sliders() const { return sliders_; }
+  // The centre of each launcher's Fire button as last drawn (window coordinates), for tests.
+  struct Point {
+    float x = 0, y = 0;
+  };
+  const std::vector<Point>& fire_buttons() const { return fire_buttons_; }
 
  private:
   void DrawSimulation(ViewerCore& core);
+  void DrawLaunchers(ViewerCore& core);
   void DrawOptions(ViewerCore& core);
   void DrawArticulation(ViewerCore& core);
   void DrawDebug(ViewerCore& core);
@@ -46,6 +52,7 @@ class Panel {
   std::string record_path_ = "viewer.urrec";
   std::string message_;
   std::vector<SliderRect> sliders_;
+  std::vector<Point> fire_buttons_;
 };
 
 }  // namespace urlab::viewer::internal

@@ -247,9 +247,12 @@ void ViewerCore::Perform(Action action) {
       spdlog::info("viewer: cinematic camera {}", ToString(mode));
       break;
     }
-    case Action::kFireLaunchers:
-      spdlog::info("viewer: nothing to do for this key in this scene");
+    case Action::kFireLaunchers: {  // every launcher once
+      const std::size_t launchers = session_->launchers().size();
+      if (launchers == 0) spdlog::info("viewer: this scene has no launchers");
+      for (std::size_t i = 0; i < launchers; ++i) session_->FireLauncher(i);
       break;
+    }
     default:
       break;
   }

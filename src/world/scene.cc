@@ -239,6 +239,16 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     terrain_cached.push_back(built.cache_hit);
     inputs.push_back(GeneratedInput(t.spec.name, std::move(built.doc), t.pos, t.quat));
   }
+  // Impulse launchers: their trays and projectile pools, in world coordinates.
+  for (const LauncherConfig& l : scene.launchers) {
+    document::Document doc;
+    try {
+      doc = BuildLauncherDocument(l.spec);
+    } catch (const InputError& e) {
+      throw InputError(l.where, e.message());
+    }
+    inputs.push_back(GeneratedInput(l.spec.name, std::move(doc), {0, 0, 0}, {1, 0, 0, 0}));
+  }
   mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs), scene.options);
   // Scene overrides: only the fields set, over whatever the articulations gave.
   for (const auto& [k, v] : scene.options) mjcf::SetOptionAttribute(composed.doc, k, v);
@@ -263,6 +273,9 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     t.hfield = mj_name2id(out.model.get(), mjOBJ_HFIELD, (t.name + "_hfield").c_str());
     t.from_cache = terrain_cached[i];
     out.terrain.push_back(t);
+  }
+  for (const LauncherConfig& l : scene.launchers) {
+    out.launchers.push_back(LauncherLayoutOf(out.model.get(), l.spec));
   }
   out.articulations = std::move(composed.articulations);
   out.diagnostics = std::move(composed.diagnostics);

@@ -81,6 +81,16 @@ void CheckSceneConfig(const SceneConfig& scene, Diagnostics& sink) {
                                 "_' elements); rename one");
       }
     }
+    // A launcher whose prefix an articulation's would own (its projectiles would be bound as
+    // that articulation's joints).
+    for (const LauncherConfig& l : scene.launchers) {
+      if ((l.spec.name + "_").starts_with(a.name + "_")) {
+        sink.Error(l.where, "launcher name '" + l.spec.name + "' starts with articulation '" +
+                                a.name +
+                                "_' (that articulation would own its projectiles); "
+                                "rename the launcher");
+      }
+    }
     if (a.hold_keyframe && a.keyframe.empty()) {
       sink.Error(a.where, a.name + ": hold_keyframe needs an initial 'keyframe'");
     }

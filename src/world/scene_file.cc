@@ -367,13 +367,7 @@ class Parser {
         p.spec.friction[0] = Number(f, name + ".friction", kNonNegativeFinite);
       }
     }
-    if (n["rgba"]) {
-      auto v = Numbers(n["rgba"], name + ".rgba", 4);
-      for (std::size_t i = 0; i < 4; ++i) {
-        if (v[i] < 0 || v[i] > 1) Fail(n["rgba"], name + ".rgba values must be 0 to 1");
-        p.spec.rgba[i] = v[i];
-      }
-    }
+    if (n["rgba"]) p.spec.rgba = Rgba(n["rgba"], name + ".rgba");
     if (n["threshold"]) {
       p.spec.decompose.threshold = Number(n["threshold"], name + ".threshold", Range{0, 1, true});
     }
@@ -475,6 +469,63 @@ class Parser {
     }
     t.quat = Orientation(n, name, t.quat);
     return t;
+  }
+
+  // A colour: four numbers 0 to 1.
+  std::array<double, 4> Rgba(const YAML::Node& n, const std::string& what) const {
+    const std::vector<double> v = Numbers(n, what, 4);
+    std::array<double, 4> out{};
+    for (std::size_t i = 0; i < 4; ++i) {
+      if (v[i] < 0 || v[i] > 1) Fail(n, what + " values must be 0 to 1");
+      out[i] = v[i];
+    }
+    return out;
+  }
+
+  // An impulse launcher: pose (+x fires), projectile shape, size, mass, speed, pool, colour.
+  LauncherConfig Launcher(const YAML::Node& n) const {
+    CheckKeys(n, "launcher",
+              {"name", "pos", "quat", "euler", "axisangle", "shape", "size", "mass", "speed",
+               "pool", "rgba"});
+    LauncherConfig l;
+    l.where = At(n);
+    LauncherSpec& spec = l.spec;
+    spec.name = EntryName(n, "launcher");
+    const std::string& name = spec.name;
+    if (n["pos"]) {
+      auto v = Numbers(n["pos"], name + ".pos", 3);
+      spec.pos = {v[0], v[1], v[2]};
+    }
+    spec.quat = Orientation(n, name, spec.quat);
+    if (n["shape"]) {
+      spec.shape = String(n["shape"], name + ".shape");
+      if (!FindProjectileShape(spec.shape)) {
+        Fail(n["shape"], name + ".shape must be sphere, box or capsule, not '" + spec.shape + "'");
+      }
+    }
+    const ProjectileShape& shape = *FindProjectileShape(spec.shape);
+    constexpr Range kPositive{0, std::numeric_limits<double>::max(), true};
+    if (const auto sz = n["size"]) {
+      if (sz.IsSequence()) {
+        for (const auto& v : sz) spec.size.push_back(Number(v, name + ".size", kPositive));
+      } else {
+        spec.size.push_back(Number(sz, name + ".size", kPositive));
+      }
+      if (static_cast<int>(spec.size.size()) != shape.size_count) {
+        Fail(sz, name + ".size: a " + shape.name + " needs " + std::to_string(shape.size_count) +
+                     " number(s) (" + shape.size_help + "), not " +
+                     std::to_string(spec.size.size()));
+      }
+    }
+    if (n["mass"]) spec.mass = Number(n["mass"], name + ".mass", kPositive);
+    if (n["speed"]) spec.speed = Number(n["speed"], name + ".speed", Range{0, 1000});
+    if (n["pool"]) {
+      const double v = Number(n["pool"], name + ".pool", Range{1, kMaxLauncherPool});
+      if (v != std::floor(v)) Fail(n["pool"], name + ".pool must be a whole number");
+      spec.pool = static_cast<int>(v);
+    }
+    if (n["rgba"]) spec.rgba = Rgba(n["rgba"], name + ".rgba");
+    return l;
   }
 
   // The twist block: every field a positive finite number.
@@ -686,6 +737,24 @@ class Parser {
     return c;
   }
 
+  // The list section `key` of entries parsed by `parse` into `out`; each name (spec.name) must be
+  // new in `names`, the scene's one namespace.
+  template <typename T>
+  void NamedList(const YAML::Node& root, const char* key, std::vector<T>* out,
+                 T (Parser::*parse)(const YAML::Node&) const, std::set<std::string>* names) const {
+    const YAML::Node list = root[key];
+    if (!list) return;
+    if (!list.IsSequence()) Fail(list, std::string(key) + " must be a list");
+    for (const auto& entry : list) {
+      out->push_back((this->*parse)(entry));
+      if (!names->insert(out->back().spec.name).second) {
+        Fail(entry, "the name '" + out->back().spec.name +
+                        "' is used twice (articulations, props, terrain and launchers share one "
+                        "namespace)");
+      }
+    }
+  }
+
   SceneConfig Scene(const YAML::Node& root) const {
     SceneConfig s;
     s.path = path_;
@@ -702,8 +771,8 @@ class Parser {
       }
     }
     CheckKeys(root, "the scene",
-              {"articulations", "props", "terrain", "options", "size", "control_source", "network",
-               "save_debug_xml", "cameras", "cinematic"});
+              {"articulations", "props", "terrain", "launchers", "options", "size",
+               "control_source", "network", "save_debug_xml", "cameras", "cinematic"});
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {
       Fail(arts ? arts : root, "the scene needs a non-empty list 'articulations'");
@@ -715,26 +784,10 @@ class Parser {
         Fail(a, "two articulations are named '" + s.articulations.back().name + "'");
       }
     }
-    if (const auto props = root["props"]) {
-      if (!props.IsSequence()) Fail(props, "props must be a list");
-      for (const auto& p : props) {
-        s.props.push_back(Prop(p));
-        if (!names.insert(s.props.back().spec.name).second) {
-          Fail(p, "the name '" + s.props.back().spec.name +
-                      "' is used twice (articulations and props share one namespace)");
-        }
-      }
-    }
-    if (const auto terrain = root["terrain"]) {
-      if (!terrain.IsSequence()) Fail(terrain, "terrain must be a list");
-      for (const auto& t : terrain) {
-        s.terrain.push_back(Terrain(t));
-        if (!names.insert(s.terrain.back().spec.name).second) {
-          Fail(t, "the name '" + s.terrain.back().spec.name +
-                      "' is used twice (articulations, props and terrain share one namespace)");
-        }
-      }
-    }
+    // Props, terrain and launchers share the articulations' namespace.
+    NamedList(root, "props", &s.props, &Parser::Prop, &names);
+    NamedList(root, "terrain", &s.terrain, &Parser::Terrain, &names);
+    NamedList(root, "launchers", &s.launchers, &Parser::Launcher, &names);
     if (root["options"]) s.options = Options(root["options"], "options");
     if (const auto n = root["size"]) {
       CheckKeys(n, "size", {"njmax", "nconmax", "nstack", "nuserdata"});

@@ -65,6 +65,7 @@ void Session::Build(const SceneConfig& scene) {
       articulations_.push_back(std::move(a));
     }
   });
+  launches_ = std::make_unique<std::atomic<std::uint64_t>[]>(compiled_.launchers.size());
   controls_->Install(*engine_);
   engine_->SetArticulationResolver([this](std::string_view name) {
     const Articulation* a = OwnerOf(name);
@@ -151,6 +152,41 @@ std::uint64_t Session::QueueInitialReset(bool full) {
         for (const auto& [control, key] : keys) control->ResetToKeyframe(m, d, key);
       },
       full ? "reset to the initial state" : "initial keyframes");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Impulse launchers
+
+const LauncherLayout* Session::FindLauncher(std::string_view name) const {
+  for (const LauncherLayout& l : compiled_.launchers) {
+    if (l.name == name) return &l;
+  }
+  return nullptr;
+}
+
+Session::Launch Session::FireLauncher(std::string_view name) {
+  const LauncherLayout* l = FindLauncher(name);
+  if (!l) throw Error("no launcher '" + std::string(name) + "' in the scene");
+  return FireLauncher(static_cast<std::size_t>(l - compiled_.launchers.data()));
+}
+
+Session::Launch Session::FireLauncher(std::size_t index) {
+  if (index >= compiled_.launchers.size()) {
+    throw Error("no launcher " + std::to_string(index) + " in the scene (it has " +
+                std::to_string(compiled_.launchers.size()) + ")");
+  }
+  const LauncherLayout& l = compiled_.launchers[index];
+  Launch out;
+  out.projectile =
+      static_cast<int>(launches_[index].fetch_add(1, std::memory_order_relaxed) % l.bodies.size());
+  const auto i = static_cast<std::size_t>(out.projectile);
+  // Position and velocity in one command: no step can run between them.
+  const LaunchState s = LaunchStateOf(l);
+  physics::cmd::SetState set;
+  set.qpos.push_back({l.qpos_adr[i], {s.qpos.begin(), s.qpos.end()}});
+  set.qvel.push_back({l.qvel_adr[i], {s.qvel.begin(), s.qvel.end()}});
+  out.seq = engine_->Submit(std::move(set));
+  return out;
 }
 
 // ---------------------------------------------------------------------------------------------

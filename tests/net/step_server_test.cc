@@ -436,6 +436,24 @@ TEST_F(StepServerTest, SetTwistDrivesTheFreeBase) {
   EXPECT_EQ(s["per_articulation"]["arm"]["actions"], 0);
 }
 
+TEST_F(StepServerTest, FireLauncherLaunchesBeforeTheReply) {
+  // The last argument closes the articulation's entry and opens a launcher's.
+  Play(5000ms, "direct", "}\nlaunchers:\n  - {name: gun, pos: [0.5, 0, 1], speed: 2");
+  Client c(ctx_, rpc());
+  c.Hello();
+  EXPECT_EQ(c.Op("fire_launcher", {{"launcher", "cannon"}})["code"], "unknown_launcher");
+  const Json r = c.Op("fire_launcher", {{"launcher", "gun"}});
+  ASSERT_EQ(r["op"], "fire_launcher_ok") << r.dump();
+  EXPECT_EQ(r["projectile"], 0);
+  EXPECT_EQ(c.Op("fire_launcher", {{"launcher", "gun"}})["projectile"], 1);
+  // Direct mode: nothing stepped, so the state shows the launch exactly.
+  const world::LauncherLayout& l = manager_.session().launchers()[0];
+  manager_.session().engine().WithLockedData([&](const mjModel*, mjData* d) {
+    EXPECT_EQ(d->qvel[l.qvel_adr[0]], 2);
+    EXPECT_EQ(d->qpos[l.qpos_adr[0]], l.muzzle[0]);
+  });
+}
+
 TEST_F(StepServerTest, GetContactsListsForcesWithFilterAndLimit) {
   urlab::testing::WriteTextFile(dir_, "box.xml", kBoxXml);
   Play(5000ms, "direct", "", "box.xml");

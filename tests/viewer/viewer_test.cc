@@ -645,6 +645,53 @@ TEST_F(ViewerTest, KeysPauseResetAndScreenshot) {
   EXPECT_EQ(png.height, 480);
 }
 
+TEST_F(ViewerTest, HotkeyFFiresTheLaunchers) {
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  Play(kBotXml, vo, /*paused=*/false,
+       "launchers:\n  - name: gun\n    pos: [-0.5, -0.5, 0.5]\n    speed: 3\n    pool: 2\n");
+  ASSERT_EQ(manager_->session().launchers().size(), 1u);
+  const world::LauncherLayout& l = manager_->session().launchers()[0];
+  const int first = l.bodies[0], second = l.bodies[1];
+  const mjtNum* xpos = core().view().data()->xpos;
+  ASSERT_TRUE(TickUntil([&] { return core().frame()->time > 0.05; }));
+  const double parked_y = xpos[3 * first + 1];
+  EXPECT_LT(xpos[3 * first], l.muzzle[0]) << "parked on the tray, behind the muzzle";
+  Key(GLFW_KEY_F);
+  // The viewer's copy shows the first projectile leave the tray along +x; the second stays.
+  EXPECT_TRUE(TickUntil([&] { return xpos[3 * first] > l.muzzle[0] + 0.3; }))
+      << "x " << xpos[3 * first];
+  EXPECT_NEAR(xpos[3 * first + 1], -0.5, 0.02) << "along the launcher's +x only";
+  EXPECT_NE(xpos[3 * first + 1], parked_y);
+  EXPECT_LT(xpos[3 * second], l.muzzle[0]);
+  Key(GLFW_KEY_F);
+  EXPECT_TRUE(TickUntil([&] { return xpos[3 * second] > l.muzzle[0] + 0.3; }));
+}
+
+TEST_F(ViewerTest, PanelFireButtonLaunches) {
+  Play(kBotXml, {}, /*paused=*/false,
+       "launchers:\n  - name: gun\n    pos: [-0.5, -0.5, 0.5]\n    speed: 3\n    pool: 1\n");
+  manager_->Tick();
+  viewer::internal::Panel* panel = core().panel();
+  ASSERT_NE(panel, nullptr);
+  ASSERT_EQ(panel->fire_buttons().size(), 1u);
+  const viewer::internal::Panel::Point b = panel->fire_buttons()[0];
+  const world::LauncherLayout& l = manager_->session().launchers()[0];
+  const mjtNum* xpos = core().view().data()->xpos;
+  EXPECT_LT(xpos[3 * l.bodies[0]], l.muzzle[0]);
+  // A click through ImGui's own input: press, then release on the button.
+  using Mouse = viewer::internal::Window::InjectedMouse;
+  core().window().InjectImGuiMouse(Mouse{b.x, b.y, false});
+  manager_->Tick();
+  core().window().InjectImGuiMouse(Mouse{b.x, b.y, true});
+  manager_->Tick();
+  core().window().InjectImGuiMouse(Mouse{b.x, b.y, false});
+  manager_->Tick();
+  core().window().InjectImGuiMouse(std::nullopt);
+  EXPECT_TRUE(TickUntil([&] { return xpos[3 * l.bodies[0]] > l.muzzle[0] + 0.3; }))
+      << "x " << xpos[3 * l.bodies[0]];
+}
+
 TEST_F(ViewerTest, MouseRotatesSelectsAndPerturbs) {
   viewer::ViewerOptions vo;
   vo.panel = false;

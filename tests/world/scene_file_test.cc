@@ -5,6 +5,7 @@
 
 #include <sys/stat.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -108,6 +109,25 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       {WithArm("cinematic:\n  path:\n    - {t: 0, pos: [1, 0, 0], look_at: [1, 0, 0]}\n"), 6,
        "pos and look_at must differ"},
       {WithArm("recording: {file: r.bin}\n"), 4, "'recording:' is not supported yet"},
+      // impulse launchers
+      {WithArm("launchers: {name: gun}\n"), 4, "launchers must be a list"},
+      {WithArm("launchers:\n  - {pos: [0, 0, 1]}\n"), 5, "a launcher needs a name"},
+      {WithArm("launchers:\n  - {name: gun, shape: cone}\n"), 5,
+       "gun.shape must be sphere, box or capsule, not 'cone'"},
+      {WithArm("launchers:\n  - {name: gun, shape: box, size: [0.1, 0.1]}\n"), 5,
+       "a box needs 3 number(s) (half sizes x y z), not 2"},
+      {WithArm("launchers:\n  - {name: gun, size: 0}\n"), 5, "gun.size must be > 0"},
+      {WithArm("launchers:\n  - {name: gun, mass: -1}\n"), 5, "gun.mass must be > 0"},
+      {WithArm("launchers:\n  - {name: gun, speed: .nan}\n"), 5, "gun.speed must be 0 to 1000"},
+      {WithArm("launchers:\n  - {name: gun, pool: 0}\n"), 5, "gun.pool must be 1 to 64"},
+      {WithArm("launchers:\n  - {name: gun, pool: 65}\n"), 5, "gun.pool must be 1 to 64"},
+      {WithArm("launchers:\n  - {name: gun, pool: 2.5}\n"), 5, "whole number"},
+      {WithArm("launchers:\n  - {name: gun, rgba: [1, 0, 0, 2]}\n"), 5, "rgba values must be"},
+      {WithArm("launchers:\n  - {name: gun, quat: [1, 0, 0, 0], euler: [0, 0, 0]}\n"), 5,
+       "at most one of quat, euler, axisangle"},
+      {WithArm("launchers:\n  - {name: gun, direction: [1, 0, 0]}\n"), 5,
+       "unknown key 'direction' in launcher"},
+      {WithArm("launchers:\n  - {name: a}\n"), 5, "the name 'a' is used twice"},
   };
   for (const Case& c : cases) {
     try {
@@ -148,6 +168,18 @@ TEST_F(SceneFileTest, GoodValuesStillPass) {
   EXPECT_EQ(a.input[0].scale, -0.5);
   EXPECT_EQ(a.input[1].gamepad_axis, 3);
   EXPECT_EQ(a.input[1].where.line, 8);
+  const world::SceneConfig l = world::ParseScene(
+      WithArm("launchers:\n  - {name: gun, pos: [1, 2, 3], shape: capsule, size: [0.02, 0.1],\n"
+              "     mass: 0.2, speed: 12, pool: 64, axisangle: [0, 0, 1, 90]}\n"),
+      dir_ + "/l.yaml");
+  ASSERT_EQ(l.launchers.size(), 1u);
+  const world::LauncherSpec& g = l.launchers[0].spec;
+  EXPECT_EQ(g.shape, "capsule");
+  EXPECT_EQ(g.size, (std::vector<double>{0.02, 0.1}));
+  EXPECT_EQ(g.pool, 64);
+  EXPECT_EQ(g.speed, 12);
+  EXPECT_NEAR(g.quat[3], std::sqrt(0.5), 1e-12);
+  EXPECT_EQ(l.launchers[0].where.line, 5);
 }
 
 TEST_F(SceneFileTest, CamerasSectionAndArticulationCameras) {

@@ -40,8 +40,9 @@ struct ArticulationInput {
   std::map<std::string, std::string> options;
   // false: drop the elements attached directly to the world body, other than bodies.
   bool include_world = true;
-  // true: the document sets no options and takes the scene's (a converted prop, composed after
-  // the articulations): it neither sets them nor is warned about differing from them.
+  // true: the document sets no options or compiler settings and takes the scene's (a converted
+  // prop, a launcher, composed after the articulations): it neither sets them nor is warned
+  // about differing from them.
   bool takes_scene_options = false;
 };
 

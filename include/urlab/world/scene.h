@@ -14,6 +14,7 @@
 #include "urlab/mjcf/compose.h"
 #include "urlab/physics/model.h"
 #include "urlab/physics/software_sensors.h"
+#include "urlab/world/launchers.h"
 #include "urlab/world/scene_file.h"
 
 namespace urlab::world {
@@ -48,6 +49,7 @@ struct CompiledScene {
   std::vector<mjcf::ArticulationLayout> articulations;
   std::vector<PropLayout> props;
   std::vector<TerrainLayout> terrain;
+  std::vector<LauncherLayout> launchers;          // the scene's `launchers:` in order
   std::vector<document::Diagnostic> diagnostics;  // warnings worth showing the user
   document::Document doc;  // the (composed) document MuJoCo compiled, e.g. for --save-xml
 };

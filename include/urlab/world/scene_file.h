@@ -2,7 +2,7 @@
 // The scene file (the "level"): YAML listing articulations with their MJCF, world transform,
 // options, control source, controller and initial keyframe, Quick Convert props (a mesh, its
 // pose, scale, mode, mass or density, friction and decomposition settings), terrain
-// (meshes sampled into a heightfield, or a PNG height map), plus scene-wide
+// (meshes sampled into a heightfield, or a PNG height map), impulse launchers, plus scene-wide
 // option overrides,
 // network endpoints and the debug-XML switch. Unknown keys, duplicate keys, keys that are not
 // strings, wrong types and numbers out of range (gains, torque limits, hold/blend times, options
@@ -20,6 +20,7 @@
 #include "urlab/convert/heightfield.h"
 #include "urlab/convert/prop.h"
 #include "urlab/core/error.h"
+#include "urlab/world/launchers.h"
 
 namespace urlab::world {
 
@@ -103,6 +104,13 @@ struct TerrainConfig {
   SourceLocation where;
 };
 
+// An impulse launcher (`launchers:`, world/launchers.h): composed after the terrain like an
+// articulation named `spec.name` (bodies "{name}_projectile{i}").
+struct LauncherConfig {
+  LauncherSpec spec;
+  SourceLocation where;
+};
+
 // How one camera streams; unset fields take the `cameras:` section's defaults.
 struct CameraSettings {
   std::optional<int> width, height;
@@ -162,6 +170,7 @@ struct SceneConfig {
   std::vector<ArticulationConfig> articulations;
   std::vector<PropConfig> props;
   std::vector<TerrainConfig> terrain;
+  std::vector<LauncherConfig> launchers;
   std::map<std::string, std::string> options;  // manager overrides: only the fields set
   std::map<std::string, std::string> size;     // <size> attributes (nconmax, njmax, nstack...)
   ControlSource control_source = ControlSource::kNetwork;

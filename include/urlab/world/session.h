@@ -9,7 +9,7 @@
 // - Main thread: Create, Start, Stop, SyncHostPoses, SetHostDrivenPose/ClearHostDriven.
 // - Any thread: engine() and controls() (under their own contracts), the registry getters
 //   (immutable after Create), SetPaused, SetResetOnDivergence, ResetToInitialState,
-//   ResetArticulation.
+//   ResetArticulation, FireLauncher (a round-robin counter per launcher, atomic).
 // - Physics thread: the session's pre-step callback copies the host-driven poses into
 //   d->mocap_pos/d->mocap_quat (a small mutex shared with SyncHostPoses, held for a copy).
 #include <array>
@@ -91,6 +91,9 @@ class Session : public std::enable_shared_from_this<Session> {
   // prop's body ("body") is driven with SetHostDrivenPose(prop name, "body", pose).
   const std::vector<PropLayout>& props() const { return compiled_.props; }
   const PropLayout* FindProp(std::string_view name) const;
+  // The scene's impulse launchers (immutable after Create); nullptr when absent.
+  const std::vector<LauncherLayout>& launchers() const { return compiled_.launchers; }
+  const LauncherLayout* FindLauncher(std::string_view name) const;
 
   // ---- Commands (any thread) ----
   void SetPaused(bool paused) { engine_->SetPaused(paused); }
@@ -101,6 +104,16 @@ class Session : public std::enable_shared_from_this<Session> {
   // Resets one articulation to keyframe `key` (its initial keyframe when empty); the rest of the
   // scene is untouched. Throws Error for an unknown articulation or keyframe.
   std::uint64_t ResetArticulation(std::string_view name, std::string_view key = {});
+  // Fires a launcher: its next projectile (round robin over the pool, so when all are out the
+  // one fired longest ago is reused) is put at the muzzle in the launch orientation, moving at
+  // the launcher's speed along its +x without spin, by one queued SetState command (recorded
+  // like any other, so re-simulation stays exact). Throws Error for an unknown launcher.
+  struct Launch {
+    std::uint64_t seq = 0;  // the command's sequence number (engine().WaitForCommand)
+    int projectile = -1;    // index in the launcher's pool
+  };
+  Launch FireLauncher(std::string_view name);
+  Launch FireLauncher(std::size_t index);
 
   // ---- Host-driven mocap bodies (main thread) ----
   // Marks a mocap body of an articulation as driven by the host and sets its world pose; from the
@@ -131,6 +144,8 @@ class Session : public std::enable_shared_from_this<Session> {
   std::unique_ptr<control::ControlSystem> controls_;
   std::unique_ptr<physics::PhysicsEngine> engine_;
   std::vector<Articulation> articulations_;
+  // Per launcher: projectiles fired so far (the next one is count % pool).
+  std::unique_ptr<std::atomic<std::uint64_t>[]> launches_;
 
   std::vector<HostPose> host_poses_;  // main thread: the host's latest poses
   bool host_dirty_ = false;           // main thread: host_poses_ changed since the last sync
