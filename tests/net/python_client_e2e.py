@@ -34,6 +34,8 @@ articulations:
   - name: arm
     mjcf: {model}
     controller: {{type: pd, kp: 400, kv: 20}}
+launchers:
+  - {{name: cannon, pos: [1.5, 1.5, 0.8], speed: 3}}
 """)
     proc, endpoints = start_urlab(URLAB, scene)
     try:
@@ -125,6 +127,15 @@ articulations:
             c.replay_start(mode="kinematic")
             c.replay_stop()
             print(f"recorded {done['frames']} steps ({done['bytes']} bytes), snapshot at t={t}")
+            # Impulse launchers: round robin over the pool, unknown names refused.
+            shots = [c.fire_launcher("cannon")["projectile"] for _ in range(2)]
+            if shots != [0, 1]:
+                fail(f"fire_launcher projectiles {shots}, expected [0, 1]", proc)
+            try:
+                c.fire_launcher("nope")
+                fail("unknown_launcher not reported", proc)
+            except UrlabError as e:
+                assert e.code == "unknown_launcher", e
     finally:
         proc.send_signal(signal.SIGINT)
         try:

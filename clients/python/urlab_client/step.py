@@ -142,6 +142,16 @@ class StepClient:
     def forward(self):
         return _arrays(self.call("forward"))
 
+    def set_twist(self, articulation, vx=0.0, vy=0.0, yaw_rate=0.0):
+        """Drives the articulation's twist controller (free base): planar velocity in its heading
+        frame and yaw rate, clamped to the scene's maxima; the reply gives what was applied."""
+        return self.call("set_twist", articulation=articulation,
+                         linear=[float(vx), float(vy), 0.0], angular=[0.0, 0.0, float(yaw_rate)])
+
+    def fire_launcher(self, launcher):
+        """Fires one of the scene's impulse launchers (name); the reply names the projectile."""
+        return self.call("fire_launcher", launcher=launcher)
+
     def puppet(self, qpos=None, qvel=None, ctrl=None, time=None, per_articulation=None):
         """Puppet mode (set_mode("puppet") first): writes the whole model's qpos/qvel/ctrl (or
         per articulation {art: {"qpos", "qvel", "ctrl"}}) and time, runs mj_forward, returns the
