@@ -198,7 +198,10 @@ class Parser {
     if (n.IsScalar()) return n.as<std::string>();
     if (n.IsSequence()) {
       std::string s;
-      for (const auto& v : n) s += (s.empty() ? "" : " ") + String(v, what);
+      for (const auto& v : n) {
+        if (!s.empty()) s += ' ';
+        s += String(v, what);
+      }
       return s;
     }
     Fail(n, what + " must be a value or a list of values");
