@@ -7,7 +7,7 @@
 #   release     Release build with GCC (-O3), warnings as errors, no tests
 #   clang       clang Debug build of everything (tests, benchmarks, examples) + the fast unit tests
 #   install     cmake --install of the release build, examples/find_package built against it
-#   fuzz        every libFuzzer target for URLAB_FUZZ_SECONDS (default 60) s (tools/fuzz.sh)
+#   fuzz        every libFuzzer target for URLAB_FUZZ_SECONDS (default 30) s (tools/fuzz.sh)
 # Build folders: $URLAB_BUILD_DIR (default build) and beside it ${URLAB_BUILD_DIR}-tsan, -asan,
 # -release, -clang, -fuzz. ccache is used when present. Skip stages with
 # URLAB_SKIP_STAGES="tsan asan ..." (URLAB_SKIP_TSAN=1 still skips tsan).
@@ -131,7 +131,7 @@ install_stage() {
 
 fuzz_stage() {
   URLAB_FUZZ_BUILD_DIR="${BUILD_DIR}-fuzz" URLAB_JOBS="$JOBS" \
-    tools/fuzz.sh "${URLAB_FUZZ_SECONDS:-60}"
+    tools/fuzz.sh "${URLAB_FUZZ_SECONDS:-30}"
 }
 
 stage main main_stage
