@@ -13,7 +13,6 @@
 #include "urlab/net/latency_bench.h"
 #include "urlab/replay/recorder.h"
 #include "urlab/viewer/view_bench.h"
-#include "urlab/world/controller_factory.h"
 #include "urlab/world/loop_bench.h"
 #include "urlab/world/manager.h"
 #include "urlab/world/scene.h"
@@ -60,8 +59,6 @@ int BenchLoop(const BenchLoopArgs& args) {
   world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
   scene.articulations.resize(1);  // the first articulation only
   scene.save_debug_xml.clear();
-  world::ArticulationConfig art = scene.articulations.front();
-  if (art.controller.type == "none") art.controller.type = "pd";
   // Exactly what begin-play builds and checks (world/scene_checks.h).
   const world::CompiledScene compiled = world::BuildCheckedScene(scene);
 
@@ -69,11 +66,7 @@ int BenchLoop(const BenchLoopArgs& args) {
   options.steps = args.steps;
   options.trials = args.trials;
   options.subscribers = args.subscribers;
-  options.prefix = compiled.articulations.front().prefix;
-  options.setup = [&art](const mjModel* m, control::ArticulationControl& control) {
-    world::InstallController(art, control, m);
-    world::SetBenchTargets(control);
-  };
+  const world::ArticulationConfig art = world::DriveFirstArticulation(scene, compiled, &options);
   options.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
   // --record: each trial also runs the loop with a recorder writing a compressed file.
   std::unique_ptr<replay::Recorder> recorder;

@@ -16,7 +16,6 @@
 #include "render/render_thread.h"
 #include "urlab/camera/camera_subsystem.h"
 #include "urlab/core/error.h"
-#include "urlab/world/controller_factory.h"
 #include "urlab/world/loop_bench.h"
 #include "urlab/world/manager.h"
 #include "urlab/world/scene_checks.h"
@@ -225,19 +224,13 @@ CameraBenchResult RunCameraBench(const world::SceneConfig& scene_in, const Camer
   {
     // The whole scene (the camera may belong to any articulation); the first one is driven.
     world::SceneConfig s = scene;
-    world::ArticulationConfig art = s.articulations.front();
-    if (art.controller.type == "none") art.controller.type = "pd";
     const world::CompiledScene one = world::BuildCheckedScene(s);
     const Target t = FindTarget(s, one.model.get(),
                                 o.camera.empty() ? "" : target.articulation + "/" + target.camera);
     world::LoopBenchOptions lo;
     lo.steps = o.loop_steps;
     lo.trials = o.loop_trials;
-    lo.prefix = one.articulations.front().prefix;
-    lo.setup = [&art](const mjModel* m, control::ArticulationControl& control) {
-      world::InstallController(art, control, m);
-      world::SetBenchTargets(control);
-    };
+    world::DriveFirstArticulation(s, one, &lo);
     std::unique_ptr<PacedRenderer> paced;
     lo.attach = [&](physics::PhysicsEngine& engine) {
       paced =

@@ -12,6 +12,7 @@
 #include "urlab/physics/engine.h"
 #include "urlab/physics/model.h"
 #include "urlab/physics/views.h"
+#include "urlab/world/controller_factory.h"
 
 namespace urlab::world {
 
@@ -105,6 +106,18 @@ class BenchReaders {
 };
 
 }  // namespace
+
+ArticulationConfig DriveFirstArticulation(const SceneConfig& scene, const CompiledScene& compiled,
+                                          LoopBenchOptions* options) {
+  ArticulationConfig art = scene.articulations.front();
+  if (art.controller.type == "none") art.controller.type = "pd";
+  options->prefix = compiled.articulations.front().prefix;
+  options->setup = [art](const mjModel* m, control::ArticulationControl& control) {
+    InstallController(art, control, m);
+    SetBenchTargets(control);
+  };
+  return art;
+}
 
 void SetBenchTargets(control::ArticulationControl& articulation) {
   for (int i = 0; i < articulation.num_actuators(); ++i) {

@@ -13,6 +13,8 @@
 
 #include "urlab/control/articulation_control.h"
 #include "urlab/physics/engine.h"
+#include "urlab/world/scene.h"
+#include "urlab/world/scene_file.h"
 
 namespace urlab::world {
 
@@ -52,6 +54,12 @@ struct LoopBenchResult {
 
 // Small alternating targets (0.1 * ((i % 3) - 1)) on every actuator, network source.
 void SetBenchTargets(control::ArticulationControl& articulation);
+
+// Drives the scene's first articulation as `urlab bench` does: `options.prefix` from `compiled`,
+// and a setup that installs its controller (a PD when the scene gives none) and SetBenchTargets.
+// Returns that articulation's configuration (controller type resolved).
+ArticulationConfig DriveFirstArticulation(const SceneConfig& scene, const CompiledScene& compiled,
+                                          LoopBenchOptions* options);
 
 // Runs the benchmark on copies of `model`. Throws Error for steps or trials < 1.
 LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& options);
