@@ -1,6 +1,7 @@
 // `urlab convert MESH -o OUT.xml`: a mesh of any readable format becomes a stand-alone MJCF
 // model (the editor's Decompose Mesh button): the visual mesh in group 2, the convex parts of
-// our decomposition (written as STL files in OUT_parts/) in group 3, compiled once as a check.
+// our decomposition (written as STL files in OUT_parts/) in group 3. The model is compiled as a
+// check before OUT.xml and OUT_parts/ are written, so a model MuJoCo refuses leaves nothing.
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -13,6 +14,7 @@
 #include "app/commands.h"
 #include "app/signals.h"
 #include "urlab/convert/prop.h"
+#include "urlab/document/element.h"
 #include "urlab/mjcf/writer.h"
 #include "urlab/physics/model.h"
 
@@ -66,13 +68,30 @@ int Convert(const ConvertArgs& args) {
   if (args.no_cache) fs::remove_all(cache);
   GracefulScope finish_writing;
   const auto t0 = std::chrono::steady_clock::now();
-  convert::PropDocument prop = convert::BuildPropDocument(spec, cache, parts_dir);
+  // The parts go to a staging folder first: nothing of OUT is written (or replaced) until the
+  // model has compiled.
+  const std::string staging = parts_dir + ".partial";
+  fs::remove_all(staging);
+  convert::PropDocument prop;
+  try {
+    prop = convert::BuildPropDocument(spec, cache, staging);
+    for (const std::string& line : prop.report) spdlog::info("{}", line);
+    physics::CompileXmlString(mjcf::WriteString(prop.doc));  // absolute paths
+  } catch (...) {
+    fs::remove_all(staging);
+    throw;
+  }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  for (const std::string& line : prop.report) spdlog::info("{}", line);
+  fs::remove_all(parts_dir);
+  fs::rename(staging, parts_dir);
+  prop.doc.root().Visit([&](document::Element& e) {
+    const std::string file = e.GetOr("file", "");
+    if (e.tag() == "mesh" && file.rfind(staging + "/", 0) == 0) {
+      e.Set("file", parts_dir + file.substr(staging.size()));
+    }
+  });
   mjcf::WriteFile(prop.doc, out.string());  // paths relative to OUT.xml's folder
-  // The written model must load on its own.
-  physics::LoadXmlFile(out.string());
   std::cout << "wrote " << out.string() << " and " << prop.decomposition.parts.size()
             << " part meshes in " << parts_dir << "\n";
   std::cout << "parts " << prop.decomposition.parts.size() << "\nconcavity "

@@ -718,7 +718,7 @@ Prepared Prepare(TriMesh mesh, const DecomposeOptions& options) {
   };
   Prepared p;
   progress(0, "cleaning the mesh");
-  const CleanReport clean = CleanMesh(mesh);
+  CleanReport clean = CleanMesh(mesh);
   if (mesh.empty()) {
     throw Error("decompose: the mesh has no usable triangles (" + clean.Summary() + ")");
   }
@@ -726,16 +726,16 @@ Prepared Prepare(TriMesh mesh, const DecomposeOptions& options) {
   if (mesh.triangles.size() > options.max_triangles) {
     progress(0, "simplifying a large mesh");
     const std::size_t before = mesh.triangles.size();
-    int cells = 400;
-    TriMesh small = ClusterVertices(mesh, cells);
-    while (small.triangles.size() > options.max_triangles && cells > 16) {
-      cells = cells * 3 / 4;
-      small = ClusterVertices(mesh, cells);
-    }
-    mesh = std::move(small);
-    p.notes.push_back(
-        fmt::format("simplified from {} to {} triangles (vertex clustering, {} cells)", before,
-                    mesh.triangles.size(), cells));
+    int cells = 0;
+    mesh = SimplifyToAtMost(mesh, options.max_triangles, 400, &cells);
+    // Clustering folds thin places into faces that disagree or share an edge three ways; the
+    // inside test and the concavity measure need a surface that agrees.
+    const std::size_t dropped = MakeEdgesOrientable(mesh);
+    p.notes.push_back(fmt::format(
+        "simplified from {} to {} triangles (vertex clustering, {} cells{})", before,
+        mesh.triangles.size(), cells,
+        dropped ? fmt::format("; {} triangles on non-manifold edges dropped", dropped) : ""));
+    clean = CleanMesh(mesh);  // whether the simplified surface is closed decides the terms
   }
   const Bounds b = ComputeBounds(mesh);
   const Vec3 size = b.Size();
@@ -1013,7 +1013,7 @@ Decomposition SingleHull(TriMesh mesh, const DecomposeOptions& options) {
 
 std::string OptionsKey(const DecomposeOptions& o) {
   return fmt::format(
-      "v1 threshold={} max_parts={} resolution={} samples={} k={} candidates={} "
+      "v2 threshold={} max_parts={} resolution={} samples={} k={} candidates={} "
       "max_triangles={}",
       o.threshold, o.max_parts, o.resolution, o.samples, o.volume_weight, o.candidates,
       o.max_triangles);

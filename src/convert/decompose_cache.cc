@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "byte_io.h"
+#include "core/byte_io.h"
 #include "urlab/convert/decompose.h"
 #include "urlab/core/files.h"
 
@@ -22,7 +22,7 @@ constexpr std::uint32_t kMaxNotes = 64;
 }  // namespace
 
 std::string SerializeDecomposition(const Decomposition& d, std::uint64_t key) {
-  internal::ByteWriter w;
+  urlab::internal::ByteWriter w;
   w.PutBytes(kMagic);
   w.Put(key);
   w.Put(static_cast<std::uint32_t>(d.parts.size()));
@@ -54,7 +54,7 @@ Decomposition ParseDecomposition(std::string_view bytes, std::uint64_t key) {
     std::memcpy(&sum, bytes.data() + bytes.size() - 8, 8);
     if (sum != HashBytes(bytes.substr(0, bytes.size() - 8))) throw Error(what + ": checksum");
   }
-  internal::ByteReader r(bytes.substr(0, bytes.size() - 8), what);
+  urlab::internal::ByteReader r(bytes.substr(0, bytes.size() - 8), what);
   r.GetBytes(kMagic.size());
   if (r.Get<std::uint64_t>() != key) throw Error(what + ": another mesh or options");
   Decomposition d;

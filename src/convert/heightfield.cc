@@ -13,7 +13,7 @@
 #include <memory>
 #include <sstream>
 
-#include "byte_io.h"
+#include "core/byte_io.h"
 #include "urlab/convert/mesh_io.h"
 #include "urlab/core/error.h"
 #include "urlab/core/files.h"
@@ -46,7 +46,7 @@ CacheFiles CachePaths(const std::string& cache_dir, std::uint64_t key) {
 }
 
 std::string HfieldBytes(const HeightGrid& g) {
-  internal::ByteWriter w;
+  urlab::internal::ByteWriter w;
   w.Put(static_cast<std::int32_t>(g.rows));
   w.Put(static_cast<std::int32_t>(g.cols));
   for (float h : g.heights) w.Put(h);

@@ -40,8 +40,10 @@ bool VisualOnly(const document::Document& doc, const document::Element& geom) {
   return true;
 }
 
-// The OBJ a mesh file is converted to: <cache>/meshes/<stem>-<content hash>.obj, written once.
-std::string Convert(const std::string& source, const std::string& cache_dir,
+// The OBJ a mesh file is converted to: <cache>/meshes/<stem>-<content hash>.obj, written once
+// (simplified when it has more faces than MuJoCo 2.2.2 takes from an STL). `why` says why the
+// source cannot be used as it is.
+std::string Convert(const std::string& source, const std::string& why, const std::string& cache_dir,
                     std::vector<std::string>* steps) {
   const std::string bytes = ReadInputFile(source, "mesh file", {}, kMaxMeshFileBytes);
   const std::string out =
@@ -53,12 +55,12 @@ std::string Convert(const std::string& source, const std::string& cache_dir,
     steps->push_back(fmt::format("{}: converted before, using {}", source, out));
     return out;
   }
-  const TriMesh mesh = ReadMesh(source);
+  std::string simplified;
+  const TriMesh mesh = LimitForMujoco(ReadMesh(source), &simplified);
   WriteFileAtomic(out, ObjBytes(mesh));
-  steps->push_back(
-      fmt::format("{}: converted to {} ({} triangles; MuJoCo 2.2.2 loads STL, OBJ, "
-                  "MSH)",
-                  source, out, mesh.triangles.size()));
+  steps->push_back(fmt::format("{}: converted to {} ({} triangles; {}{}{})", source, out,
+                               mesh.triangles.size(), why, simplified.empty() ? "" : "; ",
+                               simplified));
   return out;
 }
 
@@ -196,10 +198,13 @@ MeshAssetReport PrepareMeshAssets(document::Document& doc, const std::string& ca
   std::vector<document::Element*> dropped;
   for (document::Element* m : meshes) {
     const std::optional<std::string> file = m->ResolvedFile("file");
-    if (!file || IsMujocoMeshFormat(*file)) continue;
+    if (!file) continue;
+    const std::string why =
+        IsMujocoMeshFormat(*file) ? MujocoStlRefusal(*file) : "MuJoCo 2.2.2 loads STL, OBJ, MSH";
+    if (why.empty()) continue;
     const std::string name = document::DefinedName(*m);
     try {
-      const std::string converted = Convert(*file, cache_dir, &report.steps);
+      const std::string converted = Convert(*file, why, cache_dir, &report.steps);
       m->Set("name", name);  // keep the name MuJoCo gave it from the original file
       m->Set("file", converted);
       m->set_file_bases(nullptr);  // an absolute path

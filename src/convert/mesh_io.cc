@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 
 #include "assimp_reader.h"
 #include "urlab/core/error.h"
@@ -192,6 +193,41 @@ bool IsMujocoMeshFormat(const std::string& path) {
 bool IsReadableMeshFormat(const std::string& path) {
   const std::string e = Extension(path);
   return e == ".stl" || e == ".obj" || internal::AssimpCanRead(e);
+}
+
+std::string MujocoStlRefusal(const std::string& path) {
+  if (Extension(path) != ".stl") return {};
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  std::ifstream in(path, std::ios::binary);
+  if (ec || !in) return {};
+  char header[84] = {};
+  if (size < 84 || !in.read(header, 84)) return "shorter than a binary STL header";
+  std::uint32_t n = 0;
+  std::memcpy(&n, header + 80, 4);
+  if (84 + 50ull * n != size) return "not a binary STL (MuJoCo 2.2.2 reads no ASCII STL)";
+  if (n == 0) return "a binary STL without faces";
+  if (n > kMujocoMaxStlFaces) {
+    return fmt::format("a binary STL of {} faces (MuJoCo 2.2.2 reads at most {})", n,
+                       kMujocoMaxStlFaces);
+  }
+  return {};
+}
+
+TriMesh LimitForMujoco(TriMesh mesh, std::string* note) {
+  if (mesh.triangles.size() <= kMujocoMaxStlFaces) return mesh;
+  const std::size_t before = mesh.triangles.size();
+  int cells = 0;
+  TriMesh small = SimplifyToAtMost(mesh, kMujocoMaxStlFaces, 1024, &cells);
+  const std::size_t dropped = MakeEdgesOrientable(small);
+  if (note) {
+    *note = fmt::format(
+        "simplified from {} to {} triangles for MuJoCo 2.2.2 (vertex clustering on a {}-cell "
+        "grid{})",
+        before, small.triangles.size(), cells,
+        dropped ? fmt::format("; {} triangles on non-manifold edges dropped", dropped) : "");
+  }
+  return small;
 }
 
 TriMesh ReadMesh(const std::string& path) {

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <map>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "geometry.h"
 #include "urlab/convert/mesh.h"
@@ -132,6 +133,40 @@ OrientationPlan PlanConsistentOrientation(const TriMesh& mesh, bool weld_equal_v
   plan.flipped = static_cast<std::size_t>(std::count(plan.flip.begin(), plan.flip.end(), true));
   plan.repeated_after = RepeatedDirectedEdges(tris, plan.flip);
   return plan;
+}
+
+std::size_t MakeEdgesOrientable(TriMesh& mesh) {
+  const OrientationPlan plan = PlanConsistentOrientation(mesh, false);
+  std::unordered_set<EdgeKey, EdgeKeyHash> directed;  // (from, to) edges in use
+  directed.reserve(mesh.triangles.size() * 3);
+  std::vector<Triangle> kept;
+  kept.reserve(mesh.triangles.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    Triangle c = mesh.triangles[t];
+    if (plan.flip[t]) std::swap(c[1], c[2]);
+    bool clash = false;
+    for (int k = 0; k < 3 && !clash; ++k) clash = directed.count({c[k], c[(k + 1) % 3]}) > 0;
+    if (clash) continue;
+    for (int k = 0; k < 3; ++k) directed.emplace(c[k], c[(k + 1) % 3]);
+    kept.push_back(c);
+  }
+  const std::size_t dropped = mesh.triangles.size() - kept.size();
+  // Unused vertices out, indices renumbered in first-use order.
+  std::vector<std::int32_t> remap(mesh.vertices.size(), -1);
+  std::vector<Vec3> vertices;
+  for (Triangle& c : kept) {
+    for (std::int32_t& i : c) {
+      std::int32_t& r = remap[static_cast<std::size_t>(i)];
+      if (r < 0) {
+        r = static_cast<std::int32_t>(vertices.size());
+        vertices.push_back(mesh.vertices[static_cast<std::size_t>(i)]);
+      }
+      i = r;
+    }
+  }
+  mesh.vertices = std::move(vertices);
+  mesh.triangles = std::move(kept);
+  return dropped;
 }
 
 }  // namespace urlab::convert

@@ -32,13 +32,17 @@ std::string Faces(const TriMesh& m) {
   return s;
 }
 
-// The file MuJoCo reads for the visual mesh: the source when MuJoCo loads its format, else an
-// OBJ written into the cache, named after the source and its content (so two sources with the
-// same stem never share a file).
+// The file MuJoCo reads for the visual mesh: the source when MuJoCo loads it as it is, else an
+// OBJ written into the cache (simplified when the mesh has more faces than MuJoCo 2.2.2 takes
+// from an STL), named after the source and its content (so two sources with the same stem never
+// share a file).
 std::string VisualFile(const std::string& source, const TriMesh& mesh, const std::string& cache_dir,
                        std::vector<std::string>* report) {
-  if (IsMujocoMeshFormat(source)) return source;
-  const std::string bytes = ObjBytes(mesh);
+  const std::string why =
+      IsMujocoMeshFormat(source) ? MujocoStlRefusal(source) : "MuJoCo 2.2.2 loads STL, OBJ, MSH";
+  if (why.empty()) return source;
+  std::string simplified;
+  const std::string bytes = ObjBytes(LimitForMujoco(mesh, &simplified));
   const std::string out =
       (fs::path(cache_dir) / "meshes" /
        (fs::path(source).stem().string() + "-" + HashHex(HashBytes(bytes)).substr(0, 12) + ".obj"))
@@ -46,10 +50,10 @@ std::string VisualFile(const std::string& source, const TriMesh& mesh, const std
   std::error_code ec;
   if (!fs::is_regular_file(out, ec)) {
     WriteFileAtomic(out, bytes);
-    report->push_back(
-        fmt::format("converted {} to {} (MuJoCo 2.2.2 loads STL, OBJ, MSH)", source, out));
+    report->push_back(fmt::format("visual mesh: converted {} to {} ({}{}{})", source, out, why,
+                                  simplified.empty() ? "" : "; ", simplified));
   } else {
-    report->push_back(fmt::format("converted {}: cached {}", source, out));
+    report->push_back(fmt::format("visual mesh: converted {}: cached {}", source, out));
   }
   return out;
 }

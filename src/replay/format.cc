@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "core/byte_io.h"
 #include "urlab/physics/state.h"
 
 namespace urlab::replay::format {
@@ -41,45 +42,7 @@ void Put(std::string* out, T value) {
   out->append(bytes, sizeof(T));
 }
 
-// Reads little-endian values from a span; every read checks the bounds.
-class Cursor {
- public:
-  Cursor(std::string_view bytes, const char* what) : p_(bytes), what_(what) {}
-  template <typename T>
-  T Get() {
-    Need(sizeof(T));
-    T v;
-    std::memcpy(&v, p_.data() + pos_, sizeof(T));
-    pos_ += sizeof(T);
-    return v;
-  }
-  std::string_view Bytes(std::uint64_t n) {
-    Need(n);
-    std::string_view v = p_.substr(pos_, n);
-    pos_ += n;
-    return v;
-  }
-  void Doubles(std::vector<double>* out, std::size_t n) {
-    Need(n * sizeof(double));
-    out->resize(n);
-    if (n) std::memcpy(out->data(), p_.data() + pos_, n * sizeof(double));
-    pos_ += n * sizeof(double);
-  }
-  bool done() const { return pos_ == p_.size(); }
-  std::size_t pos() const { return pos_; }
-  std::size_t left() const { return p_.size() - pos_; }
-
- private:
-  void Need(std::uint64_t n) const {
-    if (n > p_.size() - pos_) {
-      throw std::runtime_error(std::string(what_) + " ends early (needs " + std::to_string(n) +
-                               " more bytes at byte " + std::to_string(pos_) + ")");
-    }
-  }
-  std::string_view p_;
-  std::size_t pos_ = 0;
-  const char* what_;
-};
+using Cursor = internal::ByteReader;
 
 void PutDoubles(std::string* out, const std::vector<double>& v) {
   if (!v.empty()) out->append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(double));
@@ -326,10 +289,10 @@ std::string EncodeInfo(const RecordingInfo& info) {
 
 RecordingInfo DecodeInfo(std::string_view payload) {
   Cursor c(payload, "header chunk");
-  const std::string_view text = c.Bytes(c.Get<std::uint64_t>());
+  const std::string_view text = c.GetBytes(c.Get<std::uint64_t>());
   RecordingInfo info;
-  info.mjcf = std::string(c.Bytes(c.Get<std::uint64_t>()));
-  info.mjb = std::string(c.Bytes(c.Get<std::uint64_t>()));
+  info.mjcf = std::string(c.GetBytes(c.Get<std::uint64_t>()));
+  info.mjb = std::string(c.GetBytes(c.Get<std::uint64_t>()));
   if (!c.done()) throw std::runtime_error("header chunk has bytes after the model");
   try {
     const nlohmann::json j = nlohmann::json::parse(text);
@@ -595,7 +558,7 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
     const std::string where = "record " + std::to_string(index);
     const auto type = c.Get<std::uint8_t>();
     const auto length = c.Get<std::uint32_t>();
-    Cursor r(c.Bytes(length), "record");
+    Cursor r(c.GetBytes(length), "record");
     try {
       switch (type) {
         case kFrame: {
@@ -607,7 +570,7 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
             throw std::runtime_error("unknown frame fields");
           }
           const auto unxor = [&](std::vector<double>* out, std::vector<double>* prev) {
-            r.Doubles(out, prev->size());
+            r.GetDoubles(out, prev->size());
             XorInto(out, *prev);
             *prev = *out;
           };
@@ -616,13 +579,13 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
           unxor(&f.act, &act);
           unxor(&f.ctrl, &ctrl);
           if (groups & kGroupMocap) {
-            r.Doubles(&mocap_pos, mocap_pos.size());
-            r.Doubles(&mocap_quat, mocap_quat.size());
+            r.GetDoubles(&mocap_pos, mocap_pos.size());
+            r.GetDoubles(&mocap_quat, mocap_quat.size());
             have_mocap = true;
           } else if (!have_mocap) {
             throw std::runtime_error("the chunk's first frame has no mocap poses");
           }
-          if (groups & kGroupQfrc) r.Doubles(&qfrc, qfrc.size());
+          if (groups & kGroupQfrc) r.GetDoubles(&qfrc, qfrc.size());
           if (groups & kGroupXfrc) {
             std::fill(xfrc.begin(), xfrc.end(), 0.0);
             const auto rows = r.Get<std::uint32_t>();
@@ -633,7 +596,7 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
                                          std::to_string(t.nbody));
               }
               std::vector<double> row;
-              r.Doubles(&row, 6);
+              r.GetDoubles(&row, 6);
               std::copy(row.begin(), row.end(), xfrc.begin() + 6 * body);
             }
           }
@@ -651,9 +614,9 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
               commands.seq[g] = r.Get<std::uint64_t>();
               commands.source[g] = r.Get<std::uint8_t>();
             }
-            r.Doubles(&commands.targets, commands.targets.size());
-            r.Doubles(&commands.kp, commands.kp.size());
-            r.Doubles(&commands.kv, commands.kv.size());
+            r.GetDoubles(&commands.targets, commands.targets.size());
+            r.GetDoubles(&commands.kp, commands.kp.size());
+            r.GetDoubles(&commands.kv, commands.kv.size());
             have_commands = true;
           }
           f.qfrc_applied = qfrc;
@@ -665,7 +628,7 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
         case kState: {
           StateRecord s;
           s.jump = r.Get<std::uint32_t>();
-          const std::string_view bytes = r.Bytes(r.left());
+          const std::string_view bytes = r.GetBytes(r.remaining());
           s.state = physics::DeserializeState(
               std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()));
           if (s.state.layout.nq != t.nq || s.state.layout.nv != t.nv || s.state.layout.na != t.na ||
@@ -681,12 +644,12 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
           m.flags = r.Get<std::uint32_t>();
           m.time = r.Get<double>();
           m.step = r.Get<std::uint64_t>();
-          m.text = std::string(r.Bytes(r.left()));
+          m.text = std::string(r.GetBytes(r.remaining()));
           records.emplace_back(std::move(m));
           break;
         }
         case kOptions: {
-          const std::string_view bytes = r.Bytes(r.left());
+          const std::string_view bytes = r.GetBytes(r.remaining());
           if (bytes.size() != sizeof(mjOption)) {
             throw std::runtime_error("physics options of " + std::to_string(bytes.size()) +
                                      " bytes (MuJoCo 2.2.2's are " +

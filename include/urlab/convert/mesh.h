@@ -79,6 +79,19 @@ OrientationPlan PlanConsistentOrientation(const TriMesh& mesh, bool weld_equal_v
 // simplification for very large meshes (the result is cleaned).
 TriMesh ClusterVertices(const TriMesh& mesh, int cells);
 
+// ClusterVertices on the finest grid, from `start_cells` down by quarters (to 16 cells at the
+// coarsest), that leaves at most `max_triangles`; `cells_used` (optional) gets that grid. A mesh
+// already small enough comes back unchanged (cells_used 0).
+TriMesh SimplifyToAtMost(const TriMesh& mesh, std::size_t max_triangles, int start_cells,
+                         int* cells_used = nullptr);
+
+// Makes every directed edge appear at most once, which MuJoCo 2.2.2's orientation check needs:
+// faces are oriented consistently where the mesh allows (PlanConsistentOrientation), then each
+// triangle that would run an edge the same way as an earlier one (a non-manifold edge, as
+// vertex clustering leaves where thin parts collapse) is dropped, and unused vertices removed.
+// Returns the number of triangles dropped.
+std::size_t MakeEdgesOrientable(TriMesh& mesh);
+
 // 64-bit FNV-1a of bytes, continuing from `seed` (for cache keys, not security).
 std::uint64_t HashBytes(std::string_view bytes, std::uint64_t seed = 0xcbf29ce484222325ull);
 // Hash of a mesh's vertex and index arrays.

@@ -4,9 +4,12 @@
 // glTF/GLB, FBX, DAE, ...) is converted through assimp into an OBJ in the cache folder, named
 // after the source and its content hash (converted once; two sources with the same stem, such
 // as link1.dae and link1.ply, never share a file), and the mesh keeps the name MuJoCo would have
-// given it. Unnamed meshes whose file stems clash (link1.obj and link1.stl both named "link1"
-// by MuJoCo) get distinct names (link1, link1_1). A mesh that cannot be read is an InputError
-// naming the file and the <mesh> element's file:line, unless only visual geoms use it
+// given it. So is an STL that 2.2.2 refuses (ASCII, or more than 200,000 faces: simplified to
+// at most that many by vertex clustering, which moves the surface by about one grid cell: the
+// finest grid from 1,024 cells along the longest side that is small enough; see
+// LimitForMujoco). Unnamed meshes whose file stems clash (link1.obj and link1.stl both named
+// "link1" by MuJoCo) get distinct names (link1, link1_1). A mesh that cannot be read is an
+// InputError naming the file and the <mesh> element's file:line, unless only visual geoms use it
 // (contype and conaffinity 0): then those geoms and the mesh are dropped with a warning and the
 // collision geometry stays (the description's fallback).
 //
