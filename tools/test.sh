@@ -98,7 +98,11 @@ asan_stage() {
     -DURLAB_BUILD_BENCH=OFF
   cmake --build "$dir" -j"$JOBS" --target urlab_tests_mjcf urlab_tests_document urlab_tests_world \
     urlab_tests_replay
-  ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1" \
+  # The MuJoCo 3.x reference the main stage installed (the 3.x comparison tests skip without it).
+  local js="$BUILD_DIR/mujoco-js"
+  [[ "$js" == /* ]] || js="$PWD/$js"
+  URLAB_MUJOCO_JS="$js" \
+    ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1" \
     ctest --test-dir "$dir" -L 'mjcf|document|world|replay' --output-on-failure -j"$JOBS" --timeout 900
 }
 
