@@ -71,7 +71,7 @@ configure() {  # configure DIR [cmake args...] (once; later runs keep the cache)
 main_stage() {
   tools/build.sh
   if [ -f tools/install-mujoco-js.sh ]; then
-    bash tools/install-mujoco-js.sh build/mujoco-js ||
+    bash tools/install-mujoco-js.sh "$BUILD_DIR/mujoco-js" ||
       echo "mujoco-js not installed: the 3.x reference test will skip"
   fi
   ctest --test-dir "$BUILD_DIR" --output-on-failure -j"$JOBS" --timeout 900
