@@ -178,6 +178,28 @@ LauncherLayout LauncherLayoutOf(const mjModel* m, const LauncherSpec& spec) {
   return l;
 }
 
+void CheckTrayAboveGround(const mjModel* m, const LauncherSpec& spec) {
+  const int tray = mj_name2id(m, mjOBJ_GEOM, (spec.name + "_tray").c_str());
+  if (tray < 0) return;
+  const double top = m->geom_pos[3 * tray + 2] + m->geom_size[3 * tray + 2];
+  for (int g = 0; g < m->ngeom; ++g) {
+    if (m->geom_type[g] != mjGEOM_PLANE || m->geom_bodyid[g] != 0) continue;
+    const mjtNum* q = m->geom_quat + 4 * g;
+    const double normal_z = 1 - 2 * (q[1] * q[1] + q[2] * q[2]);  // the plane's z axis, up part
+    if (normal_z < 0.999) continue;
+    const double ground = m->geom_pos[3 * g + 2];
+    if (top >= ground) continue;
+    const char* plane = mj_id2name(m, mjOBJ_GEOM, g);
+    throw InputError(
+        {}, fmt::format("{}: its projectiles rest on a tray {:.3f} m below the launcher, at z = "
+                        "{:.3f}, under the ground plane {}(z = {:.3f}); place the launcher at z "
+                        ">= {:.3f}",
+                        spec.name, spec.pos[2] - top, top,
+                        plane ? fmt::format("'{}' ", plane) : std::string(), ground,
+                        spec.pos[2] + ground - top));
+  }
+}
+
 LaunchState LaunchStateOf(const LauncherLayout& l) {
   LaunchState s;
   std::copy(l.muzzle.begin(), l.muzzle.end(), s.qpos.begin());

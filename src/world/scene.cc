@@ -275,6 +275,11 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     out.terrain.push_back(t);
   }
   for (const LauncherConfig& l : scene.launchers) {
+    try {
+      CheckTrayAboveGround(out.model.get(), l.spec);
+    } catch (const InputError& e) {
+      throw InputError(l.where, e.message());
+    }
     out.launchers.push_back(LauncherLayoutOf(out.model.get(), l.spec));
   }
   out.articulations = std::move(composed.articulations);

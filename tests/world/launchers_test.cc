@@ -188,6 +188,25 @@ TEST_F(LaunchersTest, LauncherNamedUnderAnArticulationsPrefixIsRefused) {
   EXPECT_NE(sink.all()[0].message.find("rename the launcher"), std::string::npos);
 }
 
+TEST_F(LaunchersTest, TrayUnderTheGroundIsRefusedWithTheHeightThatFits) {
+  // A 5 cm ball parked 5 cm under the muzzle: at z = 0.1 its tray would be under the floor.
+  const world::SceneConfig low = Scene("launchers:\n  - name: gun\n    pos: [0, 0, 0.1]\n");
+  try {
+    world::BuildScene(low);
+    FAIL() << "compiled";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where().line, 5) << e.what();
+    EXPECT_NE(e.message().find("under the ground plane 'ground_floor'"), std::string::npos)
+        << e.message();
+    // The height it names fits.
+    const std::string m = e.message();
+    const double fits = std::stod(m.substr(m.rfind(">= ") + 3));
+    EXPECT_GT(fits, 0.1);
+    EXPECT_NO_THROW(world::BuildScene(Scene("launchers:\n  - name: gun\n    pos: [0, 0, " +
+                                            std::to_string(fits + 1e-3) + "]\n")));
+  }
+}
+
 TEST_F(LaunchersTest, ExampleSceneFiresAtTheDog) {
   world::SessionOptions o;
   o.start_paused = true;

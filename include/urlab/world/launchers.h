@@ -71,6 +71,12 @@ struct LauncherLayout {
 // projectile is missing.
 LauncherLayout LauncherLayoutOf(const mjModel* m, const LauncherSpec& spec);
 
+// Throws InputError when the tray of `spec` in `m` lies below a ground plane (an upward plane
+// geom of the world body): its parked projectiles would start inside the ground and be thrown
+// out at compile. The message gives the lowest launcher height that fits (callers add the scene
+// file's line).
+void CheckTrayAboveGround(const mjModel* m, const LauncherSpec& spec);
+
 // The free joint's state of a projectile leaving `l`: qpos (muzzle position, launch_quat) and qvel
 // (speed along the launch direction, no spin).
 struct LaunchState {
