@@ -21,9 +21,7 @@ using testing::TempDir;
 
 class MeshAssets : public urlab::testing::MujocoTest {};
 
-void Write(const std::string& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary) << bytes;
-}
+using testing::Write;
 
 std::string Coordinates(const Vec3& v) {
   return std::to_string(v[0]) + " " + std::to_string(v[1]) + " " + std::to_string(v[2]) + "\n";

@@ -14,9 +14,7 @@ namespace {
 using testing::Box;
 using testing::TempDir;
 
-void Write(const std::string& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary) << bytes;
-}
+using testing::Write;
 
 std::string ErrorOf(const std::function<void()>& f) {
   try {

@@ -26,9 +26,7 @@ using testing::Torus;
 
 class MujocoLimit : public urlab::testing::MujocoTest {};
 
-void Write(const std::string& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary) << bytes;
-}
+using testing::Write;
 
 std::string AsciiStl(const TriMesh& m) {
   std::string s = "solid box\n";

@@ -1,10 +1,11 @@
 #pragma once
 // Closed meshes built in C++ for the convert tests: boxes, a cup (a lathe with an opening), a
-// torus, an L-bracket and a sinusoidal terrain slab, plus a temporary folder.
+// torus, an L-bracket and a sinusoidal terrain slab, plus a temporary folder and a file writer.
 #include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -146,6 +147,11 @@ TriMesh TerrainSlab(F height, double size, int n, double base) {
 }
 
 // A fresh temporary folder, removed when the object dies.
+// Writes `bytes` to `path` as they are.
+inline void Write(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary) << bytes;
+}
+
 class TempDir {
  public:
   TempDir() {
