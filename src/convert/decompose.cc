@@ -727,7 +727,7 @@ Prepared Prepare(TriMesh mesh, const DecomposeOptions& options) {
     progress(0, "simplifying a large mesh");
     const std::size_t before = mesh.triangles.size();
     int cells = 0;
-    mesh = SimplifyToAtMost(mesh, options.max_triangles, 400, &cells);
+    mesh = SimplifyToAtMost(mesh, options.max_triangles, 400, false, &cells);
     // Clustering folds thin places into faces that disagree or share an edge three ways; the
     // inside test and the concavity measure need a surface that agrees.
     const std::size_t dropped = MakeEdgesOrientable(mesh);

@@ -229,18 +229,18 @@ TriMesh ClusterVertices(const TriMesh& mesh, int cells) {
   return out;
 }
 
-TriMesh SimplifyToAtMost(const TriMesh& mesh, std::size_t max_triangles, int start_cells,
+TriMesh SimplifyToAtMost(const TriMesh& mesh, std::size_t max_triangles, int start_cells, bool aim,
                          int* cells_used) {
   if (cells_used) *cells_used = 0;
   if (mesh.triangles.size() <= max_triangles) return mesh;
   int cells = std::max(start_cells, 16);
   TriMesh small = ClusterVertices(mesh, cells);
   while (small.triangles.size() > max_triangles && cells > 16) {
-    // A surface's triangle count goes about with the square of the grid: aim just below the
-    // limit, and shrink by at least a quarter so that it ends.
-    const double aim = 0.95 * std::sqrt(static_cast<double>(max_triangles) /
-                                        static_cast<double>(small.triangles.size()));
-    cells = std::max(std::min(cells * 3 / 4, static_cast<int>(cells * aim)), 16);
+    // Aimed: just below the limit, shrinking by at least a quarter so that it ends.
+    const double factor = 0.95 * std::sqrt(static_cast<double>(max_triangles) /
+                                           static_cast<double>(small.triangles.size()));
+    const int quarter = cells * 3 / 4;
+    cells = std::max(aim ? std::min(quarter, static_cast<int>(cells * factor)) : quarter, 16);
     small = ClusterVertices(mesh, cells);
   }
   if (cells_used) *cells_used = cells;

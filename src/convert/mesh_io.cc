@@ -218,7 +218,7 @@ TriMesh LimitForMujoco(TriMesh mesh, std::string* note) {
   if (mesh.triangles.size() <= kMujocoMaxStlFaces) return mesh;
   const std::size_t before = mesh.triangles.size();
   int cells = 0;
-  TriMesh small = SimplifyToAtMost(mesh, kMujocoMaxStlFaces, 1024, &cells);
+  TriMesh small = SimplifyToAtMost(mesh, kMujocoMaxStlFaces, 1024, true, &cells);
   const std::size_t dropped = MakeEdgesOrientable(small);
   if (note) {
     *note = fmt::format(
