@@ -29,6 +29,13 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // (the final hulls use every point).
 constexpr std::size_t kEvalHullPoints = 3000;
 constexpr std::size_t kEvalProbes = 3000;
+// Points a cut's score thins to: the cut to make, and the further cuts a blind cut's look ahead
+// only ranks (see BestCut).
+struct Detail {
+  std::size_t hull_points, probes;
+};
+constexpr Detail kChoose{kEvalHullPoints, kEvalProbes};
+constexpr Detail kRank{kEvalHullPoints / 3, kEvalProbes / 3};
 // Clipping tolerance in normalised units (the mesh's diagonal is 1).
 constexpr double kPlaneEps = 1e-9;
 
@@ -213,6 +220,11 @@ class NearestPoint {
 
 // Hull surface points sampled per evaluation (the hull-to-surface term).
 constexpr int kHullSamples = 800;
+// A cut is blind (see BestCut) when it takes less than this fraction of a part's concavity
+// above the threshold away and leaves a side above the threshold; then this many of the best
+// candidates, besides the middle plane of each axis, are compared two cuts deep.
+constexpr double kBlindGain = 0.25;
+constexpr std::size_t kLookaheadBest = 2;
 
 // Concavity of a part given its hull (with its mesh), CoACD's measure: the larger of the
 // surface term, a symmetric distance between the part's surface and its hull's (how deep a
@@ -579,11 +591,21 @@ std::vector<Part> Components(Part part, const Context& ctx) {
   return kept;
 }
 
+// The connected pieces of `part` on either side of `plane` (the kept side's first).
+std::vector<Part> CutInto(const Part& part, const Plane& plane, const Context& ctx) {
+  Part lo, hi;
+  Split(part, plane, ctx, &lo, &hi);
+  std::vector<Part> pieces = Components(std::move(lo), ctx);
+  for (Part& q : Components(std::move(hi), ctx)) pieces.push_back(std::move(q));
+  std::erase_if(pieces, [](const Part& q) { return q.verts.empty() && q.voxels.empty(); });
+  return pieces;
+}
+
 // ---- choosing a cut ----
 
 // Score of cutting `part` by `plane` (lower is better): the larger concavity of the two sides,
 // estimated on thinned points without splitting into pieces. +inf when a side is empty.
-double ScoreCut(const Part& part, const Plane& plane, const Context& ctx) {
+double ScoreCut(const Part& part, const Plane& plane, const Detail& detail, const Context& ctx) {
   std::vector<Vec3> pts[2];
   const std::size_t nv = part.verts.size();
   std::vector<double> s;
@@ -616,7 +638,7 @@ double ScoreCut(const Part& part, const Plane& plane, const Context& ctx) {
   }
   if (pts[0].size() < 3 || pts[1].size() < 3) return kInf;
   std::vector<Vec3> probes[2];
-  Strided(part.samples, kEvalProbes, [&](const Sample& smp) {
+  Strided(part.samples, detail.probes, [&](const Sample& smp) {
     probes[Dot(plane.n, smp.p) <= plane.d ? 0 : 1].push_back(smp.p);
   });
   if (probes[0].empty() || probes[1].empty()) return kInf;
@@ -626,65 +648,156 @@ double ScoreCut(const Part& part, const Plane& plane, const Context& ctx) {
   for (int k = 0; k < 2; ++k) {
     std::vector<Plane> caps = part.cell;
     caps.push_back(k == 0 ? plane : Plane{plane.n * -1.0, -plane.d});
-    const std::optional<Hull> hull = ComputeHull(Thin(pts[k], kEvalHullPoints), true);
+    const std::optional<Hull> hull = ComputeHull(Thin(pts[k], detail.hull_points), true);
     c[k] = hull ? Concavity(*hull, probes[k], voxels[k], caps, ctx) : 0;
   }
   return std::max(c[0], c[1]) + 0.01 * (c[0] + c[1]);
 }
 
-std::optional<Plane> BestCut(const Part& part, const Context& ctx) {
-  if (part.verts.size() < 4) return std::nullopt;  // only cut faces: nothing to cut along
-  Bounds b{part.verts[0], part.verts[0]};
+// Planes to try on `part`: `per_axis` evenly spaced per axis over the part's vertex bounds
+// (with the spacing on each axis, for refining), and the feature planes inside those bounds.
+struct CutCandidates {
+  std::vector<Plane> planes, features;
+  std::array<double, 3> step = {0, 0, 0};
+  Bounds bounds;
+};
+
+CutCandidates CandidatesFor(const Part& part, int per_axis, const Context& ctx) {
+  CutCandidates out;
+  if (part.verts.size() < 4) return out;  // only cut faces: nothing to cut along
+  Bounds& b = out.bounds;
+  b = {part.verts[0], part.verts[0]};
   for (const Vec3& v : part.verts) {
     for (int k = 0; k < 3; ++k) {
       b.min[k] = std::min(b.min[k], v[k]);
       b.max[k] = std::max(b.max[k], v[k]);
     }
   }
-  const int n = ctx.options.candidates;
-  std::vector<Plane> planes, features;
-  std::vector<double> step(3, 0);
+  const int n = per_axis;
   for (int a = 0; a < 3; ++a) {
     const double e = b.max[a] - b.min[a];
     if (e < 1e-6) continue;
-    step[static_cast<std::size_t>(a)] = e / (n + 1);
+    out.step[static_cast<std::size_t>(a)] = e / (n + 1);
     Vec3 nrm{0, 0, 0};
     nrm[a] = 1;
-    for (int i = 1; i <= n; ++i) planes.push_back({nrm, b.min[a] + e * i / (n + 1)});
+    for (int i = 1; i <= n; ++i) out.planes.push_back({nrm, b.min[a] + e * i / (n + 1)});
     for (double f : ctx.features[static_cast<std::size_t>(a)]) {
-      if (f > b.min[a] + 1e-4 && f < b.max[a] - 1e-4) features.push_back({nrm, f});
+      if (f > b.min[a] + 1e-4 && f < b.max[a] - 1e-4) out.features.push_back({nrm, f});
     }
   }
+  return out;
+}
+
+// ScoreCut of each of `cands` on `part` (in parallel, into indexed slots).
+std::vector<double> Scores(const Part& part, const std::vector<Plane>& cands, const Detail& detail,
+                           const Context& ctx) {
+  std::vector<double> score(cands.size());
+  internal::ParallelFor(static_cast<int>(cands.size()), ctx.threads, [&](int i) {
+    score[static_cast<std::size_t>(i)] =
+        ScoreCut(part, cands[static_cast<std::size_t>(i)], detail, ctx);
+  });
+  return score;
+}
+
+// Index of the lowest score (the first of equals); 0 for none.
+std::size_t Lowest(const std::vector<double>& score) {
+  return static_cast<std::size_t>(std::min_element(score.begin(), score.end()) - score.begin());
+}
+
+// Score of cutting `part` by `plane` looking one cut further: the part is split into its
+// connected pieces, and each piece above the threshold counts with the best score of its own
+// next cut (among half as many evenly spaced candidates: this ranks, it does not choose). The
+// larger over the pieces, plus a hundredth of their sum, as ScoreCut; within the threshold,
+// every cut counts as the threshold (done either way: the tie-breaks decide).
+double LookaheadScore(const Part& part, const Plane& plane, const Context& ctx) {
+  const std::vector<Part> pieces = CutInto(part, plane, ctx);
+  if (pieces.size() < 2) return kInf;
+  double worst = 0, sum = 0;
+  for (const Part& q : pieces) {
+    double c = ToPiece(q, ctx).concavity;
+    if (c > ctx.options.threshold) {
+      const int per_axis = std::max(2, ctx.options.candidates / 2);
+      const std::vector<double> next =
+          Scores(q, CandidatesFor(q, per_axis, ctx).planes, kRank, ctx);
+      if (!next.empty()) c = std::min(c, next[Lowest(next)]);
+    }
+    worst = std::max(worst, c);
+    sum += c;
+  }
+  return std::max(worst, ctx.options.threshold) + 0.01 * sum;
+}
+
+// The cut for a part of concavity `concavity`: the plane whose two sides are least concave
+// (coarse candidates, refined around the best; a feature plane nearly as good wins). Where no
+// single cut lowers the worst side by a quarter of its excess over the threshold, the choice
+// among the candidates is blind (a ring: half a torus is as concave as the torus, and which nearly
+// equal score wins would follow the sampling, hence the tessellation): then the best few candidates
+// and the middle plane of each axis are compared two cuts deep (LookaheadScore).
+std::optional<Plane> BestCut(const Part& part, double concavity, const Context& ctx) {
+  const CutCandidates cands = CandidatesFor(part, ctx.options.candidates, ctx);
+  const std::vector<Plane>& planes = cands.planes;
   if (planes.empty()) return std::nullopt;
-  auto best_of = [&](const std::vector<Plane>& cands, std::size_t* best) {
-    std::vector<double> score(cands.size());
-    internal::ParallelFor(static_cast<int>(cands.size()), ctx.threads, [&](int i) {
-      score[static_cast<std::size_t>(i)] = ScoreCut(part, cands[static_cast<std::size_t>(i)], ctx);
-    });
-    *best = static_cast<std::size_t>(std::min_element(score.begin(), score.end()) - score.begin());
-    return score[*best];
-  };
-  std::size_t best = 0;
-  double best_score = best_of(planes, &best);
+  const std::vector<double> score = Scores(part, planes, kChoose, ctx);
+  const std::size_t best = Lowest(score);
+  double best_score = score[best];
   if (!std::isfinite(best_score)) return std::nullopt;
   Plane chosen = planes[best];
   // Refine around the best position on its axis.
   const int axis = chosen.n[0] != 0 ? 0 : chosen.n[1] != 0 ? 1 : 2;
-  const double fine = step[static_cast<std::size_t>(axis)] / 3;
+  const double fine = cands.step[static_cast<std::size_t>(axis)] / 3;
   std::vector<Plane> refine;
   for (int j : {-2, -1, 1, 2}) refine.push_back({chosen.n, chosen.d + j * fine});
-  std::size_t rbest = 0;
-  const double rscore = best_of(refine, &rbest);
-  if (rscore < best_score) {
-    chosen = refine[rbest];
-    best_score = rscore;
+  const std::vector<double> rscore = Scores(part, refine, kChoose, ctx);
+  if (const std::size_t r = Lowest(rscore); rscore[r] < best_score) {
+    chosen = refine[r];
+    best_score = rscore[r];
   }
   // A feature plane (many vertices on it) nearly as good wins: it leaves no sliver behind.
-  if (!features.empty()) {
-    std::size_t fbest = 0;
-    const double fscore = best_of(features, &fbest);
-    if (fscore <= best_score + 0.1 * ctx.options.threshold) chosen = features[fbest];
+  const double feature_slack = 0.1 * ctx.options.threshold;
+  std::optional<Plane> feature;  // the best feature plane
+  bool feature_chosen = false;
+  if (!cands.features.empty()) {
+    const std::vector<double> fscore = Scores(part, cands.features, kChoose, ctx);
+    const std::size_t f = Lowest(fscore);
+    if (std::isfinite(fscore[f])) feature = cands.features[f];
+    if (fscore[f] <= best_score + feature_slack) {
+      chosen = cands.features[f];
+      best_score = fscore[f];
+      feature_chosen = true;
+    }
   }
+  const double excess = concavity - ctx.options.threshold;
+  if (best_score <= ctx.options.threshold || concavity - best_score >= kBlindGain * excess) {
+    return chosen;
+  }
+  // Blind: look two cuts ahead. The chosen plane first (it wins ties), then the next best
+  // candidates, the middle of each axis, and the best feature plane (which wins when nearly as
+  // good, as above).
+  std::vector<Plane> shortlist = {chosen};
+  std::vector<std::size_t> order(planes.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t x, std::size_t y) { return score[x] < score[y]; });
+  for (std::size_t i = 0; i < order.size() && shortlist.size() < 1 + kLookaheadBest; ++i) {
+    if (std::isfinite(score[order[i]]) && order[i] != best) shortlist.push_back(planes[order[i]]);
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (cands.step[static_cast<std::size_t>(a)] == 0) continue;
+    Vec3 nrm{0, 0, 0};
+    nrm[a] = 1;
+    shortlist.push_back({nrm, 0.5 * (cands.bounds.min[a] + cands.bounds.max[a])});
+  }
+  double ahead = kInf, feature_ahead = kInf;
+  for (std::size_t i = 0; i < shortlist.size(); ++i) {
+    const double v = LookaheadScore(part, shortlist[i], ctx);
+    if (i == 0 && feature_chosen) feature_ahead = v;
+    if (v < ahead) {
+      ahead = v;
+      chosen = shortlist[i];
+    }
+  }
+  if (feature && !feature_chosen) feature_ahead = LookaheadScore(part, *feature, ctx);
+  if (feature && feature_ahead <= ahead + feature_slack) chosen = *feature;
   return chosen;
 }
 
@@ -897,16 +1010,12 @@ Decomposition Decompose(TriMesh mesh, const DecomposeOptions& options) {
     if (c <= options.threshold || open.size() + done.size() >= cut_limit) break;
     Entry e = std::move(open[worst]);
     open.erase(open.begin() + static_cast<std::ptrdiff_t>(worst));
-    const std::optional<Plane> plane = BestCut(e.part, ctx);
+    const std::optional<Plane> plane = BestCut(e.part, e.piece.concavity, ctx);
     if (!plane) {
       done.push_back(std::move(e));
       continue;
     }
-    Part lo, hi;
-    Split(e.part, *plane, ctx, &lo, &hi);
-    std::vector<Part> pieces = Components(std::move(lo), ctx);
-    for (Part& q : Components(std::move(hi), ctx)) pieces.push_back(std::move(q));
-    std::erase_if(pieces, [](const Part& q) { return q.verts.empty() && q.voxels.empty(); });
+    std::vector<Part> pieces = CutInto(e.part, *plane, ctx);
     if (pieces.size() < 2) {
       done.push_back(std::move(e));
       continue;
@@ -1013,7 +1122,7 @@ Decomposition SingleHull(TriMesh mesh, const DecomposeOptions& options) {
 
 std::string OptionsKey(const DecomposeOptions& o) {
   return fmt::format(
-      "v2 threshold={} max_parts={} resolution={} samples={} k={} candidates={} "
+      "v3 threshold={} max_parts={} resolution={} samples={} k={} candidates={} "
       "max_triangles={}",
       o.threshold, o.max_parts, o.resolution, o.samples, o.volume_weight, o.candidates,
       o.max_triangles);

@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <utility>
+#include <vector>
 
 #include "test_meshes.h"
 #include "urlab/convert/evaluate.h"
@@ -67,6 +71,30 @@ TEST(Decompose, SameInputSameParts_WhateverTheThreads) {
     EXPECT_EQ(a.parts[i].hull.triangles, b.parts[i].hull.triangles) << "part " << i;
   }
   EXPECT_GT(a.parts.size(), 2u);  // a torus is not convex
+}
+
+// The same torus tessellated coarsely and finely: the parts follow the shape. (A greedy cut
+// choice among nearly equal scores followed the sampling of each tessellation: 32 parts at
+// 48x16 and 28 at 128x40, above the threshold, where 64x28 gave 5.)
+TEST(Decompose, PartsFollowTheShapeNotItsTessellation) {
+  DecomposeOptions o;
+  std::vector<Decomposition> runs;
+  for (const auto& [nu, nv] : {std::pair{48, 16}, std::pair{128, 40}}) {
+    runs.push_back(Decompose(Torus(0.05, 0.015, nu, nv), o));
+    const Decomposition& d = runs.back();
+    SCOPED_TRACE(::testing::Message() << nu << "x" << nv);
+    EXPECT_LE(d.concavity, o.threshold);
+    EXPECT_GE(d.parts.size(), 5u);
+    EXPECT_LE(d.parts.size(), 9u);
+  }
+  const auto volume = [](const Decomposition& d) {
+    double v = 0;
+    for (const ConvexPart& p : d.parts) v += p.volume;
+    return v;
+  };
+  EXPECT_LE(
+      std::abs(static_cast<int>(runs[0].parts.size()) - static_cast<int>(runs[1].parts.size())), 1);
+  EXPECT_NEAR(volume(runs[0]) / volume(runs[1]), 1.0, 0.1);
 }
 
 TEST(Decompose, MaxPartsIsAHardLimit) {
