@@ -2,10 +2,10 @@
 # The test command (CI runs it): installs dependencies, builds, runs the whole test suite with
 # ctest, then more stages, each printing its wall time, and a table of them at the end:
 #   main        RelWithDebInfo build (GCC) + every test (ctest)
-#   tsan        ThreadSanitizer: the core, physics, control, world, replay, net and client tests
-#   asan        AddressSanitizer + UndefinedBehaviorSanitizer: the mjcf, document, world tests
+#   tsan        ThreadSanitizer (-O1): the core, physics, control, world, replay, net and client tests
+#   asan        ASan + UBSan (-O1): the mjcf, document, world and replay tests
 #   release     Release build with GCC (-O3), warnings as errors, no tests
-#   clang       clang Debug build of everything (tests, benchmarks, examples) + the fast unit tests
+#   clang       clang -O0 build of everything (tests, benchmarks, examples) + the fast unit tests
 #   install     cmake --install of the release build, examples/find_package built against it
 #   fuzz        every libFuzzer target for URLAB_FUZZ_SECONDS (default 30) s (tools/fuzz.sh)
 # Build folders: $URLAB_BUILD_DIR (default build) and beside it ${URLAB_BUILD_DIR}-tsan, -asan,
@@ -68,6 +68,10 @@ configure() {  # configure DIR [cmake args...] (once; later runs keep the cache)
   fi
 }
 
+# Sanitizer builds at -O1 (what the sanitizers' documentation suggests): about 40% less compile
+# time than -O2 with UBSan's checks, stack traces keep their lines.
+SANITIZER_OPT="-O1 -g -DNDEBUG"
+
 main_stage() {
   tools/build.sh
   if [ -f tools/install-mujoco-js.sh ]; then
@@ -83,7 +87,8 @@ main_stage() {
 
 tsan_stage() {
   local dir="${BUILD_DIR}-tsan"
-  configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_SANITIZE=thread -DURLAB_BUILD_BENCH=OFF
+  configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_SANITIZE=thread -DURLAB_BUILD_BENCH=OFF \
+    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=$SANITIZER_OPT"
   # The net tests include the Python client's end-to-end test, which runs the urlab binary.
   cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_core urlab_tests_physics \
     urlab_tests_control urlab_tests_world urlab_tests_replay urlab_tests_net urlab_tests_client
@@ -95,7 +100,7 @@ tsan_stage() {
 asan_stage() {
   local dir="${BUILD_DIR}-asan"
   configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_SANITIZE=address,undefined \
-    -DURLAB_BUILD_BENCH=OFF
+    -DURLAB_BUILD_BENCH=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=$SANITIZER_OPT"
   cmake --build "$dir" -j"$JOBS" --target urlab_tests_mjcf urlab_tests_document urlab_tests_world \
     urlab_tests_replay
   # The MuJoCo 3.x reference the main stage installed (the 3.x comparison tests skip without it).
@@ -114,7 +119,9 @@ release_stage() {
 
 clang_stage() {  # also the Debug build of CI (GCC builds RelWithDebInfo and Release)
   local dir="${BUILD_DIR}-clang"
-  CC=clang CXX=clang++ configure "$dir" -DCMAKE_BUILD_TYPE=Debug
+  # No debug information: this stage checks that clang builds everything warning-free and runs
+  # the fast tests; leaving out -g takes about a fifth off its compile time.
+  CC=clang CXX=clang++ configure "$dir" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-O0
   cmake --build "$dir" -j"$JOBS"
   ctest --test-dir "$dir" -L 'core|document|control' --output-on-failure -j"$JOBS" --timeout 900
 }

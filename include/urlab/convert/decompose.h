@@ -4,7 +4,8 @@
 // deep the part's own surface lies inside its convex hull) and a volume term (the radius of a
 // ball holding the volume its hull adds), measured against the mesh's bounding-box diagonal;
 // parts whose concavity exceeds the threshold are cut recursively with the axis-aligned plane
-// that lowers it most (a coarse search refined around the best), split into connected pieces,
+// that lowers it most (a coarse search refined around the best; when no single cut helps much,
+// as on a ring, a few candidates are compared two cuts ahead), split into connected pieces,
 // then neighbouring parts are merged while the merged part stays within the threshold and until
 // at most max_parts remain; every part's hull is computed with Qhull.
 //
