@@ -14,6 +14,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <thread>
+#include <tuple>
 
 #include "replay/format.h"
 #include "replay/io.h"
@@ -112,6 +113,12 @@ struct Recorder::Impl {
   Impl(physics::PhysicsEngine& e) : engine(e) {}
 
   void Run();
+  // Asks the physics thread for a full-state keyframe, captured when the command applies (into
+  // `captures`). Returns its token and the command's sequence number. Any thread.
+  std::pair<std::uint64_t, std::uint64_t> RequestKeyframe();
+  // The start keyframe, requested by Start before the writer runs (so the recording begins with
+  // the first step after Start returns, however late the writer thread gets a core).
+  std::uint64_t start_token = 0, start_seq = 0;
   void WriteChunk(HeldChunk chunk);
   std::string EndChunk(std::uint32_t number) const;
   std::string FileBytesLocked();  // file_mutex held: a finished copy of what is recorded so far
@@ -216,6 +223,7 @@ void Recorder::Start(RecorderOptions options) {
   s.stop_requested.store(false);
   s.recording.store(true, std::memory_order_release);
   s.ring->SetActive(true);
+  std::tie(s.start_token, s.start_seq) = s.RequestKeyframe();
   s.writer = std::thread([&s] { s.Run(); });
   spdlog::info("recording to {}{}", options.path,
                options.ring_seconds > 0
@@ -328,12 +336,26 @@ void Recorder::Impl::WriteChunk(HeldChunk chunk) {
   ++status.chunks;
 }
 
+std::pair<std::uint64_t, std::uint64_t> Recorder::Impl::RequestKeyframe() {
+  const std::uint64_t token = next_token.fetch_add(1);
+  Impl* self = this;
+  const std::uint64_t seq =
+      engine.Submit(physics::cmd::Inspect{[self, token](const mjModel* m, const mjData* d) {
+        Capture cap;
+        cap.token = token;
+        cap.state = physics::CaptureState(m, d);
+        cap.option = OptionBytes(m);
+        std::lock_guard<std::mutex> lock(self->capture_mutex);
+        self->captures.push_back(std::move(cap));
+      }});
+  return {token, seq};
+}
+
 void Recorder::Impl::Run() {
   const ModelTables& tables = info.tables;
   format::ChunkEncoder enc(tables, options.sensordata);
   const format::Codec codec = options.compress ? format::Codec::kZstd : format::Codec::kStored;
   std::deque<Capture> caps;  // taken from the physics thread, in application order
-  std::uint64_t start_token = 0, start_seq = 0;
   std::uint64_t pending_token = 0, pending_seq = 0;
   Clock::time_point pending_since{};
   bool started = false;
@@ -349,23 +371,10 @@ void Recorder::Impl::Run() {
   std::uint64_t frames = 0, markers = 0, raw_bytes = 0;
   std::string stopped_because = "stopped";
 
-  // Asks the physics thread for a full-state keyframe (captured when the command applies).
   const auto request_keyframe = [&]() -> std::uint64_t {
-    const std::uint64_t token = next_token.fetch_add(1);
-    Impl* self = this;
-    const std::uint64_t seq =
-        engine.Submit(physics::cmd::Inspect{[self, token](const mjModel* m, const mjData* d) {
-          Capture cap;
-          cap.token = token;
-          cap.state = physics::CaptureState(m, d);
-          cap.option = OptionBytes(m);
-          std::lock_guard<std::mutex> lock(self->capture_mutex);
-          self->captures.push_back(std::move(cap));
-        }});
-    pending_token = token;
-    pending_seq = seq;
+    std::tie(pending_token, pending_seq) = RequestKeyframe();
     pending_since = Clock::now();
-    return token;
+    return pending_token;
   };
   const auto flush = [&] {
     if (enc.empty()) return;
@@ -389,8 +398,9 @@ void Recorder::Impl::Run() {
     status.dropped = ring->dropped() - dropped_at_start;
   };
   try {
-    start_token = request_keyframe();
-    start_seq = pending_seq;
+    pending_token = start_token;
+    pending_seq = start_seq;
+    pending_since = Clock::now();
     while (true) {
       {
         std::lock_guard<std::mutex> lock(capture_mutex);
