@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Configures and builds URLab into ./build (or $URLAB_BUILD_DIR), through ccache when present.
-# Extra args go to cmake.
+# A development build: warnings are errors (URLAB_WARNINGS_AS_ERRORS=ON; pass
+# -DURLAB_WARNINGS_AS_ERRORS=OFF to turn that off). Extra args go to cmake.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR="${URLAB_BUILD_DIR:-build}"
@@ -8,7 +9,8 @@ GEN=()
 if command -v ninja >/dev/null 2>&1; then GEN=(-G Ninja); fi
 if command -v ccache >/dev/null 2>&1; then GEN+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
-  cmake -S . -B "$BUILD_DIR" "${GEN[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@"
+  cmake -S . -B "$BUILD_DIR" "${GEN[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DURLAB_WARNINGS_AS_ERRORS=ON "$@"
 else
   cmake -S . -B "$BUILD_DIR" "$@" >/dev/null
 fi

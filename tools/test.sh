@@ -1,15 +1,19 @@
 #!/usr/bin/env bash
 # The test command (CI runs it): installs dependencies, builds, runs the whole test suite with
 # ctest, then more stages, each printing its wall time, and a table of them at the end:
-#   main        RelWithDebInfo build (GCC) + every test (ctest)
+#   main        GCC build (RelWithDebInfo: -O2, line tables) of everything + every test (ctest);
+#               the same build is the one installed by the install stage
 #   tsan        ThreadSanitizer (-O1): the core, physics, control, world, replay, net and client tests
-#   asan        ASan + UBSan (-O1): the mjcf, document, world and replay tests
-#   release     Release build with GCC (-O3), warnings as errors, no tests
-#   clang       clang -O0 build of everything (tests, benchmarks, examples) + the fast unit tests
-#   install     cmake --install of the release build, examples/find_package built against it
+#   asan        ASan + UBSan (-O1): the decoders of untrusted bytes and the model readers (core,
+#               document, mjcf, replay tests)
+#   clang       clang -O0 build of the libraries, the CLI and the fast unit tests (core, document,
+#               control), which it runs
+#   install     cmake --install of the main build, examples/find_package built against it
 #   fuzz        every libFuzzer target for URLAB_FUZZ_SECONDS (default 30) s (tools/fuzz.sh)
+# Every stage builds with warnings as errors (URLAB_WARNINGS_AS_ERRORS=ON). A user's plain
+# `cmake -DCMAKE_BUILD_TYPE=Release` build keeps warnings as warnings.
 # Build folders: $URLAB_BUILD_DIR (default build) and beside it ${URLAB_BUILD_DIR}-tsan, -asan,
-# -release, -clang, -fuzz. ccache is used when present. Skip stages with
+# -clang, -fuzz. ccache is used when present. Skip stages with
 # URLAB_SKIP_STAGES="tsan asan ..." (URLAB_SKIP_TSAN=1 still skips tsan).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -64,7 +68,7 @@ configure() {  # configure DIR [cmake args...] (once; later runs keep the cache)
   local dir=$1
   shift
   if [ ! -f "$dir/CMakeCache.txt" ]; then
-    cmake -S . -B "$dir" "${GEN[@]}" "${LAUNCHER[@]}" "$@" >/dev/null
+    cmake -S . -B "$dir" "${GEN[@]}" "${LAUNCHER[@]}" -DURLAB_WARNINGS_AS_ERRORS=ON "$@" >/dev/null
   fi
 }
 
@@ -73,7 +77,8 @@ configure() {  # configure DIR [cmake args...] (once; later runs keep the cache)
 SANITIZER_OPT="-O1 -g -DNDEBUG"
 
 main_stage() {
-  tools/build.sh
+  # Line tables only (-g1): enough for stack traces, a third less to compile and link than -g.
+  tools/build.sh "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG"
   if [ -f tools/install-mujoco-js.sh ]; then
     bash tools/install-mujoco-js.sh "$BUILD_DIR/mujoco-js" ||
       echo "mujoco-js not installed: the 3.x reference test will skip"
@@ -101,33 +106,29 @@ asan_stage() {
   local dir="${BUILD_DIR}-asan"
   configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_SANITIZE=address,undefined \
     -DURLAB_BUILD_BENCH=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=$SANITIZER_OPT"
-  cmake --build "$dir" -j"$JOBS" --target urlab_tests_mjcf urlab_tests_document urlab_tests_world \
+  cmake --build "$dir" -j"$JOBS" --target urlab_tests_core urlab_tests_mjcf urlab_tests_document \
     urlab_tests_replay
   # The MuJoCo 3.x reference the main stage installed (the 3.x comparison tests skip without it).
   local js="$BUILD_DIR/mujoco-js"
   [[ "$js" == /* ]] || js="$PWD/$js"
   URLAB_MUJOCO_JS="$js" \
     ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1" \
-    ctest --test-dir "$dir" -L 'mjcf|document|world|replay' --output-on-failure -j"$JOBS" --timeout 900
+    ctest --test-dir "$dir" -L 'core|mjcf|document|replay' --output-on-failure -j"$JOBS" --timeout 900
 }
 
-release_stage() {
-  local dir="${BUILD_DIR}-release"
-  configure "$dir" -DCMAKE_BUILD_TYPE=Release -DURLAB_BUILD_TESTS=OFF -DURLAB_BUILD_BENCH=OFF
-  cmake --build "$dir" -j"$JOBS"
-}
-
-clang_stage() {  # also the Debug build of CI (GCC builds RelWithDebInfo and Release)
+clang_stage() {  # also the Debug (-O0, assertions on) build of CI
   local dir="${BUILD_DIR}-clang"
-  # No debug information: this stage checks that clang builds everything warning-free and runs
-  # the fast tests; leaving out -g takes about a fifth off its compile time.
-  CC=clang CXX=clang++ configure "$dir" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-O0
-  cmake --build "$dir" -j"$JOBS"
+  # No debug information: this stage checks that clang builds the libraries and the CLI
+  # warning-free and runs the fast tests; leaving out -g takes about a fifth off its compile time.
+  CC=clang CXX=clang++ configure "$dir" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-O0 \
+    -DURLAB_BUILD_BENCH=OFF
+  cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_core urlab_tests_document \
+    urlab_tests_control
   ctest --test-dir "$dir" -L 'core|document|control' --output-on-failure -j"$JOBS" --timeout 900
 }
 
 install_stage() {
-  local dir="${BUILD_DIR}-release" prefix example
+  local dir="$BUILD_DIR" prefix example
   prefix=$(mktemp -d)
   example=$(mktemp -d)
   cmake --install "$dir" --prefix "$prefix" >/dev/null
@@ -148,7 +149,6 @@ fuzz_stage() {
 stage main main_stage
 stage tsan tsan_stage
 stage asan asan_stage
-stage release release_stage
 stage clang clang_stage
 stage install install_stage
 stage fuzz fuzz_stage
