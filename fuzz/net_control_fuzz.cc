@@ -1,4 +1,4 @@
-// libFuzzer target for the network's decoders of untrusted bytes (include/urlab/net/wire.h):
+// libFuzzer target for the network's decoders of untrusted bytes (include/urlab/wire/wire.h):
 // the control topic's binary payload and set_gains' JSON, resolved against a real articulation's
 // table (net::BuildTopicTables over a built Session) and applied as the network's I/O thread
 // does (a command-frame patch, PD gains), then one physics step consumes them.
@@ -19,8 +19,8 @@
 #include "net/topic_table.h"
 #include "urlab/control/controllers.h"
 #include "urlab/core/error.h"
-#include "urlab/net/wire.h"
 #include "urlab/physics/commands.h"
+#include "urlab/wire/wire.h"
 
 namespace {
 

@@ -127,6 +127,18 @@ clang_stage() {  # also the Debug (-O0, assertions on) build of CI
   ctest --test-dir "$dir" -L 'core|document|control' --output-on-failure -j"$JOBS" --timeout 900
 }
 
+check_client_links() {  # check_client_links BINARY...: fails when one links a server library
+  local bin libs
+  for bin in "$@"; do
+    libs=$(ldd "$bin")
+    if grep -Ei 'assimp|embree|libGL|libEGL|OSMesa|mujoco|glfw' <<<"$libs"; then
+      echo "$bin links a server-side library (above)" >&2
+      return 1
+    fi
+    echo "$bin: $(grep -c '=>' <<<"$libs") shared libraries, none of the server's"
+  done
+}
+
 install_stage() {
   local dir="$BUILD_DIR" prefix example
   prefix=$(mktemp -d)
@@ -137,6 +149,10 @@ install_stage() {
     -DCMAKE_PREFIX_PATH="$prefix" "${LAUNCHER[@]}" >/dev/null
   cmake --build "$example" -j"$JOBS"
   "$example/urlab_find_package_example" examples/models/pendulum_arm.xml
+  "$example/urlab_client_only_example"
+  # A client program links the wire format and ZeroMQ only: neither MuJoCo's model code nor
+  # assimp, Embree or a renderer (GL, EGL, OSMesa) may reach it.
+  check_client_links "$example/urlab_client_only_example" "$BUILD_DIR/example_cpp_controller"
   "$prefix/bin/urlab" --version
   rm -rf "$prefix" "$example"
 }

@@ -77,9 +77,9 @@ struct StreamClient::Impl {
   zmq::socket_t info = Socket(ctx, zmq::socket_type::sub);
   zmq::socket_t control = Socket(ctx, zmq::socket_type::pub);
   std::map<std::string, Robot> robots;
-  std::map<std::string, net::wire::JointMessage> joints;     // "robot/joint"
-  std::map<std::string, net::wire::BaseStateMessage> bases;  // "robot/joint"
-  std::map<std::string, std::vector<float>> sensors;         // "robot/sensor"
+  std::map<std::string, wire::JointMessage> joints;     // "robot/joint"
+  std::map<std::string, wire::BaseStateMessage> bases;  // "robot/joint"
+  std::map<std::string, std::vector<float>> sensors;    // "robot/sensor"
 };
 
 StreamClient::StreamClient(Endpoints e) : impl_(std::make_unique<Impl>()) {
@@ -149,23 +149,23 @@ int StreamClient::Poll(std::chrono::milliseconds timeout) {
     const std::string kind = topic.substr(a + 1, b - a - 1);
     const std::string key = topic.substr(0, a) + "/" + topic.substr(b + 1);
     if (kind == "joint") {
-      if (auto j = net::wire::DecodeJoint(payload)) impl_->joints[key] = *j;
+      if (auto j = wire::DecodeJoint(payload)) impl_->joints[key] = *j;
     } else if (kind == "base_state") {
-      if (auto s = net::wire::DecodeBaseState(payload)) impl_->bases[key] = *s;
+      if (auto s = wire::DecodeBaseState(payload)) impl_->bases[key] = *s;
     } else if (kind == "sensor") {
-      if (auto s = net::wire::DecodeSensor(payload)) impl_->sensors[key] = s->values;
+      if (auto s = wire::DecodeSensor(payload)) impl_->sensors[key] = s->values;
     }
   }
 }
 
-std::optional<net::wire::JointMessage> StreamClient::Joint(const std::string& robot,
-                                                           const std::string& joint) const {
+std::optional<wire::JointMessage> StreamClient::Joint(const std::string& robot,
+                                                      const std::string& joint) const {
   const auto it = impl_->joints.find(robot + "/" + joint);
   return it == impl_->joints.end() ? std::nullopt : std::optional(it->second);
 }
 
-std::optional<net::wire::BaseStateMessage> StreamClient::Base(const std::string& robot,
-                                                              const std::string& joint) const {
+std::optional<wire::BaseStateMessage> StreamClient::Base(const std::string& robot,
+                                                         const std::string& joint) const {
   const auto it = impl_->bases.find(robot + "/" + joint);
   return it == impl_->bases.end() ? std::nullopt : std::optional(it->second);
 }
@@ -187,14 +187,14 @@ void StreamClient::SendControl(const std::string& robot,
     values.emplace_back(it->second.ActuatorId(name), static_cast<float>(v));
   }
   std::string payload;
-  net::wire::AppendControl(&payload, values);
-  const std::string topic = net::wire::ControlTopic(robot);
+  wire::AppendControl(&payload, values);
+  const std::string topic = wire::ControlTopic(robot);
   impl_->control.send(zmq::buffer(topic), zmq::send_flags::sndmore);
   impl_->control.send(zmq::buffer(payload), zmq::send_flags::none);
 }
 
 void StreamClient::SetGains(const std::string& robot, const std::string& json) {
-  const std::string topic = net::wire::SetGainsTopic(robot);
+  const std::string topic = wire::SetGainsTopic(robot);
   impl_->control.send(zmq::buffer(topic), zmq::send_flags::sndmore);
   impl_->control.send(zmq::buffer(json), zmq::send_flags::none);
 }

@@ -15,8 +15,8 @@
 #include "net/msgpack_codec.h"
 #include "urlab/core/error.h"
 #include "urlab/net/network.h"
-#include "urlab/net/wire.h"
 #include "urlab/physics/model.h"
+#include "urlab/wire/wire.h"
 #include "urlab/world/manager.h"
 
 namespace urlab::net {

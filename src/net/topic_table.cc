@@ -1,6 +1,6 @@
 #include "net/topic_table.h"
 
-#include "urlab/net/wire.h"
+#include "urlab/wire/wire.h"
 
 namespace urlab::net {
 

@@ -16,7 +16,7 @@
 #include "support/mujoco_test.h"
 #include "support/wait.h"
 #include "urlab/control/controllers.h"
-#include "urlab/net/wire.h"
+#include "urlab/wire/wire.h"
 #include "urlab/world/manager.h"
 
 namespace urlab::net {

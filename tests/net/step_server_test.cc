@@ -14,7 +14,7 @@
 #include "support/mujoco_test.h"
 #include "support/wait.h"
 #include "urlab/net/network.h"
-#include "urlab/net/wire.h"
+#include "urlab/wire/wire.h"
 #include "urlab/world/manager.h"
 
 namespace urlab::net {

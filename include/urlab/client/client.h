@@ -17,7 +17,7 @@
 #include <string_view>
 #include <vector>
 
-#include "urlab/net/wire.h"
+#include "urlab/wire/wire.h"
 
 namespace urlab::client {
 
@@ -55,10 +55,9 @@ class StreamClient {
   // Reads every waiting state message (waiting up to `timeout` for the first); returns the
   // number read. The newest values are kept by robot and name.
   int Poll(std::chrono::milliseconds timeout = std::chrono::milliseconds(0));
-  std::optional<net::wire::JointMessage> Joint(const std::string& robot,
-                                               const std::string& joint) const;
-  std::optional<net::wire::BaseStateMessage> Base(const std::string& robot,
-                                                  const std::string& joint) const;
+  std::optional<wire::JointMessage> Joint(const std::string& robot, const std::string& joint) const;
+  std::optional<wire::BaseStateMessage> Base(const std::string& robot,
+                                             const std::string& joint) const;
   std::optional<std::vector<float>> Sensor(const std::string& robot,
                                            const std::string& sensor) const;
   // One control message: {actuator short/full name: value}; throws std::out_of_range for an

@@ -20,7 +20,7 @@
 #include <string_view>
 #include <vector>
 
-#include "urlab/net/wire.h"
+#include "urlab/wire/wire.h"
 #include "urlab/world/scene_file.h"
 #include "urlab/world/subsystem.h"
 

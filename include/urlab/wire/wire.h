@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-namespace urlab::net::wire {
+namespace urlab::wire {
 
 // Payload sizes of the fixed-size topics.
 inline constexpr std::size_t kJointBytes = 16;      // int32 id, f32 qpos, qvel, qacc
@@ -103,4 +103,4 @@ struct SensorMessage {
 };
 std::optional<SensorMessage> DecodeSensor(std::string_view payload);
 
-}  // namespace urlab::net::wire
+}  // namespace urlab::wire

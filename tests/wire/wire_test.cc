@@ -1,6 +1,6 @@
 // The streaming topics' byte layouts against bytes computed by hand from protocol.md's tables,
 // and the decoders' refusals (each with its reason).
-#include "urlab/net/wire.h"
+#include "urlab/wire/wire.h"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <limits>
 #include <string>
 
-namespace urlab::net::wire {
+namespace urlab::wire {
 namespace {
 
 // "07 00 00 00 ..." -> bytes.
@@ -140,4 +140,4 @@ TEST(WireTest, SetGainsIsAPartialPatch) {
 }
 
 }  // namespace
-}  // namespace urlab::net::wire
+}  // namespace urlab::wire

@@ -1,11 +1,11 @@
-#include "urlab/net/wire.h"
+#include "urlab/wire/wire.h"
 
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <nlohmann/json.hpp>
 
-namespace urlab::net::wire {
+namespace urlab::wire {
 
 namespace {
 
@@ -190,4 +190,4 @@ std::optional<SensorMessage> DecodeSensor(std::string_view payload) {
   return m;
 }
 
-}  // namespace urlab::net::wire
+}  // namespace urlab::wire
