@@ -110,6 +110,9 @@ void GaitController::Bind(const mjModel* m, std::span<const int> actuator_ids) {
   }
   s.targets.assign(bindings_.size(), 0);
   s.feedforward.assign(bindings_.size(), 0);
+  std::size_t most = 0;
+  for (const legs::Leg& l : s.legs) most = std::max(most, l.joints.size());
+  s.jac.assign(3 * most, 0);
 }
 
 void GaitController::Start(const mjModel*, const mjData* d) {
@@ -209,13 +212,15 @@ void GaitController::Walk(const mjModel* m, mjData* d, std::span<const double> t
   // ground reactions F_i.
   double h_meas = 0, sum_x2 = 0, sum_y2 = 0;
   std::array<std::array<double, 3>, 4> feet{};
+  std::array<double, 16> now{};  // a leg's joint angles (FindLegs allows at most 16)
+  const auto angles = [&](const legs::Leg& leg) {
+    const std::size_t n = leg.joints.size();
+    for (std::size_t k = 0; k < n; ++k) now[k] = d->qpos[leg.joints[k].qpos_adr];
+    return std::span<const double>(now.data(), n);
+  };
   for (std::size_t i = 0; i < s.legs.size(); ++i) {
-    std::vector<double>& q = s.leg_state[i].q;
-    const legs::Leg& leg = s.legs[i];
-    std::vector<double> now(leg.joints.size());
-    for (std::size_t k = 0; k < now.size(); ++k) now[k] = d->qpos[leg.joints[k].qpos_adr];
     double foot[3];
-    legs::FootPosition(leg, now, foot, nullptr);
+    legs::FootPosition(s.legs[i], angles(s.legs[i]), foot, nullptr);
     feet[i] = {foot[0], foot[1], foot[2]};
     if (stance[i]) {
       // Height of the base over this foot, in the world's vertical.
@@ -223,7 +228,6 @@ void GaitController::Walk(const mjModel* m, mjData* d, std::span<const double> t
       sum_x2 += foot[0] * foot[0];
       sum_y2 += foot[1] * foot[1];
     }
-    (void)q;
   }
   std::fill(s.feedforward.begin(), s.feedforward.end(), 0.0);
   if (n_stance > 0) {
@@ -242,11 +246,8 @@ void GaitController::Walk(const mjModel* m, mjData* d, std::span<const double> t
       const double push[3] = {-r[6] * f, -r[7] * f, -r[8] * f};
       const legs::Leg& leg = s.legs[i];
       const std::size_t n = leg.joints.size();
-      std::vector<double> now(n);
-      for (std::size_t k = 0; k < n; ++k) now[k] = d->qpos[leg.joints[k].qpos_adr];
-      s.jac.resize(3 * n);
       double foot[3];
-      legs::FootPosition(leg, now, foot, s.jac.data());
+      legs::FootPosition(leg, angles(leg), foot, s.jac.data());
       for (std::size_t k = 0; k < n; ++k) {
         const double tau =
             s.jac[k] * push[0] + s.jac[n + k] * push[1] + s.jac[2 * n + k] * push[2];

@@ -34,7 +34,7 @@ class GaitTest : public urlab::testing::MujocoTest {
 };
 
 TEST_F(GaitTest, FindsFourLegsWhoseKinematicsAreMujocos) {
-  Controller probe;
+  PassthroughController probe;
   probe.Bind(m_.get(), actuators_);
   const int torso = mj_name2id(m_.get(), mjOBJ_BODY, "torso");
   const std::vector<legs::Leg> legs =
