@@ -52,8 +52,7 @@ void PdController::ComputeAndApply(const mjModel* m, mjData* d, std::span<const 
   ApplyPositionTargets(m, d, targets);
 }
 
-void PdController::ApplyPositionTargets(const mjModel*, mjData* d,
-                                        std::span<const double> targets,
+void PdController::ApplyPositionTargets(const mjModel*, mjData* d, std::span<const double> targets,
                                         std::span<const double> feedforward) {
   const std::size_t n = std::min(bindings_.size(), targets.size());
   for (std::size_t i = 0; i < n; ++i) {

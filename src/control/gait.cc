@@ -20,6 +20,9 @@ constexpr double kVelocityFilter = 0.1;
 // so that a 15 kg robot gets about 45 N m/rad), added to the weight's share.
 constexpr double kHeightStiffness = 40, kHeightDamping = 4;
 constexpr double kAttitudeStiffness = 3, kAttitudeDamping = 0.2;
+// Planar velocity and yaw rate feedback through the stance feet (1/s), and the share of the
+// normal force those horizontal forces may use (below the usual friction coefficients).
+constexpr double kVelocityGain = 2, kYawGain = 4, kFrictionUse = 0.3;
 // How far a landing point may move from its nominal position, as a fraction of the stance height.
 constexpr double kMaxStepFraction = 0.6;
 
@@ -45,6 +48,7 @@ struct GaitController::State {
   std::vector<double> phase_offset;  // 0 or 0.5 (diagonal pairs)
   std::vector<LegState> leg_state;
   int root = -1, free_qpos = -1, free_dof = -1;
+  std::vector<int> bodies;  // the root's subtree
   double mass = 0, height = 0;
   double t0 = 0;
   double cmd[3] = {0, 0, 0};  // slewed vx, vy, yaw rate
@@ -100,6 +104,11 @@ void GaitController::Bind(const mjModel* m, std::span<const int> actuator_ids) {
   s.free_qpos = m->jnt_qposadr[free_joint];
   s.free_dof = m->jnt_dofadr[free_joint];
   s.mass = m->body_subtreemass[root];
+  for (int b = root; b < m->nbody; ++b) {  // a subtree's bodies follow its root
+    int a = b;
+    while (a > root) a = m->body_parentid[a];
+    if (a == root) s.bodies.push_back(b);
+  }
   if (settings_.stance_height > 0) {
     s.height = settings_.stance_height;
   } else {
@@ -130,8 +139,7 @@ void GaitController::Start(const mjModel*, const mjData* d) {
   walking_.store(true, std::memory_order_release);
 }
 
-void GaitController::ComputeAndApply(const mjModel* m, mjData* d,
-                                     std::span<const double> targets) {
+void GaitController::ComputeAndApply(const mjModel* m, mjData* d, std::span<const double> targets) {
   if (!twist_ || !twist_->attached() || state_->legs.empty()) {
     walking_.store(false, std::memory_order_release);
     return ApplyPositionTargets(m, d, targets);
@@ -208,9 +216,10 @@ void GaitController::Walk(const mjModel* m, mjData* d, std::span<const double> t
     }
   }
 
-  // Stance forces: the weight's share plus feedback on height, roll and pitch, as vertical
-  // ground reactions F_i.
-  double h_meas = 0, sum_x2 = 0, sum_y2 = 0;
+  // Stance forces, as the ground reactions F_i wanted on the stance feet (heading frame): the
+  // weight's share with feedback on height, roll and pitch (vertical), and feedback on planar
+  // velocity and yaw rate (horizontal, within what friction gives).
+  double h_meas = 0, sum_x2 = 0, sum_y2 = 0, sum_r2 = 0;
   std::array<std::array<double, 3>, 4> feet{};
   std::array<double, 16> now{};  // a leg's joint angles (FindLegs allows at most 16)
   const auto angles = [&](const legs::Leg& leg) {
@@ -229,6 +238,7 @@ void GaitController::Walk(const mjModel* m, mjData* d, std::span<const double> t
       sum_y2 += foot[1] * foot[1];
     }
   }
+  sum_r2 = sum_x2 + sum_y2;
   std::fill(s.feedforward.begin(), s.feedforward.end(), 0.0);
   if (n_stance > 0) {
     h_meas /= n_stance;
@@ -236,34 +246,71 @@ void GaitController::Walk(const mjModel* m, mjData* d, std::span<const double> t
         s.mass * (g + kHeightStiffness * (s.height - h_meas) - kHeightDamping * qv[2]);
     const double mx = -s.mass * (kAttitudeStiffness * roll + kAttitudeDamping * qv[3]);
     const double my = -s.mass * (kAttitudeStiffness * pitch + kAttitudeDamping * qv[4]);
+    const double fx = s.mass * kVelocityGain * (vx - s.vel[0]) / n_stance;
+    const double fy = s.mass * kVelocityGain * (vy - s.vel[1]) / n_stance;
+    // Yaw: the base's inertia about the vertical through its centre of mass.
+    const mjtNum* com = d->subtree_com + 3 * s.root;
+    double izz = 0;
+    for (int b : s.bodies) {
+      const double ex = d->xipos[3 * b] - com[0], ey = d->xipos[3 * b + 1] - com[1];
+      izz += m->body_inertia[3 * b + 2] + m->body_mass[b] * (ex * ex + ey * ey);
+    }
+    const double w_meas = r[6] * qv[3] + r[7] * qv[4] + r[8] * qv[5];
+    double mz = izz * kYawGain * (wz - w_meas);
+    // Turning spins the stance feet on the ground: their torsional friction (condim 4 and 6)
+    // resists with up to mu_torsion * N each, which the legs must overcome.
+    double torsion = 0;
+    for (std::size_t i = 0; i < s.legs.size(); ++i) {
+      const int fg = s.legs[i].foot_geom;
+      if (stance[i] && fg >= 0 && m->geom_condim[fg] >= 4) torsion += m->geom_friction[3 * fg + 1];
+    }
+    mz += std::tanh(wz / 0.05) * torsion * total / n_stance;
     for (std::size_t i = 0; i < s.legs.size(); ++i) {
       if (!stance[i]) continue;
-      double f = total / n_stance;
-      if (sum_y2 > 1e-9) f += mx * feet[i][1] / sum_y2;
-      if (sum_x2 > 1e-9) f -= my * feet[i][0] / sum_x2;
-      f = std::max(f, 0.0);
-      // The foot pushes the ground down with f: in the base frame, R^T (0, 0, -f).
-      const double push[3] = {-r[6] * f, -r[7] * f, -r[8] * f};
+      double f[3] = {fx, fy, total / n_stance};
+      if (sum_y2 > 1e-9) f[2] += mx * feet[i][1] / sum_y2;
+      if (sum_x2 > 1e-9) f[2] -= my * feet[i][0] / sum_x2;
+      if (sum_r2 > 1e-9) {
+        f[0] -= mz * feet[i][1] / sum_r2;
+        f[1] += mz * feet[i][0] / sum_r2;
+      }
+      f[2] = std::max(f[2], 0.0);
+      const double planar = std::hypot(f[0], f[1]), limit = kFrictionUse * f[2];
+      if (planar > limit) {
+        f[0] *= limit / planar;
+        f[1] *= limit / planar;
+      }
+      // The foot pushes the ground with -F: in the world, then in the base frame (R^T).
+      const double world[3] = {c * f[0] - sn * f[1], sn * f[0] + c * f[1], f[2]};
+      double push[3];
+      for (int k = 0; k < 3; ++k) {
+        push[k] = -(r[k] * world[0] + r[3 + k] * world[1] + r[6 + k] * world[2]);
+      }
       const legs::Leg& leg = s.legs[i];
       const std::size_t n = leg.joints.size();
       double foot[3];
       legs::FootPosition(leg, angles(leg), foot, s.jac.data());
       for (std::size_t k = 0; k < n; ++k) {
-        const double tau =
-            s.jac[k] * push[0] + s.jac[n + k] * push[1] + s.jac[2 * n + k] * push[2];
+        const double tau = s.jac[k] * push[0] + s.jac[n + k] * push[1] + s.jac[2 * n + k] * push[2];
         s.feedforward[static_cast<std::size_t>(leg.joints[k].binding)] = tau;
       }
     }
   }
 
-  // Joint targets: the source's for actuators outside the legs, inverse kinematics for the legs.
+  // Joint targets: the source's for actuators outside the legs, inverse kinematics for the legs;
+  // a motor's damping acts on the velocity error (the targets' rate of change is known).
   const std::size_t nb = std::min(bindings_.size(), targets.size());
   std::copy_n(targets.begin(), nb, s.targets.begin());
   for (std::size_t i = 0; i < s.legs.size(); ++i) {
     State::LegState& ls = s.leg_state[i];
-    legs::SolveIk(s.legs[i], ls.p, ls.q);
+    const legs::Leg& leg = s.legs[i];
+    for (std::size_t k = 0; k < ls.q.size(); ++k) now[k] = ls.q[k];
+    legs::SolveIk(leg, ls.p, ls.q);
     for (std::size_t k = 0; k < ls.q.size(); ++k) {
-      s.targets[static_cast<std::size_t>(s.legs[i].joints[k].binding)] = ls.q[k];
+      const auto b = static_cast<std::size_t>(leg.joints[k].binding);
+      s.targets[b] = ls.q[k];
+      if (bindings_[b].motor)
+        s.feedforward[b] += gains(static_cast<int>(b)).kv * (ls.q[k] - now[k]) / dt;
     }
   }
   ApplyPositionTargets(m, d, s.targets, s.feedforward);

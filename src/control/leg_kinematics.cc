@@ -124,6 +124,16 @@ std::vector<Leg> FindLegs(const mjModel* m, int root, std::span<const ActuatorBi
     for (int s = 0; s < m->nsite; ++s) consider(d->site_xpos + 3 * s, m->site_bodyid[s]);
     for (int g = 0; g < m->ngeom; ++g) consider(d->geom_xpos + 3 * g, m->geom_bodyid[g]);
     if (!foot_world) foot_world = d->xpos + 3 * end;
+    double nearest = mjMAXVAL;
+    for (int g = 0; g < m->ngeom; ++g) {
+      if (!IsAncestor(m, end, m->geom_bodyid[g])) continue;
+      if (m->geom_contype[g] == 0 && m->geom_conaffinity[g] == 0) continue;
+      const double dist = mju_dist3(d->geom_xpos + 3 * g, foot_world);
+      if (dist < nearest) {
+        nearest = dist;
+        leg.foot_geom = g;
+      }
+    }
     mjtNum rel[3];
     mju_sub3(rel, foot_world, d->xpos + 3 * end);
     mju_mulMatTVec(leg.foot, d->xmat + 9 * end, rel, 3, 3);

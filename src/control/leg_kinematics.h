@@ -45,6 +45,7 @@ struct Leg {
   std::vector<ChainLink> links;  // from the root's child to the end body
   std::vector<LegJoint> joints;  // root outwards
   double foot[3] = {0, 0, 0};    // foot point in the end body's frame
+  int foot_geom = -1;            // the colliding geom nearest the foot point, -1 when none
   std::vector<double> stand_q;   // joint angles of the standing pose
   double stand[3] = {0, 0, 0};   // foot point of the standing pose, root frame
   double hip[3] = {0, 0, 0};     // first joint's anchor, root frame

@@ -1,10 +1,10 @@
 #include "urlab/world/controller_factory.h"
 
 #include <memory>
-
-#include "urlab/control/gait.h"
 #include <string>
 #include <vector>
+
+#include "urlab/control/gait.h"
 
 namespace urlab::world {
 
@@ -117,9 +117,9 @@ void CheckController(const ArticulationConfig& config, const mjModel* m, const s
                                    " with a gait controller (the gait walks at the twist; hover "
                                    "pushes the base and is for bodies without legs)");
     } else if (c.type != "gait" && mode == control::TwistMode::kGait) {
-      sink.Error(config.where,
-                 config.name + ": twist mode gait needs `controller: {type: gait}`, not '" +
-                     c.type + "'");
+      sink.Error(
+          config.where,
+          config.name + ": twist mode gait needs `controller: {type: gait}`, not '" + c.type + "'");
     }
   }
 }

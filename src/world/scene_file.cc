@@ -288,9 +288,9 @@ class Parser {
     }
     if (c.type != "none" && c.type != "pd" && c.type != "passthrough" && c.type != "keyframe" &&
         c.type != "gait") {
-      throw InputError(c.where,
-                       "controller type must be none, pd, passthrough, keyframe or gait, not '" +
-                           c.type + "'");
+      throw InputError(
+          c.where,
+          "controller type must be none, pd, passthrough, keyframe or gait, not '" + c.type + "'");
     }
     if (c.type == "keyframe" && c.sequence.empty()) {
       throw InputError(c.where, "a keyframe controller needs a sequence of keyframes");

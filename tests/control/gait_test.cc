@@ -77,8 +77,8 @@ TEST_F(GaitTest, FindsFourLegsWhoseKinematicsAreMujocos) {
 
 TEST_F(GaitTest, RefusesRobotsItCannotWalk) {
   // A fixed-base arm: no free joint.
-  physics::ModelPtr arm = physics::LoadXmlFile(std::string(URLAB_SOURCE_DIR) +
-                                               "/examples/models/servo_arm.xml");
+  physics::ModelPtr arm =
+      physics::LoadXmlFile(std::string(URLAB_SOURCE_DIR) + "/examples/models/servo_arm.xml");
   GaitController on_arm({}, {});
   std::vector<int> ids;
   for (int i = 0; i < arm->nu; ++i) ids.push_back(i);

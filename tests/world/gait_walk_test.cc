@@ -38,8 +38,7 @@ Walk RunWalk(const std::string& path, double vx, double vy, double wz, double se
   Walk w;
   double x0 = 0, y0 = 0, yaw0 = 0, last_yaw = 0;
   const int root = twist->root_body();
-  const auto base = [&](const mjData* d, double* x, double* y, double* z, double* yaw,
-                        double* up) {
+  const auto base = [&](const mjData* d, double* x, double* y, double* z, double* yaw, double* up) {
     const mjtNum* r = d->xmat + 9 * root;
     *x = d->xpos[3 * root];
     *y = d->xpos[3 * root + 1];

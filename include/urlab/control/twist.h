@@ -18,8 +18,8 @@
 // gains are decay rates (1/s) of the velocity errors. The actuators keep following their own
 // control source: this moves the base like a hovercraft (a legged robot slides and tips; give it
 // a gait controller instead). In hover mode, while attached the root body's xfrc_applied row
-// belongs to the controller (other forces on it are overwritten; one-shot forces such as the viewer's
-// perturbation are added on top by the engine); detaching zeroes the row once.
+// belongs to the controller (other forces on it are overwritten; one-shot forces such as the
+// viewer's perturbation are added on top by the engine); detaching zeroes the row once.
 //
 // Commands are clamped to the scene's per-articulation maxima. Up to 10 action bits (held action
 // keys or gamepad buttons) travel beside the twist for a policy to read.
