@@ -16,10 +16,12 @@
 //   position plus half a stance of commanded motion plus `step_gain` * (measured - commanded
 //   velocity), under a raised-cosine lift of `swing_height`.
 // - Foot targets become joint targets by each leg's inverse kinematics; a joint PD (the scene's
-//   kp, kv, torque_limit, as PdController) tracks them, plus, on stance legs, the torques J^T f
-//   that carry the robot's weight (f: its share of m g, with a PD on the stance height and on
-//   roll and pitch). Motors receive the torque; position servos the target shifted by
-//   torque / kp.
+//   kp, kv, torque_limit, as PdController, with the targets' own rate as the velocity target)
+//   tracks them, plus, on stance legs, the torques J^T f of wanted ground reactions: the weight's
+//   share with a PD on the stance height, roll and pitch; a pull toward the commanded planar
+//   velocity and yaw rate (at most 0.3 of the normal force); and, while turning, the
+//   torsional friction of the feet (geom friction[1] under condim 4 or 6) the turn must
+//   overcome. Motors receive the torque; position servos the target shifted by torque / gain.
 // The command is slewed (acceleration limits) so a step in the twist does not kick the legs.
 // While detached it is a PdController on the active source's joint targets (a robot standing on
 // its keyframe, or a client's targets); other actuators of the robot (not in a leg) always are.
