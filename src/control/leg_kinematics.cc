@@ -188,12 +188,14 @@ void FootPosition(const Leg& leg, std::span<const double> q, double foot[3], dou
 double SolveIk(const Leg& leg, const double target[3], std::span<double> q) {
   const std::size_t n = leg.joints.size();
   double jac[3 * 16], foot[3], err[3];
-  double dist = 0;
-  for (int iter = 0; iter < 20; ++iter) {
+  double dist = 0, last = mjMAXVAL;
+  for (int iter = 0; iter < 12; ++iter) {
     FootPosition(leg, q, foot, jac);
     mju_sub3(err, target, foot);
     dist = mju_norm3(err);
-    if (dist < 1e-6 || n > 16) break;
+    // Within 10 um, or stuck (a target out of reach, a joint at its limit).
+    if (dist < 1e-5 || dist > 0.9 * last || n > 16) break;
+    last = dist;
     // dq = J^T (J J^T + lambda^2 I)^-1 err
     mjtNum a[9];
     for (int i = 0; i < 3; ++i) {

@@ -129,6 +129,44 @@ TEST_P(GaitWalkTest, WalksSidewaysAndTurnsWhileWalking) {
   ExpectStanding(w);
 }
 
+class GaitSceneTest : public testing::MujocoTest {};
+
+// The twist mode follows the controller unless the scene names it; contradictions and robots a
+// gait cannot walk are refused at their file:line.
+TEST_F(GaitSceneTest, TwistModesAndRefusals) {
+  const std::string quadruped = std::string(URLAB_SOURCE_DIR) + "/examples/models/quadruped.xml";
+  const std::string arm = std::string(URLAB_SOURCE_DIR) + "/examples/models/pendulum_arm.xml";
+  const auto scene = [&](const std::string& mjcf, const std::string& extra) {
+    return world::ParseScene("articulations:\n  - name: dog\n    mjcf: " + mjcf + "\n" +
+                                 (mjcf == arm ? "    keyframe: raised\n" : "    keyframe: stand\n") +
+                                 extra,
+                             std::string(URLAB_SOURCE_DIR) + "/examples/scenes/x.yaml");
+  };
+  const auto mode = [&](const std::string& extra) {
+    auto session = world::Session::Create(scene(quadruped, extra), {});
+    return session->articulations().at(0).control->twist()->settings().mode;
+  };
+  EXPECT_EQ(mode("    controller: {type: gait}\n"), control::TwistMode::kGait);
+  EXPECT_EQ(mode("    controller: {type: pd}\n"), control::TwistMode::kPolicy);
+  EXPECT_EQ(mode("    controller: {type: pd}\n    twist: {mode: hover}\n"),
+            control::TwistMode::kHover);
+  const auto refused = [&](const std::string& mjcf, const std::string& extra, int line,
+                           const std::string& message) {
+    try {
+      world::Session::Create(scene(mjcf, extra), {});
+      ADD_FAILURE() << "accepted: " << extra;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where().line, line) << e.what();
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  };
+  refused(quadruped, "    controller: {type: gait}\n    twist: {mode: hover}\n", 2,
+          "twist mode hover with a gait controller");
+  refused(quadruped, "    controller: {type: pd}\n    twist: {mode: gait}\n", 2,
+          "twist mode gait needs `controller: {type: gait}`");
+  refused(arm, "    controller: {type: gait}\n", 5, "has no free joint");
+}
+
 INSTANTIATE_TEST_SUITE_P(Examples, GaitWalkTest,
                          ::testing::Values("quadruped_walk.yaml", "go2_network.yaml"));
 
