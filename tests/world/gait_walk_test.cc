@@ -137,10 +137,10 @@ TEST_F(GaitSceneTest, TwistModesAndRefusals) {
   const std::string quadruped = std::string(URLAB_SOURCE_DIR) + "/examples/models/quadruped.xml";
   const std::string arm = std::string(URLAB_SOURCE_DIR) + "/examples/models/pendulum_arm.xml";
   const auto scene = [&](const std::string& mjcf, const std::string& extra) {
-    return world::ParseScene("articulations:\n  - name: dog\n    mjcf: " + mjcf + "\n" +
-                                 (mjcf == arm ? "    keyframe: raised\n" : "    keyframe: stand\n") +
-                                 extra,
-                             std::string(URLAB_SOURCE_DIR) + "/examples/scenes/x.yaml");
+    return world::ParseScene(
+        "articulations:\n  - name: dog\n    mjcf: " + mjcf + "\n" +
+            (mjcf == arm ? "    keyframe: raised\n" : "    keyframe: stand\n") + extra,
+        std::string(URLAB_SOURCE_DIR) + "/examples/scenes/x.yaml");
   };
   const auto mode = [&](const std::string& extra) {
     auto session = world::Session::Create(scene(quadruped, extra), {});

@@ -78,10 +78,8 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       {WithArm("    controller: {type: pd, period: 0.3}\n"), 4,
        "controller.period applies to a gait controller"},
       {WithArm("    controller: {type: gait, period: 0}\n"), 4, "controller.period"},
-      {WithArm("    controller: {type: gait, swing_height: -0.1}\n"), 4,
-       "controller.swing_height"},
-      {WithArm("    controller: {type: gait, stance_height: 0}\n"), 4,
-       "controller.stance_height"},
+      {WithArm("    controller: {type: gait, swing_height: -0.1}\n"), 4, "controller.swing_height"},
+      {WithArm("    controller: {type: gait, stance_height: 0}\n"), 4, "controller.stance_height"},
       {WithArm("    controller: {type: trot}\n"), 4, "none, pd, passthrough, keyframe or gait"},
       {WithArm("    input:\n      - {actuator: shoulder, key: J, gamepad_axis: 1}\n"), 5,
        "exactly one of key, gamepad_axis, gamepad_button"},
@@ -179,12 +177,12 @@ TEST_F(SceneFileTest, GoodValuesStillPass) {
   EXPECT_EQ(a.input[0].scale, -0.5);
   EXPECT_EQ(a.input[1].gamepad_axis, 3);
   EXPECT_EQ(a.input[1].where.line, 8);
-  const world::SceneConfig g = world::ParseScene(
+  const world::SceneConfig gs = world::ParseScene(
       WithArm("    controller: {type: gait, kp: 80, period: 0.5, swing_height: 0.05,\n"
               "                 stance_height: 0.3, step_gain: 0.1}\n"
               "    twist: {mode: hover}\n"),
       dir_ + "/g.yaml");
-  const world::ArticulationConfig& ga = g.articulations.at(0);
+  const world::ArticulationConfig& ga = gs.articulations.at(0);
   EXPECT_EQ(ga.controller.type, "gait");
   EXPECT_EQ(ga.controller.defaults.kp, 80);
   EXPECT_EQ(ga.controller.gait.period, 0.5);
