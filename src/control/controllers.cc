@@ -52,13 +52,15 @@ void PdController::ComputeAndApply(const mjModel* m, mjData* d, std::span<const 
   ApplyPositionTargets(m, d, targets);
 }
 
-void PdController::ApplyPositionTargets(const mjModel*, mjData* d,
-                                        std::span<const double> targets) {
+void PdController::ApplyPositionTargets(const mjModel*, mjData* d, std::span<const double> targets,
+                                        std::span<const double> feedforward) {
   const std::size_t n = std::min(bindings_.size(), targets.size());
   for (std::size_t i = 0; i < n; ++i) {
     const ActuatorBinding& b = bindings_[i];
     const double target = b.has_joint() ? b.ClampToJoint(targets[i]) : targets[i];
+    const double ff = i < feedforward.size() ? feedforward[i] : 0.0;
     double u = target;
+    if (ff != 0 && !b.motor && b.gain * b.gear != 0) u = target + ff / (b.gain * b.gear);
     if (b.motor && b.has_joint()) {
       const AtomicGains& g = gains_[i];
       const double limit = g.limit.load(std::memory_order_relaxed);
@@ -68,7 +70,7 @@ void PdController::ApplyPositionTargets(const mjModel*, mjData* d,
       const double kv = i < frame_kv_.size() && !std::isnan(frame_kv_[i])
                             ? frame_kv_[i]
                             : g.kv.load(std::memory_order_relaxed);
-      double tau = kp * (target - d->qpos[b.qpos_adr]) - kv * d->qvel[b.dof_adr];
+      double tau = kp * (target - d->qpos[b.qpos_adr]) - kv * d->qvel[b.dof_adr] + ff;
       tau = std::clamp(tau, -limit, limit);
       const double scale = b.gain * b.gear;
       u = scale != 0 ? tau / scale : 0;

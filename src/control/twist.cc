@@ -7,6 +7,25 @@
 
 namespace urlab::control {
 
+const char* ToString(TwistMode mode) {
+  switch (mode) {
+    case TwistMode::kPolicy:
+      return "policy";
+    case TwistMode::kGait:
+      return "gait";
+    case TwistMode::kHover:
+      return "hover";
+  }
+  return "?";
+}
+
+std::optional<TwistMode> ParseTwistMode(std::string_view name) {
+  for (TwistMode m : {TwistMode::kPolicy, TwistMode::kGait, TwistMode::kHover}) {
+    if (name == ToString(m)) return m;
+  }
+  return std::nullopt;
+}
+
 void TwistController::Bind(const mjModel* m, int free_joint) {
   if (free_joint < 0 || free_joint >= m->njnt || m->jnt_type[free_joint] != mjJNT_FREE) {
     throw Error("TwistController: joint " + std::to_string(free_joint) +
@@ -48,7 +67,7 @@ void TwistController::Attach(bool on) {
 }
 
 void TwistController::Apply(const mjModel* m, mjData* d) {
-  if (root_ < 0) return;
+  if (root_ < 0 || settings_.mode != TwistMode::kHover) return;
   mjtNum* row = d->xfrc_applied + 6 * root_;
   if (!attached()) {
     if (applied_) mju_zero(row, 6);

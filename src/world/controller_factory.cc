@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "urlab/control/gait.h"
+
 namespace urlab::world {
 
 namespace {
@@ -36,12 +38,38 @@ void ApplyJointGains(const ArticulationConfig& config, const control::Articulati
   }
 }
 
+// The actuators a controller binds: the articulation's, by prefix (ArticulationControl).
+std::vector<int> ArticulationActuators(const mjModel* m, const std::string& prefix) {
+  std::vector<int> ids;
+  for (int id = 0; id < m->nu; ++id) {
+    const char* name = mj_id2name(m, mjOBJ_ACTUATOR, id);
+    if (name && std::string_view(name).starts_with(prefix)) ids.push_back(id);
+  }
+  return ids;
+}
+
+// The gait's settings with its standing keyframe: the articulation's initial keyframe, else its
+// first keyframe, else qpos0.
+control::GaitSettings GaitSettingsFor(const ArticulationConfig& config, const mjModel* m,
+                                      const std::string& prefix) {
+  control::GaitSettings g = config.controller.gait;
+  g.stand_key = -1;
+  if (!config.keyframe.empty()) {
+    g.stand_key = mj_name2id(m, mjOBJ_KEY, (prefix + config.keyframe).c_str());
+  }
+  for (int k = 0; k < m->nkey && g.stand_key < 0; ++k) {
+    const char* name = mj_id2name(m, mjOBJ_KEY, k);
+    if (name && std::string_view(name).starts_with(prefix)) g.stand_key = k;
+  }
+  return g;
+}
+
 }  // namespace
 
 void CheckController(const ArticulationConfig& config, const mjModel* m, const std::string& prefix,
                      Diagnostics& sink) {
   const ControllerConfig& c = config.controller;
-  if (c.type == "pd" || c.type == "keyframe") {
+  if (c.type == "pd" || c.type == "keyframe" || c.type == "gait") {
     // The actuators a controller binds: the articulation's, by prefix (ArticulationControl).
     std::vector<control::ActuatorBinding> bindings;
     for (int id = 0; id < m->nu; ++id) {
@@ -60,7 +88,7 @@ void CheckController(const ArticulationConfig& config, const mjModel* m, const s
     }
   } else if (!c.gains.empty()) {
     sink.Error(c.where, config.name +
-                            ": controller gains apply to pd and keyframe controllers, "
+                            ": controller gains apply to pd, keyframe and gait controllers, "
                             "not '" +
                             c.type + "'");
   }
@@ -71,6 +99,27 @@ void CheckController(const ArticulationConfig& config, const mjModel* m, const s
         sink.Error(c.where, config.name + ": controller sequence: keyframe '" + step.keyframe +
                                 "' is not in " + config.mjcf);
       }
+    }
+  }
+  if (c.type == "gait") {
+    // The legs are found as InstallController finds them.
+    try {
+      control::GaitController gait(GaitSettingsFor(config, m, prefix), control::PdGains{});
+      gait.Bind(m, ArticulationActuators(m, prefix));
+    } catch (const Error& e) {
+      sink.Error(c.where, config.name + ": " + e.what() + " in " + config.mjcf);
+    }
+  }
+  if (config.twist_mode_given) {
+    const control::TwistMode mode = config.twist.mode;
+    if (c.type == "gait" && mode != control::TwistMode::kGait) {
+      sink.Error(config.where, config.name + ": twist mode " + control::ToString(mode) +
+                                   " with a gait controller (the gait walks at the twist; hover "
+                                   "pushes the base and is for bodies without legs)");
+    } else if (c.type != "gait" && mode == control::TwistMode::kGait) {
+      sink.Error(
+          config.where,
+          config.name + ": twist mode gait needs `controller: {type: gait}`, not '" + c.type + "'");
     }
   }
 }
@@ -107,6 +156,12 @@ void InstallController(const ArticulationConfig& config, control::ArticulationCo
       const int key = mj_name2id(m, mjOBJ_KEY, (control.prefix() + step.keyframe).c_str());
       kf.AddPose(kf.PoseFromModelKey(m, key, step.blend, step.hold));
     }
+  } else if (c.type == "gait") {
+    auto gait = std::make_unique<control::GaitController>(
+        GaitSettingsFor(config, m, control.prefix()), defaults);
+    control::GaitController* g = gait.get();
+    control.SetController(std::move(gait));  // finds the legs (checked above)
+    ApplyJointGains(config, control, m, *g);
   } else {
     throw InputError(c.where, config.name + ": unknown controller type '" + c.type + "'");
   }
@@ -116,8 +171,14 @@ void InstallTwist(const ArticulationConfig& config, const physics::ArticulationB
                   control::ArticulationControl& control, const mjModel* m) {
   for (const physics::JointView& j : bindings.joints().all()) {
     if (j.type != mjJNT_FREE) continue;
-    auto twist = std::make_unique<control::TwistController>(config.twist);
+    auto* gait = dynamic_cast<control::GaitController*>(control.controller());
+    control::TwistSettings settings = config.twist;
+    if (!config.twist_mode_given) {
+      settings.mode = gait ? control::TwistMode::kGait : control::TwistMode::kPolicy;
+    }
+    auto twist = std::make_unique<control::TwistController>(settings);
     twist->Bind(m, j.id);
+    if (gait) gait->SetTwistSource(twist.get());
     control.SetTwistController(std::move(twist));
     return;
   }

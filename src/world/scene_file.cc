@@ -239,8 +239,8 @@ class Parser {
     } else {
       CheckKeys(n, "controller",
                 {"type", "kp", "kv", "torque_limit", "gains", "sequence", "loop", "autoplay",
-                 "start_delay"});
-      if (!n["type"]) Fail(n, "controller needs a type (pd, passthrough, keyframe)");
+                 "start_delay", "period", "swing_height", "stance_height", "step_gain"});
+      if (!n["type"]) Fail(n, "controller needs a type (pd, passthrough, keyframe, gait)");
       c.type = String(n["type"], "controller.type");
       c.defaults = GainFields(n, "controller");
       if (const auto g = n["gains"]) {
@@ -266,10 +266,31 @@ class Parser {
       if (n["start_delay"]) {
         c.start_delay = Number(n["start_delay"], "controller.start_delay", kNonNegativeFinite);
       }
+      // The gait's fields, only on a gait controller.
+      struct GaitField {
+        const char* key;
+        double control::GaitSettings::*value;
+        Range range;
+      };
+      const GaitField gait_fields[] = {
+          {"period", &control::GaitSettings::period, Range{0.1, 2}},
+          {"swing_height", &control::GaitSettings::swing_height, Range{0, 0.5}},
+          {"stance_height", &control::GaitSettings::stance_height, Range{0, 5, true}},
+          {"step_gain", &control::GaitSettings::step_gain, Range{0, 1}},
+      };
+      for (const GaitField& f : gait_fields) {
+        if (!n[f.key]) continue;
+        if (c.type != "gait") {
+          Fail(n[f.key], std::string("controller.") + f.key + " applies to a gait controller");
+        }
+        c.gait.*f.value = Number(n[f.key], std::string("controller.") + f.key, f.range);
+      }
     }
-    if (c.type != "none" && c.type != "pd" && c.type != "passthrough" && c.type != "keyframe") {
-      throw InputError(c.where, "controller type must be none, pd, passthrough or keyframe, not '" +
-                                    c.type + "'");
+    if (c.type != "none" && c.type != "pd" && c.type != "passthrough" && c.type != "keyframe" &&
+        c.type != "gait") {
+      throw InputError(
+          c.where,
+          "controller type must be none, pd, passthrough, keyframe or gait, not '" + c.type + "'");
     }
     if (c.type == "keyframe" && c.sequence.empty()) {
       throw InputError(c.where, "a keyframe controller needs a sequence of keyframes");
@@ -531,9 +552,9 @@ class Parser {
     return l;
   }
 
-  // The twist block: every field a positive finite number.
+  // The twist block: a mode (policy, gait, hover), every other field a positive finite number.
   control::TwistSettings Twist(const YAML::Node& n, const std::string& where) const {
-    if (!n.IsMap()) Fail(n, where + " must be a map (max_vx, max_vy, max_yaw_rate, gains)");
+    if (!n.IsMap()) Fail(n, where + " must be a map (mode, max_vx, max_vy, max_yaw_rate, gains)");
     struct Field {
       const char* key;
       double control::TwistSettings::*value;
@@ -547,8 +568,17 @@ class Parser {
     };
     std::set<std::string> keys;
     for (const Field& f : kFields) keys.insert(f.key);
+    keys.insert("mode");
     CheckKeys(n, where, keys);
     control::TwistSettings t;
+    if (n["mode"]) {
+      const std::string mode = String(n["mode"], where + ".mode");
+      const auto parsed = control::ParseTwistMode(mode);
+      if (!parsed) {
+        Fail(n["mode"], where + ".mode must be policy, gait or hover, not '" + mode + "'");
+      }
+      t.mode = *parsed;
+    }
     for (const Field& f : kFields) {
       if (n[f.key]) t.*f.value = Number(n[f.key], where + "." + f.key, kNonNegativeFinite);
     }
@@ -659,6 +689,7 @@ class Parser {
     if (n["twist"]) {
       a.twist = Twist(n["twist"], a.name + ".twist");
       a.twist_given = true;
+      a.twist_mode_given = static_cast<bool>(n["twist"]["mode"]);
     }
     if (const auto in = n["input"]) {
       if (!in.IsSequence()) Fail(in, a.name + ".input must be a list of bindings");

@@ -39,7 +39,8 @@ TEST_F(TwistTest, ReachesTheCommandedTwistInTheHeadingFrame) {
   physics::ModelPtr m = physics::CompileXmlString(kXml);
   physics::DataPtr d = physics::MakeData(m.get());
   mj_forward(m.get(), d.get());
-  TwistController twist({.max_vx = 1.0, .max_vy = 0.5, .max_yaw_rate = 0.5});
+  TwistController twist(
+      {.mode = TwistMode::kHover, .max_vx = 1.0, .max_vy = 0.5, .max_yaw_rate = 0.5});
   twist.Bind(m.get(), mj_name2id(m.get(), mjOBJ_JOINT, "root"));
   EXPECT_EQ(twist.root_body(), mj_name2id(m.get(), mjOBJ_BODY, "base"));
   EXPECT_THROW(twist.Bind(m.get(), mj_name2id(m.get(), mjOBJ_JOINT, "hinge")), Error);
@@ -90,6 +91,31 @@ TEST_F(TwistTest, ReachesTheCommandedTwistInTheHeadingFrame) {
   d->xfrc_applied[6 * twist.root_body()] = 3;  // someone else's force stays
   twist.Apply(m.get(), d.get());
   EXPECT_EQ(d->xfrc_applied[6 * twist.root_body()], 3);
+}
+
+// Outside hover mode the controller only holds the twist: nothing touches the root body (a gait
+// controller or a walking policy reads it).
+TEST_F(TwistTest, OnlyHoverModePushesTheRootBody) {
+  EXPECT_EQ(TwistSettings{}.mode, TwistMode::kPolicy) << "hover is chosen explicitly";
+  EXPECT_EQ(ParseTwistMode("hover"), TwistMode::kHover);
+  EXPECT_EQ(ParseTwistMode("gait"), TwistMode::kGait);
+  EXPECT_EQ(ParseTwistMode("policy"), TwistMode::kPolicy);
+  EXPECT_EQ(ParseTwistMode("walk"), std::nullopt);
+  physics::ModelPtr m = physics::CompileXmlString(kXml);
+  physics::DataPtr d = physics::MakeData(m.get());
+  mj_forward(m.get(), d.get());
+  for (TwistMode mode : {TwistMode::kPolicy, TwistMode::kGait}) {
+    TwistController twist({.mode = mode});
+    twist.Bind(m.get(), mj_name2id(m.get(), mjOBJ_JOINT, "root"));
+    twist.Attach(true);
+    EXPECT_EQ(twist.SetTwist({5, 0, 0.2}), (Twist{1.0, 0, 0.2})) << "still clamped";
+    for (int i = 0; i < 100; ++i) {
+      twist.Apply(m.get(), d.get());
+      mj_step(m.get(), d.get());
+    }
+    for (int i = 0; i < 6; ++i) EXPECT_EQ(d->xfrc_applied[6 * twist.root_body() + i], 0);
+    EXPECT_EQ(d->qvel[0], 0) << ToString(mode) << " mode moved the base";
+  }
 }
 
 }  // namespace

@@ -415,7 +415,7 @@ constexpr const char* kBoxXml = R"(<mujoco model="box">
 
 TEST_F(StepServerTest, SetTwistDrivesTheFreeBase) {
   urlab::testing::WriteTextFile(dir_, "box.xml", kBoxXml);
-  Play(5000ms, "direct", "", "box.xml");
+  Play(5000ms, "direct", ", twist: {mode: hover}", "box.xml");  // a body without legs
   Client c(ctx_, rpc());
   c.Hello();
   EXPECT_EQ(c.Op("set_twist", {{"articulation", "arm"}, {"linear", {0.5, 0, 0}}})["code"],

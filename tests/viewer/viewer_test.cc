@@ -461,7 +461,7 @@ TEST_F(ViewerTest, PossessDrivesTheTwistTopicFromKeys) {
   more_.push_back(std::move(network));
   viewer::ViewerOptions vo;
   vo.panel = false;
-  Play(kBotXml, vo, /*paused=*/false, "    twist: {max_vx: 0.8, max_vy: 0.4, max_yaw_rate: 1.0}\n");
+  Play(kBotXml, vo, /*paused=*/false, "    twist: {mode: hover, max_vx: 0.8, max_vy: 0.4, max_yaw_rate: 1.0}\n");
   zmq::context_t ctx;
   zmq::socket_t sub(ctx, zmq::socket_type::sub);
   sub.set(zmq::sockopt::subscribe, "bot/twist");

@@ -73,6 +73,14 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       // twist and input bindings
       {WithArm("    twist: {max_vx: -1}\n"), 4, "a.twist.max_vx must be >= 0"},
       {WithArm("    twist: {max_vz: 1}\n"), 4, "max_vz"},
+      {WithArm("    twist: {mode: walk}\n"), 4, "a.twist.mode must be policy, gait or hover"},
+      // gait controller fields
+      {WithArm("    controller: {type: pd, period: 0.3}\n"), 4,
+       "controller.period applies to a gait controller"},
+      {WithArm("    controller: {type: gait, period: 0}\n"), 4, "controller.period"},
+      {WithArm("    controller: {type: gait, swing_height: -0.1}\n"), 4, "controller.swing_height"},
+      {WithArm("    controller: {type: gait, stance_height: 0}\n"), 4, "controller.stance_height"},
+      {WithArm("    controller: {type: trot}\n"), 4, "none, pd, passthrough, keyframe or gait"},
       {WithArm("    input:\n      - {actuator: shoulder, key: J, gamepad_axis: 1}\n"), 5,
        "exactly one of key, gamepad_axis, gamepad_button"},
       {WithArm("    input:\n      - {key: J}\n"), 5, "a binding needs an actuator"},
@@ -163,11 +171,26 @@ TEST_F(SceneFileTest, GoodValuesStillPass) {
   EXPECT_EQ(a.twist.max_vx, 2);
   EXPECT_EQ(a.twist.yaw_gain, 1);
   EXPECT_EQ(a.twist.max_vy, control::TwistSettings{}.max_vy);
+  EXPECT_FALSE(a.twist_mode_given) << "resolved when installed (gait or policy)";
   ASSERT_EQ(a.input.size(), 2u);
   EXPECT_EQ(a.input[0].key, "J");
   EXPECT_EQ(a.input[0].scale, -0.5);
   EXPECT_EQ(a.input[1].gamepad_axis, 3);
   EXPECT_EQ(a.input[1].where.line, 8);
+  const world::SceneConfig gs = world::ParseScene(
+      WithArm("    controller: {type: gait, kp: 80, period: 0.5, swing_height: 0.05,\n"
+              "                 stance_height: 0.3, step_gain: 0.1}\n"
+              "    twist: {mode: hover}\n"),
+      dir_ + "/g.yaml");
+  const world::ArticulationConfig& ga = gs.articulations.at(0);
+  EXPECT_EQ(ga.controller.type, "gait");
+  EXPECT_EQ(ga.controller.defaults.kp, 80);
+  EXPECT_EQ(ga.controller.gait.period, 0.5);
+  EXPECT_EQ(ga.controller.gait.swing_height, 0.05);
+  EXPECT_EQ(ga.controller.gait.stance_height, 0.3);
+  EXPECT_EQ(ga.controller.gait.step_gain, 0.1);
+  EXPECT_TRUE(ga.twist_mode_given);
+  EXPECT_EQ(ga.twist.mode, control::TwistMode::kHover);
   const world::SceneConfig l = world::ParseScene(
       WithArm("launchers:\n  - {name: gun, pos: [1, 2, 3], shape: capsule, size: [0.02, 0.1],\n"
               "     mass: 0.2, speed: 12, pool: 64, axisangle: [0, 0, 1, 90]}\n"),

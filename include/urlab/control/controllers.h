@@ -50,8 +50,11 @@ class PdController : public Controller {
   const PdGains& default_gains() const { return defaults_; }
 
  protected:
-  // The PD law for targets already resolved (used by subclasses).
-  void ApplyPositionTargets(const mjModel* m, mjData* d, std::span<const double> targets);
+  // The PD law for targets already resolved (used by subclasses), plus, when given, a joint
+  // torque per binding added to the PD's (a motor receives it in its torque, before the limit;
+  // a position servo as its target shifted by torque / (gain * gear)).
+  void ApplyPositionTargets(const mjModel* m, mjData* d, std::span<const double> targets,
+                            std::span<const double> feedforward = {});
 
  private:
   struct AtomicGains {

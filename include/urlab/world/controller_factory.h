@@ -1,7 +1,9 @@
 #pragma once
 // Builds an articulation's controller from its scene description (ControllerConfig): PD with
-// default and per-joint gains, passthrough, keyframe sequencer, or none (targets go straight to
-// d->ctrl). Thread: main, before the physics loop runs the articulation's controls.
+// default and per-joint gains, passthrough, keyframe sequencer, gait (control/gait.h: walks at
+// the twist; its standing pose is the articulation's keyframe, else its first), or none (targets
+// go straight to d->ctrl). Thread: main, before the physics loop runs the articulation's
+// controls.
 #include <mujoco/mujoco.h>
 
 #include "urlab/control/articulation_control.h"
@@ -18,7 +20,9 @@ control::PdGains MergeGains(const control::PdGains& base, const PdGains& config)
 // Every problem of `config.controller` against model `m` for the articulation with `prefix`:
 // per-joint gains naming no actuated joint or actuator of the articulation (matched exactly as
 // InstallController matches them), gains on a controller without gains, keyframe steps naming
-// no keyframe of the articulation. Each is an error at the controller's file:line.
+// no keyframe of the articulation, a gait on a robot whose legs it cannot find, a twist mode
+// that contradicts the controller (gait without a gait controller, hover or policy with one).
+// Each is an error at the controller's (or, for the twist, the articulation's) file:line.
 void CheckController(const ArticulationConfig& config, const mjModel* m, const std::string& prefix,
                      Diagnostics& sink);
 
@@ -30,8 +34,10 @@ void InstallController(const ArticulationConfig& config, control::ArticulationCo
                        const mjModel* m);
 
 // Gives an articulation with a free base its twist controller (detached until possessed or
-// driven by set_twist) with the scene's maxima and gains (config.twist). Throws InputError at the
-// articulation's file:line for a twist block on an articulation without a free base.
+// driven by set_twist) with the scene's maxima and gains (config.twist) and its mode: the
+// scene's, else gait under a gait controller (which it then drives), else policy. Throws
+// InputError at the articulation's file:line for a twist block on an articulation without a free
+// base. Call after InstallController.
 void InstallTwist(const ArticulationConfig& config, const physics::ArticulationBindings& bindings,
                   control::ArticulationControl& control, const mjModel* m);
 

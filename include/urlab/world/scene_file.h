@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "urlab/control/controller.h"
+#include "urlab/control/gait.h"
 #include "urlab/control/twist.h"
 #include "urlab/convert/heightfield.h"
 #include "urlab/convert/prop.h"
@@ -38,13 +39,16 @@ struct KeyframeStep {
 };
 
 struct ControllerConfig {
-  std::string type = "none";             // none | pd | passthrough | keyframe
+  std::string type = "none";             // none | pd | passthrough | keyframe | gait
   PdGains defaults;                      // pd: gains for every actuator
   std::map<std::string, PdGains> gains;  // pd: per joint or actuator (short name)
   std::vector<KeyframeStep> sequence;    // keyframe controller
   bool loop = false;
   bool autoplay = true;
   double start_delay = 0.0;
+  // gait: the trot's period, swing height, stance height and landing gain (control/gait.h;
+  // stand_key is resolved from the articulation's keyframe when installed).
+  control::GaitSettings gait;
   SourceLocation where;
 };
 
@@ -80,8 +84,12 @@ struct ArticulationConfig {
   std::vector<std::string> cameras;
   // The twist controller's maxima and gains (control/twist.h); every articulation with a free
   // base gets one (detached until possessed or set_twist), with these or the defaults.
+  // Its mode (what the twist drives) is resolved when installed: `gait` with a gait controller,
+  // else `policy`, unless the block says `mode:` (hover for bodies without legs).
   control::TwistSettings twist;
-  bool twist_given = false;  // the scene gave a twist block (refused without a free base)
+  bool twist_given = false;       // the scene gave a twist block (refused without a free base)
+  bool twist_mode_given = false;  // ... with a mode
+
   std::vector<InputBindingConfig> input;
   SourceLocation where;
 };
