@@ -302,5 +302,75 @@ TEST(ViewScreenshot, AtTimeShowsTheStateAtThatTime) {
   fs::remove_all(dir);
 }
 
+TEST(ReplayView, WatchesARecordingWithTheTimelineOnTheModelItCarries) {
+  if (testing::RunCommand("command -v xvfb-run >/dev/null") != 0) {
+    GTEST_SKIP() << "xvfb-run is not installed";
+  }
+  const std::string dir = testing::MakeTempDir("replay_view");
+  const std::string xml = testing::WriteTextFile(dir, "pendulum.xml", kPendulumXml);
+  const std::string rec = dir + "/fall.urrec";
+  std::string log;
+  ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " record " + xml + " -o " + rec +
+                                    " --no-network --no-cameras --max-speed --duration 1",
+                                &log),
+            0)
+      << log;
+  fs::remove(xml);  // the recorded scene is gone: the MJCF the recording carries is used
+  const std::string shot = dir + "/timeline.png";
+  ASSERT_EQ(testing::RunCommand(
+                "xvfb-run -a -s '-screen 0 1024x768x24' " + testing::UrlabBinary() + " replay " +
+                    rec + " --view --width 800 --height 500 --screenshot " + shot + " --at 0.5",
+                &log),
+            0)
+      << log;
+  EXPECT_NE(log.find("the MJCF the recording carries"), std::string::npos) << log;
+  EXPECT_NE(log.find("keyframes"), std::string::npos) << log;
+  const std::vector<std::uint8_t> image = Decode(shot, dir + "/timeline.rgb");
+  constexpr int w = 800, h = 500;
+  ASSERT_EQ(image.size(), static_cast<std::size_t>(3 * w * h)) << log;
+  // The scene region (right of the panel, above the timeline) shows the recorded state at 0.5 s
+  // (step 150 of 1/300 s): nearer to it than to 1/30 s before or after.
+  const physics::ModelPtr model = physics::CompileXmlString(kPendulumXml);
+  const mjModel* m = model.get();
+  physics::DataPtr data = physics::MakeData(m);
+  std::vector<std::vector<double>> qpos(1, {0.0});
+  for (int n = 0; n < 200; ++n) {
+    mj_step(m, data.get());
+    qpos.push_back({data->qpos[0]});
+  }
+  Reference reference(m, w, h);
+  auto region_difference = [&](const std::vector<std::uint8_t>& expected) {
+    double sum = 0;
+    std::size_t count = 0;
+    for (int y = 0; y < h - 110; ++y) {
+      for (int x = 370; x < w; ++x) {
+        const std::size_t i = 3 * (static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x));
+        for (int c = 0; c < 3; ++c) sum += std::abs(int{image[i + c]} - int{expected[i + c]});
+        count += 3;
+      }
+    }
+    return sum / static_cast<double>(count);
+  };
+  std::vector<std::pair<double, int>> diffs;
+  for (int step : {140, 150, 160}) {
+    diffs.emplace_back(region_difference(reference.At(qpos[static_cast<std::size_t>(step)], -1)),
+                       step);
+  }
+  std::sort(diffs.begin(), diffs.end());
+  std::string table;
+  for (const auto& [diff, step] : diffs) table += fmt::format(" step {}: {:.2f};", step, diff);
+  EXPECT_EQ(diffs[0].second, 150) << table;
+  // The timeline strip along the bottom is drawn (not the scene's black background).
+  int lit = 0;
+  for (int y = h - 100; y < h - 4; ++y) {
+    for (int x = 380; x < w - 10; ++x) {
+      const std::size_t i = 3 * (static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x));
+      if (image[i] + image[i + 1] + image[i + 2] > 150) ++lit;
+    }
+  }
+  EXPECT_GT(lit, 300) << "no timeline at the bottom of the window";
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace urlab
