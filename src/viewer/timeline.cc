@@ -178,11 +178,9 @@ void Timeline::Draw(const replay::Playback& p, float x, float y, float width) {
     resim = st.resim.diverged ? fmt::format("   DIVERGED at step {}", st.resim.divergent_step)
                               : fmt::format("   {} steps identical", st.resim.steps_checked);
   }
-  Text(fmt::format(
-      "{}   {}   step {}   {}/{} frames   {:.3f} .. {:.3f} s   {} keyframes, {} "
-      "resets   {}{}",
-      p.label, state, st.step, st.frame + 1, st.frames, p.marks.first_time, p.marks.last_time,
-      p.marks.keyframes.size(), p.marks.jumps.size(), p.mode, resim));
+  Text(fmt::format("{}   {}   step {}   frame {}/{}   {} keyframes, {} resets   {}{}", p.label,
+                   state, st.step, st.frame + 1, st.frames, p.marks.keyframes.size(),
+                   p.marks.jumps.size(), p.mode, resim));
   ImGui::End();
 }
 
