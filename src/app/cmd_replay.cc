@@ -300,6 +300,13 @@ int View(const ReplayArgs& args, const RecordingReader& r) {
   std::unique_ptr<replay::Player> player;
   try {
     player = std::make_unique<replay::Player>(manager.session().engine(), r, po);
+  } catch (const replay::RecordingError& e) {
+    manager.EndPlay();
+    if (temporary.empty() || e.reason() != replay::RecordingError::Reason::kWrongModel) throw;
+    throw InputError({r.path(), 0},
+                     fmt::format("the MJCF the recording carries compiles to another model here "
+                                 "({}); give the scene it was recorded from with --scene",
+                                 e.what()));
   } catch (...) {
     manager.EndPlay();
     throw;

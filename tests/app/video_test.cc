@@ -227,7 +227,8 @@ TEST(RenderRecording, FourSecondsAt30FpsAre120FramesEachShowingItsTime) {
   // Frame k against the state at k/30 s (step 10k) and against its neighbours' states: the
   // decoded frame is (near) the right one, and clearly nearer to it than to 1/30 s off.
   int discriminating = 0;
-  for (int k : {0, 1, 7, 15, 30, 44, 60, 73, 90, 102, 119}) {
+  // The rod turns around at about 0, 1, 2 and 3 s and is fastest half-way between.
+  for (int k : {0, 1, 8, 15, 22, 30, 45, 52, 60, 75, 90, 105, 119}) {
     const std::uint8_t* frame = video.data() + static_cast<std::size_t>(k) * frame_bytes;
     const auto right = reference.At(qpos[static_cast<std::size_t>(k * kStepsPerFrame)], side);
     const double d_right = Difference(frame, right.data(), frame_bytes);
@@ -240,11 +241,11 @@ TEST(RenderRecording, FourSecondsAt30FpsAre120FramesEachShowingItsTime) {
       d_off = std::min(d_off, Difference(frame, other.data(), frame_bytes));
     }
     // Where the rod moves (all but the turning points) a frame 1/30 s off looks clearly
-    // different; the right state must be the nearest everywhere.
-    EXPECT_LT(d_right, d_off) << "frame " << k;
+    // different; nothing is nearer than the right state anywhere.
+    EXPECT_LE(d_right, d_off) << "frame " << k;
     if (d_off > 2 * d_right + 20) ++discriminating;
   }
-  EXPECT_GE(discriminating, 6) << "the rod hardly moves between frames: the check is too weak";
+  EXPECT_GE(discriminating, 7) << "the rod hardly moves between frames: the check is too weak";
   fs::remove_all(dir);
 }
 
@@ -307,7 +308,7 @@ TEST(ViewScreenshot, AtTimeShowsTheStateAtThatTime) {
   fs::remove_all(dir);
 }
 
-TEST(ReplayView, WatchesARecordingWithTheTimelineOnTheModelItCarries) {
+TEST(ReplayView, WatchesARecordingWithTheTimelineAtAnExactTime) {
   if (testing::RunCommand("command -v xvfb-run >/dev/null") != 0) {
     GTEST_SKIP() << "xvfb-run is not installed";
   }
@@ -316,22 +317,21 @@ TEST(ReplayView, WatchesARecordingWithTheTimelineOnTheModelItCarries) {
   const std::string rec = dir + "/fall.urrec";
   std::string log;
   ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " record " + xml + " -o " + rec +
-                                    " --no-network --no-cameras --max-speed --duration 1",
+                                    " --no-network --no-cameras --max-speed --duration 0.3",
                                 &log),
             0)
       << log;
-  fs::remove(xml);  // the recorded scene is gone: the MJCF the recording carries is used
   const std::string shot = dir + "/timeline.png";
   ASSERT_EQ(testing::RunCommand(
                 "xvfb-run -a -s '-screen 0 1024x768x24' " + testing::UrlabBinary() + " replay " +
-                    rec + " --view --width 800 --height 500 --screenshot " + shot + " --at 0.5",
+                    rec + " --view --width 1200 --height 500 --screenshot " + shot + " --at 0.5",
                 &log),
             0)
       << log;
-  EXPECT_NE(log.find("the MJCF the recording carries"), std::string::npos) << log;
+  EXPECT_NE(log.find("viewing on " + xml), std::string::npos) << log;  // the recorded scene
   EXPECT_NE(log.find("keyframes"), std::string::npos) << log;
   const std::vector<std::uint8_t> image = Decode(shot, dir + "/timeline.rgb");
-  constexpr int w = 800, h = 500;
+  constexpr int w = 1200, h = 500;
   ASSERT_EQ(image.size(), static_cast<std::size_t>(3 * w * h)) << log;
   // The scene region (right of the panel, above the timeline) shows the recorded state at 0.5 s
   // (step 150 of 1/300 s): nearer to it than to 1/30 s before or after.
