@@ -24,7 +24,7 @@ namespace urlab::viewer::internal {
 
 class FrameGate {
  public:
-  static constexpr std::chrono::seconds kMaxWait{10};
+  static constexpr std::chrono::seconds kMaxWait{30};
 
   // Video frames from the state after `first_step` steps on, at `fps` with timestep `dt`.
   void StartVideo(std::uint64_t first_step, double dt, int fps);
