@@ -1,7 +1,8 @@
 // `urlab replay`: information about a recording, its exports (CSV, .npz), a bit-for-bit
 // re-simulation check, and playback through a physics thread (kinematic or re-simulating) at a
-// chosen speed, with loop. Playback is headless here.
+// chosen speed, with loop; headless, or with --view in the viewer with the replay timeline.
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -12,12 +13,16 @@
 
 #include "app/commands.h"
 #include "app/signals.h"
+#include "urlab/core/files.h"
 #include "urlab/physics/engine.h"
 #include "urlab/replay/csv.h"
 #include "urlab/replay/npz.h"
+#include "urlab/replay/playback.h"
 #include "urlab/replay/player.h"
 #include "urlab/replay/recording.h"
 #include "urlab/replay/trajectory.h"
+#include "urlab/viewer/viewer.h"
+#include "urlab/world/manager.h"
 #include "urlab/world/scene_file.h"
 #include "urlab/world/session.h"
 
@@ -43,6 +48,9 @@ struct ReplayArgs {
   bool short_names = false;
   std::size_t segment = 0;  // 0: the recording must be one segment
   double duration = 0;
+  bool view = false;  // the viewer window with the replay timeline
+  bool paused = false;
+  viewer::ViewerOptions viewer;
 };
 
 // Opens a recording, keeping the readable prefix of a damaged or unfinished one (with a warning).
@@ -243,6 +251,103 @@ int Play(const ReplayArgs& args, const RecordingReader& r) {
   return signal ? ExitCodeForSignal(signal) : 0;
 }
 
+// The scene a viewed replay runs on: --scene, else the scene the recording names when it is
+// still there, else the composed MJCF the recording carries (written to a temporary file, with
+// the asset paths it resolved when recorded). The player checks that the model is the recorded
+// one (same hash).
+world::SceneConfig SceneForView(const ReplayArgs& args, const RecordingReader& r,
+                                std::string* temporary) {
+  std::string path = args.scene;
+  if (path.empty() && !r.info().scene.empty() && fs::is_regular_file(r.info().scene)) {
+    path = r.info().scene;
+  }
+  if (path.empty()) {
+    if (r.info().mjcf.empty()) {
+      throw InputError({r.path(), 0},
+                       "the recording names no scene and carries no MJCF: give --scene");
+    }
+    *temporary = (fs::temp_directory_path() / fmt::format("urlab-replay-{}-{}.xml", ::getpid(),
+                                                          replay::HashText(r.info().model_hash)))
+                     .string();
+    WriteFileAtomic(*temporary, r.info().mjcf);
+    path = *temporary;
+  }
+  spdlog::info("replay: viewing on {}",
+               path == *temporary ? "the MJCF the recording carries" : path);
+  CurrentInput() = path;
+  return world::LoadSceneOrModel(path);
+}
+
+// `replay FILE --view`: the scene in the viewer, the recording played through its engine's step
+// handler, the timeline driving the player.
+int View(const ReplayArgs& args, const RecordingReader& r) {
+  std::string temporary;
+  const world::SceneConfig scene = SceneForView(args, r, &temporary);
+  world::Manager manager;
+  const auto slot = std::make_shared<replay::PlaybackSlot>();
+  auto view = std::make_unique<viewer::ViewerSubsystem>(args.viewer);
+  view->SetManager(&manager);
+  view->SetPlayback(slot);
+  manager.AddSubsystem(std::move(view));
+  manager.BeginPlay(scene);
+  if (!temporary.empty()) fs::remove(temporary);
+  CurrentInput() = args.file;
+  replay::PlayerOptions po;
+  po.mode = args.resimulate ? replay::PlayMode::kResimulate : replay::PlayMode::kKinematic;
+  po.speed = args.speed;
+  po.loop = args.loop;
+  po.start_paused = args.paused;
+  std::unique_ptr<replay::Player> player;
+  try {
+    player = std::make_unique<replay::Player>(manager.session().engine(), r, po);
+  } catch (const replay::RecordingError& e) {
+    manager.EndPlay();
+    if (temporary.empty() || e.reason() != replay::RecordingError::Reason::kWrongModel) throw;
+    throw InputError({r.path(), 0},
+                     fmt::format("the MJCF the recording carries compiles to another model here "
+                                 "({}); give the scene it was recorded from with --scene",
+                                 e.what()));
+  } catch (...) {
+    manager.EndPlay();
+    throw;
+  }
+  replay::Playback shown;
+  shown.player = player.get();
+  shown.reader = &r;
+  shown.marks = replay::ScanTimeline(r);
+  shown.label = r.path();
+  shown.mode = args.resimulate ? "resimulate" : "kinematic";
+  slot->Set(&shown);
+  spdlog::info(
+      "replay: {} frames, {} keyframes, {} resets; Space plays/pauses, Left/Right step, "
+      "PgUp/PgDn keyframes, [ ] resets, Up/Down speed, L loop",
+      shown.marks.frames, shown.marks.keyframes.size(), shown.marks.jumps.size());
+  SetImmediateExit(false);
+  const auto start = Clock::now();
+  auto next = start;
+  while (StopSignal() == 0 && !manager.StopRequested()) {
+    manager.Tick();
+    const auto now = Clock::now();
+    if (args.duration > 0 && now - start >= std::chrono::duration<double>(args.duration)) break;
+    next += std::chrono::microseconds(16667);
+    if (next < now) next = now;
+    std::this_thread::sleep_until(next);
+  }
+  const replay::PlayerStatus st = player->status();
+  slot->Set(nullptr);
+  player.reset();
+  manager.EndPlay();
+  std::printf("viewed: frame %llu of %llu, t=%.6f s\n",
+              static_cast<unsigned long long>(st.frame + 1),
+              static_cast<unsigned long long>(st.frames), st.time);
+  if (!st.error.empty()) {
+    std::fprintf(stderr, "urlab: error: %s\n", st.error.c_str());
+    return 1;
+  }
+  const int signal = StopSignal();
+  return signal ? ExitCodeForSignal(signal) : 0;
+}
+
 int Replay(const ReplayArgs& args) {
   CurrentInput() = args.file;
   const RecordingReader r = OpenRecording(args.file);
@@ -273,6 +378,7 @@ int Replay(const ReplayArgs& args) {
     return 0;
   }
   if (args.check) return Check(r);
+  if (args.view) return View(args, r);
   return Play(args, r);
 }
 
@@ -321,6 +427,28 @@ void RegisterReplayCommand(CLI::App& app, int& exit_code) {
   segment->check(CLI::PositiveNumber);
   cmd->add_flag("--short-names", args.short_names,
                 "CSV columns without the articulation prefix where unambiguous");
+  CLI::Option* view = cmd->add_flag(
+      "--view", args.view,
+      "watch it in the viewer with the replay timeline: play/pause (Space), speed (Up/Down), "
+      "scrub, single steps (Left/Right), loop (L), keyframes (PgUp/PgDn) and resets ([ ]); runs "
+      "on --scene, the recorded scene when it is still there, or the MJCF the recording carries");
+  cmd->add_flag("--paused", args.paused, "with --view: start paused on the first frame");
+  cmd->add_option("--width", args.viewer.width, "with --view: window width (default 1280)")
+      ->check(CLI::Range(64, 8192));
+  cmd->add_option("--height", args.viewer.height, "with --view: window height (default 720)")
+      ->check(CLI::Range(64, 8192));
+  CLI::Option* shot = cmd->add_option(
+      "--screenshot", args.viewer.screenshot,
+      "with --view: write a PNG of the window (timeline included) showing the first frame at "
+      "recorded time --at, then stop");
+  cmd->add_option("--at", args.viewer.screenshot_at, "recorded time of --screenshot (default 0)")
+      ->check(CLI::NonNegativeNumber)
+      ->needs(shot);
+  shot->needs(view);
+  info->excludes(view);
+  check->excludes(view);
+  csv->excludes(view);
+  npz->excludes(view);
   info->excludes(check)->excludes(csv)->excludes(npz);
   check->excludes(csv)->excludes(npz);
   info->excludes(segment);

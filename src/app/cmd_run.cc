@@ -20,6 +20,7 @@
 #include "urlab/core/mujoco_handlers.h"
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/net/network.h"
+#include "urlab/replay/playback.h"
 #include "urlab/replay/recorder.h"
 #include "urlab/viewer/viewer.h"
 #include "urlab/world/manager.h"
@@ -87,6 +88,8 @@ int Run(const RunArgs& args) {
     recorder = sub.get();
     manager.AddSubsystem(std::move(sub));
   }
+  // A replay a step server client starts (replay_start) shows on the viewer's timeline.
+  const auto playback = std::make_shared<replay::PlaybackSlot>();
   world::CameraStreams* cameras = nullptr;
   if (!args.no_cameras || !args.video.empty()) {
     // Added before the network, whose discovery and step server read its streams.
@@ -107,11 +110,13 @@ int Run(const RunArgs& args) {
         std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network));
     network->SetRecorder(recorder);
     network->SetCameras(cameras);
+    if (args.view) network->SetPlayback(playback);  // the step server's replays on the timeline
     manager.AddSubsystem(std::move(network));
   }
   if (args.view) {
     auto view = std::make_unique<viewer::ViewerSubsystem>(args.viewer);
     view->SetManager(&manager);
+    view->SetPlayback(playback);
     manager.AddSubsystem(std::move(view));
   }
   manager.BeginPlay(scene);
@@ -309,13 +314,18 @@ void AddViewOptions(CLI::App* cmd, RunArgs& args) {
       ->check(CLI::Range(64, 8192));
   CLI::Option* shot = cmd->add_option(
       "--screenshot", v.screenshot,
-      "write a PNG of the window when the simulation reaches --at seconds, then stop (exit 0)");
+      "write a PNG of the window showing the first state at --at seconds of simulation time "
+      "(the simulation waits for the shot), then stop (exit 0)");
   cmd->add_option("--at", v.screenshot_at, "simulation time of --screenshot (default 0)")
       ->check(CLI::NonNegativeNumber)
       ->needs(shot);
   cmd->add_flag("--debug-all", v.debug_all,
                 "start with contact forces, collision wireframes, joint axes and sites drawn");
-  cmd->add_option("--video", v.video, "record the window to a video file (.mp4 or .webm; ffmpeg)");
+  cmd->add_option("--video", v.video,
+                  "record the window to a video file (.mp4 or .webm; ffmpeg), frame-exact: frame k "
+                  "shows the simulation k/fps simulated seconds after the start (the simulation "
+                  "waits for frames the renderer is late with, so a slow renderer makes the run "
+                  "slower, not the video shorter)");
   cmd->add_option("--video-fps", v.video_fps, "frames per second of --video (default 30)")
       ->check(CLI::Range(1, 240));
   cmd->add_flag("!--no-panel", v.panel, "no simulate panel");

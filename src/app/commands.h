@@ -17,6 +17,7 @@ void RegisterRunCommand(CLI::App& app, int& exit_code);
 void RegisterViewCommand(CLI::App& app, int& exit_code);
 void RegisterRecordCommand(CLI::App& app, int& exit_code);
 void RegisterReplayCommand(CLI::App& app, int& exit_code);
+void RegisterRenderCommand(CLI::App& app, int& exit_code);
 void RegisterBenchCommand(CLI::App& app, int& exit_code);
 void RegisterConvertCommand(CLI::App& app, int& exit_code);
 

@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
   urlab::app::RegisterViewCommand(app, exit_code);
   urlab::app::RegisterRecordCommand(app, exit_code);
   urlab::app::RegisterReplayCommand(app, exit_code);
+  urlab::app::RegisterRenderCommand(app, exit_code);
   urlab::app::RegisterBenchCommand(app, exit_code);
   urlab::app::RegisterConvertCommand(app, exit_code);
 

@@ -187,6 +187,8 @@ void StepServer::Close() {
   }
   pending_.clear();
   socket_.reset();
+  if (playback_) playback_->Set(nullptr);  // the viewer's timeline lets go first
+  shown_.reset();
   player_.reset();  // removes the custom step handler while the engine still runs
 }
 

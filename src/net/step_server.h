@@ -25,6 +25,7 @@
 #include "net/observation.h"
 #include "net/topic_table.h"
 #include "urlab/physics/state_frame.h"
+#include "urlab/replay/playback.h"
 #include "urlab/replay/player.h"
 #include "urlab/replay/recorder.h"
 #include "urlab/replay/recording.h"
@@ -68,6 +69,9 @@ class StepServer {
   // The cameras hello lists and `include_cameras` reads (nullptr: none). Main thread, before the
   // I/O thread starts.
   void SetCameras(world::CameraStreams* cameras) { cameras_ = cameras; }
+  // Where the replay replay_start plays is shown (the viewer's timeline); nullptr: nowhere. Main
+  // thread, before the I/O thread starts.
+  void SetPlayback(std::shared_ptr<replay::PlaybackSlot> slot) { playback_ = std::move(slot); }
 
   // Requests answered with an error, per code (I/O thread).
   const std::map<std::string, std::uint64_t>& errors() const { return errors_; }
@@ -214,6 +218,8 @@ class StepServer {
   std::string playing_replay_;              // the session player_ plays
   std::string player_mode_;                 // kinematic | resimulate
   std::unique_ptr<replay::Player> player_;  // declared after replays_: destroyed first
+  std::shared_ptr<replay::PlaybackSlot> playback_;
+  std::unique_ptr<replay::Playback> shown_;  // what playback_ points at (player_, its reader)
 };
 
 }  // namespace urlab::net

@@ -257,6 +257,8 @@ StepServer::Outcome StepServer::ReplayStart(Request& r) {
          "replay plays through physics steps; puppet mode never steps (set_mode live or "
          "direct)");
   }
+  if (playback_) playback_->Set(nullptr);  // the viewer's timeline lets go of the old player
+  shown_.reset();
   player_.reset();  // one replay at a time: a new start replaces it
   try {
     player_ = std::make_unique<replay::Player>(session_.engine(), *s->reader, o);
@@ -265,6 +267,20 @@ StepServer::Outcome StepServer::ReplayStart(Request& r) {
   }
   playing_replay_ = id;
   player_mode_ = mode;
+  if (playback_) {  // a running viewer shows it on its timeline
+    auto shown = std::make_unique<replay::Playback>();
+    shown->player = player_.get();
+    shown->reader = s->reader.get();
+    try {
+      shown->marks = replay::ScanTimeline(*s->reader);
+    } catch (const replay::RecordingError& e) {
+      spdlog::warn("step server: the timeline shows no keyframes or resets: {}", e.what());
+    }
+    shown->label = id + ": " + s->reader->path();
+    shown->mode = mode;
+    shown_ = std::move(shown);
+    playback_->Set(shown_.get());
+  }
   spdlog::info("step server: replaying {} ({}, speed {})", s->reader->path(), mode, o.speed);
   return {Json{{"op", "replay_start_ok"},
                {"session", id},
@@ -276,6 +292,8 @@ StepServer::Outcome StepServer::ReplayStart(Request& r) {
 
 StepServer::Outcome StepServer::ReplayStop(Request&) {
   const std::string was = player_ ? playing_replay_ : std::string();
+  if (playback_) playback_->Set(nullptr);
+  shown_.reset();
   player_.reset();  // the engine steps on its own again
   playing_replay_.clear();
   return {Json{{"op", "replay_stop_ok"}, {"session", was.empty() ? Json() : Json(was)}}};

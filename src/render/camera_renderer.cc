@@ -77,8 +77,7 @@ void CameraRenderer::SetGeomGroups(std::vector<int> group_of_geom) {
   group_of_geom_ = std::move(group_of_geom);
 }
 
-void CameraRenderer::Draw(int camera, const mjrRect& viewport, bool segment) {
-  camera_.fixedcamid = camera;
+void CameraRenderer::Draw(const mjrRect& viewport, bool segment) {
   scene_.flags[mjRND_SEGMENT] = segment ? 1 : 0;
   scene_.flags[mjRND_IDCOLOR] = segment ? 1 : 0;
   mjv_updateScene(model_.get(), data_.get(), &option_, nullptr, &camera_, mjCAT_ALL, &scene_);
@@ -91,6 +90,20 @@ void CameraRenderer::Render(int camera, int width, int height, const ImageReques
     throw Error(
         fmt::format("camera renderer: no camera {} (the model has {})", camera, model_->ncam));
   }
+  mjv_defaultCamera(&camera_);
+  camera_.type = mjCAMERA_FIXED;
+  camera_.fixedcamid = camera;
+  RenderWith(width, height, request, out);
+}
+
+void CameraRenderer::RenderView(const mjvCamera& view, int width, int height,
+                                const ImageRequest& request, CameraImages& out) {
+  camera_ = view;
+  RenderWith(width, height, request, out);
+}
+
+void CameraRenderer::RenderWith(int width, int height, const ImageRequest& request,
+                                CameraImages& out) {
   if (width < 1 || height < 1 || width > max_width_ || height > max_height_) {
     throw Error(fmt::format("camera renderer: {}x{} is outside the off-screen buffer {}x{}", width,
                             height, max_width_, max_height_));
@@ -101,7 +114,7 @@ void CameraRenderer::Render(int camera, int width, int height, const ImageReques
   const mjrRect viewport = {0, 0, width, height};
   const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   if (request.rgb || request.depth) {
-    Draw(camera, viewport, false);
+    Draw(viewport, false);
     scratch_rgb_.resize(3 * pixels);
     scratch_depth_.resize(pixels);
     mjr_readPixels(request.rgb ? scratch_rgb_.data() : nullptr,
@@ -120,7 +133,7 @@ void CameraRenderer::Render(int camera, int width, int height, const ImageReques
     }
   }
   if (request.segmentation) {
-    Draw(camera, viewport, true);
+    Draw(viewport, true);
     scratch_rgb_.resize(3 * pixels);
     mjr_readPixels(scratch_rgb_.data(), nullptr, viewport, &context_);
     out.geom_ids.resize(pixels);

@@ -58,6 +58,10 @@ class CameraRenderer {
   // Renders MJCF camera `camera` at width x height (at most the off-screen size) into `out`.
   // Throws Error for a bad camera id or size.
   void Render(int camera, int width, int height, const ImageRequest& request, CameraImages& out);
+  // Renders from `view` (a free or tracking camera, render/view_camera.h) instead of an MJCF
+  // camera, with the same requests and limits.
+  void RenderView(const mjvCamera& view, int width, int height, const ImageRequest& request,
+                  CameraImages& out);
 
   mjModel* model() { return model_.get(); }
   mjData* data() { return data_.get(); }
@@ -65,7 +69,8 @@ class CameraRenderer {
   int max_height() const { return max_height_; }
 
  private:
-  void Draw(int camera, const mjrRect& viewport, bool segment);
+  void Draw(const mjrRect& viewport, bool segment);
+  void RenderWith(int width, int height, const ImageRequest& request, CameraImages& out);
 
   physics::ModelPtr model_;
   physics::DataPtr data_;

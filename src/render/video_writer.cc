@@ -35,6 +35,7 @@ struct InputFormat {
 constexpr InputFormat kInputFormats[] = {
     {VideoInput::kRgbBottomUp, "rgb24", "-vf vflip", 3},
     {VideoInput::kBgraTopDown, "bgra", "", 4},
+    {VideoInput::kRgbTopDown, "rgb24", "", 3},
 };
 
 const InputFormat& FormatOf(VideoInput input) {

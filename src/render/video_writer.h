@@ -1,7 +1,7 @@
 #pragma once
 // Writing camera frames to a video through an ffmpeg process reading raw frames on a pipe
-// (H.264 .mp4 or VP9 .webm), for the viewer (bottom-up RGB rows, as mjr_readPixels gives them)
-// and the cameras (top-down BGRA rows, the wire's).
+// (H.264 .mp4 or VP9 .webm), for the viewer (bottom-up RGB rows, as mjr_readPixels gives them),
+// the cameras (top-down BGRA rows, the wire's) and `urlab render` (top-down RGB rows).
 //
 // Threading contract: each object on one thread.
 #include <cstdint>
@@ -13,6 +13,7 @@ namespace urlab::render {
 enum class VideoInput {
   kRgbBottomUp,  // 3 bytes per pixel, rows bottom-up (glReadPixels, mjr_readPixels)
   kBgraTopDown,  // 4 bytes per pixel, rows top-down (camera streams)
+  kRgbTopDown,   // 3 bytes per pixel, rows top-down (CameraRenderer images)
 };
 
 class VideoWriter {

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <mutex>
@@ -228,6 +229,7 @@ struct Player::Impl {
   bool playing = false;
   std::optional<double> seek_time;
   std::optional<std::uint64_t> seek_step;
+  std::optional<std::uint64_t> seek_frame;
   PlayerStatus status;
 
   // Physics thread only.
@@ -307,14 +309,17 @@ void Player::Impl::Step(const mjModel* m, mjData* d) {
     std::lock_guard<std::mutex> lock(mutex);
     opt = options;
     play = playing;
-    if (seek_time || seek_step) {
+    if (seek_time || seek_step || seek_frame) {
       if (!seeking) {
         const std::size_t c = seek_time ? reader.ChunkAt(*seek_time) : [&] {
           std::size_t best = 0;
+          std::uint64_t first = 0;  // index of the chunk's first frame
           for (std::size_t i = 0; i < reader.chunks().size(); ++i) {
-            if (reader.chunks()[i].frames && reader.chunks()[i].first_step <= *seek_step) {
+            const ChunkInfo& ci = reader.chunks()[i];
+            if (ci.frames && (seek_step ? ci.first_step <= *seek_step : first <= *seek_frame)) {
               best = i;
             }
+            first += ci.frames;
           }
           return best;
         }();
@@ -338,7 +343,8 @@ void Player::Impl::Step(const mjModel* m, mjData* d) {
           return;
         }
         if (!f) break;
-        if ((seek_time && f->time >= *seek_time) || (seek_step && f->step >= *seek_step)) {
+        if ((seek_time && f->time >= *seek_time) || (seek_step && f->step >= *seek_step) ||
+            (seek_frame && frame_index >= *seek_frame)) {
           --next;  // NextFrame returned records[next - 1]: show it next
           break;
         }
@@ -355,6 +361,7 @@ void Player::Impl::Step(const mjModel* m, mjData* d) {
       clock = 0;
       seek_time.reset();
       seek_step.reset();
+      seek_frame.reset();
       status.finished = false;
       play = true;  // show the frame sought, also while paused
     }
@@ -460,6 +467,8 @@ void Player::Play() {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   if (impl_->status.finished) {
     impl_->seek_step = 0;
+    impl_->seek_time.reset();
+    impl_->seek_frame.reset();
     impl_->status.finished = false;
   }
   impl_->playing = true;
@@ -490,12 +499,44 @@ void Player::SeekTime(double t) {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   impl_->seek_time = t;
   impl_->seek_step.reset();
+  impl_->seek_frame.reset();
 }
 
 void Player::SeekStep(std::uint64_t step) {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   impl_->seek_step = step;
   impl_->seek_time.reset();
+  impl_->seek_frame.reset();
+}
+
+void Player::SeekFrame(std::uint64_t index) {
+  const std::uint64_t frames = impl_->reader.frame_count();
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->seek_frame = frames > 0 ? std::min(index, frames - 1) : 0;
+  impl_->seek_time.reset();
+  impl_->seek_step.reset();
+}
+
+TimelineMarks ScanTimeline(const RecordingReader& reader) {
+  TimelineMarks out;
+  out.frames = reader.frame_count();
+  out.first_time = reader.first_time();
+  out.last_time = reader.last_time();
+  std::uint64_t index = 0;
+  for (std::size_t c = 0; c < reader.chunks().size(); ++c) {
+    const ChunkInfo& ci = reader.chunks()[c];
+    if (ci.starts_with_state && ci.frames) {
+      out.keyframes.push_back({index, ci.first_step, ci.first_time, {}});
+    }
+    for (const Record& rec : reader.ReadChunk(c)) {
+      if (std::holds_alternative<Frame>(rec)) {
+        ++index;
+      } else if (const auto* m = std::get_if<Marker>(&rec)) {
+        out.jumps.push_back({index, m->step, m->time, m->text});
+      }
+    }
+  }
+  return out;
 }
 
 PlayerStatus Player::status() const {

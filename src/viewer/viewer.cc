@@ -12,7 +12,7 @@ ViewerSubsystem::ViewerSubsystem(ViewerOptions options) : options_(std::move(opt
 ViewerSubsystem::~ViewerSubsystem() = default;
 
 void ViewerSubsystem::BeginPlay(world::Session& session) {
-  auto core = std::make_unique<internal::ViewerCore>(options_, manager_);
+  auto core = std::make_unique<internal::ViewerCore>(options_, manager_, playback_);
   core->Begin(session);
   core_ = std::move(core);
 }

@@ -43,8 +43,9 @@ std::optional<DebugLayer> LayerOf(Action a) {
 
 }  // namespace
 
-ViewerCore::ViewerCore(ViewerOptions options, const world::Manager* manager)
-    : options_(std::move(options)), manager_(manager) {}
+ViewerCore::ViewerCore(ViewerOptions options, const world::Manager* manager,
+                       std::shared_ptr<replay::PlaybackSlot> playback)
+    : options_(std::move(options)), manager_(manager), playback_(std::move(playback)) {}
 
 ViewerCore::~ViewerCore() { End(); }
 
@@ -79,9 +80,27 @@ void ViewerCore::Begin(world::Session& session) {
     int w = 0, h = 0;
     window_->FramebufferSize(&w, &h);
     video_ = std::make_unique<render::VideoWriter>(options_.video, w, h, options_.video_fps);
-    next_video_frame_ = Clock::now();
   }
   state_ = engine.SubscribeState("viewer");
+  // The state before the first step (the engine does not run yet): the first frame drawn, and
+  // the first video frame or an --at 0 screenshot.
+  engine.WithLockedData([this, &engine](mjModel* m, mjData* d) {
+    initial_frame_ = physics::StateFrame::SizedFor(m);
+    initial_frame_.CopyFrom(m, d);
+    initial_frame_.time = d->time;
+    initial_frame_.step = engine.step_count();
+  });
+  frame_ = &initial_frame_;
+  view_->Update(initial_frame_);
+  if (video_ || !options_.screenshot.empty()) {
+    // The simulation waits for each video frame and the screenshot (frame_gate.h).
+    gate_ = std::make_shared<FrameGate>();
+    if (video_) gate_->StartVideo(engine.step_count(), engine.timestep(), options_.video_fps);
+    if (!options_.screenshot.empty()) gate_->StartShot(options_.screenshot_at);
+    gate_id_ = engine.AddPreStepCallback([g = gate_, &engine](const mjModel*, mjData* d) {
+      g->BeforeStep(engine.step_count(), d->time);
+    });
+  }
   capture_ = std::make_shared<DebugCapture>();
   capture_id_ =
       engine.AddPostStepCallback([c = capture_](const mjModel* m, mjData* d) { c->Capture(m, d); });
@@ -100,6 +119,9 @@ void ViewerCore::End() {
   }
   if (capture_id_) engine.RemoveCallback(capture_id_);
   capture_id_ = 0;
+  if (gate_) gate_->Open();  // before the callback goes: the physics thread may be waiting
+  if (gate_id_) engine.RemoveCallback(gate_id_);
+  gate_id_ = 0;
   if (video_) {
     const int frames = video_->frames();
     const int status = video_->Close();
@@ -187,7 +209,24 @@ void ViewerCore::OnKey(int key, int action, int /*mods*/) {
   if (action != GLFW_PRESS) return;
   if (window_ && window_->imgui_wants_keyboard()) return;
   if (possession_.OnKey(key, action) || input_.OnKey(key, action)) return;
+  if (const std::optional<TimelineAction> t = TimelineActionOfKey(key)) {
+    if (PerformTimeline(*t)) return;
+  }
   if (const Hotkey* h = FindHotkey(key)) Perform(h->action);
+}
+
+bool ViewerCore::replay_mode() const {
+  return playback_ && playback_->With([](const replay::Playback* p) { return p != nullptr; });
+}
+
+bool ViewerCore::PerformTimeline(TimelineAction action) {
+  if (!playback_) return false;
+  return playback_->With([action](const replay::Playback* p) {
+    if (!p) return false;
+    const std::string what = Timeline::Perform(*p, action);
+    if (!what.empty()) spdlog::info("viewer: {}", what);
+    return true;
+  });
 }
 
 void ViewerCore::OnMouseButton(int button, int action, int mods) {
@@ -219,8 +258,8 @@ void ViewerCore::Perform(Action action) {
   }
   physics::PhysicsEngine& engine = session_->engine();
   switch (action) {
-    case Action::kTogglePause:
-      session_->SetPaused(!engine.paused());
+    case Action::kTogglePause:  // in replay mode the replay pauses (the engine runs the player)
+      if (!PerformTimeline(TimelineAction::kPlayPause)) session_->SetPaused(!engine.paused());
       break;
     case Action::kReset:
       session_->ResetToInitialState();
@@ -352,10 +391,20 @@ void ViewerCore::Present() {
   if (window_->has_imgui()) {
     window_->BeginImGui();
     panel_->Draw(*this);
+    if (playback_) {
+      int ww = 0, wh = 0;
+      window_->WindowSize(&ww, &wh);
+      playback_->With([&](const replay::Playback* p) {
+        if (!p) return;
+        const float x = Panel::kWidth;
+        timeline_.Draw(*p, x, static_cast<float>(wh) - Timeline::kHeight,
+                       std::max(200.0f, static_cast<float>(ww) - x));
+      });
+    }
     window_->EndImGui();
   }
-  if (!options_.screenshot.empty() && !screenshot_done_ && frame_ &&
-      frame_->time + 1e-9 >= options_.screenshot_at && pending_screenshot_.empty()) {
+  if (gate_ && !screenshot_done_ && frame_ && gate_->ShotDue(frame_->time) &&
+      pending_screenshot_.empty()) {
     pending_screenshot_ = options_.screenshot;
   }
   Capture();
@@ -377,8 +426,10 @@ void ViewerCore::Present() {
 }
 
 void ViewerCore::Capture() {
-  const bool video_due = video_ && Clock::now() >= next_video_frame_;
-  if (pending_screenshot_.empty() && !video_due) return;
+  // Video frames are due by simulated time (the gate holds the physics thread until they are
+  // written), never by wall time.
+  const int video_due = video_ && gate_ && frame_ ? gate_->VideoFramesDue(frame_->step) : 0;
+  if (pending_screenshot_.empty() && video_due == 0) return;
   int w = 0, h = 0;
   window_->FramebufferSize(&w, &h);
   pixels_.resize(static_cast<std::size_t>(3 * w * h));
@@ -394,12 +445,14 @@ void ViewerCore::Capture() {
     } catch (const Error& e) {
       spdlog::error("viewer: {}", e.what());
     }
-    if (path == options_.screenshot) screenshot_done_ = true;
+    if (path == options_.screenshot) {
+      screenshot_done_ = true;
+      if (gate_) gate_->ShotTaken();
+    }
   }
-  if (video_due) {
-    video_->Write(pixels_.data());
-    next_video_frame_ += std::chrono::microseconds(1000000 / std::max(1, options_.video_fps));
-    if (next_video_frame_ < Clock::now()) next_video_frame_ = Clock::now();
+  if (video_due > 0) {
+    for (int i = 0; i < video_due; ++i) video_->Write(pixels_.data());
+    gate_->VideoWritten(frame_->step);
   }
 }
 

@@ -7,7 +7,8 @@
 // Threading contract
 // - Main thread: everything here (construction, Begin, Input, Present, End, the InputHandler
 //   events, Perform and the accessors).
-// - Physics thread: only the DebugCapture's post-step callback (debug_capture.h).
+// - Physics thread: only the DebugCapture's post-step callback (debug_capture.h) and, with
+//   --video or --screenshot, the FrameGate's pre-step wait (frame_gate.h).
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -17,17 +18,20 @@
 
 #include "render/video_writer.h"
 #include "urlab/physics/engine.h"
+#include "urlab/replay/playback.h"
 #include "urlab/viewer/viewer.h"
 #include "urlab/world/session.h"
 #include "viewer/cinematic.h"
 #include "viewer/debug_capture.h"
 #include "viewer/debug_draw.h"
+#include "viewer/frame_gate.h"
 #include "viewer/hotkeys.h"
 #include "viewer/image_io.h"
 #include "viewer/input_mapping.h"
 #include "viewer/mouse.h"
 #include "viewer/possess.h"
 #include "viewer/scene_view.h"
+#include "viewer/timeline.h"
 #include "viewer/window.h"
 
 namespace urlab::world {
@@ -40,7 +44,8 @@ class Panel;
 
 class ViewerCore : public InputHandler {
  public:
-  ViewerCore(ViewerOptions options, const world::Manager* manager);
+  ViewerCore(ViewerOptions options, const world::Manager* manager,
+             std::shared_ptr<replay::PlaybackSlot> playback = nullptr);
   ~ViewerCore() override;
 
   // Subsystem hooks (see ViewerSubsystem).
@@ -56,6 +61,11 @@ class ViewerCore : public InputHandler {
   void OnScroll(double dx, double dy) override;
   // Does what a hotkey does.
   void Perform(Action action);
+  // Does a replay timeline action; false when no replay plays (replay mode is off).
+  bool PerformTimeline(TimelineAction action);
+  // True while a replay plays through the slot the viewer was given.
+  bool replay_mode() const;
+  Timeline& timeline() { return timeline_; }
 
   // ---- State (main thread) ----
   bool stop_requested() const;
@@ -127,10 +137,15 @@ class ViewerCore : public InputHandler {
   std::string last_screenshot_;
   bool screenshot_done_ = false;
   bool lowered_ = false;  // the main thread's priority was lowered (first Present)
+  std::shared_ptr<replay::PlaybackSlot> playback_;  // replay mode (null: never)
+  Timeline timeline_;
   std::unique_ptr<render::VideoWriter> video_;
-  std::chrono::steady_clock::time_point next_video_frame_;
-  std::vector<std::uint8_t> pixels_;  // scratch for read-backs
-  bool keep_frame_ = false;           // ReadPixels: keep the frame being drawn in kept_
+  // Holds the physics thread for each video frame and the screenshot (null without either).
+  std::shared_ptr<FrameGate> gate_;
+  physics::PhysicsEngine::CallbackId gate_id_ = 0;
+  physics::StateFrame initial_frame_;  // the state before the first step, drawn until one comes
+  std::vector<std::uint8_t> pixels_;   // scratch for read-backs
+  bool keep_frame_ = false;            // ReadPixels: keep the frame being drawn in kept_
   Image kept_;
 };
 

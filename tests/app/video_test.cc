@@ -1,10 +1,23 @@
 // `urlab record --video CAM OUT`: a camera's frames written through ffmpeg, checked with ffprobe;
-// a bad camera name or extension is a clear error.
+// a bad camera name or extension is a clear error. `urlab render`: a recording to a video, frame
+// k showing the state at k/fps (checked against an independent render of that state), and
+// `view --screenshot --at T` showing the state at T.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
+#include <memory>
+#include <vector>
 
 #include "mujoco_test.h"
+#include "render/camera_renderer.h"
+#include "render/gl_context.h"
+#include "urlab/physics/model.h"
+#include "urlab/physics/state.h"
+#include "urlab/replay/recording.h"
 
 namespace urlab {
 namespace {
@@ -49,6 +62,314 @@ TEST(RecordVideo, BadCameraOrExtensionIsAClearError) {
                                 &log),
             0);
   EXPECT_NE(log.find(".mp4 (H.264) or .webm"), std::string::npos) << log;
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace urlab
+
+// ---- Frame-exact rendering: `urlab render` and `view --screenshot --at` ----
+
+namespace urlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A rod falling from horizontal about a hinge (gravity only): where it is shows the time. The
+// timestep is 1/300 s, so a 30 frames/s video shows every tenth step.
+constexpr const char* kPendulumXml = R"(<mujoco model="pendulum">
+  <option timestep="0.0033333333333333335"/>
+  <visual><global offwidth="320" offheight="240"/></visual>
+  <worldbody>
+    <light pos="0 -2 3" dir="0 0.5 -1"/>
+    <camera name="side" pos="0 -3 0" xyaxes="1 0 0 0 0 1" fovy="60"/>
+    <body name="arm" pos="0 0 0.5">
+      <joint name="hinge" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 1 0 0" size="0.1" rgba="0.9 0.1 0.1 1" mass="1"/>
+    </body>
+  </worldbody>
+</mujoco>
+)";
+constexpr int kStepsPerFrame = 10;  // 30 frames/s at 1/300 s
+constexpr int kWidth = 160, kHeight = 120;
+
+// Simulates the pendulum for `steps` steps from rest and writes a recording of it (a keyframe
+// every 300 steps, as the recorder makes them); qpos of every step in *qpos (index = step).
+void WritePendulumRecording(const mjModel* m, const std::string& path, int steps,
+                            std::vector<std::vector<double>>* qpos) {
+  replay::RecordingInfo info;
+  info.tables = replay::ModelTables::Of(m);
+  info.mjcf = kPendulumXml;
+  replay::DescribeModel(m, &info);
+  physics::DataPtr data = physics::MakeData(m);
+  mjData* d = data.get();
+  mj_forward(m, d);
+  auto take = [&](const double* v, int n) { return std::vector<double>(v, v + n); };
+  qpos->assign(1, take(d->qpos, m->nq));
+  std::vector<std::vector<replay::Record>> chunks;
+  for (int n = 0; n < steps; ++n) {
+    if (n % 300 == 0) {
+      chunks.emplace_back();
+      chunks.back().push_back(replay::StateRecord{0, physics::CaptureState(m, d)});
+    }
+    mj_step(m, d);
+    replay::Frame f;
+    f.time = d->time;
+    f.step = static_cast<std::uint64_t>(n + 1);
+    f.qpos = take(d->qpos, m->nq);
+    f.qvel = take(d->qvel, m->nv);
+    f.act = take(d->act, m->na);
+    f.ctrl = take(d->ctrl, m->nu);
+    f.mocap_pos = take(d->mocap_pos, 3 * m->nmocap);
+    f.mocap_quat = take(d->mocap_quat, 4 * m->nmocap);
+    f.qfrc_applied = take(d->qfrc_applied, m->nv);
+    f.xfrc_applied = take(d->xfrc_applied, 6 * m->nbody);
+    chunks.back().push_back(std::move(f));
+    qpos->push_back(take(d->qpos, m->nq));
+  }
+  replay::WriteRecording(path, info, chunks);
+}
+
+// Decodes a video or image into RGB frames of width x height with ffmpeg.
+std::vector<std::uint8_t> Decode(const std::string& file, const std::string& raw) {
+  std::string log;
+  EXPECT_EQ(testing::RunCommand(
+                "ffmpeg -v error -y -i " + file + " -f rawvideo -pix_fmt rgb24 " + raw, &log),
+            0)
+      << log;
+  const std::string bytes = testing::ReadTextFile(raw);
+  return {bytes.begin(), bytes.end()};
+}
+
+// Pixels of two RGB images (`n` bytes) that differ clearly: by more than 150 summed over the
+// channels, far above what the video's compression changes (the red rod on black).
+double Difference(const std::uint8_t* a, const std::uint8_t* b, std::size_t n) {
+  int count = 0;
+  for (std::size_t i = 0; i + 2 < n; i += 3) {
+    int sum = 0;
+    for (std::size_t c = 0; c < 3; ++c) sum += std::abs(int{a[i + c]} - int{b[i + c]});
+    if (sum > 150) ++count;
+  }
+  return count;
+}
+
+// Renders the pendulum at `qpos` through `camera` (an MJCF camera id, or -1 for the free camera
+// framing the scene), as an independent reference.
+class Reference {
+ public:
+  Reference(const mjModel* m, int width, int height)
+      : model_(m),
+        gl_(render::OffscreenGl::Create()),
+        renderer_(m, width, height, {}),
+        width_(width),
+        height_(height),
+        data_(physics::MakeData(m)) {
+    renderer_.MakeContext();
+  }
+  std::vector<std::uint8_t> At(const std::vector<double>& qpos, int camera) {
+    std::copy(qpos.begin(), qpos.end(), data_->qpos);
+    mj_forward(model_, data_.get());
+    physics::StateFrame f = physics::StateFrame::SizedFor(model_);
+    f.CopyFrom(model_, data_.get());
+    renderer_.Update(f);
+    render::ImageRequest rgb;
+    rgb.rgb = true;
+    if (camera >= 0) {
+      renderer_.Render(camera, width_, height_, rgb, image_);
+    } else {
+      mjvCamera free;
+      mjv_defaultFreeCamera(model_, &free);
+      renderer_.RenderView(free, width_, height_, rgb, image_);
+    }
+    return image_.rgb;
+  }
+
+ private:
+  const mjModel* model_;
+  std::unique_ptr<render::OffscreenGl> gl_;
+  render::CameraRenderer renderer_;
+  int width_, height_;
+  physics::DataPtr data_;
+  render::CameraImages image_;
+};
+
+TEST(RenderRecording, FourSecondsAt30FpsAre120FramesEachShowingItsTime) {
+  const std::string dir = testing::MakeTempDir("render");
+  const physics::ModelPtr model = physics::CompileXmlString(kPendulumXml);
+  const mjModel* m = model.get();
+  std::vector<std::vector<double>> qpos;
+  WritePendulumRecording(m, dir + "/fall.urrec", 1200, &qpos);  // 4 s
+  const std::string out = dir + "/fall.mp4";
+  std::string log;
+  ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " render " + dir + "/fall.urrec --video " +
+                                    out + " --fps 30 --camera side --width 160 --height 120",
+                                &log),
+            0)
+      << log;
+  EXPECT_NE(log.find("wrote " + out + ": 120 frames at 30 frames/s"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(dir + "/.fall.urlab-tmp.mp4")) << "the temporary video stayed";
+  std::string probe;
+  ASSERT_EQ(testing::RunCommand("ffprobe -v error -count_frames -show_entries "
+                                "stream=width,height,nb_read_frames,r_frame_rate -of compact " +
+                                    out,
+                                &probe),
+            0)
+      << probe;
+  EXPECT_NE(probe.find("width=160|height=120"), std::string::npos) << probe;
+  EXPECT_NE(probe.find("r_frame_rate=30/1"), std::string::npos) << probe;
+  EXPECT_NE(probe.find("nb_read_frames=120"), std::string::npos) << probe;
+
+  const std::vector<std::uint8_t> video = Decode(out, dir + "/fall.rgb");
+  const std::size_t frame_bytes = 3 * kWidth * kHeight;
+  ASSERT_EQ(video.size(), 120 * frame_bytes);
+  Reference reference(m, kWidth, kHeight);
+  const int side = mj_name2id(m, mjOBJ_CAMERA, "side");
+  // Frame k against the state at k/30 s (step 10k) and against its neighbours' states: the
+  // decoded frame is (near) the right one, and clearly nearer to it than to 1/30 s off.
+  int discriminating = 0;
+  // The rod turns around at about 0, 1, 2 and 3 s and is fastest half-way between.
+  for (int k : {0, 1, 8, 15, 22, 30, 45, 52, 60, 75, 90, 105, 119}) {
+    const std::uint8_t* frame = video.data() + static_cast<std::size_t>(k) * frame_bytes;
+    const auto right = reference.At(qpos[static_cast<std::size_t>(k * kStepsPerFrame)], side);
+    const double d_right = Difference(frame, right.data(), frame_bytes);
+    EXPECT_LT(d_right, 40) << "frame " << k;
+    double d_off = 1e9;
+    for (int off : {-1, 1}) {
+      const int j = k + off;
+      if (j < 0 || j >= 120) continue;
+      const auto other = reference.At(qpos[static_cast<std::size_t>(j * kStepsPerFrame)], side);
+      d_off = std::min(d_off, Difference(frame, other.data(), frame_bytes));
+    }
+    // Where the rod moves (all but the turning points) a frame 1/30 s off looks clearly
+    // different; nothing is nearer than the right state anywhere.
+    EXPECT_LE(d_right, d_off) << "frame " << k;
+    if (d_off > 2 * d_right + 20) ++discriminating;
+  }
+  EXPECT_GE(discriminating, 7) << "the rod hardly moves between frames: the check is too weak";
+  fs::remove_all(dir);
+}
+
+TEST(RenderRecording, UnknownCameraIsAClearErrorAndWritesNothing) {
+  const std::string dir = testing::MakeTempDir("render_bad");
+  const physics::ModelPtr model = physics::CompileXmlString(kPendulumXml);
+  std::vector<std::vector<double>> qpos;
+  WritePendulumRecording(model.get(), dir + "/fall.urrec", 30, &qpos);
+  std::string log;
+  EXPECT_EQ(testing::RunCommand(testing::UrlabBinary() + " render " + dir + "/fall.urrec --video " +
+                                    dir + "/a.mp4 --camera top",
+                                &log),
+            1);
+  EXPECT_NE(log.find("--camera top: no camera 'top'"), std::string::npos) << log;
+  EXPECT_NE(log.find("side"), std::string::npos) << "the error lists the cameras: " << log;
+  EXPECT_FALSE(fs::exists(dir + "/a.mp4"));
+  fs::remove_all(dir);
+}
+
+TEST(ViewScreenshot, AtTimeShowsTheStateAtThatTime) {
+  if (testing::RunCommand("command -v xvfb-run >/dev/null") != 0) {
+    GTEST_SKIP() << "xvfb-run is not installed";
+  }
+  const std::string dir = testing::MakeTempDir("shot_at");
+  const std::string xml = testing::WriteTextFile(dir, "pendulum.xml", kPendulumXml);
+  const std::string shot = dir + "/shot.png";
+  std::string log;
+  ASSERT_EQ(testing::RunCommand("xvfb-run -a -s '-screen 0 640x480x24' " + testing::UrlabBinary() +
+                                    " view " + xml +
+                                    " --no-network --no-cameras --no-panel --width 320 "
+                                    "--height 240 --screenshot " +
+                                    shot + " --at 0.3",
+                                &log),
+            0)
+      << log;
+  const std::vector<std::uint8_t> image = Decode(shot, dir + "/shot.rgb");
+  constexpr int w = 320, h = 240;
+  ASSERT_EQ(image.size(), static_cast<std::size_t>(3 * w * h)) << log;
+  const physics::ModelPtr model = physics::CompileXmlString(kPendulumXml);
+  const mjModel* m = model.get();
+  physics::DataPtr data = physics::MakeData(m);
+  std::vector<std::vector<double>> qpos(1, {0.0});
+  for (int n = 0; n < 200; ++n) {
+    mj_step(m, data.get());
+    qpos.push_back({data->qpos[0]});
+  }
+  // The shot against the free camera's view of the states 0.3 s +- 1/30 s and +- 1/15 s: the
+  // state at 0.3 s (step 90) is the nearest.
+  Reference reference(m, w, h);
+  std::vector<std::pair<double, int>> diffs;
+  for (int step : {70, 80, 90, 100, 110}) {
+    const auto expected = reference.At(qpos[static_cast<std::size_t>(step)], -1);
+    diffs.emplace_back(Difference(image.data(), expected.data(), image.size()), step);
+  }
+  std::sort(diffs.begin(), diffs.end());
+  std::string table;
+  for (const auto& [diff, step] : diffs) table += fmt::format(" step {}: {} pixels;", step, diff);
+  EXPECT_EQ(diffs[0].second, 90) << table << "\n" << log;
+  EXPECT_LT(diffs[0].first, 0.6 * diffs[1].first) << table;
+  fs::remove_all(dir);
+}
+
+TEST(ReplayView, WatchesARecordingWithTheTimelineAtAnExactTime) {
+  if (testing::RunCommand("command -v xvfb-run >/dev/null") != 0) {
+    GTEST_SKIP() << "xvfb-run is not installed";
+  }
+  const std::string dir = testing::MakeTempDir("replay_view");
+  const std::string xml = testing::WriteTextFile(dir, "pendulum.xml", kPendulumXml);
+  const std::string rec = dir + "/fall.urrec";
+  std::string log;
+  ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " record " + xml + " -o " + rec +
+                                    " --no-network --no-cameras --max-speed --duration 0.3",
+                                &log),
+            0)
+      << log;
+  const std::string shot = dir + "/timeline.png";
+  ASSERT_EQ(testing::RunCommand(
+                "xvfb-run -a -s '-screen 0 1024x768x24' " + testing::UrlabBinary() + " replay " +
+                    rec + " --view --width 1200 --height 500 --screenshot " + shot + " --at 0.5",
+                &log),
+            0)
+      << log;
+  EXPECT_NE(log.find("viewing on " + xml), std::string::npos) << log;  // the recorded scene
+  EXPECT_NE(log.find("keyframes"), std::string::npos) << log;
+  const std::vector<std::uint8_t> image = Decode(shot, dir + "/timeline.rgb");
+  constexpr int w = 1200, h = 500;
+  ASSERT_EQ(image.size(), static_cast<std::size_t>(3 * w * h)) << log;
+  // The scene region (right of the panel, above the timeline) shows the recorded state at 0.5 s
+  // (step 150 of 1/300 s): nearer to it than to 1/30 s before or after.
+  const physics::ModelPtr model = physics::CompileXmlString(kPendulumXml);
+  const mjModel* m = model.get();
+  physics::DataPtr data = physics::MakeData(m);
+  std::vector<std::vector<double>> qpos(1, {0.0});
+  for (int n = 0; n < 200; ++n) {
+    mj_step(m, data.get());
+    qpos.push_back({data->qpos[0]});
+  }
+  Reference reference(m, w, h);
+  auto region_difference = [&](const std::vector<std::uint8_t>& expected) {
+    double count = 0;
+    for (int y = 0; y < h - 110; ++y) {
+      const std::size_t i = 3 * (static_cast<std::size_t>(y) * w + 370);
+      count += Difference(image.data() + i, expected.data() + i, 3 * (w - 370));
+    }
+    return count;
+  };
+  std::vector<std::pair<double, int>> diffs;
+  for (int step : {140, 150, 160}) {
+    diffs.emplace_back(region_difference(reference.At(qpos[static_cast<std::size_t>(step)], -1)),
+                       step);
+  }
+  std::sort(diffs.begin(), diffs.end());
+  std::string table;
+  for (const auto& [diff, step] : diffs) table += fmt::format(" step {}: {} pixels;", step, diff);
+  EXPECT_EQ(diffs[0].second, 150) << table;
+  // The timeline strip along the bottom is drawn (not the scene's black background).
+  int lit = 0;
+  for (int y = h - 100; y < h - 4; ++y) {
+    for (int x = 380; x < w - 10; ++x) {
+      const std::size_t i = 3 * (static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x));
+      if (image[i] + image[i + 1] + image[i + 2] > 150) ++lit;
+    }
+  }
+  EXPECT_GT(lit, 300) << "no timeline at the bottom of the window";
   fs::remove_all(dir);
 }
 

@@ -17,10 +17,14 @@
 #include <zmq_addon.hpp>
 
 #include "mujoco_test.h"
+#include "net/step_test_client.h"
 #include "urlab/net/network.h"
+#include "urlab/replay/playback.h"
+#include "urlab/replay/recording.h"
 #include "urlab/world/manager.h"
 #include "viewer/image_io.h"
 #include "viewer/panel.h"
+#include "viewer/timeline.h"
 #include "viewer/viewer_core.h"
 #include "wait.h"
 
@@ -146,6 +150,7 @@ class ViewerTest : public testing::MujocoTest {
     vo.height = 480;
     auto v = std::make_unique<viewer::ViewerSubsystem>(vo);
     v->SetManager(manager_.get());
+    if (playback_) v->SetPlayback(playback_);
     viewer_ = v.get();
     manager_->AddSubsystem(std::move(v));
     manager_->BeginPlay(scene);
@@ -176,6 +181,7 @@ class ViewerTest : public testing::MujocoTest {
 
   std::string dir_;
   std::vector<std::unique_ptr<world::Subsystem>> more_;
+  std::shared_ptr<replay::PlaybackSlot> playback_;  // given to the viewer when set
   std::unique_ptr<world::Manager> manager_;
   viewer::ViewerSubsystem* viewer_ = nullptr;
 };
@@ -731,6 +737,204 @@ TEST_F(ViewerTest, MouseRotatesSelectsAndPerturbs) {
       << "the perturbation force did not move the box";
   core().OnMouseButton(GLFW_MOUSE_BUTTON_RIGHT, GLFW_RELEASE, GLFW_MOD_CONTROL);
   EXPECT_EQ(core().view().perturb().active, 0);
+}
+
+}  // namespace
+}  // namespace urlab
+
+// ---- Replay mode: the timeline ----
+
+namespace urlab {
+namespace {
+
+// A recording of the bot on the session's own model: 900 steps, a keyframe every 300, and a
+// reset back to the initial state after step 450 (as the recorder writes one).
+std::string WriteBotRecording(physics::PhysicsEngine& engine, const std::string& path) {
+  physics::ModelPtr model;
+  engine.WithLockedData([&model](mjModel* m, mjData*) { model.reset(mj_copyModel(nullptr, m)); });
+  const mjModel* m = model.get();
+  replay::RecordingInfo info;
+  info.tables = replay::ModelTables::Of(m, {"bot"});
+  replay::DescribeModel(m, &info);
+  physics::DataPtr data = physics::MakeData(m);
+  mjData* d = data.get();
+  mj_forward(m, d);
+  auto take = [](const double* v, int n) { return std::vector<double>(v, v + n); };
+  std::vector<std::vector<replay::Record>> chunks;
+  for (int n = 0; n < 900; ++n) {
+    if (n % 300 == 0) {
+      chunks.emplace_back();
+      chunks.back().push_back(replay::StateRecord{0, physics::CaptureState(m, d)});
+    }
+    if (n == 450) {
+      mj_resetData(m, d);
+      mj_forward(m, d);
+      chunks.back().push_back(replay::Marker{physics::kDiscontinuityReset, d->time, 450, "reset"});
+      chunks.back().push_back(
+          replay::StateRecord{physics::kDiscontinuityReset, physics::CaptureState(m, d)});
+    }
+    d->ctrl[0] = 0.5;
+    mj_step(m, d);
+    replay::Frame f;
+    f.time = d->time;
+    f.step = static_cast<std::uint64_t>(n + 1);
+    f.qpos = take(d->qpos, m->nq);
+    f.qvel = take(d->qvel, m->nv);
+    f.act = take(d->act, m->na);
+    f.ctrl = take(d->ctrl, m->nu);
+    f.mocap_pos = take(d->mocap_pos, 3 * m->nmocap);
+    f.mocap_quat = take(d->mocap_quat, 4 * m->nmocap);
+    f.qfrc_applied = take(d->qfrc_applied, m->nv);
+    f.xfrc_applied = take(d->xfrc_applied, 6 * m->nbody);
+    chunks.back().push_back(std::move(f));
+  }
+  replay::WriteRecording(path, info, chunks);
+  return path;
+}
+
+TEST_F(ViewerTest, ReplayTimelineDrivesThePlayerAndShowsItsFrames) {
+  const auto slot = std::make_shared<replay::PlaybackSlot>();
+  viewer::ViewerOptions vo;
+  // The slot goes to the viewer the way the app hands it over, before play.
+  {
+    testing::WriteTextFile(dir_, "bot.xml", kBotXml);
+    const world::SceneConfig scene = world::ParseScene(
+        "control_source: ui\narticulations:\n  - name: bot\n    mjcf: bot.xml\n"
+        "    controller: {type: passthrough}\n",
+        dir_ + "/scene.yaml");
+    manager_ = std::make_unique<world::Manager>();
+    vo.width = 640;
+    vo.height = 480;
+    auto v = std::make_unique<viewer::ViewerSubsystem>(vo);
+    v->SetManager(manager_.get());
+    v->SetPlayback(slot);
+    viewer_ = v.get();
+    manager_->AddSubsystem(std::move(v));
+    manager_->BeginPlay(scene);
+  }
+  EXPECT_FALSE(core().replay_mode());
+  EXPECT_FALSE(core().PerformTimeline(viewer::internal::TimelineAction::kPlayPause));
+  const replay::RecordingReader reader =
+      replay::RecordingReader::Open(WriteBotRecording(engine(), dir_ + "/bot.urrec"));
+  const std::vector<replay::Record> all = replay::ReadAllRecords(reader);
+  std::vector<const replay::Frame*> frames;
+  for (const replay::Record& r : all) {
+    if (const auto* f = std::get_if<replay::Frame>(&r)) frames.push_back(f);
+  }
+  ASSERT_EQ(frames.size(), 900u);
+  replay::PlayerOptions po;
+  po.start_paused = true;
+  replay::Player player(engine(), reader, po);
+  replay::Playback shown;
+  shown.player = &player;
+  shown.reader = &reader;
+  shown.marks = replay::ScanTimeline(reader);
+  shown.label = "bot.urrec";
+  shown.mode = "kinematic";
+  ASSERT_EQ(shown.marks.keyframes.size(), 3u);
+  ASSERT_EQ(shown.marks.jumps.size(), 1u);
+  EXPECT_EQ(shown.marks.jumps[0].frame, 450u);
+  slot->Set(&shown);
+  ASSERT_TRUE(core().replay_mode());
+
+  using viewer::internal::TimelineAction;
+  // The viewer shows the frame the player shows: its qpos, bit for bit (kinematic playback).
+  auto shows = [&](std::size_t index) {
+    return TickUntil([&] {
+      const replay::PlayerStatus st = player.status();
+      const physics::StateFrame* f = core().frame();
+      return st.frame == index && !st.playing && f && f->qpos == frames[index]->qpos;
+    });
+  };
+  Key(GLFW_KEY_RIGHT);  // one step on, paused
+  EXPECT_TRUE(shows(1)) << player.status().frame;
+  Key(GLFW_KEY_RIGHT);
+  EXPECT_TRUE(shows(2));
+  Key(GLFW_KEY_LEFT);
+  EXPECT_TRUE(shows(1));
+  Key(GLFW_KEY_PAGE_DOWN);  // next keyframe: the second chunk starts at frame 300
+  EXPECT_TRUE(TickUntil([&] { return player.status().frame == 300; })) << player.status().frame;
+  Key(GLFW_KEY_RIGHT_BRACKET);  // next reset: frame 450, time back near 0
+  EXPECT_TRUE(shows(450)) << player.status().frame;
+  EXPECT_LT(player.status().time, 0.01);
+  Key(GLFW_KEY_PAGE_UP);  // previous keyframe
+  EXPECT_TRUE(TickUntil([&] { return player.status().frame == 300; }));
+  Key(GLFW_KEY_END);
+  EXPECT_TRUE(shows(899));
+  Key(GLFW_KEY_HOME);
+  EXPECT_TRUE(TickUntil([&] { return player.status().frame == 0; }));
+  Key(GLFW_KEY_UP);
+  EXPECT_EQ(player.status().speed, 2.0);
+  Key(GLFW_KEY_DOWN);
+  Key(GLFW_KEY_DOWN);
+  EXPECT_EQ(player.status().speed, 0.5);
+  Key(GLFW_KEY_L);
+  EXPECT_TRUE(player.status().loop);
+  Key(GLFW_KEY_SPACE);  // play: frames advance
+  EXPECT_TRUE(TickUntil([&] { return player.status().playing && player.status().frame > 5; }));
+  Key(GLFW_KEY_P);  // P pauses the replay, not the engine
+  EXPECT_TRUE(TickUntil([&] { return !player.status().playing; }));
+  EXPECT_FALSE(engine().paused());
+  // The timeline is drawn at the bottom of the window (right of the panel).
+  const Image with = viewer_->ReadPixels();
+  slot->Set(nullptr);
+  EXPECT_FALSE(core().replay_mode());
+  const Image without = viewer_->ReadPixels();
+  const int panel_w = static_cast<int>(viewer::internal::Panel::kWidth);
+  const int strip = static_cast<int>(viewer::internal::Timeline::kHeight);
+  int changed = 0;
+  for (int y = with.height - strip + 4; y < with.height - 4; ++y) {
+    for (int x = panel_w + 4; x < with.width - 4; ++x) {
+      int sum = 0;
+      for (int c = 0; c < 3; ++c) sum += std::abs(int(with.at(x, y)[c]) - int(without.at(x, y)[c]));
+      if (sum > 60) ++changed;
+    }
+  }
+  EXPECT_GT(changed, 500) << "no timeline drawn";
+}
+
+TEST_F(ViewerTest, StepServerReplayShowsOnTheTimelineAndTheTimelineDrivesIt) {
+  playback_ = std::make_shared<replay::PlaybackSlot>();
+  net::NetworkOptions no;
+  no.state = no.control = no.info = no.rpc = "tcp://127.0.0.1:*";
+  auto network = std::make_unique<net::NetworkSubsystem>(no);
+  net::NetworkSubsystem* net = network.get();
+  network->SetPlayback(playback_);
+  more_.push_back(std::move(network));
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  Play(kBotXml, vo, /*paused=*/false);
+  const std::string path = WriteBotRecording(engine(), dir_ + "/bot.urrec");
+  const replay::RecordingReader reader = replay::RecordingReader::Open(path);
+  const std::vector<replay::Record> all = replay::ReadAllRecords(reader);
+  std::vector<const replay::Frame*> frames;
+  for (const replay::Record& r : all) {
+    if (const auto* f = std::get_if<replay::Frame>(&r)) frames.push_back(f);
+  }
+  zmq::context_t ctx;
+  net::test_client::Client client(ctx, net->endpoints().rpc);
+  client.Hello();
+  ASSERT_EQ(client.Op("replay_load", {{"path", path}})["op"], "replay_load_ok");
+  EXPECT_FALSE(core().replay_mode());
+  ASSERT_EQ(client.Op("replay_start", {{"mode", "kinematic"}})["op"], "replay_start_ok");
+  ASSERT_TRUE(TickUntil([&] { return core().replay_mode(); }));
+  // The viewer's keys act on the step server's player; replay_status reports it.
+  Key(GLFW_KEY_SPACE);
+  net::test_client::Json st = client.Op("replay_status");
+  EXPECT_EQ(st["playing"], false) << st.dump();
+  Key(GLFW_KEY_HOME);
+  Key(GLFW_KEY_PAGE_DOWN);  // the second keyframe: frame 300
+  ASSERT_TRUE(TickUntil([&] {
+    st = client.Op("replay_status");
+    const physics::StateFrame* f = core().frame();
+    return st["frame"] == 300 && f && f->qpos == frames[300]->qpos;
+  })) << st.dump();
+  EXPECT_EQ(st["playing"], false);
+  Key(GLFW_KEY_RIGHT);
+  ASSERT_TRUE(TickUntil([&] { return client.Op("replay_status")["frame"] == 301; }));
+  ASSERT_EQ(client.Op("replay_stop")["op"], "replay_stop_ok");
+  EXPECT_TRUE(TickUntil([&] { return !core().replay_mode(); }));
+  EXPECT_FALSE(core().PerformTimeline(viewer::internal::TimelineAction::kPlayPause));
 }
 
 }  // namespace

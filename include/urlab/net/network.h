@@ -25,8 +25,9 @@
 #include "urlab/world/subsystem.h"
 
 namespace urlab::replay {
+class PlaybackSlot;
 class RecorderSubsystem;
-}
+}  // namespace urlab::replay
 namespace urlab::world {
 class CameraStreams;
 }
@@ -92,6 +93,9 @@ class NetworkSubsystem : public world::Subsystem {
   // to the Manager before this one, so its streams are bound when this begins). nullptr: none.
   // Main thread, before BeginPlay.
   void SetCameras(world::CameraStreams* cameras) { cameras_ = cameras; }
+  // Where the step server shows the replay replay_start plays (the viewer's timeline: give the
+  // viewer the same slot). nullptr: nowhere. Main thread, before BeginPlay.
+  void SetPlayback(std::shared_ptr<replay::PlaybackSlot> slot) { playback_ = std::move(slot); }
 
  private:
   struct Impl;
@@ -99,6 +103,7 @@ class NetworkSubsystem : public world::Subsystem {
   Endpoints bound_;
   replay::RecorderSubsystem* recorder_ = nullptr;
   world::CameraStreams* cameras_ = nullptr;
+  std::shared_ptr<replay::PlaybackSlot> playback_;
   std::unique_ptr<Impl> impl_;
 };
 

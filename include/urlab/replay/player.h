@@ -21,6 +21,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "urlab/physics/engine.h"
 #include "urlab/physics/model.h"
@@ -62,6 +63,23 @@ struct ResimOptions {
 ResimReport Resimulate(const RecordingReader& reader, const mjModel* m = nullptr,
                        const ResimOptions& options = {});
 
+// Landmarks of a recording for a timeline: where its keyframes are (seeks there are cheapest)
+// and where its state jumped (resets, restores, state writes), by frame index.
+struct TimelineMark {
+  std::uint64_t frame = 0;  // index of the first frame after the mark
+  std::uint64_t step = 0;
+  double time = 0;
+  std::string text;  // the jump's kind ("" for a keyframe)
+};
+struct TimelineMarks {
+  std::uint64_t frames = 0;
+  double first_time = 0, last_time = 0;
+  std::vector<TimelineMark> keyframes;  // chunks that start with a full state
+  std::vector<TimelineMark> jumps;      // markers (a reset is the usual one)
+};
+// Reads every chunk once. Throws RecordingError for a damaged chunk.
+TimelineMarks ScanTimeline(const RecordingReader& reader);
+
 enum class PlayMode { kKinematic, kResimulate };
 
 struct PlayerOptions {
@@ -99,9 +117,12 @@ class Player {
   void Pause();
   void SetSpeed(double speed);  // > 0, finite
   void SetLoop(bool loop);
-  // The first frame at or after recorded time `t` / with step >= `step`.
+  // The first frame at or after recorded time `t` / with step >= `step` / with this index
+  // (0-based, clamped to the last frame). While paused the frame sought is shown and playback
+  // stays paused (single steps: SeekFrame(status().frame + 1)).
   void SeekTime(double t);
   void SeekStep(std::uint64_t step);
+  void SeekFrame(std::uint64_t index);
   PlayerStatus status() const;
 
  private:

@@ -23,6 +23,9 @@
 namespace urlab::world {
 class Manager;
 }
+namespace urlab::replay {
+class PlaybackSlot;
+}
 
 namespace urlab::viewer {
 
@@ -71,6 +74,10 @@ class ViewerSubsystem : public world::Subsystem {
   // The manager whose other subsystems the panel shows (their Status) and drives (the recorder).
   // Main thread, before BeginPlay; optional.
   void SetManager(const world::Manager* manager) { manager_ = manager; }
+  // Replay mode: while the slot holds a playback (the step server's replay_start, `urlab replay
+  // --view`), the viewer shows the replay timeline and its keys drive the player; P pauses the
+  // replay. Main thread, before BeginPlay; optional.
+  void SetPlayback(std::shared_ptr<replay::PlaybackSlot> slot) { playback_ = std::move(slot); }
 
   // The last drawn frame as the window shows it (scene and panel). Main thread, while playing.
   Image ReadPixels();
@@ -80,6 +87,7 @@ class ViewerSubsystem : public world::Subsystem {
  private:
   ViewerOptions options_;
   const world::Manager* manager_ = nullptr;
+  std::shared_ptr<replay::PlaybackSlot> playback_;
   std::unique_ptr<internal::ViewerCore> core_;
 };
 
