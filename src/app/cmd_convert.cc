@@ -109,7 +109,7 @@ void RegisterConvertCommand(CLI::App& app, int& exit_code) {
       "Convex-decompose a mesh (STL, OBJ, PLY, glTF/GLB, FBX, DAE...) into a stand-alone MJCF "
       "model: visual mesh in group 2, convex parts (OUT_parts/partN.stl) in group 3.");
   cmd->add_option("mesh", args->mesh, "mesh file")->required();
-  cmd->add_option("-o,--output", args->out, "MJCF file to write")->required();
+  cmd->add_option("-o,--output", args->out, "MJCF file to write")->required()->check(OutputPath());
   cmd->add_option("--threshold", args->threshold,
                   "concavity limit as a fraction of the bounding-box diagonal (default 0.05)")
       ->check(CLI::Range(1e-4, 1.0));

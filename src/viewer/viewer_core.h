@@ -74,6 +74,8 @@ class ViewerCore : public InputHandler {
   const world::Manager* manager() const { return manager_; }
   // Frames drawn, and the frame rate over the last second.
   std::uint64_t frames_drawn() const { return frames_drawn_; }
+  // After End: why the video is not complete (ffmpeg failed), "" when it is or there is none.
+  const std::string& video_error() const { return video_error_; }
   double fps() const { return fps_; }
   // The articulation the panel shows (index into session().articulations()).
   int selected_articulation() const { return selected_articulation_; }
@@ -128,6 +130,7 @@ class ViewerCore : public InputHandler {
   bool screenshot_done_ = false;
   bool lowered_ = false;  // the main thread's priority was lowered (first Present)
   std::unique_ptr<render::VideoWriter> video_;
+  std::string video_error_;
   std::chrono::steady_clock::time_point next_video_frame_;
   std::vector<std::uint8_t> pixels_;  // scratch for read-backs
   bool keep_frame_ = false;           // ReadPixels: keep the frame being drawn in kept_
