@@ -140,8 +140,10 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
       "Build a model (MJCF) or scene (YAML) exactly as `urlab run` does (a single MJCF file is "
       "composed as a scene of one articulation named after the file), with every check `urlab "
       "validate` runs, compile it with MuJoCo from an in-memory virtual file system and print "
-      "the compiled model's sizes. Outputs are written atomically, both or neither, and never over an "
-      "input file; a device or FIFO (/dev/stdout) is written in place, a symlink through the link.");
+      "the compiled model's sizes. Outputs are written atomically, both or neither, and never over "
+      "an "
+      "input file; a device or FIFO (/dev/stdout) is written in place, a symlink through the "
+      "link.");
   static CompileArgs args;
   cmd->add_option("FILE", args.file, "MJCF model file (.xml) or scene file (.yaml)")->required();
   cmd->add_flag("--json", args.json, "print the sizes as one JSON object");

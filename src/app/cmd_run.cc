@@ -232,8 +232,8 @@ int Run(const RunArgs& args) {
     }
   }
   if (viewer_sub && !viewer_sub->video_error().empty()) {
-    failures.push_back(fmt::format("video {}: {}; {}", args.viewer.video,
-                                   viewer_sub->video_error(), WhatIsThere(args.viewer.video)));
+    failures.push_back(fmt::format("video {}: {}; {}", args.viewer.video, viewer_sub->video_error(),
+                                   WhatIsThere(args.viewer.video)));
   }
   if (recorded) {
     std::printf(
@@ -246,8 +246,8 @@ int Run(const RunArgs& args) {
         static_cast<unsigned long long>(recorded->dropped),
         recorded->stopped_because.starts_with("error") ? " (FAILED)" : "");
     if (recorded->stopped_because.starts_with("error: ")) {
-      failures.push_back("recording " + recorded->path + " failed: " +
-                         recorded->stopped_because.substr(7));
+      failures.push_back("recording " + recorded->path +
+                         " failed: " + recorded->stopped_because.substr(7));
     }
   }
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();

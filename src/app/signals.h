@@ -12,7 +12,8 @@
 // async-signal-safe.
 namespace urlab::app {
 
-// Installs the handlers (immediate mode) and ignores SIGPIPE and SIGXFSZ. Main thread, once, before any other thread starts.
+// Installs the handlers (immediate mode) and ignores SIGPIPE and SIGXFSZ. Main thread, once, before
+// any other thread starts.
 void InstallSignalHandlers();
 
 // Immediate (true) or graceful (false) handling of SIGINT/SIGTERM/SIGHUP.

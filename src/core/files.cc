@@ -146,7 +146,8 @@ OutputTarget ResolveOutput(const std::string& path) {
     }
     if (S_ISLNK(st.st_mode)) {
       const fs::path to = fs::read_symlink(p, ec);
-      if (ec) WriteFailed(path, "cannot read the symbolic link " + p.string() + ": " + ec.message());
+      if (ec)
+        WriteFailed(path, "cannot read the symbolic link " + p.string() + ": " + ec.message());
       p = (to.is_absolute() ? to : p.parent_path() / to).lexically_normal();
       if (!p.has_filename()) p = p.parent_path();
       continue;
@@ -212,7 +213,13 @@ OutputFile::OutputFile(const std::string& path, Options options)
       Fail("cannot create " + writing_, err);
     }
   }
-  if (::fchmod(fd_, mode) != 0) Fail("chmod " + writing_, errno);
+  if (::fchmod(fd_, mode) != 0) {
+    const int err = errno;
+    ::close(fd_);
+    fd_ = -1;
+    ::unlink(writing_.c_str());  // just made by us, empty
+    Fail("chmod " + writing_, err);
+  }
 }
 
 OutputFile::~OutputFile() {

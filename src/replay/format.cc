@@ -1,9 +1,8 @@
 #include "replay/format.h"
 
+#include <fmt/format.h>
 #include <zlib.h>
 #include <zstd.h>
-
-#include <fmt/format.h>
 
 #include <algorithm>
 #include <bit>

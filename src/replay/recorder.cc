@@ -561,9 +561,10 @@ void Recorder::Impl::Run() {
     const std::string kept =
         !file               ? std::string("nothing was kept")
         : file->in_place()  ? fmt::format("{} bytes went to {}", file->bytes(), file->part_path())
-        : file->bytes() > 0 ? fmt::format("the {} bytes written so far are kept in {} (urlab replay "
-                                          "reads it up to its last whole chunk)",
-                                          file->bytes(), file->part_path())
+        : file->bytes() > 0 ? fmt::format(
+                                  "the {} bytes written so far are kept in {} (urlab replay "
+                                  "reads it up to its last whole chunk)",
+                                  file->bytes(), file->part_path())
                             : "nothing was kept";
     if (file && !file->in_place() && file->bytes() == 0) file->Discard();
     spdlog::error("recorder: {}; {}", e.what(), kept);

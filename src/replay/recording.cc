@@ -118,7 +118,8 @@ RecordingReader RecordingReader::Open(const std::string& path, Options options) 
         throw RecordingError(Reason::kCorrupt, path, name + " (header): checksum mismatch");
       }
       try {
-        r.info_ = format::DecodeInfo(format::Decompress(stored, h.codec, h.raw_size, format::kMaxHeaderChunkRawBytes));
+        r.info_ = format::DecodeInfo(
+            format::Decompress(stored, h.codec, h.raw_size, format::kMaxHeaderChunkRawBytes));
       } catch (const std::exception& e) {
         throw RecordingError(Reason::kCorrupt, path, name + " (header): " + e.what());
       }
@@ -210,8 +211,8 @@ std::vector<Record> RecordingReader::ReadChunk(std::size_t index) const {
   }
   try {
     return format::DecodeChunk(
-        format::Decompress(stored, h.codec, h.raw_size, format::kMaxDataChunkRawBytes), info_.tables,
-                               info_.sensordata);
+        format::Decompress(stored, h.codec, h.raw_size, format::kMaxDataChunkRawBytes),
+        info_.tables, info_.sensordata);
   } catch (const std::exception& e) {
     throw RecordingError(Reason::kCorrupt, path_, name + ": " + e.what());
   }

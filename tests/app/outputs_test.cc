@@ -85,9 +85,9 @@ TEST(OutputsCli, RecordAndExportThroughSymlinks) {
       << out;
   EXPECT_NE(out.find("finished:    yes"), std::string::npos) << out;
   // --export-csv /dev/stdout writes to standard output (a pipe here), not over the link.
-  ASSERT_EQ(RunCommand(UrlabBinary() + " replay " + dir + "/latest.urrec --export-csv /dev/stdout",
-                       &out),
-            0)
+  ASSERT_EQ(
+      RunCommand(UrlabBinary() + " replay " + dir + "/latest.urrec --export-csv /dev/stdout", &out),
+      0)
       << out;
   EXPECT_NE(out.find("\ntime,"), std::string::npos) << out.substr(0, 400);
   EXPECT_TRUE(fs::is_symlink("/dev/stdout"));
@@ -111,8 +111,8 @@ TEST(OutputsCli, ARecordingThatRunsOutOfSpaceExitsOneAndKeepsThePart) {
   // kernel signals with SIGXFSZ unless it is ignored).
   const auto limit = fs::file_size(dir + "/short.urrec") + 1;
   const std::string file = dir + "/long.urrec";
-  const int code = RunCommand(
-      "prlimit --fsize=" + std::to_string(limit) + " " + Record(file, 4), &out);
+  const int code =
+      RunCommand("prlimit --fsize=" + std::to_string(limit) + " " + Record(file, 4), &out);
   EXPECT_EQ(code, 1) << out;
   EXPECT_NE(out.find("File too large"), std::string::npos) << out;
   EXPECT_NE(out.find("kept in " + file + ".part"), std::string::npos) << out;
@@ -155,8 +155,7 @@ TEST(OutputsCli, CompileWritesBothOutputsOrNeither) {
   EXPECT_FALSE(fs::exists(dir + "/model.xml")) << "--save-xml was written without --save-mjb";
   // An empty output name is a usage error, not a silent "no output".
   for (const char* option : {"--save-xml", "--save-mjb"}) {
-    const int code =
-        RunCommand(UrlabBinary() + " compile " + model + " " + option + " \"\"", &out);
+    const int code = RunCommand(UrlabBinary() + " compile " + model + " " + option + " \"\"", &out);
     EXPECT_GE(code, 105) << option << out;
     EXPECT_LE(code, 109) << option << out;
     EXPECT_NE(out.find("may not be empty"), std::string::npos) << out;
@@ -200,8 +199,7 @@ TEST(OutputsCli, AFailedCameraVideoExitsOne) {
                        &out),
             1)
       << out;
-  EXPECT_NE(out.find("urlab: error: video " + video + ": ffmpeg failed"), std::string::npos)
-      << out;
+  EXPECT_NE(out.find("urlab: error: video " + video + ": ffmpeg failed"), std::string::npos) << out;
   EXPECT_NE(out.find("nothing was kept"), std::string::npos) << out;
 }
 
@@ -219,8 +217,7 @@ TEST(OutputsCli, AFailedViewerVideoExitsOne) {
                        &out),
             1)
       << out;
-  EXPECT_NE(out.find("urlab: error: video " + video + ": ffmpeg failed"), std::string::npos)
-      << out;
+  EXPECT_NE(out.find("urlab: error: video " + video + ": ffmpeg failed"), std::string::npos) << out;
 }
 
 }  // namespace

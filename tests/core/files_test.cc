@@ -3,10 +3,10 @@
 // files never truncated, several outputs all or none.
 #include "urlab/core/files.h"
 
-#include <gtest/gtest.h>
-#include <signal.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <poll.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <sys/wait.h>
