@@ -1,11 +1,10 @@
 #include "urlab/physics/model.h"
 
-#include "urlab/core/files.h"
-
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 
+#include "urlab/core/files.h"
 #include "urlab/core/mujoco_handlers.h"
 
 namespace urlab::physics {

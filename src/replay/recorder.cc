@@ -291,6 +291,14 @@ std::string Recorder::Save(const std::string& path) {
   try {
     std::unique_lock<std::mutex> lock(s.file_mutex);
     if (s.file) {
+      // Never over the file this recorder is writing (its .part, or where it will be renamed).
+      const std::string target = ResolveOutput(path).file;
+      if (target == ResolveOutput(s.options.path).file ||
+          target == ResolveOutput(s.file->part_path()).file) {
+        throw RecorderError("bad_value", path +
+                                             " is the recording being written; save the copy to "
+                                             "another file");
+      }
       const std::string bytes = s.FileBytesLocked();
       lock.unlock();
       WriteFileAtomic(path, bytes);
