@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -103,6 +104,19 @@ bool UnderProc(const fs::path& p) {
   return it != p.end() && ++it != p.end() && *it == "proc";
 }
 
+// N when `p` is /proc/<this process>/fd/N, else -1.
+int OwnDescriptor(const fs::path& p) {
+  const std::string prefix = "/proc/" + std::to_string(::getpid()) + "/fd/";
+  const std::string s = p.string();
+  if (s.rfind(prefix, 0) != 0 || s.size() == prefix.size()) return -1;
+  int n = 0;
+  for (std::size_t i = prefix.size(); i < s.size(); ++i) {
+    if (s[i] < '0' || s[i] > '9' || n > 1000000) return -1;
+    n = n * 10 + (s[i] - '0');
+  }
+  return n;
+}
+
 void FsyncFolder(const fs::path& folder) {
   const int dir = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dir >= 0) {
@@ -137,6 +151,7 @@ OutputTarget ResolveOutput(const std::string& path) {
       t.file = p.string();
       t.mode = OutputTarget::Mode::kInPlace;
       t.kind = KindOfMode(st.st_mode);
+      t.descriptor = OwnDescriptor(p);
       return t;
     }
     if (::lstat(p.c_str(), &st) != 0) {
@@ -170,7 +185,15 @@ OutputFile::OutputFile(const std::string& path, Options options)
     : target_(ResolveOutput(path)), options_(std::move(options)) {
   if (in_place()) {
     writing_ = target_.file;
-    // O_APPEND: through /dev/stdout into a file, our bytes follow what the process printed.
+    if (target_.descriptor >= 0) {
+      // Our own stdout (or another descriptor): what was printed goes first, and what is printed
+      // after follows, at the descriptor's own offset.
+      if (target_.descriptor == STDOUT_FILENO) std::fflush(stdout);
+      if (target_.descriptor == STDERR_FILENO) std::fflush(stderr);
+      fd_ = ::fcntl(target_.descriptor, F_DUPFD_CLOEXEC, 0);
+      if (fd_ < 0) Fail("cannot use descriptor " + std::to_string(target_.descriptor), errno);
+      return;
+    }
     fd_ = ::open(writing_.c_str(), O_WRONLY | O_APPEND | O_NOCTTY | O_CLOEXEC);
     if (fd_ < 0) {
       const int err = errno;

@@ -294,11 +294,12 @@ TEST(OutputRuleTest, ADescriptorLinkIsWrittenThroughTheDescriptor) {
   struct stat before {};
   ASSERT_EQ(::stat(file.c_str(), &before), 0);
   WriteFileAtomic("/dev/fd/" + std::to_string(fd), "exported\n");
+  ASSERT_EQ(::write(fd, "after\n", 6), 6);  // at the descriptor's offset, after the export
   ::close(fd);
   struct stat after {};
   ASSERT_EQ(::stat(file.c_str(), &after), 0);
   EXPECT_EQ(before.st_ino, after.st_ino);
-  EXPECT_EQ(testing::ReadTextFile(file), "printed\nexported\n");
+  EXPECT_EQ(testing::ReadTextFile(file), "printed\nexported\nafter\n");
 }
 
 TEST(OutputRuleTest, ANamedTemporaryIsNeverTruncated) {

@@ -56,6 +56,9 @@ struct OutputTarget {
   std::string file;  // what is written: `path` with symbolic links followed
   Mode mode = Mode::kReplace;
   std::string kind;  // "a device", "a FIFO (named pipe)"...; "" for a regular file or nothing
+  // One of this process's descriptors (/dev/stdout, /proc/self/fd/N): written through a
+  // duplicate of it, so the bytes land at its offset, between what the process prints.
+  int descriptor = -1;
 };
 OutputTarget ResolveOutput(const std::string& path);
 
