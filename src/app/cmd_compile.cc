@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
@@ -61,13 +62,18 @@ int Compile(const CompileArgs& args) {
     if (!world::IsSceneFile(args.file)) own = world::BuildModel(args.file);
     const world::CompiledScene& out = world::IsSceneFile(args.file) ? checked : own;
     GracefulScope finish_writing;  // a signal now waits until the files are in place
+    // Both or neither: each is staged next to its target, then both are put in place.
+    StagedOutputs outputs;
     if (!args.save_xml.empty()) {
-      mjcf::WriteFile(out.doc, args.save_xml);  // asset paths relative to the output folder
-      spdlog::info("saved {}", args.save_xml);
+      mjcf::WriteOptions o;  // asset paths relative to the output folder
+      o.relative_to =
+          std::filesystem::absolute(args.save_xml).parent_path().lexically_normal().string();
+      outputs.Add(args.save_xml, mjcf::WriteString(out.doc, o));
     }
-    if (!args.save_mjb.empty()) {
-      WriteFileAtomic(args.save_mjb, world::MjbBytes(out.model.get()));
-      spdlog::info("saved {}", args.save_mjb);
+    if (!args.save_mjb.empty()) outputs.Add(args.save_mjb, world::MjbBytes(out.model.get()));
+    outputs.Commit();
+    for (const std::string& saved : {args.save_xml, args.save_mjb}) {
+      if (!saved.empty()) spdlog::info("saved {}", saved);
     }
   }
   const auto sizes = ModelSizes(checked.model.get());
@@ -134,15 +140,20 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
       "Build a model (MJCF) or scene (YAML) exactly as `urlab run` does (a single MJCF file is "
       "composed as a scene of one articulation named after the file), with every check `urlab "
       "validate` runs, compile it with MuJoCo from an in-memory virtual file system and print "
-      "the compiled model's sizes. Outputs are written atomically and never over an input file.");
+      "the compiled model's sizes. Outputs are written atomically, both or neither, and never over "
+      "an "
+      "input file; a device or FIFO (/dev/stdout) is written in place, a symlink through the "
+      "link.");
   static CompileArgs args;
   cmd->add_option("FILE", args.file, "MJCF model file (.xml) or scene file (.yaml)")->required();
   cmd->add_flag("--json", args.json, "print the sizes as one JSON object");
   cmd->add_option("--save-xml", args.save_xml,
                   "also save the exported MJCF (a single model keeps its own names, a scene is "
-                  "saved as composed; asset paths relative to its folder; loadable on its own)");
+                  "saved as composed; asset paths relative to its folder; loadable on its own)")
+      ->check(OutputPath());
   cmd->add_option("--save-mjb", args.save_mjb,
-                  "also save the compiled model as MuJoCo binary (same model as --save-xml)");
+                  "also save the compiled model as MuJoCo binary (same model as --save-xml)")
+      ->check(OutputPath());
   cmd->callback([&exit_code] { exit_code = Compile(args); });
 
   CLI::App* val = app.add_subcommand(

@@ -14,6 +14,7 @@
 #include "app/commands.h"
 #include "app/signals.h"
 #include "urlab/convert/prop.h"
+#include "urlab/core/files.h"
 #include "urlab/document/element.h"
 #include "urlab/mjcf/writer.h"
 #include "urlab/physics/model.h"
@@ -61,6 +62,11 @@ int Convert(const ConvertArgs& args) {
     }
   };
   CheckOutputs({{args.out, "-o"}}, {spec.mesh});
+  if (const OutputTarget t = ResolveOutput(args.out); t.mode == OutputTarget::Mode::kInPlace) {
+    throw InputError({args.out, 0}, "-o is " + t.kind +
+                                        "; convert writes a model file with its parts in a "
+                                        "folder beside it, so -o must name a regular file");
+  }
   const fs::path out = fs::absolute(args.out);
   const std::string parts_dir = (out.parent_path() / (out.stem().string() + "_parts")).string();
   std::string cache = args.cache_dir.empty() ? convert::DefaultCacheDir() : args.cache_dir;
@@ -109,7 +115,7 @@ void RegisterConvertCommand(CLI::App& app, int& exit_code) {
       "Convex-decompose a mesh (STL, OBJ, PLY, glTF/GLB, FBX, DAE...) into a stand-alone MJCF "
       "model: visual mesh in group 2, convex parts (OUT_parts/partN.stl) in group 3.");
   cmd->add_option("mesh", args->mesh, "mesh file")->required();
-  cmd->add_option("-o,--output", args->out, "MJCF file to write")->required();
+  cmd->add_option("-o,--output", args->out, "MJCF file to write")->required()->check(OutputPath());
   cmd->add_option("--threshold", args->threshold,
                   "concavity limit as a fraction of the bounding-box diagonal (default 0.05)")
       ->check(CLI::Range(1e-4, 1.0));

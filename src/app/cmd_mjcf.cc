@@ -23,7 +23,11 @@ void RegisterMjcfCommands(CLI::App& app, int& exit_code) {
   static std::string in, out;
   static bool absolute = false;
   rt->add_option("IN", in, "MJCF file to read")->required();
-  rt->add_option("-o,--output", out, "MJCF file to write")->required();
+  rt->add_option("-o,--output", out,
+                 "MJCF file to write (a device or FIFO such as /dev/stdout is written in place, "
+                 "a symlink through the link)")
+      ->required()
+      ->check(OutputPath());
   rt->add_flag("--absolute-paths", absolute, "write absolute asset paths");
   rt->callback([&exit_code] {
     CurrentInput() = in;

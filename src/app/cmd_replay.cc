@@ -415,11 +415,14 @@ void RegisterReplayCommand(CLI::App& app, int& exit_code) {
   CLI::Option* info = cmd->add_flag("--info", args.info, "describe the file and check every chunk");
   CLI::Option* csv = cmd->add_option("--export-csv", args.export_csv,
                                      "write time, qpos and qvel per step as CSV (columns by "
-                                     "joint name, name[i] for multi-value joints)");
+                                     "joint name, name[i] for multi-value joints; /dev/stdout "
+                                     "writes to standard output)");
+  csv->check(OutputPath());
   CLI::Option* npz =
       cmd->add_option("--export-npz", args.export_npz,
                       "write time, qpos, qvel, ctrl and the applied command targets (rows x "
                       "targets, groups as --info lists them) as a NumPy .npz");
+  npz->check(OutputPath());
   CLI::Option* segment = cmd->add_option(
       "--segment", args.segment,
       "export this segment (1, 2, ...) of a recording whose time goes back at resets; --info "

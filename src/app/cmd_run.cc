@@ -9,9 +9,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <optional>
 #include <thread>
+#include <vector>
 
 #include "app/commands.h"
 #include "app/signals.h"
@@ -54,6 +56,14 @@ struct RunArgs {
   bool view = false;
   viewer::ViewerOptions viewer;
 };
+
+// What is at an output whose writer failed, for the message.
+std::string WhatIsThere(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return "nothing was kept at " + path;
+  return fmt::format("{} holds the {} bytes written (it may not play)", path,
+                     std::filesystem::file_size(path, ec));
+}
 
 // "message" plus MuJoCo's hint on a second line when the hint table has one.
 std::string WithHint(const std::string& message) {
@@ -113,10 +123,12 @@ int Run(const RunArgs& args) {
     if (args.view) network->SetPlayback(playback);  // the step server's replays on the timeline
     manager.AddSubsystem(std::move(network));
   }
+  viewer::ViewerSubsystem* viewer_sub = nullptr;
   if (args.view) {
     auto view = std::make_unique<viewer::ViewerSubsystem>(args.viewer);
     view->SetManager(&manager);
     view->SetPlayback(playback);
+    viewer_sub = view.get();
     manager.AddSubsystem(std::move(view));
   }
   manager.BeginPlay(scene);
@@ -189,6 +201,11 @@ int Run(const RunArgs& args) {
     }
     if (args.duration > 0 && now - start >= std::chrono::duration<double>(args.duration)) break;
     if (manager.StopRequested()) break;  // the window closed, the screenshot was taken
+    // The recording this command exists for failed (disk full...): stop, and say so.
+    if (!args.record.empty() && recorder && recorder->recorder() &&
+        recorder->recorder()->status().stopped_because.starts_with("error")) {
+      break;
+    }
     next_frame += kFrame;
     if (next_frame < now) next_frame = now;  // far behind: do not burst
     std::this_thread::sleep_until(next_frame);
@@ -207,10 +224,21 @@ int Run(const RunArgs& args) {
   if (video) video->Poll();
   manager.EndPlay();
   FlushMujocoWarningCounts();
+  // The run's products: each failure is reported with what was kept, and makes the exit code 1.
+  std::vector<std::string> failures;
   if (video) {
     const int status = video->Close();
     std::printf("video: %s frames=%d%s\n", args.video[1].c_str(), video->frames(),
                 status == 0 ? "" : " (ffmpeg failed)");
+    if (status != 0) {
+      failures.push_back(fmt::format("video {}: ffmpeg failed (exit {}) after {} frames; {}",
+                                     args.video[1], status, video->frames(),
+                                     WhatIsThere(args.video[1])));
+    }
+  }
+  if (viewer_sub && !viewer_sub->video_error().empty()) {
+    failures.push_back(fmt::format("video {}: {}; {}", args.viewer.video, viewer_sub->video_error(),
+                                   WhatIsThere(args.viewer.video)));
   }
   if (recorded) {
     std::printf(
@@ -221,9 +249,11 @@ int Run(const RunArgs& args) {
         recorded->frames ? static_cast<double>(recorded->bytes) / recorded->frames : 0.0,
         recorded->frames ? static_cast<double>(recorded->raw_bytes) / recorded->frames : 0.0,
         static_cast<unsigned long long>(recorded->dropped),
-        recorded->stopped_because.starts_with("error")
-            ? (" (" + recorded->stopped_because + ")").c_str()
-            : "");
+        recorded->stopped_because.starts_with("error") ? " (FAILED)" : "");
+    if (recorded->stopped_because.starts_with("error: ")) {
+      failures.push_back("recording " + recorded->path +
+                         " failed: " + recorded->stopped_because.substr(7));
+    }
   }
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();
   const double sim = sim_time;
@@ -241,9 +271,11 @@ int Run(const RunArgs& args) {
     std::cerr << "urlab: error: " << args.scene << ": at t=" << fatal->sim_time
               << " s: " << WithHint(message)
               << "\n  (--reset-on-divergence resets and goes on instead)\n";
-    return 1;
   }
-  return signal ? ExitCodeForSignal(signal) : 0;
+  for (const std::string& f : failures) std::cerr << "urlab: error: " << f << "\n";
+  if (fatal) return 1;
+  if (signal) return ExitCodeForSignal(signal);
+  return failures.empty() ? 0 : 1;
 }
 
 // A number that must be finite and > 0 (CLI::PositiveNumber lets NaN through).
@@ -316,6 +348,7 @@ void AddViewOptions(CLI::App* cmd, RunArgs& args) {
       "--screenshot", v.screenshot,
       "write a PNG of the window showing the first state at --at seconds of simulation time "
       "(the simulation waits for the shot), then stop (exit 0)");
+  shot->check(OutputPath());
   cmd->add_option("--at", v.screenshot_at, "simulation time of --screenshot (default 0)")
       ->check(CLI::NonNegativeNumber)
       ->needs(shot);
@@ -325,7 +358,8 @@ void AddViewOptions(CLI::App* cmd, RunArgs& args) {
                   "record the window to a video file (.mp4 or .webm; ffmpeg), frame-exact: frame k "
                   "shows the simulation k/fps simulated seconds after the start (the simulation "
                   "waits for frames the renderer is late with, so a slow renderer makes the run "
-                  "slower, not the video shorter)");
+                  "slower, not the video shorter); if ffmpeg fails the command exits 1")
+      ->check(OutputPath());
   cmd->add_option("--video-fps", v.video_fps, "frames per second of --video (default 30)")
       ->check(CLI::Range(1, 240));
   cmd->add_flag("!--no-panel", v.panel, "no simulate panel");
@@ -351,16 +385,22 @@ void RegisterRecordCommand(CLI::App& app, int& exit_code) {
       "qvel, act, ctrl, mocap poses, applied forces (one-shot included), optionally sensordata; "
       "the state at every reset, restore or state write; keyframes for seeking. The file is "
       "written as FILE.part (flushed at least once a second, so a crash loses at most about a "
-      "second) and renamed to FILE when the recording ends (--duration, Ctrl-C, SIGTERM). "
-      "`urlab replay` plays, checks and exports it.");
+      "second) and renamed to FILE when the recording ends (--duration, Ctrl-C, SIGTERM). An "
+      "existing FILE.part (a crashed recording) is never overwritten: the command refuses, and "
+      "`urlab replay FILE.part --info` (or --export-csv, or playback) recovers it. A device or "
+      "FIFO (/dev/null, a named pipe) is written in place; a symlink gets the recording through "
+      "the link. If the recording or a --video fails (disk full, ffmpeg), the command exits 1 "
+      "and says what was kept. `urlab replay` plays, checks and exports it.");
   static RunArgs args;
   AddRunOptions(cmd, args);
-  cmd->add_option("-o,--output", args.record, "the recording to write (.urrec)");
+  cmd->add_option("-o,--output", args.record, "the recording to write (.urrec)")
+      ->check(OutputPath());
   cmd->add_option("--video", args.video,
                   "CAM OUT: also (or only) write camera CAM (articulation/camera, an MJCF camera) "
                   "to OUT (.mp4 H.264 or .webm VP9) through ffmpeg, at the camera's rate and size "
-                  "(the scene's cameras: section)")
-      ->expected(2);
+                  "(the scene's cameras: section); if ffmpeg fails the command exits 1")
+      ->expected(2)
+      ->check(OutputPath());
   AddRecordOptions(cmd, args);
   cmd->callback([&exit_code] {
     if (args.record.empty() && args.video.empty()) {
@@ -397,7 +437,8 @@ void RegisterRunCommand(CLI::App& app, int& exit_code) {
   static RunArgs args;
   AddRunOptions(cmd, args);
   cmd->add_option("--record", args.record,
-                  "also record every step to this .urrec file (see `urlab record --help`)");
+                  "also record every step to this .urrec file (see `urlab record --help`)")
+      ->check(OutputPath());
   AddRecordOptions(cmd, args);
   cmd->add_flag("--view", args.view, "open the viewer window (see `urlab view --help`)");
   AddViewOptions(cmd, args);

@@ -7,7 +7,8 @@
 
 namespace CLI {
 class App;
-}
+class Validator;
+}  // namespace CLI
 
 namespace urlab::app {
 
@@ -24,6 +25,10 @@ void RegisterConvertCommand(CLI::App& app, int& exit_code);
 // The file the running command works on: main() names it when an error arrives without a
 // location of its own. Main thread.
 std::string& CurrentInput();
+
+// The check of every option naming an output file: "" is a usage error (it would write nothing
+// and say nothing), not "no output".
+const CLI::Validator& OutputPath();
 
 // Refuses (InputError) an output path that is one of `inputs`; "" outputs are ignored.
 void CheckOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,

@@ -3,6 +3,9 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <new>
@@ -23,6 +26,15 @@ std::string& CurrentInput() {
   return file;
 }
 
+const CLI::Validator& OutputPath() {
+  static const CLI::Validator check(
+      [](std::string& path) -> std::string {
+        return path.empty() ? "an output file name may not be empty" : std::string();
+      },
+      "PATH");
+  return check;
+}
+
 void CheckOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,
                   const std::vector<std::string>& inputs) {
   for (const auto& [path, what] : outputs) {
@@ -41,9 +53,13 @@ int main(int argc, char** argv) {
 
   CLI::App app{"URLab: MuJoCo robotics simulation runtime (scenes, control over ZeroMQ, replay)."};
   app.require_subcommand(1);
+  // Global options (--log-level) are also accepted after the subcommand (every subcommand
+  // inherits this; each falls through to its parents for options it does not know).
+  app.fallthrough();
   app.footer(
-      "Exit codes: 0 success, 1 bad input or a failed run (the message names the file and "
-      "line), 2 internal error, 105-109 bad command line, 128+N stopped by signal N (130 "
+      "Global options may also follow the subcommand. Exit codes: 0 success, 1 bad input or a "
+      "failed run or output (the message names the file and line, or the output and what was "
+      "kept), 2 internal error, 105-109 bad command line, 128+N stopped by signal N (130 "
       "Ctrl-C, 143 SIGTERM, 129 SIGHUP).");
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
@@ -98,6 +114,18 @@ int main(int argc, char** argv) {
     std::cerr << "urlab: error: " << where() << "internal error: " << e.what()
               << " (please report it)\n";
     return 2;
+  }
+  // Results printed on a closed pipe or a full disk are lost: an ordinary error (SIGPIPE is
+  // ignored, so a write to a closed stdout fails here instead of killing the process earlier).
+  std::cout.flush();
+  errno = 0;
+  const bool flush_failed = std::fflush(stdout) != 0;
+  const int err = flush_failed ? errno : 0;
+  if (flush_failed || std::ferror(stdout) || !std::cout) {
+    std::cerr << "urlab: error: cannot write to standard output"
+              << (err ? std::string(": ") + std::strerror(err) : std::string())
+              << "; what it printed is lost (files the command wrote are complete)\n";
+    if (exit_code == 0) exit_code = 1;
   }
   return exit_code;
 }

@@ -50,6 +50,9 @@ void Install(int sig, void (*handler)(int)) {
 }  // namespace
 
 void InstallSignalHandlers() {
+  // A closed pipe (`urlab record ... | head -1`) or a file size limit is a write error to report,
+  // never a silent death in the middle of writing a recording.
+  for (int sig : {SIGPIPE, SIGXFSZ}) Install(sig, SIG_IGN);
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) Install(sig, OnStopSignal);
   Install(SIGUSR1, OnPauseToggle);
 }

@@ -5,11 +5,15 @@
 // Ctrl-C is prompt even during a long MuJoCo compile on the main thread. A command that has
 // something to finish (`run` playing, an output being written) switches to "graceful" mode: the
 // signal is recorded for it to poll and stop cleanly, and a second signal forces the exit.
+// SIGPIPE and SIGXFSZ are ignored for the whole process: a write to a closed pipe or past a file
+// size limit fails with EPIPE or EFBIG like any other write error (a closed stdout or stderr
+// never kills a recording; a product that cannot be written is reported and exits 1).
 // Thread: the setters and getters may be called from any thread; the handlers are
 // async-signal-safe.
 namespace urlab::app {
 
-// Installs the handlers (immediate mode). Main thread, once, before any other thread starts.
+// Installs the handlers (immediate mode) and ignores SIGPIPE and SIGXFSZ. Main thread, once, before
+// any other thread starts.
 void InstallSignalHandlers();
 
 // Immediate (true) or graceful (false) handling of SIGINT/SIGTERM/SIGHUP.

@@ -4,6 +4,7 @@
 #include <cstring>
 #include <filesystem>
 
+#include "urlab/core/files.h"
 #include "urlab/core/mujoco_handlers.h"
 
 namespace urlab::physics {
@@ -57,13 +58,9 @@ DataPtr MakeData(const mjModel* m) {
 
 void SaveMjb(const mjModel* m, const std::string& path) {
   const int size = mj_sizeModel(m);
-  std::vector<unsigned char> buf(static_cast<size_t>(size));
+  std::string buf(static_cast<size_t>(size), '\0');
   mj_saveModel(m, nullptr, buf.data(), size);
-  FILE* f = std::fopen(path.c_str(), "wb");
-  if (!f) throw Error(path + ": cannot open for writing");
-  const bool written = std::fwrite(buf.data(), 1, buf.size(), f) == buf.size();
-  const bool closed = std::fclose(f) == 0;
-  if (!written || !closed) throw Error(path + ": write failed");
+  WriteFileAtomic(path, buf);  // the output rule of urlab/core/files.h
 }
 
 std::string MujocoVersion() {

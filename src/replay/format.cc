@@ -1,10 +1,14 @@
 #include "replay/format.h"
 
+#include <fmt/format.h>
 #include <zlib.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <bit>
 #include <cstring>
+#include <memory>
+#include <new>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -202,7 +206,14 @@ std::string Compress(std::string_view raw, Codec codec, int level) {
   return out;
 }
 
-std::string Decompress(std::string_view stored, Codec codec, std::uint64_t raw_size) {
+std::string Decompress(std::string_view stored, Codec codec, std::uint64_t raw_size,
+                       std::uint64_t max_raw_size) {
+  if (raw_size > max_raw_size) {
+    throw std::runtime_error(fmt::format(
+        "declares {} bytes uncompressed, more than the {} MiB such a chunk can hold (damaged, or "
+        "not written by URLab)",
+        raw_size, max_raw_size >> 20));
+  }
   if (codec == Codec::kStored) {
     if (stored.size() != raw_size) throw std::runtime_error("stored payload size mismatch");
     return std::string(stored);
@@ -211,15 +222,47 @@ std::string Decompress(std::string_view stored, Codec codec, std::uint64_t raw_s
     throw std::runtime_error("unknown compression codec " +
                              std::to_string(static_cast<std::uint32_t>(codec)));
   }
-  if (raw_size > kMaxChunkBytes) throw std::runtime_error("declared size is too large");
   const unsigned long long content = ZSTD_getFrameContentSize(stored.data(), stored.size());
   if (content == ZSTD_CONTENTSIZE_ERROR || content != raw_size) {
     throw std::runtime_error("zstd frame does not declare the chunk's size");
   }
-  std::string out(raw_size, '\0');
-  const std::size_t n = ZSTD_decompress(out.data(), out.size(), stored.data(), stored.size());
-  if (ZSTD_isError(n)) throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(n));
-  if (n != raw_size) throw std::runtime_error("zstd payload is shorter than declared");
+  std::unique_ptr<ZSTD_DCtx, decltype(&ZSTD_freeDCtx)> ctx(ZSTD_createDCtx(), &ZSTD_freeDCtx);
+  if (!ctx) throw std::bad_alloc();
+  // Grown as zstd produces bytes: a false declaration costs nothing, a real one what it holds.
+  std::string out(static_cast<std::size_t>(std::min<std::uint64_t>(
+                      raw_size, std::max<std::uint64_t>(8 * stored.size(), 1u << 20))),
+                  '\0');
+  ZSTD_inBuffer in{stored.data(), stored.size(), 0};
+  std::size_t produced = 0;
+  while (true) {
+    if (produced == out.size()) {
+      if (out.size() == raw_size) {
+        // All declared bytes are out; the frame must end without producing more.
+        char extra = 0;
+        ZSTD_outBuffer probe{&extra, 1, 0};
+        const std::size_t r = ZSTD_decompressStream(ctx.get(), &probe, &in);
+        if (ZSTD_isError(r)) {
+          throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(r));
+        }
+        if (probe.pos > 0) throw std::runtime_error("zstd payload is longer than declared");
+        if (r == 0) break;
+        if (in.pos == in.size) throw std::runtime_error("zstd payload is truncated");
+        continue;
+      }
+      out.resize(static_cast<std::size_t>(std::min<std::uint64_t>(raw_size, 2 * out.size())));
+    }
+    ZSTD_outBuffer ob{out.data(), out.size(), produced};
+    const std::size_t r = ZSTD_decompressStream(ctx.get(), &ob, &in);
+    if (ZSTD_isError(r)) throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(r));
+    const bool progressed = ob.pos > produced;
+    produced = ob.pos;
+    if (r == 0) break;  // the frame is complete
+    if (!progressed && in.pos == in.size && produced < out.size()) {
+      throw std::runtime_error("zstd payload is truncated");
+    }
+  }
+  if (produced != raw_size) throw std::runtime_error("zstd payload is shorter than declared");
+  if (in.pos != in.size) throw std::runtime_error("bytes after the zstd frame");
   return out;
 }
 

@@ -21,6 +21,14 @@ inline constexpr std::size_t kChunkCrcBytes = 72;  // the header bytes the CRC c
 // A chunk payload larger than this is damage, not data (a recorder flushes far smaller ones;
 // the header chunk holds the model, which may be large).
 inline constexpr std::uint64_t kMaxChunkBytes = 1ull << 31;
+// The most a chunk may declare uncompressed, checked before anything is allocated (a small file
+// can declare gigabytes, and a zstd frame can expand 30000-fold). A data chunk: the recorder
+// closes a chunk once its records pass kDataChunkFlushBytes (normally at a keyframe, long before),
+// so one record more than that is the most it writes. The header chunk: the tables, the model's
+// MJCF text and its MJB, which carries the meshes and height fields.
+inline constexpr std::uint64_t kDataChunkFlushBytes = 32ull << 20;
+inline constexpr std::uint64_t kMaxDataChunkRawBytes = 64ull << 20;
+inline constexpr std::uint64_t kMaxHeaderChunkRawBytes = 512ull << 20;
 
 enum class ChunkKind : std::uint32_t { kHeader = 1, kData = 2, kEnd = 3 };
 enum class Codec : std::uint32_t { kStored = 0, kZstd = 1 };
@@ -51,8 +59,11 @@ std::uint32_t ChunkCrc(std::span<const std::uint8_t> header_bytes, std::string_v
 
 // zstd at `level`, or the bytes themselves for kStored.
 std::string Compress(std::string_view raw, Codec codec, int level = 3);
-// Throws std::runtime_error with zstd's reason when the bytes do not decompress to `raw_size`.
-std::string Decompress(std::string_view stored, Codec codec, std::uint64_t raw_size);
+// Throws std::runtime_error with zstd's reason when the bytes do not decompress to `raw_size`, and
+// before allocating anything when `raw_size` is larger than `max_raw_size`. Memory grows with the
+// bytes zstd actually produces, never to a declared size ahead of them.
+std::string Decompress(std::string_view stored, Codec codec, std::uint64_t raw_size,
+                       std::uint64_t max_raw_size);
 
 // The start of every recording file: the file header, then chunk 0 holding EncodeInfo(info).
 std::string EncodeFileStart(const RecordingInfo& info, Codec codec, int level = 3);

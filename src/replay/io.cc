@@ -6,13 +6,10 @@
 
 #include <cerrno>
 #include <cstring>
-#include <filesystem>
 
 #include "urlab/replay/recording.h"
 
 namespace urlab::replay {
-
-namespace fs = std::filesystem;
 
 InputFile::InputFile(const std::string& path) : path_(path) {
   fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -52,42 +49,23 @@ std::string InputFile::Read(std::uint64_t offset, std::uint64_t n) const {
 }
 
 PartFile::PartFile(std::string path) : path_(std::move(path)) {
-  const fs::path parent = fs::path(path_).parent_path();
-  std::error_code ec;
-  if (!parent.empty()) fs::create_directories(parent, ec);
-  fd_ = ::open(part_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd_ < 0) throw Error(path_ + ": cannot write: " + std::strerror(errno));
+  OutputFile::Options o;
+  o.temporary_suffix = ".part";
+  o.existing_temporary_hint =
+      "an unfinished recording (a crash or a kill?), which this would destroy. Recover it with "
+      "`urlab replay " +
+      path_ +
+      ".part --info` (replay and its exports read it up to its last readable chunk), then move "
+      "or delete it, or record to another file";
+  out_ = std::make_unique<OutputFile>(path_, std::move(o));
 }
 
-PartFile::~PartFile() {
-  if (fd_ >= 0) ::close(fd_);
-}
+PartFile::~PartFile() = default;
 
-void PartFile::Discard() {
-  if (fd_ >= 0) ::close(fd_);
-  fd_ = -1;
-  if (!finished_) ::unlink(part_path().c_str());
-}
+void PartFile::Discard() { out_->Discard(); }
 
-void PartFile::Append(std::string_view bytes) {
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) throw Error(part_path() + ": write failed: " + std::strerror(errno));
-    done += static_cast<std::size_t>(n);
-  }
-  bytes_ += bytes.size();
-}
+void PartFile::Append(std::string_view bytes) { out_->Write(bytes); }
 
-void PartFile::Finish() {
-  if (::fsync(fd_) != 0) throw Error(part_path() + ": fsync failed: " + std::strerror(errno));
-  ::close(fd_);
-  fd_ = -1;
-  if (::rename(part_path().c_str(), path_.c_str()) != 0) {
-    throw Error(path_ + ": rename from .part failed: " + std::strerror(errno));
-  }
-  finished_ = true;
-}
+void PartFile::Finish() { out_->Commit(); }
 
 }  // namespace urlab::replay

@@ -99,8 +99,10 @@ struct Recorder::Impl {
   std::atomic<bool> stop_requested{false};
   RecorderOptions options;
   bool temporary = false;
+  bool in_place = false;  // the recording goes straight to a device or FIFO
   std::string last_path;  // the last finished recording
   bool last_temporary = false;
+  bool last_in_place = false;  // it went to a device or FIFO: nothing to copy
 
   // Shared with the writer thread.
   mutable std::mutex status_mutex;
@@ -203,6 +205,7 @@ void Recorder::Start(RecorderOptions options) {
   try {
     std::lock_guard<std::mutex> lock(s.file_mutex);
     s.file = std::make_unique<PartFile>(options.path);
+    s.in_place = s.file->in_place();
     s.file->Append(header);
   } catch (const Error& e) {
     s.file.reset();
@@ -245,6 +248,7 @@ RecorderStatus Recorder::Stop() {
   RecorderStatus st = status();
   s.last_path = st.path;
   s.last_temporary = s.temporary;
+  s.last_in_place = s.in_place;
   return st;
 }
 
@@ -272,6 +276,10 @@ std::string Recorder::Impl::FileBytesLocked() {
     }
     return out + EndChunk(n);
   }
+  if (file->in_place()) {
+    throw Error(options.path + " is " + file->part_path() +
+                ", written in place: the recording cannot be read back to save a copy");
+  }
   InputFile in(file->part_path());
   return in.Read(0, file->bytes()) + EndChunk(next_chunk);
 }
@@ -283,6 +291,14 @@ std::string Recorder::Save(const std::string& path) {
   try {
     std::unique_lock<std::mutex> lock(s.file_mutex);
     if (s.file) {
+      // Never over the file this recorder is writing (its .part, or where it will be renamed).
+      const std::string target = ResolveOutput(path).file;
+      if (target == ResolveOutput(s.options.path).file ||
+          target == ResolveOutput(s.file->part_path()).file) {
+        throw RecorderError("bad_value", path +
+                                             " is the recording being written; save the copy to "
+                                             "another file");
+      }
       const std::string bytes = s.FileBytesLocked();
       lock.unlock();
       WriteFileAtomic(path, bytes);
@@ -292,7 +308,13 @@ std::string Recorder::Save(const std::string& path) {
     if (s.last_path.empty()) {
       throw RecorderError("recording_not_active", "nothing recorded to save");
     }
-    if (fs::exists(path) && fs::equivalent(path, s.last_path)) return path;
+    if (s.last_in_place) {
+      throw RecorderError("recording_not_active",
+                          "the last recording went straight to " + s.last_path +
+                              " (a device or FIFO): there is no file to save a copy of");
+    }
+    std::error_code ec;
+    if (fs::exists(path) && fs::equivalent(path, s.last_path, ec)) return path;
     InputFile in(s.last_path);
     WriteFileAtomic(path, in.Read(0, in.size()));
     return path;
@@ -506,6 +528,9 @@ void Recorder::Impl::Run() {
            enc.bytes().size() > (8u << 20))) {
         request_keyframe();
       }
+      // Never a chunk larger than a reader accepts (a flood of state writes while a keyframe is
+      // pending): close it now, without a keyframe at its start.
+      if (enc.bytes().size() >= format::kDataChunkFlushBytes) flush();
       if ((frames & 255) == 0) publish_status();
       if (options.max_duration > 0 && duration >= options.max_duration) {
         stopped_because = "max_duration";
@@ -540,11 +565,19 @@ void Recorder::Impl::Run() {
   } catch (const std::exception& e) {
     ring->SetActive(false);
     recording.store(false, std::memory_order_release);
-    spdlog::error("recorder: {} (the chunks written so far stay in {}.part)", e.what(),
-                  options.path);
-    std::lock_guard<std::mutex> lock(status_mutex);
-    status.stopped_because = std::string("error: ") + e.what();
     std::lock_guard<std::mutex> fl(file_mutex);
+    const std::string kept =
+        !file               ? std::string("nothing was kept")
+        : file->in_place()  ? fmt::format("{} bytes went to {}", file->bytes(), file->part_path())
+        : file->bytes() > 0 ? fmt::format(
+                                  "the {} bytes written so far are kept in {} (urlab replay "
+                                  "reads it up to its last whole chunk)",
+                                  file->bytes(), file->part_path())
+                            : "nothing was kept";
+    if (file && !file->in_place() && file->bytes() == 0) file->Discard();
+    spdlog::error("recorder: {}; {}", e.what(), kept);
+    std::lock_guard<std::mutex> lock(status_mutex);
+    status.stopped_because = std::string("error: ") + e.what() + "; " + kept;
     file.reset();
   }
   // Frames left in the ring belong to no recording.

@@ -118,7 +118,8 @@ RecordingReader RecordingReader::Open(const std::string& path, Options options) 
         throw RecordingError(Reason::kCorrupt, path, name + " (header): checksum mismatch");
       }
       try {
-        r.info_ = format::DecodeInfo(format::Decompress(stored, h.codec, h.raw_size));
+        r.info_ = format::DecodeInfo(
+            format::Decompress(stored, h.codec, h.raw_size, format::kMaxHeaderChunkRawBytes));
       } catch (const std::exception& e) {
         throw RecordingError(Reason::kCorrupt, path, name + " (header): " + e.what());
       }
@@ -135,6 +136,13 @@ RecordingReader RecordingReader::Open(const std::string& path, Options options) 
       }
       break;
     } else if (h.kind == format::ChunkKind::kData) {
+      if (h.raw_size > format::kMaxDataChunkRawBytes) {
+        stop(Reason::kCorrupt,
+             fmt::format("{}: declares {} bytes uncompressed, more than the {} MiB a data chunk "
+                         "can hold (damaged, or not written by URLab)",
+                         name, h.raw_size, format::kMaxDataChunkRawBytes >> 20));
+        break;
+      }
       ChunkInfo c;
       c.number = h.number;
       c.offset = offset;
@@ -202,8 +210,9 @@ std::vector<Record> RecordingReader::ReadChunk(std::size_t index) const {
                              "it are readable)");
   }
   try {
-    return format::DecodeChunk(format::Decompress(stored, h.codec, h.raw_size), info_.tables,
-                               info_.sensordata);
+    return format::DecodeChunk(
+        format::Decompress(stored, h.codec, h.raw_size, format::kMaxDataChunkRawBytes),
+        info_.tables, info_.sensordata);
   } catch (const std::exception& e) {
     throw RecordingError(Reason::kCorrupt, path_, name + ": " + e.what());
   }

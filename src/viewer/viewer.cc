@@ -23,7 +23,12 @@ void ViewerSubsystem::Tick(world::Session& /*session*/, world::TickPhase phase) 
   if (phase == world::TickPhase::kPresent) core_->Present();
 }
 
-void ViewerSubsystem::EndPlay(world::Session& /*session*/) { core_.reset(); }
+void ViewerSubsystem::EndPlay(world::Session& /*session*/) {
+  if (!core_) return;
+  core_->End();
+  video_error_ = core_->video_error();
+  core_.reset();
+}
 
 std::vector<world::StatusLine> ViewerSubsystem::Status() const {
   if (!core_) return {};

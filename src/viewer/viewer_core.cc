@@ -128,7 +128,9 @@ void ViewerCore::End() {
     if (status == 0) {
       spdlog::info("viewer: video {} ({} frames)", video_->path(), frames);
     } else {
-      spdlog::error("viewer: ffmpeg failed (exit {}) writing {}", status, video_->path());
+      video_error_ = fmt::format("ffmpeg failed (exit {}) writing {} after {} frames", status,
+                                 video_->path(), frames);
+      spdlog::error("viewer: {}", video_error_);
     }
     video_.reset();
   }

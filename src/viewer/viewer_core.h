@@ -84,6 +84,8 @@ class ViewerCore : public InputHandler {
   const world::Manager* manager() const { return manager_; }
   // Frames drawn, and the frame rate over the last second.
   std::uint64_t frames_drawn() const { return frames_drawn_; }
+  // After End: why the video is not complete (ffmpeg failed), "" when it is or there is none.
+  const std::string& video_error() const { return video_error_; }
   double fps() const { return fps_; }
   // The articulation the panel shows (index into session().articulations()).
   int selected_articulation() const { return selected_articulation_; }
@@ -140,6 +142,7 @@ class ViewerCore : public InputHandler {
   std::shared_ptr<replay::PlaybackSlot> playback_;  // replay mode (null: never)
   Timeline timeline_;
   std::unique_ptr<render::VideoWriter> video_;
+  std::string video_error_;
   // Holds the physics thread for each video frame and the screenshot (null without either).
   std::shared_ptr<FrameGate> gate_;
   physics::PhysicsEngine::CallbackId gate_id_ = 0;

@@ -435,5 +435,44 @@ TEST_F(RecorderTest, RefusesWhatItCannotDo) {
   engine.Stop();
 }
 
+TEST_F(RecorderTest, NeverDestroysACrashedRecordingOrItsOwnFile) {
+  PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
+  Recorder recorder(engine, {{"arm"}, "<mujoco/>", "arm.xml"}, kDeepRing);
+  const std::string path = dir_ + "/run.urrec";
+  std::ofstream(path + ".part") << "a crashed recording";
+  RecorderOptions o;
+  o.path = path;
+  try {
+    recorder.Start(o);
+    FAIL() << "started over an existing .part";
+  } catch (const RecorderError& e) {
+    EXPECT_EQ(e.code(), "path_not_writable");
+    EXPECT_NE(std::string(e.what()).find("urlab replay " + path + ".part --info"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(urlab::testing::ReadTextFile(path + ".part"), "a crashed recording");
+  fs::remove(path + ".part");
+  engine.SetAsFastAsPossible(true);
+  engine.Start();
+  recorder.Start(o);
+  WaitFor([&] { return recorder.status().frames > 100; }, 60000ms);
+  // A copy may not be saved over the recording being written, under any of its names.
+  fs::create_symlink(path + ".part", dir_ + "/link.urrec");
+  for (const std::string& self : {path, path + ".part", dir_ + "/link.urrec"}) {
+    try {
+      recorder.Save(self);
+      ADD_FAILURE() << "saved over " << self;
+    } catch (const RecorderError& e) {
+      EXPECT_NE(std::string(e.what()).find("is the recording being written"), std::string::npos);
+    }
+  }
+  EXPECT_NO_THROW(recorder.Save(dir_ + "/copy.urrec"));
+  recorder.Stop();
+  engine.Stop();
+  EXPECT_TRUE(RecordingReader::Open(path).finished());
+  EXPECT_TRUE(RecordingReader::Open(dir_ + "/copy.urrec").finished());
+}
+
 }  // namespace
 }  // namespace urlab::replay

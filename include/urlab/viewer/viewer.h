@@ -71,6 +71,10 @@ class ViewerSubsystem : public world::Subsystem {
   // The window was closed, or the screenshot was taken.
   bool RequestsStop() const override;
 
+  // After EndPlay: why the --video file is not complete ("" when it is, or there is none), for the
+  // command's exit code. Main thread.
+  const std::string& video_error() const { return video_error_; }
+
   // The manager whose other subsystems the panel shows (their Status) and drives (the recorder).
   // Main thread, before BeginPlay; optional.
   void SetManager(const world::Manager* manager) { manager_ = manager; }
@@ -89,6 +93,7 @@ class ViewerSubsystem : public world::Subsystem {
   const world::Manager* manager_ = nullptr;
   std::shared_ptr<replay::PlaybackSlot> playback_;
   std::unique_ptr<internal::ViewerCore> core_;
+  std::string video_error_;
 };
 
 }  // namespace urlab::viewer
