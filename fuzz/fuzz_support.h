@@ -3,6 +3,7 @@
 // logs, MuJoCo's handlers, and a small real scene (an arm with PD control) built into a Session.
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -70,6 +71,15 @@ inline const std::string& TempDir() {
 
 inline void WriteText(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary | std::ios::trunc) << text;
+}
+
+// tools/fuzz.sh asks a target for its largest input by running it with URLAB_FUZZ_PRINT_MAX_LEN=1
+// (from LLVMFuzzerInitialize, before any set-up): it prints `max_len`, the limit of the decoder
+// it feeds, and exits, so -max_len follows the decoder's own constant.
+inline void AnswerMaxLenQuery(std::size_t max_len) {
+  if (!std::getenv("URLAB_FUZZ_PRINT_MAX_LEN")) return;
+  std::printf("%zu\n", max_len);
+  std::exit(0);
 }
 
 // Logs off (a fuzzer prints its own progress), MuJoCo errors as exceptions.

@@ -4,9 +4,9 @@
 // does (a command-frame patch, PD gains), then one physics step consumes them.
 //
 // Input: the first byte picks the message kind (even: control, odd: set_gains); the rest is the
-// payload. Invariants checked beyond "no crash": an accepted control message is exactly
-// 4 + 8 n bytes of finite values and re-encodes to the same bytes; an accepted set_gains has
-// only finite gains >= 0.
+// payload, up to wire::kMaxInboundPayloadBytes (tools/fuzz.sh's -max_len, asked from this target).
+// Invariants checked beyond "no crash": an accepted control message is exactly 4 + 8 n bytes of
+// finite values and re-encodes to the same bytes; an accepted set_gains has only finite gains >= 0.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -100,6 +100,7 @@ void SetGains(ArticulationTopics& t, urlab::control::PdController* pd, std::stri
 
 // The fixture is built before the first input (its allocations are not the input's).
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  urlab::fuzz::AnswerMaxLenQuery(1 + wire::kMaxInboundPayloadBytes);  // the kind byte, a payload
   (void)F();
   return 0;
 }

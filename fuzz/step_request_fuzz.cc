@@ -1,21 +1,25 @@
 // libFuzzer target for the step server's request path (src/net/step_server.h): a StepServer over
 // a real world::Session (the arm of fuzz_support.h, engine not started: commands run on this
 // thread), bound to an inproc:// ROUTER endpoint, answers each input sent as one request from a
-// DEALER socket. msgpack or JSON as the server detects it (JSON when the first byte is '{', ' '
-// or '\n'). Every request must get exactly one reply, in the request's encoding, that is a map
-// whose "op" is "error" (with string "code" and "message") or ends in "_ok"; never a crash.
+// DEALER socket; inputs up to the server's request limit (kMaxRequestBytes, tools/fuzz.sh's
+// -max_len, asked from this target). msgpack or JSON as the server detects it (JSON when the first
+// byte is '{', ' ' or '\n'). Every request must get exactly one reply, in the request's encoding,
+// that is a map whose "op" is "error" (with string "code" and "message") or ends in "_ok"; never a
+// crash.
 //
 // Before each input the harness says hello itself, and every occurrence of the 20-byte
 // placeholder "@@@@@@@@@@@@@@@@@@@@" in the input becomes that session id (also 20 bytes, so a
 // msgpack string keeps its length), so that inputs reach the operations that need a session
-// and the driver lease. Between inputs the state, the options and the pause are reset and the
-// the harness ends every session and sets live mode again (clients, lease and mode start afresh;
-// one server and one client serve the whole run). URLAB_FUZZ_VERBOSE=1 prints each reply (to read
+// and the driver lease. Between inputs the state, the options and the pause are reset, the files
+// folder (a private temporary one) is emptied, and the harness ends every session and sets live
+// mode again (clients, lease and mode start afresh; one server and one client serve the whole
+// run). URLAB_FUZZ_VERBOSE=1 prints each reply (to read
 // what a reproducer got).
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -29,6 +33,7 @@
 #include "net/topic_table.h"
 #include "urlab/core/error.h"
 #include "urlab/physics/commands.h"
+#include "wire/request_limits.h"
 
 namespace {
 
@@ -50,6 +55,7 @@ struct Fixture {
   Fixture() {
     urlab::net::StepServerOptions o;
     o.endpoint = "inproc://urlab-fuzz-step";
+    o.files_dir = urlab::fuzz::TempDir() + "/files";  // file operations write only there
     server = std::make_unique<urlab::net::StepServer>(*session, tables, state, o);
     if (server->Bind(context).empty()) __builtin_trap();
     client.emplace(context, zmq::socket_type::dealer);
@@ -121,6 +127,7 @@ Json Decode(const std::string& frame, bool json) {
 
 // The fixture is built before the first input (its allocations are not the input's).
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  urlab::fuzz::AnswerMaxLenQuery(urlab::wire::kMaxRequestBytes);  // the server's request limit
   (void)F();
   return 0;
 }
@@ -137,6 +144,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                                                       "fuzz: options as built"});
   (void)engine.Submit(urlab::physics::cmd::SetPaused{false});
   (void)f.session->ResetToInitialState();
+  // No file from an earlier input (file operations answer by what exists: file_exists).
+  std::error_code ec;
+  std::filesystem::remove_all(urlab::fuzz::TempDir() + "/files", ec);
 
   const std::vector<std::string> hello = Exchange(server, client, Bytes({{"op", "hello"}}));
   CheckReply(hello, false);

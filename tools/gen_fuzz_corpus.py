@@ -119,6 +119,7 @@ def net_control():
                   {"elbow": {"damping": 1}}]:
         put(d, b"\x01" + json.dumps(gains).encode())
     put(d, b"\x01[1, 2, 3]")
+    put(d, b"\x01" + b"{\"elbow\": " * 3 + b"1" + b"}" * 3)  # deeper than set_gains' 2
     put(d, b"\x01{\"elbow\": {\"kp\": 1e999}}")
 
 
@@ -162,6 +163,18 @@ REQUESTS = [
      "angular": [0, 0, 0.5]},
     {"op": "configure_controller", "session_id": SID, "articulation": "arm",
      "params": {"kp": 10, "gains": {"elbow": {"kv": 2}}}},
+    {"op": "snapshot_save", "session_id": SID, "path": "state.urrec"},
+    {"op": "snapshot_save", "session_id": SID, "path": "state.urrec", "overwrite": True},
+    {"op": "snapshot_save", "session_id": SID, "path": "../arm.xml"},
+    {"op": "snapshot_load", "session_id": SID, "path": "state.urrec"},
+    {"op": "recording_start", "session_id": SID, "path": "run.urrec"},
+    {"op": "recording_save", "session_id": SID, "path": "copy.urrec", "overwrite": True},
+    {"op": "replay_load", "session_id": SID, "path": "run.urrec.part"},
+    {"op": "replay_unload", "session_id": SID},
+    {"op": "cancel", "session_id": SID},
+    {"op": "set_sim_options", "session_id": SID,
+     "options": {"impratio": -1, "tolerance": 1e-9, "density": 1.2, "viscosity": 0}},
+    {"op": "set_qpos", "session_id": SID, "articulation": "arm", "qpos": [1e300, 0, 0]},
     {"op": "step", "session_id": "nobody"},
     {"op": "no_such_op", "session_id": SID},
     {"session_id": SID},
@@ -174,6 +187,10 @@ def step_request():
         put(d, msgpack.packb(r, use_bin_type=True))
         put(d, json.dumps(r))
     put(d, msgpack.packb([1, 2, 3]))
+    # Nesting at and beyond the depth limit (32, src/net/request_limits.h) in both encodings.
+    for depth in (31, 40):
+        put(d, '{"op": "meta", "seq": ' + "[" * depth + "1" + "]" * depth + "}")
+        put(d, b"\x82\xa2op\xa4meta\xa3seq" + b"\x91" * depth + b"\x01")
     put(d, b"{not json")
     put(d, b"")
 

@@ -44,6 +44,7 @@ struct RunArgs {
   bool paused = false;
   bool reset_on_divergence = false;
   bool no_network = false;
+  std::string files_dir;  // --files-dir: replaces the scene's network.files_dir
   bool no_cameras = false;
   std::vector<std::string> video;  // --video CAM OUT: a camera's frames to MP4/WebM
   // `urlab record` (and `run --record`): the file to record to, and how.
@@ -81,6 +82,9 @@ int Run(const RunArgs& args) {
   world::Manager manager(options);
   // Loading and compiling: a signal ends the process at once (nothing runs, nothing is written).
   world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
+  if (!args.files_dir.empty()) {
+    scene.network.files_dir = std::filesystem::absolute(args.files_dir).lexically_normal().string();
+  }
   if (!args.video.empty()) {
     CheckOutputs({{args.video[1], "--video"}}, world::SceneInputFiles(scene));
     camera::RequestVideoCamera(scene, args.video[0]);
@@ -308,6 +312,18 @@ const CLI::Validator kInteger(
     },
     "");
 
+// A folder, or a path where one can be made (not an existing file).
+const CLI::Validator kFolderOrAbsent(
+    [](std::string& text) -> std::string {
+      std::error_code ec;
+      if (text.empty()) return "must name a folder";
+      if (std::filesystem::exists(text, ec) && !std::filesystem::is_directory(text, ec)) {
+        return text + " exists and is not a folder";
+      }
+      return {};
+    },
+    "FOLDER");
+
 }  // namespace
 
 namespace {
@@ -333,6 +349,12 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
   cmd->add_flag("--no-network", args.no_network,
                 "no ZeroMQ sockets (by default the streaming topics and the step server of "
                 "protocol.md are served on the scene's endpoints or the defaults 5555-5557, 5559)");
+  cmd->add_option("--files-dir", args.files_dir,
+                  "the folder whose files step-server clients may write and read by name "
+                  "(snapshots, recordings, replays; never a path, never over an existing file "
+                  "without overwrite and the lease, never over the scene's inputs); replaces the "
+                  "scene's network.files_dir (default: recordings/ in the working folder)")
+      ->check(kFolderOrAbsent);
   cmd->add_flag("--reset-on-divergence", args.reset_on_divergence,
                 "reset to the initial state when the simulation diverges or MuJoCo reports an "
                 "error (instead of stopping with exit 1)");

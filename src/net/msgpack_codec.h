@@ -13,12 +13,14 @@
 #include <string>
 #include <string_view>
 
+#include "wire/request_limits.h"
+
 namespace urlab::net {
 
 using Json = nlohmann::ordered_json;
 
-// Nesting deeper than this is refused (a request is a map of maps of arrays at most).
-inline constexpr std::size_t kMaxMsgpackDepth = 32;
+// Nesting deeper than this is refused: the step server's request limit (request_limits.h).
+inline constexpr std::size_t kMaxMsgpackDepth = wire::kMaxRequestDepth;
 
 // Decodes exactly one msgpack value from `data`. On failure returns nothing and says why in
 // *error ("truncated", "trailing bytes", "map keys must be strings", ...). Map keys must be

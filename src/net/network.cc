@@ -18,6 +18,7 @@
 
 #include "core/spin_wait.h"
 #include "net/camera_list.h"
+#include "net/loopback.h"
 #include "net/msgpack_codec.h"
 #include "net/observation.h"
 #include "net/port_owner.h"
@@ -25,6 +26,7 @@
 #include "net/topic_table.h"
 #include "urlab/control/controllers.h"
 #include "urlab/core/doorbell.h"
+#include "urlab/world/scene.h"
 #include "urlab/world/session.h"
 
 namespace urlab::net {
@@ -66,6 +68,8 @@ NetworkOptions NetworkOptionsFromScene(const world::NetworkConfig& config) {
   o.rpc = config.rpc;
   o.step_mode = config.step_mode;
   o.full_state = config.full_state;
+  o.files_dir = config.files_dir;
+  o.max_queued_steps = config.max_queued_steps;
   return o;
 }
 
@@ -142,11 +146,15 @@ struct NetworkSubsystem::Impl {
       return "";
     }
     const std::string bound = s.get(zmq::sockopt::last_endpoint);
-    if (endpoint.find("127.0.0.1") == std::string::npos &&
-        endpoint.find("localhost") == std::string::npos && !endpoint.starts_with("ipc://") &&
-        !endpoint.starts_with("inproc://") && type == zmq::socket_type::sub) {
-      spdlog::warn("network: the {} socket accepts connections from other hosts ({})", what,
-                   endpoint);
+    if (!IsLoopbackEndpoint(endpoint)) {
+      if (type == zmq::socket_type::sub) {
+        spdlog::warn(
+            "network: the {} socket accepts connections from other hosts ({}): anyone who can "
+            "reach it may send controls and gains",
+            what, endpoint);
+      } else {
+        spdlog::info("network: the {} socket publishes to other hosts ({})", what, endpoint);
+      }
     }
     *slot = std::move(s);
     return bound;
@@ -490,6 +498,9 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
     so.endpoint = options_.rpc;
     so.mode = options_.step_mode;
     so.lease_timeout = options_.lease_timeout;
+    so.limits.max_queued_steps = options_.max_queued_steps;
+    if (!options_.files_dir.empty()) so.files_dir = options_.files_dir;
+    so.inputs = world::SceneInputFiles(session.scene_config());
     impl_->server = std::make_unique<StepServer>(
         session, impl_->tables, session.engine().SubscribeState("step_server"), so);
     impl_->server->SetRecorder(recorder_);

@@ -9,12 +9,15 @@
 
 #include "net/base64.h"
 #include "net/camera_list.h"
+#include "net/loopback.h"
 #include "net/model_assets.h"
 #include "net/observation.h"
 #include "net/request_fields.h"
+#include "net/value_ranges.h"
 #include "urlab/control/controller.h"
 #include "urlab/core/version.h"
 #include "urlab/replay/tables.h"
+#include "wire/request_limits.h"
 
 namespace urlab::net {
 
@@ -110,7 +113,7 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
        true,
        {},
        "path, frames, duration, bytes, dropped"},
-      {"recording_save", &StepServer::RecordingSave, true, false, {"path"}, "path"},
+      {"recording_save", &StepServer::RecordingSave, true, false, {"path"}, "path", true},
       {"recording_clear", &StepServer::RecordingClear, true, true, {}, ""},
       {"recording_status",
        &StepServer::RecordingStatus,
@@ -119,7 +122,7 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
        {},
        "active, path, frames, chunks, bytes, raw_bytes, dropped, markers, duration, "
        "stopped_because"},
-      {"snapshot_save", &StepServer::SnapshotSave, true, false, {"path"}, "path, time"},
+      {"snapshot_save", &StepServer::SnapshotSave, true, false, {"path"}, "path, time", true},
       {"snapshot_load", &StepServer::SnapshotLoad, true, true, {"path"}, "path, time"},
       {"replay_load",
        &StepServer::ReplayLoad,
@@ -141,6 +144,8 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
        {},
        "session, mode, speed, loop, frames"},
       {"replay_stop", &StepServer::ReplayStop, true, true, {}, "session"},
+      {"replay_unload", &StepServer::ReplayUnload, true, true, {}, "session"},
+      {"cancel", &StepServer::Cancel, true, true, {}, "cancelled"},
       {"replay_status",
        &StepServer::ReplayStatus,
        true,
@@ -157,7 +162,8 @@ StepServer::StepServer(world::Session& session, const std::vector<ArticulationTo
       tables_(tables),
       state_(std::move(state)),
       options_(std::move(options)),
-      mode_(options_.mode == "direct" ? "direct" : "live") {
+      mode_(options_.mode == "direct" ? "direct" : "live"),
+      files_(options_.files_dir, options_.inputs) {
   // The compiled model for hello, saved once here (main thread, before the physics thread).
   const mjModel* m = session_.engine().model();
   mjb_.resize(static_cast<std::size_t>(mj_sizeModel(m)));
@@ -177,6 +183,12 @@ std::string StepServer::Bind(zmq::context_t& context) {
     return "";
   }
   std::string bound = s.get(zmq::sockopt::last_endpoint);
+  if (!IsLoopbackEndpoint(options_.endpoint)) {
+    spdlog::warn(
+        "step server: {} accepts requests from other hosts (anyone who can reach it may drive "
+        "the simulation and write under {}); bind 127.0.0.1 to keep it local",
+        options_.endpoint, files_.dir());
+  }
   socket_ = std::move(s);
   return bound;
 }
@@ -190,6 +202,9 @@ void StepServer::Close() {
   if (playback_) playback_->Set(nullptr);  // the viewer's timeline lets go first
   shown_.reset();
   player_.reset();  // removes the custom step handler while the engine still runs
+  for (const auto& [example, n] : log_limiter_.TakeSkipped()) {
+    spdlog::info("step server: {} more line(s) like \"{}\" were not logged", n, example);
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -314,16 +329,18 @@ void StepServer::HandleIncoming() {
     r.envelope = std::move(parts);  // identity (and the REQ delimiter) echoed back
     const auto* bytes = static_cast<const std::uint8_t*>(payload.data());
     r.json = payload.size() > 0 && (bytes[0] == '{' || bytes[0] == ' ' || bytes[0] == '\n');
-    if (payload.size() > options_.max_request_bytes) {
+    if (payload.size() > options_.limits.max_request_bytes) {
       SendError(r.envelope, nullptr, r.json, "bad_request",
                 "request of " + std::to_string(payload.size()) + " bytes (limit " +
-                    std::to_string(options_.max_request_bytes) + ")");
+                    std::to_string(options_.limits.max_request_bytes) + ")");
       continue;
     }
     std::string why;
     if (r.json) {
-      r.body = Json::parse(bytes, bytes + payload.size(), nullptr, false);
-      if (r.body.is_discarded()) why = "not valid JSON";
+      if (std::optional<Json> body = wire::DecodeJsonRequest(
+              std::string_view(static_cast<const char*>(payload.data()), payload.size()), &why)) {
+        r.body = std::move(*body);
+      }
     } else if (std::optional<Json> body = DecodeMsgpack(bytes, payload.size(), &why)) {
       r.body = std::move(*body);
     }
@@ -359,11 +376,21 @@ void StepServer::Dispatch(Request& r) {
       r.client->last_seen = r.now;
     }
     for (const char* field : spec->required) Require(r.body, field);
-    if (spec->needs_driver) {
+    if (r.client && PendingRequests(r.client->id) >= options_.limits.max_pending_requests) {
+      Fail("queue_full", std::to_string(options_.limits.max_pending_requests) +
+                             " requests of this session wait for their replies already (the "
+                             "limit); wait for them, or cancel queued steps");
+    }
+    LeaseTake lease;
+    const auto overwrite = r.body.find("overwrite");
+    if (spec->needs_driver || (spec->overwrite_needs_driver && overwrite != r.body.end() &&
+                               Bool(*overwrite, "overwrite"))) {
       const auto force = r.body.find("force");
-      RequireDriver(*r.client, force != r.body.end() && Bool(*force, "force"), r.now);
+      lease = CheckDriver(*r.client, force != r.body.end() && Bool(*force, "force"), r.now);
     }
     Outcome out = (this->*spec->handler)(r);
+    // The request succeeded (a failure threw above): only now does it take the lease.
+    if (lease.take) CommitLease(*r.client, lease);
     if (out.wait_for == 0) {
       if (out.on_applied) out.on_applied(out.reply);
       if (!seq.is_null()) out.reply["seq"] = seq;
@@ -377,6 +404,7 @@ void StepServer::Dispatch(Request& r) {
     p.json = r.json;
     p.op = op;
     p.command = out.wait_for;
+    p.steps = out.steps;
     p.outcome = std::move(out);
     p.deadline = r.now + options_.step_timeout;
     pending_.push_back(std::move(p));
@@ -402,21 +430,26 @@ void StepServer::Service(Clock::time_point now) {
                 "'" + p.op + "' did not take effect within the step timeout");
     } else {
       const physics::CommandResult result = engine.WaitForCommand(p.command, Clock::duration(0));
-      if (!result.ok()) {
+      if (!result.ok() && p.steps > 0 && physics::IsCancelledStep(result.error)) {
+        SendError(p.envelope, p.seq, p.json, "cancelled",
+                  "the queued steps of this request were cancelled (" +
+                      (p.cancelled.empty() ? std::string("by the server") : p.cancelled) +
+                      "): " + result.error);
+      } else if (!result.ok()) {
         SendError(p.envelope, p.seq, p.json, "bad_value", result.error);
       } else {
         try {
           if (p.outcome.on_applied) p.outcome.on_applied(p.outcome.reply);
           if (!p.seq.is_null()) p.outcome.reply["seq"] = p.seq;
           Send(p.envelope, p.outcome.reply, p.json, p.outcome.observation);
-          // Waiting for a long step is not silence: the lease runs from the reply.
-          if (const auto c = clients_.find(p.client); c != clients_.end()) {
-            c->second.last_seen = std::max(c->second.last_seen, now);
-          }
         } catch (const Failure& f) {
           SendError(p.envelope, p.seq, p.json, f.code, f.message);
         }
       }
+    }
+    // Waiting for a reply is not silence: the lease runs from the reply (an error too).
+    if (const auto c = clients_.find(p.client); c != clients_.end()) {
+      c->second.last_seen = std::max(c->second.last_seen, now);
     }
     pending_.pop_front();
   }
@@ -436,35 +469,96 @@ bool StepServer::LeaseExpired(const std::string& id, Clock::time_point now) cons
 
 void StepServer::ReleaseLease(const std::string& why) {
   const std::string initial = options_.mode == "direct" ? "direct" : "live";
+  const std::string driver = driver_;
   if (mode_ != initial) {
     // Nobody drives the lockstep any more: back to the scene's mode (a paused simulation left
     // behind by a crashed learning loop would look hung).
     session_.engine().Submit(physics::cmd::SetPaused{initial != "live"});
-    spdlog::info("step server: driver {} left ({}); {} mode -> {} mode", driver_, why, mode_,
-                 initial);
+    LogRemote(spdlog::level::info, "lease released, mode",
+              fmt::format("step server: driver {} left ({}); {} mode -> {} mode", driver, why,
+                          mode_, initial));
     mode_ = initial;
   } else {
-    spdlog::info("step server: driver {} left ({})", driver_, why);
+    LogRemote(spdlog::level::info, "lease released",
+              fmt::format("step server: driver {} left ({})", driver, why));
   }
   driver_.clear();
+  ReleaseReplays(driver);  // its recordings go with its lease
 }
 
-void StepServer::RequireDriver(Client& c, bool force, Clock::time_point now) {
-  if (driver_ == c.id) return;
+StepServer::LeaseTake StepServer::CheckDriver(const Client& c, bool force, Clock::time_point now) {
+  if (driver_ == c.id) return {};
   if (!driver_.empty()) {
-    const bool expired = LeaseExpired(driver_, now);
-    if (!expired && !force) {
+    if (LeaseExpired(driver_, now)) {
+      // As if Service had seen it first: the mode it chose ends, whatever this request does.
+      ReleaseLease("silent for more than " + std::to_string(options_.lease_timeout.count()) +
+                   " ms");
+    } else if (!force) {
       Fail("not_driver", "another client (" + driver_ +
                              ") holds the driver lease; wait, or send force: true to take it");
-    }
-    if (expired) {
-      ReleaseLease("silent for more than " + std::to_string(options_.lease_timeout.count()) +
-                   " ms");  // as if Service had seen it first: the mode it chose ends
     } else {
-      spdlog::warn("step server: {} took the lease from {}", c.id, driver_);
+      return {.take = true, .forced = true};
     }
   }
+  return {.take = true};
+}
+
+void StepServer::CommitLease(const Client& c, const LeaseTake& take) {
+  if (take.forced && !driver_.empty() && driver_ != c.id) {
+    const std::string old = driver_;
+    const std::size_t cancelled = CancelQueuedSteps(old, "the lease was taken over with force");
+    const std::size_t released = ReleaseReplays(old);
+    LogRemote(spdlog::level::warn, "lease takeover",
+              fmt::format("step server: {} took the lease from {} ({} queued step request(s) "
+                          "cancelled, {} replay session(s) released)",
+                          c.id, old, cancelled, released));
+  }
   driver_ = c.id;
+}
+
+std::uint64_t StepServer::QueuedSteps(const std::string& client) const {
+  std::uint64_t n = 0;
+  for (const Pending& p : pending_) {
+    if (p.client == client && p.cancelled.empty()) n += p.steps;
+  }
+  return n;
+}
+
+std::size_t StepServer::PendingRequests(const std::string& client) const {
+  return static_cast<std::size_t>(std::count_if(
+      pending_.begin(), pending_.end(), [&](const Pending& p) { return p.client == client; }));
+}
+
+std::size_t StepServer::CancelQueuedSteps(const std::string& client, const std::string& why) {
+  std::uint64_t through = 0;
+  std::size_t n = 0;
+  for (Pending& p : pending_) {
+    if (p.steps == 0 || !p.cancelled.empty() || (!client.empty() && p.client != client)) continue;
+    p.cancelled = why;
+    through = std::max(through, p.command);
+    ++n;
+  }
+  // The physics thread drops them: queued ones never run, a running one stops after its
+  // current iteration. (Only drivers queue steps, so nobody else's work is among them.)
+  if (through > 0) session_.engine().CancelStepsThrough(through);
+  return n;
+}
+
+void StepServer::ForgetClient(const std::string& id, const std::string& why) {
+  if (driver_ == id) ReleaseLease(why);
+  ReleaseReplays(id);
+  clients_.erase(id);
+}
+
+void StepServer::LogRemote(spdlog::level::level_enum level, std::string_view kind,
+                           const std::string& text) {
+  std::uint64_t skipped = 0;
+  if (!log_limiter_.Admit(kind, Clock::now(), &skipped)) return;
+  if (skipped > 0) {
+    spdlog::log(level, "{} (and {} more like it since the last one logged)", text, skipped);
+  } else {
+    spdlog::log(level, "{}", text);
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -493,7 +587,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
   if (const auto it = r.body.find("arrays"); it != r.body.end()) {
     c.binary_arrays = String(*it, "arrays") == "binary";
   }
-  if (clients_.size() >= options_.max_clients) {  // forget the longest-silent observer
+  if (clients_.size() >= options_.limits.max_clients) {  // forget the longest-silent observer
     auto oldest = clients_.end();
     for (auto it = clients_.begin(); it != clients_.end(); ++it) {
       if (it->first != driver_ &&
@@ -501,7 +595,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
         oldest = it;
       }
     }
-    if (oldest != clients_.end()) clients_.erase(oldest);
+    if (oldest != clients_.end()) ForgetClient(std::string(oldest->first), "forgotten");
   }
   const mjModel* m = session_.engine().model();
   Json arts = Json::array();
@@ -605,9 +699,16 @@ StepServer::Outcome StepServer::Meta(Request&) {
 }
 
 StepServer::Outcome StepServer::Bye(Request& r) {
-  if (driver_ == r.client->id) ReleaseLease("bye");
-  clients_.erase(r.client->id);
+  const std::string id = r.client->id;
+  CancelQueuedSteps(id, "its session said bye");
+  ForgetClient(id, "bye");
+  r.client = nullptr;
   return {Json{{"op", "bye_ok"}}};
+}
+
+StepServer::Outcome StepServer::Cancel(Request& r) {
+  const std::size_t n = CancelQueuedSteps(r.client->id, "the client asked with 'cancel'");
+  return {Json{{"op", "cancel_ok"}, {"cancelled", n}}};
 }
 
 StepServer::Outcome StepServer::Step(Request& r) {
@@ -621,9 +722,7 @@ StepServer::Outcome StepServer::Step(Request& r) {
   }
   int n = 1;
   if (const auto it = r.body.find("n_steps"); it != r.body.end()) {
-    const double v = Number(*it, "n_steps");
-    if (v < 1 || v > 100000 || v != std::floor(v)) Fail("bad_value", "n_steps must be 1..100000");
-    n = static_cast<int>(v);
+    n = static_cast<int>(RangedNumber(*it, "n_steps"));
   }
   const std::optional<ObsSpec> observation = ObservationFor(r);
   // Controls: validate every articulation's entry first, then publish them (all or nothing).
@@ -641,6 +740,7 @@ StepServer::Outcome StepServer::Step(Request& r) {
       std::vector<std::pair<int, double>> patch;
       if (const auto c = entry.find("ctrl"); c != entry.end()) {
         const std::vector<double> v = Numbers(*c, "ctrl");
+        CheckRanges(v, "ctrl", name + ": ctrl");
         if (v.size() != t.actuator_ids.size()) {
           Fail("dim_mismatch", name + ": ctrl has " + std::to_string(v.size()) + " values, " +
                                    std::to_string(t.actuator_ids.size()) + " actuators");
@@ -654,7 +754,7 @@ StepServer::Outcome StepServer::Step(Request& r) {
           if (g == t.gain_index.end()) {
             Fail("bad_value", name + ": no actuator or joint '" + actuator + "'");
           }
-          patch.emplace_back(g->second, Number(value, "ctrl_map"));
+          patch.emplace_back(g->second, RangedNumber(value, "ctrl_map", name + ": ctrl_map"));
         }
       }
       if (const auto x = entry.find("xfrc_applied"); x != entry.end()) {
@@ -669,6 +769,7 @@ StepServer::Outcome StepServer::Step(Request& r) {
             Fail("unknown_body", name + ": no body '" + body + "' in this articulation");
           }
           const std::vector<double> w = Numbers(wrench, "xfrc_applied");
+          CheckRanges(w, "xfrc_applied", name + ": xfrc_applied");
           if (w.size() != 6) {
             Fail("dim_mismatch", name + ": xfrc_applied needs 6 values (force, torque)");
           }
@@ -683,6 +784,15 @@ StepServer::Outcome StepServer::Step(Request& r) {
       patches.emplace_back(&t, std::move(patch));
     }
   }
+  // Bounded work per client: a driver cannot queue more than max_queued_steps ahead.
+  const std::uint64_t queued = QueuedSteps(r.client->id);
+  if (mode_ == "direct" &&
+      queued + static_cast<std::uint64_t>(n) > options_.limits.max_queued_steps) {
+    Fail("queue_full", "this session has " + std::to_string(queued) + " steps queued already; " +
+                           std::to_string(n) + " more exceed the " + "limit of " +
+                           std::to_string(options_.limits.max_queued_steps) +
+                           " (wait for the replies, or send 'cancel')");
+  }
   for (auto& [t, patch] : patches) {
     if (!patch.empty()) t->control->channel(control::ControlSource::kNetwork).Patch(patch);
   }
@@ -690,7 +800,10 @@ StepServer::Outcome StepServer::Step(Request& r) {
   Outcome out;
   out.reply = Json{{"op", "step_ok"}};
   out.observation = observation;
-  if (mode_ == "direct") out.wait_for = session_.engine().Submit(physics::cmd::Step{n});
+  if (mode_ == "direct") {
+    out.wait_for = session_.engine().Submit(physics::cmd::Step{n});
+    out.steps = static_cast<std::uint64_t>(n);
+  }
   return out;
 }
 
@@ -721,9 +834,11 @@ StepServer::Outcome StepServer::Reset(Request& r) {
           Fail("dim_mismatch", name + ": joint '" + joint + "' takes " + std::to_string(width) +
                                    " qpos value(s), got " + std::to_string(v.size()));
         }
+        CheckRanges(v, "qpos", name + ": joint '" + joint + "'");
         joints_after.qpos.push_back({t.joints[i].qpos_adr, std::move(v)});
       }
     }
+    CheckQposQuaternions(m, joints_after.qpos, "per_articulation_qpos");
   }
   std::uint64_t seq = 0;
   if (key >= 0) {
@@ -753,8 +868,14 @@ StepServer::Outcome StepServer::SetMode(Request& r) {
   if (mode != "live" && mode != "direct" && mode != "puppet") {
     Fail("bad_mode", "mode must be live, direct or puppet");
   }
+  // Lockstep steps still queued belong to the mode being left: they are cancelled (answered
+  // `cancelled`), so this takes effect now and not behind them.
+  const std::size_t cancelled = CancelQueuedSteps("", "set_mode " + mode);
   Outcome out;
-  out.reply = Json{{"op", "set_mode_ok"}, {"previous_mode", mode_}, {"current_mode", mode}};
+  out.reply = Json{{"op", "set_mode_ok"},
+                   {"previous_mode", mode_},
+                   {"current_mode", mode},
+                   {"cancelled", cancelled}};
   // Direct: the physics thread waits for step requests (paused between them). Puppet: it never
   // steps; each step request writes the client's state and runs mj_forward.
   out.wait_for = session_.engine().Submit(physics::cmd::SetPaused{mode != "live"});
@@ -795,6 +916,7 @@ StepServer::Outcome StepServer::SetControlSource(Request& r) {
 StepServer::Outcome StepServer::SetQpos(Request& r) {
   const ArticulationTopics& t = Articulation(r.body["articulation"]);
   const std::vector<double> q = Numbers(r.body["qpos"], "qpos");
+  CheckRanges(q, "qpos");
   if (t.qpos_adrs.empty()) Fail("no_joints", t.name + " has no joints");
   physics::cmd::SetState state;
   if (t.free_joint >= 0 && q.size() == 7 && t.qpos_adrs.size() != 7) {
@@ -806,6 +928,7 @@ StepServer::Outcome StepServer::SetQpos(Request& r) {
                              (t.free_joint >= 0 ? " (or 7 for the free base)" : "") + ", got " +
                              std::to_string(q.size()));
   }
+  CheckQposQuaternions(session_.engine().model(), state.qpos, "set_qpos");
   const std::uint64_t seq = session_.engine().Submit(std::move(state));
   Outcome out;
   out.reply = Json{{"op", "set_qpos_ok"}};
@@ -826,6 +949,7 @@ StepServer::Outcome StepServer::PuppetStep(Request& r) {
     const auto it = r.body.find(field);
     if (it == r.body.end()) return;
     std::vector<double> v = Numbers(*it, field);
+    CheckRanges(v, field);
     if (v.size() != static_cast<std::size_t>(size)) {
       Fail("dim_mismatch", std::string(field) + " has " + std::to_string(v.size()) +
                                " values, the model has " + std::to_string(size));
@@ -855,6 +979,7 @@ StepServer::Outcome StepServer::PuppetStep(Request& r) {
         const auto f = entry.find(field);
         if (f == entry.end()) return;
         const std::vector<double> v = Numbers(*f, field);
+        CheckRanges(v, field, name + ": " + field);
         if (v.size() != adrs.size()) {
           Fail("dim_mismatch", name + ": " + field + " has " + std::to_string(v.size()) +
                                    " values, the articulation has " + std::to_string(adrs.size()));
@@ -866,7 +991,10 @@ StepServer::Outcome StepServer::PuppetStep(Request& r) {
       part("ctrl", t.actuator_ids, &state.ctrl);
     }
   }
-  if (const auto it = r.body.find("time"); it != r.body.end()) state.time = Number(*it, "time");
+  if (const auto it = r.body.find("time"); it != r.body.end()) {
+    state.time = RangedNumber(*it, "time");
+  }
+  CheckQposQuaternions(m, state.qpos, "qpos");
   if (state.qpos.empty() && state.qvel.empty() && state.ctrl.empty() && !state.time) {
     Fail("missing_field",
          "a puppet step needs qpos, qvel, ctrl or time (whole model or "

@@ -1,13 +1,20 @@
 #pragma once
 // The step server of protocol.md: request/reply operations on a ROUTER socket (REQ and DEALER
-// clients both work), msgpack or JSON (detected per message; a reply uses the request's
-// encoding), `seq` echoed. Many clients at once: observers read; one driver holds a lease for
-// stepping, mode changes and control (released on `bye`, after `lease_timeout` without a
-// request, or taken over with `force`). A reply that depends on a command is sent only once the
-// physics thread has applied it (and the state frame showing it is published).
+// clients both work), msgpack or JSON (detected per message, under the size and depth limits of
+// request_limits.h; a reply uses the request's encoding), `seq` echoed. Many clients at once:
+// observers read; one driver holds a lease for stepping, mode changes and control (released on
+// `bye`, after `lease_timeout` without a request, or taken over with `force`; taken only by a
+// request that succeeds). A reply that depends on a command is sent only once the physics thread
+// has applied it (and the state frame showing it is published). What a client can make the
+// server hold is bounded (StepServerLimits: queued steps, waiting requests, loaded recordings);
+// queued lockstep steps are cancelled by `cancel`, set_mode and a forced takeover. Files are
+// names under one folder (network_files.h); numbers are checked against value_ranges.h; lines a
+// client causes are rate-limited.
 //
 // Threading: the network subsystem's I/O thread only (it owns the socket); built on the main
 // thread in BeginPlay.
+#include <spdlog/spdlog.h>
+
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -17,11 +24,14 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 #include <zmq.hpp>
 
+#include "core/warning_limiter.h"
 #include "net/model_assets.h"
 #include "net/msgpack_codec.h"
+#include "net/network_files.h"
 #include "net/observation.h"
 #include "net/topic_table.h"
 #include "urlab/physics/state_frame.h"
@@ -31,16 +41,32 @@
 #include "urlab/replay/recording.h"
 #include "urlab/world/camera_streams.h"
 #include "urlab/world/session.h"
+#include "wire/request_limits.h"
 
 namespace urlab::net {
+
+// The bounds on what clients may make the server hold (docs/network.md, "Limits").
+struct StepServerLimits {
+  std::size_t max_request_bytes = wire::kMaxRequestBytes;  // larger: bad_request, not decoded
+  std::size_t max_clients = 64;  // hello beyond: the longest-silent observer
+                                 // is forgotten
+  // Per client: lockstep steps queued (the n_steps of its step requests not answered yet), and
+  // requests waiting for their command. Beyond either: queue_full.
+  std::size_t max_queued_steps = 100000;
+  std::size_t max_pending_requests = 64;
+  std::size_t max_replay_sessions = 8;  // recordings loaded at once; beyond: replay_limit
+};
 
 struct StepServerOptions {
   std::string endpoint = "tcp://127.0.0.1:5559";
   std::chrono::milliseconds lease_timeout{5000};
   std::chrono::milliseconds step_timeout{30000};  // a reply not ready by then: step_timeout
   std::string mode = "live";                      // initial step mode: live | direct
-  std::size_t max_request_bytes = 1 << 20;
-  std::size_t max_clients = 64;
+  StepServerLimits limits;
+  // The folder of the files clients name (snapshots, recordings, replays; network_files.h);
+  // relative: to the working folder. And the files the running process read, never written.
+  std::string files_dir = kDefaultFilesDir;
+  std::vector<std::string> inputs;
 };
 
 class StepServer {
@@ -106,6 +132,7 @@ class StepServer {
     std::uint64_t wait_for = 0;             // a command to wait for, 0: reply now
     std::function<void(Json&)> on_applied;  // completes the reply once applied
     std::optional<ObsSpec> observation;     // appended to the reply when it is sent
+    std::uint64_t steps = 0;                // wait_for is a lockstep step command of n steps
   };
   struct Pending {
     std::vector<zmq::message_t> envelope;
@@ -114,6 +141,8 @@ class StepServer {
     bool json = false;
     std::string op;
     std::uint64_t command = 0;
+    std::uint64_t steps = 0;  // a lockstep step command's n (0: not a step)
+    std::string cancelled;    // why its steps were cancelled ("": they were not)
     Outcome outcome;
     Clock::time_point deadline;
   };
@@ -125,6 +154,14 @@ class StepServer {
     bool needs_driver;
     std::vector<const char*> required;  // fields
     const char* replies;                // reply fields, for meta
+    // The request may say `overwrite: true` (replace an existing file), which needs the lease.
+    bool overwrite_needs_driver = false;
+  };
+  // What the lease check decided for a request: the client takes the lease once the request
+  // succeeded (a failing request takes nothing).
+  struct LeaseTake {
+    bool take = false;    // the client does not hold it yet
+    bool forced = false;  // taken from a live driver with force: true
   };
   static const std::vector<OpSpec>& Ops();
 
@@ -138,8 +175,23 @@ class StepServer {
   std::optional<ObsSpec> ObservationFor(const Request& r) const;
   void SendError(const std::vector<zmq::message_t>& envelope, const Json& seq, bool json,
                  const std::string& code, const std::string& message);
-  // The lease: throws Failure unless `c` may drive (taking a free or expired lease).
-  void RequireDriver(Client& c, bool force, Clock::time_point now);
+  // The lease: throws not_driver unless `c` may drive. An expired lease is released here; taking
+  // it (CommitLease) waits until the request succeeded.
+  LeaseTake CheckDriver(const Client& c, bool force, Clock::time_point now);
+  // `c` holds the lease from now on; a driver it was forced from loses its queued steps and its
+  // replay sessions.
+  void CommitLease(const Client& c, const LeaseTake& take);
+  // Cancels the lockstep steps queued by `client` ("" : by every client): their requests are
+  // answered `cancelled` once the physics thread dropped them. Returns how many requests.
+  std::size_t CancelQueuedSteps(const std::string& client, const std::string& why);
+  // The steps and requests `client` has queued.
+  std::uint64_t QueuedSteps(const std::string& client) const;
+  std::size_t PendingRequests(const std::string& client) const;
+  // Forgets a client: its replay sessions are released (bye, evicted, expired).
+  void ForgetClient(const std::string& id, const std::string& why);
+  // Logs a line a client's request caused, at most once a second per `kind` (the rest counted
+  // in the next line of that kind).
+  void LogRemote(spdlog::level::level_enum level, std::string_view kind, const std::string& text);
   // True when `id` is silent past the lease timeout and has no reply waiting.
   bool LeaseExpired(const std::string& id, Clock::time_point now) const;
   // Frees the lease; a lockstep or puppet mode the driver chose goes back to the initial mode.
@@ -169,7 +221,9 @@ class StepServer {
   Outcome SetTwist(Request& r);
   Outcome FireLauncher(Request& r);
   Outcome ConfigureController(Request& r);
-  // Recorder, snapshot and replay operations (step_server_recorder_ops.cc).
+  Outcome Cancel(Request& r);
+  // Recorder, snapshot and replay operations (step_server_recorder_ops.cc). File names are
+  // names under options.files_dir (network_files.h).
   replay::Recorder& RequireRecorder();
   // Every client's lease runs from now (after a blocking file operation on this thread).
   void RefreshLeases();
@@ -191,6 +245,13 @@ class StepServer {
   Outcome ReplayStart(Request& r);
   Outcome ReplayStop(Request& r);
   Outcome ReplayStatus(Request& r);
+  Outcome ReplayUnload(Request& r);
+  // The path of the request's `path` for writing (NetworkFiles::ForWriting with its
+  // `overwrite`), never the file a running recording writes.
+  std::string WritablePath(const Request& r);
+  // Releases the replay sessions `owner` loaded ("" : any owner) except `keep`; stops the
+  // playback of a released one. Returns how many.
+  std::size_t ReleaseReplays(const std::string& owner, const std::string& keep = {});
 
   world::Session& session_;
   const std::vector<ArticulationTopics>& tables_;
@@ -208,12 +269,18 @@ class StepServer {
   MsgpackWriter writer_;                   // reply bytes, reused
   replay::RecorderSubsystem* recorder_ = nullptr;
   world::CameraStreams* cameras_ = nullptr;
-  // Recordings loaded for replay ("r1", "r2", ...), in load order; never unloaded while playing.
+  NetworkFiles files_;                    // the names clients give, under files_dir
+  internal::WarningLimiter log_limiter_;  // lines clients cause (LogRemote)
+  // Recordings loaded for replay ("r1", "r2", ...), in load order, each owned by the client
+  // that loaded it (released with its lease, its session, its next load or replay_unload).
   struct ReplaySession {
     std::string id;
+    std::string owner;
     std::unique_ptr<replay::RecordingReader> reader;
   };
   std::vector<ReplaySession> replays_;
+  std::uint64_t next_replay_ = 1;
+  std::size_t ReleaseReplaysIf(const std::function<bool(const ReplaySession&)>& which);
   std::string active_replay_;
   std::string playing_replay_;              // the session player_ plays
   std::string player_mode_;                 // kinematic | resimulate

@@ -14,6 +14,7 @@
 #include "net/observation.h"
 #include "net/request_fields.h"
 #include "net/step_server.h"
+#include "net/value_ranges.h"
 #include "urlab/control/controllers.h"
 
 namespace urlab::net {
@@ -40,11 +41,14 @@ StepServer::Outcome StepServer::SetMocapPose(Request& r) {
   if (const auto it = r.body.find("pos"); it != r.body.end()) {
     const std::vector<double> p = Numbers(*it, "pos");
     if (p.size() != 3) Fail("dim_mismatch", "pos needs 3 values");
+    CheckRanges(p, "pos");
     std::copy(p.begin(), p.end(), c.pos.begin());
   }
   if (const auto it = r.body.find("quat"); it != r.body.end()) {
     const std::vector<double> q = Numbers(*it, "quat");
     if (q.size() != 4) Fail("dim_mismatch", "quat needs 4 values (w x y z)");
+    CheckRange(std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]), "quaternion norm",
+               "the norm of quat");
     std::copy(q.begin(), q.end(), c.quat.begin());
   }
   Outcome out;
@@ -90,6 +94,7 @@ StepServer::Outcome StepServer::SetSimOptions(Request& r) {
   const auto vec3 = [](const Json& v, const char* f) {
     const std::vector<double> x = Numbers(v, f);
     if (x.size() != 3) Fail("dim_mismatch", std::string(f) + " needs 3 values");
+    CheckRanges(x, f);
     return std::array<double, 3>{x[0], x[1], x[2]};
   };
   const auto keyword = [](const Json& v, const char* f, std::vector<const char*> names) {
@@ -100,17 +105,17 @@ StepServer::Outcome StepServer::SetSimOptions(Request& r) {
     Fail("bad_value", std::string(f) + ": unknown value '" + s + "'");
   };
   for (const auto& [key, value] : options.items()) {
+    // Each number within its range (value_range_table.cc); one bad field refuses them all.
     if (key == "timestep") {
-      ch.timestep = Number(value, "timestep");
-      if (!(*ch.timestep > 0)) Fail("bad_value", "timestep must be > 0");
+      ch.timestep = RangedNumber(value, "timestep");
     } else if (key == "impratio") {
-      ch.impratio = Number(value, "impratio");
+      ch.impratio = RangedNumber(value, "impratio");
     } else if (key == "tolerance") {
-      ch.tolerance = Number(value, "tolerance");
+      ch.tolerance = RangedNumber(value, "tolerance");
     } else if (key == "density") {
-      ch.density = Number(value, "density");
+      ch.density = RangedNumber(value, "density");
     } else if (key == "viscosity") {
-      ch.viscosity = Number(value, "viscosity");
+      ch.viscosity = RangedNumber(value, "viscosity");
     } else if (key == "gravity") {
       ch.gravity = vec3(value, "gravity");
     } else if (key == "wind") {
@@ -118,9 +123,7 @@ StepServer::Outcome StepServer::SetSimOptions(Request& r) {
     } else if (key == "magnetic") {
       ch.magnetic = vec3(value, "magnetic");
     } else if (key == "iterations") {
-      const double it = Number(value, "iterations");
-      if (it < 1 || it > 10000) Fail("bad_value", "iterations must be 1..10000");
-      ch.iterations = static_cast<int>(it);
+      ch.iterations = static_cast<int>(RangedNumber(value, "iterations"));
     } else if (key == "integrator") {
       ch.integrator = keyword(value, "integrator", {"Euler", "RK4", "implicit"});
     } else if (key == "cone") {
@@ -173,10 +176,7 @@ StepServer::Outcome StepServer::GetContacts(Request& r) {
   const mjModel* m = session_.engine().model();
   int max_contacts = 64;
   if (const auto it = r.body.find("max_contacts"); it != r.body.end()) {
-    const double v = Number(*it, "max_contacts");
-    if (v < 0 || v > 100000 || v != std::floor(v))
-      Fail("bad_value", "max_contacts must be 0..100000");
-    max_contacts = static_cast<int>(v);
+    max_contacts = static_cast<int>(RangedNumber(*it, "max_contacts"));
   }
   ContactFilter filter;
   if (const auto it = r.body.find("filter"); it != r.body.end() && !it->is_null()) {

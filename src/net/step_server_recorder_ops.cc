@@ -11,6 +11,7 @@
 
 #include "net/request_fields.h"
 #include "net/step_server.h"
+#include "net/value_ranges.h"
 #include "urlab/physics/model.h"
 #include "urlab/replay/snapshot.h"
 
@@ -85,9 +86,20 @@ void StepServer::RunFileOp(const std::function<void()>& op, const char* other_er
 StepServer::Outcome StepServer::RecordingStart(Request& r) {
   replay::Recorder& recorder = RequireRecorder();
   replay::RecorderOptions o;
+  // A name in the files folder (a fresh one when none is given); the recorder writes NAME.part
+  // and renames it to NAME at the end: neither may be anything but a regular file, and NAME is
+  // not replaced unless the request says overwrite.
+  std::string name;
   if (const auto it = r.body.find("path"); it != r.body.end() && !it->is_null()) {
-    o.path = String(*it, "path");
+    name = String(*it, "path");
+  } else {
+    name = files_.FreshName("recording", ".urrec");
   }
+  if (recorder.active()) {
+    Fail("recording_already_active",
+         "a recording is already running (to " + recorder.status().path + ")");
+  }
+  o.path = files_.ForWriting(name, "path", OptionalBool(r.body, "overwrite", false), {kPartSuffix});
   o.compress = OptionalBool(r.body, "compress", true);
   o.sensordata = OptionalBool(r.body, "sensordata", false);
   o.keyframe_interval = OptionalNumber(r.body, "keyframe_interval", o.keyframe_interval);
@@ -111,7 +123,7 @@ StepServer::Outcome StepServer::RecordingStop(Request&) {
 
 StepServer::Outcome StepServer::RecordingSave(Request& r) {
   replay::Recorder& recorder = RequireRecorder();
-  const std::string path = String(r.body["path"], "path");
+  const std::string path = WritablePath(r);
   std::string saved;
   RunFileOp([&] { saved = recorder.Save(path); });
   return {Json{{"op", "recording_save_ok"}, {"path", saved}}};
@@ -136,7 +148,7 @@ StepServer::Outcome StepServer::RecordingStatus(Request&) {
 // ---- Snapshots
 
 StepServer::Outcome StepServer::SnapshotSave(Request& r) {
-  const std::string path = String(r.body["path"], "path");
+  const std::string path = WritablePath(r);
   physics::PhysicsEngine& engine = session_.engine();
   // The state and the model it belongs to, taken together (the options may change).
   physics::PhysicsState state;
@@ -160,7 +172,7 @@ StepServer::Outcome StepServer::SnapshotSave(Request& r) {
 }
 
 StepServer::Outcome StepServer::SnapshotLoad(Request& r) {
-  const std::string path = String(r.body["path"], "path");
+  const std::string path = files_.ForReading(String(r.body["path"], "path"), "path");
   physics::PhysicsEngine& engine = session_.engine();
   const physics::ModelPtr model = ModelCopy(engine);
   physics::PhysicsState state;
@@ -175,7 +187,14 @@ StepServer::Outcome StepServer::SnapshotLoad(Request& r) {
 // ---- Replay
 
 StepServer::Outcome StepServer::ReplayLoad(Request& r) {
-  const std::string path = String(r.body["path"], "path");
+  const std::string path = files_.ForReading(String(r.body["path"], "path"), "path");
+  // A new load releases this client's earlier recordings (except one playing); the total is
+  // bounded too.
+  ReleaseReplays(r.client->id, playing_replay_);
+  if (replays_.size() >= options_.limits.max_replay_sessions) {
+    Fail("replay_limit", std::to_string(replays_.size()) +
+                             " recordings are loaded (the limit); replay_unload one first");
+  }
   std::unique_ptr<replay::RecordingReader> reader;
   RunFileOp(
       [&] {
@@ -188,7 +207,7 @@ StepServer::Outcome StepServer::ReplayLoad(Request& r) {
     Fail("path_not_readable", path + ": not a recording (a " + reader->info().kind + ")");
   }
   // fmt, not "r" + std::to_string: GCC 12 -O3 raises a false -Wrestrict on the latter.
-  ReplaySession s{fmt::format("r{}", replays_.size() + 1), std::move(reader)};
+  ReplaySession s{fmt::format("r{}", next_replay_++), r.client->id, std::move(reader)};
   const replay::RecordingReader& rd = *s.reader;
   Json reply{{"op", "replay_load_ok"},
              {"session", s.id},
@@ -248,8 +267,10 @@ StepServer::Outcome StepServer::ReplayStart(Request& r) {
   } else {
     Fail("bad_value", "mode must be kinematic or resimulate");
   }
-  o.speed = OptionalNumber(r.body, "speed", 1.0);
-  if (!(o.speed > 0)) Fail("bad_value", "speed must be > 0");
+  o.speed = 1.0;
+  if (const auto it = r.body.find("speed"); it != r.body.end() && !it->is_null()) {
+    o.speed = RangedNumber(*it, "speed");
+  }
   o.loop = OptionalBool(r.body, "loop", false);
   // The player runs in the engine's step handler: puppet mode never steps the engine.
   if (mode_ == "puppet") {
@@ -281,7 +302,9 @@ StepServer::Outcome StepServer::ReplayStart(Request& r) {
     shown_ = std::move(shown);
     playback_->Set(shown_.get());
   }
-  spdlog::info("step server: replaying {} ({}, speed {})", s->reader->path(), mode, o.speed);
+  LogRemote(
+      spdlog::level::info, "replay start",
+      fmt::format("step server: replaying {} ({}, speed {})", s->reader->path(), mode, o.speed));
   return {Json{{"op", "replay_start_ok"},
                {"session", id},
                {"mode", mode},
@@ -321,6 +344,61 @@ StepServer::Outcome StepServer::ReplayStatus(Request&) {
                {"loops", st.loops},
                {"resim", std::move(resim)},
                {"error", st.error}}};
+}
+
+StepServer::Outcome StepServer::ReplayUnload(Request& r) {
+  std::string id = active_replay_;
+  if (const auto it = r.body.find("session"); it != r.body.end() && !it->is_null()) {
+    id = String(*it, "session");
+  }
+  if (ReleaseReplaysIf([&id](const ReplaySession& s) { return s.id == id; }) == 0) {
+    Fail("replay_session_not_found",
+         id.empty() ? std::string("no recording loaded")
+                    : "no replay session '" + id + "' (see replay_list_sessions)");
+  }
+  return {Json{{"op", "replay_unload_ok"}, {"session", id}}};
+}
+
+std::size_t StepServer::ReleaseReplays(const std::string& owner, const std::string& keep) {
+  return ReleaseReplaysIf([&](const ReplaySession& s) {
+    return (owner.empty() || s.owner == owner) && (keep.empty() || s.id != keep);
+  });
+}
+
+std::size_t StepServer::ReleaseReplaysIf(const std::function<bool(const ReplaySession&)>& which) {
+  std::size_t n = 0;
+  for (auto it = replays_.begin(); it != replays_.end();) {
+    if (!which(*it)) {
+      ++it;
+      continue;
+    }
+    if (it->id == playing_replay_) {
+      if (playback_) playback_->Set(nullptr);  // the viewer's timeline lets go first
+      shown_.reset();
+      player_.reset();  // the reader it plays goes away: the engine steps on its own again
+      playing_replay_.clear();
+    }
+    if (it->id == active_replay_) active_replay_.clear();
+    it = replays_.erase(it);
+    ++n;
+  }
+  if (active_replay_.empty() && !replays_.empty()) active_replay_ = replays_.back().id;
+  return n;
+}
+
+std::string StepServer::WritablePath(const Request& r) {
+  const std::string name = String(r.body.at("path"), "path");
+  const std::string path =
+      files_.ForWriting(name, "path", OptionalBool(r.body, "overwrite", false), {kPartSuffix});
+  // Nor the file a running recording is making.
+  replay::Recorder* recorder = recorder_ ? recorder_->recorder() : nullptr;
+  if (recorder && recorder->active()) {
+    const std::string& active = recorder->status().path;
+    if (path == active) {
+      Fail("file_exists", "'" + name + "' is the file the running recording writes");
+    }
+  }
+  return path;
 }
 
 }  // namespace urlab::net

@@ -352,6 +352,13 @@ std::uint64_t PhysicsEngine::Submit(Command command) {
   return seq;
 }
 
+void PhysicsEngine::CancelStepsThrough(std::uint64_t seq) {
+  std::uint64_t now = cancel_steps_through_.load(std::memory_order_relaxed);
+  while (now < seq && !cancel_steps_through_.compare_exchange_weak(now, seq)) {
+  }
+  wake_cv_.notify_one();  // a paused loop applies the queue (and drops the cancelled) at once
+}
+
 CommandResult PhysicsEngine::WaitForCommand(std::uint64_t seq,
                                             std::chrono::steady_clock::duration timeout) {
   ThrowIfOnPhysicsThread("WaitForCommand");
@@ -569,7 +576,12 @@ bool PhysicsEngine::ApplyPendingLocked() {
     backlog_.pop_front();
     any = true;
     if (const auto* step = std::get_if<cmd::Step>(&e.command)) {
+      if (e.seq <= cancel_steps_through_.load(std::memory_order_acquire)) {
+        to_finish_.emplace_back(e.seq, std::string(kStepCancelled) + " before it ran");
+        continue;
+      }
       step_budget_ = step->n;  // finished by IterateLocked after its last iteration
+      step_total_ = step->n;
       step_seq_ = e.seq;
       break;
     }
@@ -605,7 +617,17 @@ void PhysicsEngine::IterateLocked(bool force_step, bool from_loop) {
   const mjModel* m = model_.get();
   mjData* d = data_.get();
   IteratingScope scope(this);
-  const bool applied = ApplyPendingLocked();
+  bool applied = ApplyPendingLocked();
+  if (step_budget_ > 0 && step_seq_ <= cancel_steps_through_.load(std::memory_order_acquire)) {
+    // The running step command was cancelled: its window ends here, the commands behind it go on.
+    to_finish_.emplace_back(step_seq_, std::string(kStepCancelled) + " after " +
+                                           std::to_string(step_total_ - step_budget_) + " of " +
+                                           std::to_string(step_total_) + " steps");
+    step_budget_ = 0;
+    window_ended_ = true;
+    ApplyPendingLocked();
+    applied = true;
+  }
   for (const Hook& h : pre_step_) h.fn(m, d);
   const bool budgeted = step_budget_ > 0;
   const bool step = force_step || budgeted || !paused_.load(std::memory_order_acquire);

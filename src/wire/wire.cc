@@ -5,6 +5,8 @@
 #include <cstring>
 #include <nlohmann/json.hpp>
 
+#include "wire/request_limits.h"
+
 namespace urlab::wire {
 
 namespace {
@@ -39,9 +41,9 @@ std::string Join(std::string_view art, std::string_view kind, std::string_view n
 }
 
 constexpr const char* kDropNames[] = {
-    "unknown_topic",    "truncated",     "bad_size",   "negative_count", "too_many",
-    "foreign_actuator", "non_finite",    "bad_json",   "unknown_name",   "bad_number",
-    "unknown_field",    "no_controller", "bad_framing"};
+    "unknown_topic",    "truncated",     "bad_size",    "negative_count", "too_many",
+    "foreign_actuator", "non_finite",    "bad_json",    "unknown_name",   "bad_number",
+    "unknown_field",    "no_controller", "bad_framing", "too_large"};
 static_assert(std::size(kDropNames) == kNumDrops, "one name per Drop reason");
 
 }  // namespace
@@ -111,6 +113,7 @@ void AppendControl(std::string* out, std::span<const std::pair<std::int32_t, flo
 std::optional<Drop> DecodeControl(std::string_view payload,
                                   std::vector<std::pair<std::int32_t, float>>* out) {
   out->clear();
+  if (payload.size() > kMaxInboundPayloadBytes) return Drop::kTooLarge;
   if (payload.size() < 4) return Drop::kTruncated;
   const std::int32_t n = GetI32(payload, 0);
   if (n < 0) return Drop::kNegativeCount;
@@ -132,6 +135,8 @@ std::optional<Drop> DecodeControl(std::string_view payload,
 
 std::optional<Drop> DecodeSetGains(std::string_view payload, std::vector<GainPatch>* out) {
   out->clear();
+  if (payload.size() > kMaxInboundPayloadBytes) return Drop::kTooLarge;
+  if (!JsonDepthWithin(payload, kMaxSetGainsDepth)) return Drop::kBadJson;
   const auto j = nlohmann::ordered_json::parse(payload, nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded() || !j.is_object()) return Drop::kBadJson;
   for (const auto& [name, fields] : j.items()) {

@@ -845,7 +845,7 @@ class Parser {
     if (const auto n = root["network"]) {
       CheckKeys(n, "network",
                 {"enabled", "state", "control", "info", "rpc", "step_mode", "full_state",
-                 "camera_base_port"});
+                 "camera_base_port", "files_dir", "max_queued_steps"});
       if (n["enabled"]) s.network.enabled = Bool(n["enabled"], "network.enabled");
       if (n["state"]) s.network.state = String(n["state"], "network.state");
       if (n["control"]) s.network.control = String(n["control"], "network.control");
@@ -867,6 +867,22 @@ class Parser {
         }
       }
       if (n["camera_base_port"]) s.network.camera_base_port = String(n["camera_base_port"], "port");
+      if (const auto d = n["files_dir"]) {
+        const std::string text = String(d, "network.files_dir");
+        if (text.empty()) Fail(d, "network.files_dir must name a folder (or leave it out)");
+        fs::path p(text);
+        if (p.is_relative()) p = fs::path(path_).parent_path() / p;
+        s.network.files_dir = fs::absolute(p).lexically_normal().string();
+        std::error_code ec;
+        if (fs::exists(s.network.files_dir, ec) && !fs::is_directory(s.network.files_dir, ec)) {
+          Fail(d, "network.files_dir: " + s.network.files_dir + " exists and is not a folder");
+        }
+      }
+      if (const auto q = n["max_queued_steps"]) {
+        const double v = Number(q, "network.max_queued_steps", Range{1, 1e7});
+        if (v != std::floor(v)) Fail(q, "network.max_queued_steps must be a whole number");
+        s.network.max_queued_steps = static_cast<std::size_t>(v);
+      }
     }
     if (const auto n = root["save_debug_xml"]) {
       if (n.IsScalar() && (n.as<std::string>() == "true" || n.as<std::string>() == "false")) {

@@ -246,6 +246,9 @@ TEST_F(NetworkTest, MalformedControlIsDroppedCountedAndChangesNothing) {
       {"a/set_gains ", R"({"nope": {"kp": 1}})", wire::Drop::kUnknownName},
       {"a/set_gains ", R"({"hinge": {"kp": -1}})", wire::Drop::kBadNumber},
       {"a/set_gains ", R"({"hinge": {"kd": 1}})", wire::Drop::kUnknownField},
+      // Limits: deeper than set_gains' shape, larger than any control message.
+      {"a/set_gains ", R"({"hinge": {"kp": {"x": 1}}})", wire::Drop::kBadJson},
+      {"a/control ", std::string(wire::kMaxInboundPayloadBytes + 1, '\0'), wire::Drop::kTooLarge},
       // One bad name spoils the whole patch: the good one is not applied either.
       {"a/set_gains ", R"({"hinge": {"kp": 777}, "nope": {"kp": 1}})", wire::Drop::kUnknownName},
   };

@@ -37,7 +37,8 @@ articulations:
 launchers:
   - {{name: cannon, pos: [1.5, 1.5, 0.8], speed: 3}}
 """)
-    proc, endpoints = start_urlab(URLAB, scene)
+    files = os.path.join(tmp, "files")
+    proc, endpoints = start_urlab(URLAB, scene, "--files-dir", files)
     try:
         with StreamClient(state=endpoints[0], control=endpoints[1], info=endpoints[2]) as client:
             robots = client.discover(timeout=10, expect=["arm"])
@@ -104,11 +105,11 @@ launchers:
             if c.info["mode"] != "live":
                 fail(f"mode after the driver left: {c.info['mode']}", proc)
             # Recording, snapshots and replay through the server's recorder.
-            rec = os.path.join(tmp, "run.urrec")
-            if c.recording_start(rec) != rec:
+            rec = os.path.join(files, "run.urrec")
+            if c.recording_start("run.urrec") != rec:
                 fail("recording_start did not echo the path", proc)
             try:
-                c.recording_start(rec)
+                c.recording_start("run.urrec")
                 fail("recording_already_active not reported", proc)
             except UrlabError as e:
                 assert e.code == "recording_already_active", e
@@ -118,11 +119,10 @@ launchers:
             done = c.recording_stop()
             if done["path"] != rec or done["frames"] < 50 or not os.path.exists(rec):
                 fail(f"recording_stop: {done}", proc)
-            snap = os.path.join(tmp, "state.urrec")
-            t = c.snapshot_save(snap)
-            if c.snapshot_load(snap) != t:
+            t = c.snapshot_save("state.urrec")
+            if c.snapshot_load("state.urrec") != t:
                 fail("snapshot_load did not restore the saved time", proc)
-            loaded = c.replay_load(rec)
+            loaded = c.replay_load("run.urrec")
             assert loaded["session"] in [s["session"] for s in c.replay_list_sessions()], loaded
             c.replay_start(mode="kinematic")
             c.replay_stop()

@@ -57,6 +57,7 @@ class StepServerRecorderTest : public urlab::testing::MujocoTest {
     }
     NetworkOptions o;
     o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
+    o.files_dir = dir_;  // clients name files in the test's folder
     auto net = std::make_unique<NetworkSubsystem>(o);
     net->SetRecorder(recorder);
     net_ = &static_cast<NetworkSubsystem&>(manager_.AddSubsystem(std::move(net)));
@@ -88,10 +89,10 @@ TEST_F(StepServerRecorderTest, RecordsARunThatReSimulatesBitForBit) {
   Play();
   const std::string path = dir_ + "/run.urrec";
   ASSERT_EQ(c().Op("set_mode", {{"mode", "direct"}})["op"], "set_mode_ok");
-  const Json start = c().Op("recording_start", {{"path", path}});
+  const Json start = c().Op("recording_start", {{"path", "run.urrec"}});
   ASSERT_EQ(start["op"], "recording_start_ok") << start.dump();
   EXPECT_EQ(start["path"], path);
-  const Json again = c().Op("recording_start", {{"path", dir_ + "/other.urrec"}});
+  const Json again = c().Op("recording_start", {{"path", "other.urrec"}});
   EXPECT_EQ(again["code"], "recording_already_active") << again.dump();
   // The recording starts at the recorder's first keyframe (requested by its writer thread).
   ASSERT_TRUE(WaitFor([&] {
@@ -117,7 +118,7 @@ TEST_F(StepServerRecorderTest, RecordsARunThatReSimulatesBitForBit) {
   EXPECT_TRUE(report.identical) << report.str();
   EXPECT_GE(report.steps_checked, 59u);
 
-  const Json saved = c().Op("recording_save", {{"path", dir_ + "/copy.urrec"}});
+  const Json saved = c().Op("recording_save", {{"path", "copy.urrec"}});
   EXPECT_EQ(saved["op"], "recording_save_ok") << saved.dump();
   EXPECT_TRUE(fs::exists(dir_ + "/copy.urrec"));
   EXPECT_EQ(c().Op("recording_clear")["op"], "recording_clear_ok");
@@ -126,9 +127,12 @@ TEST_F(StepServerRecorderTest, RecordsARunThatReSimulatesBitForBit) {
 TEST_F(StepServerRecorderTest, RecorderErrorsHaveTheirCodes) {
   Play();
   EXPECT_EQ(c().Op("recording_stop")["code"], "recording_not_active");
-  // A path under a regular file: unwritable even for root.
-  const Json bad = c().Op("recording_start", {{"path", dir_ + "/arm.xml/run.urrec"}});
+  // A folder where the name must go: not a regular file, refused before anything is opened.
+  ASSERT_TRUE(fs::create_directory(dir_ + "/taken.urrec"));
+  const Json bad = c().Op("recording_start", {{"path", "taken.urrec"}});
   EXPECT_EQ(bad["code"], "path_not_writable") << bad.dump();
+  // A path instead of a name.
+  EXPECT_EQ(c().Op("recording_start", {{"path", dir_ + "/run.urrec"}})["code"], "bad_file_name");
   const Json negative = c().Op("recording_start", {{"max_duration", -1}});
   EXPECT_EQ(negative["code"], "bad_value") << negative.dump();
   EXPECT_EQ(c().Op("recording_start", {{"compress", "yes"}})["code"], "bad_value");
@@ -140,7 +144,7 @@ TEST_F(StepServerRecorderTest, WithoutARecorderRecordingIsNotReadyButSnapshotsWo
   const Json r = c().Op("recording_start");
   EXPECT_EQ(r["code"], "not_ready") << r.dump();
   EXPECT_NE(r["message"].get<std::string>().find("recorder"), std::string::npos);
-  const Json s = c().Op("snapshot_save", {{"path", dir_ + "/s.urrec"}});
+  const Json s = c().Op("snapshot_save", {{"path", "s.urrec"}});
   EXPECT_EQ(s["op"], "snapshot_save_ok") << s.dump();
 }
 
@@ -149,13 +153,13 @@ TEST_F(StepServerRecorderTest, SnapshotSaveAndLoadRoundTrip) {
   ASSERT_EQ(c().Op("set_mode", {{"mode", "direct"}})["op"], "set_mode_ok");
   Drive(25);
   const std::string path = dir_ + "/state.urrec";
-  const Json saved = c().Op("snapshot_save", {{"path", path}});
+  const Json saved = c().Op("snapshot_save", {{"path", "state.urrec"}});
   ASSERT_EQ(saved["op"], "snapshot_save_ok") << saved.dump();
   const double t = saved["time"];
   EXPECT_GE(t, 25 * 0.002 - 1e-9);
   const Json before = c().Op("forward");
   Drive(40);
-  const Json loaded = c().Op("snapshot_load", {{"path", path}});
+  const Json loaded = c().Op("snapshot_load", {{"path", "state.urrec"}});
   ASSERT_EQ(loaded["op"], "snapshot_load_ok") << loaded.dump();
   EXPECT_EQ(loaded["time"].get<double>(), t);
   const Json after = c().Op("forward");  // the state shown once the restore took effect
@@ -163,15 +167,13 @@ TEST_F(StepServerRecorderTest, SnapshotSaveAndLoadRoundTrip) {
   EXPECT_EQ(after["per_articulation"]["arm"]["qpos"], before["per_articulation"]["arm"]["qpos"]);
   EXPECT_EQ(after["per_articulation"]["arm"]["qvel"], before["per_articulation"]["arm"]["qvel"]);
 
-  EXPECT_EQ(c().Op("snapshot_save", {{"path", dir_ + "/arm.xml/s.urrec"}})["code"],
-            "path_not_writable");
-  EXPECT_EQ(c().Op("snapshot_load", {{"path", dir_ + "/missing.urrec"}})["code"],
-            "path_not_readable");
-  EXPECT_EQ(c().Op("snapshot_load", {{"path", dir_ + "/arm.xml"}})["code"], "path_not_readable");
+  EXPECT_EQ(c().Op("snapshot_save", {{"path", "arm.xml/s.urrec"}})["code"], "bad_file_name");
+  EXPECT_EQ(c().Op("snapshot_load", {{"path", "missing.urrec"}})["code"], "path_not_readable");
+  EXPECT_EQ(c().Op("snapshot_load", {{"path", "arm.xml"}})["code"], "path_not_readable");
   // Other physics options make another model: refused, naming both hashes.
   ASSERT_EQ(c().Op("set_sim_options", {{"options", {{"timestep", 0.001}}}})["op"],
             "set_sim_options_ok");
-  const Json other = c().Op("snapshot_load", {{"path", path}});
+  const Json other = c().Op("snapshot_load", {{"path", "state.urrec"}});
   EXPECT_EQ(other["code"], "bad_value") << other.dump();
   EXPECT_NE(other["message"].get<std::string>().find("model hash"), std::string::npos)
       << other.dump();
@@ -179,7 +181,7 @@ TEST_F(StepServerRecorderTest, SnapshotSaveAndLoadRoundTrip) {
 
 TEST_F(StepServerRecorderTest, ReplaySessionsAndKinematicPlayback) {
   Play();
-  const Json missing = c().Op("replay_load", {{"path", dir_ + "/missing.urrec"}});
+  const Json missing = c().Op("replay_load", {{"path", "missing.urrec"}});
   EXPECT_EQ(missing["code"], "path_not_readable") << missing.dump();
   EXPECT_NE(missing["message"].get<std::string>().find("missing.urrec"), std::string::npos);
   EXPECT_EQ(c().Op("replay_set_active", {{"session", "r9"}})["code"], "replay_session_not_found");
@@ -187,11 +189,11 @@ TEST_F(StepServerRecorderTest, ReplaySessionsAndKinematicPlayback) {
 
   // A second of recording in live mode.
   const std::string path = dir_ + "/run.urrec";
-  ASSERT_EQ(c().Op("recording_start", {{"path", path}})["op"], "recording_start_ok");
+  ASSERT_EQ(c().Op("recording_start", {{"path", "run.urrec"}})["op"], "recording_start_ok");
   ASSERT_TRUE(WaitFor([&] { return c().Op("recording_status")["duration"] >= 0.3; }));
   ASSERT_EQ(c().Op("recording_stop")["op"], "recording_stop_ok");
 
-  const Json load = c().Op("replay_load", {{"path", path}});
+  const Json load = c().Op("replay_load", {{"path", "run.urrec"}});
   ASSERT_EQ(load["op"], "replay_load_ok") << load.dump();
   EXPECT_EQ(load["session"], "r1");
   EXPECT_EQ(load["finished"], true);

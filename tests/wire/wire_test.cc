@@ -139,5 +139,27 @@ TEST(WireTest, SetGainsIsAPartialPatch) {
   EXPECT_TRUE(out.empty());
 }
 
+// The limits: deeper than an object of objects is refused before parsing (a million levels
+// cost a scan, not a parse); a payload beyond kMaxInboundPayloadBytes is not decoded at all.
+TEST(WireTest, InboundDecodersHaveSizeAndDepthLimits) {
+  std::vector<GainPatch> gains;
+  EXPECT_EQ(DecodeSetGains(R"({"knee": {"kp": {"x": 1}}})", &gains), Drop::kBadJson);
+  const std::string deep = std::string(1000000, '[') + std::string(1000000, ']');
+  EXPECT_EQ(DecodeSetGains(deep, &gains), Drop::kTooLarge);
+  const std::string deep_small = std::string(200000, '[') + std::string(200000, ']');
+  EXPECT_EQ(DecodeSetGains(deep_small, &gains), Drop::kBadJson);
+  EXPECT_EQ(DecodeSetGains(R"({"knee": {"kp": 1, "kv": 2}})", &gains), std::nullopt);
+  std::vector<std::pair<std::int32_t, float>> values;
+  std::string big(kMaxInboundPayloadBytes + 1, '\0');
+  EXPECT_EQ(DecodeControl(big, &values), Drop::kTooLarge);
+  // The largest control message is exactly at the limit and decodes.
+  std::vector<std::pair<std::int32_t, float>> many(kMaxControlCount, {0, 1.0f});
+  std::string largest;
+  AppendControl(&largest, many);
+  ASSERT_EQ(largest.size(), kMaxInboundPayloadBytes);
+  EXPECT_EQ(DecodeControl(largest, &values), std::nullopt);
+  EXPECT_EQ(values.size(), many.size());
+}
+
 }  // namespace
 }  // namespace urlab::wire

@@ -189,13 +189,16 @@ class StepClient:
             fields["quat"] = [float(x) for x in quat]
         return self.call("set_mocap_pose", **fields)
 
-    # ---- Recorder, snapshots and replay (the server's recorder writes and reads the files)
+    # ---- Recorder, snapshots and replay (the server's recorder writes and reads the files).
+    # Every `path` is a file name in the server's files folder (network.files_dir, --files-dir),
+    # never a path; an existing file is replaced only with overwrite=True (which needs the
+    # driver lease). The replies give the file's full path on the server.
 
     def recording_start(self, path=None, compress=True, sensordata=False, keyframe_interval=None,
-                        max_duration=None, ring_seconds=None):
-        """Starts recording every physics step to `path` (a temporary file when None); returns
-        the path."""
-        fields = {"compress": compress, "sensordata": sensordata}
+                        max_duration=None, ring_seconds=None, overwrite=False):
+        """Starts recording every physics step to the file named `path` (a fresh name when
+        None); returns its full path on the server."""
+        fields = {"compress": compress, "sensordata": sensordata, "overwrite": overwrite}
         for key, value in (("path", path), ("keyframe_interval", keyframe_interval),
                            ("max_duration", max_duration), ("ring_seconds", ring_seconds)):
             if value is not None:
@@ -206,8 +209,8 @@ class StepClient:
         """Finishes the recording: {"path", "frames", "duration", "bytes", "dropped"}."""
         return self.call("recording_stop")
 
-    def recording_save(self, path):
-        return self.call("recording_save", path=path)["path"]
+    def recording_save(self, path, overwrite=False):
+        return self.call("recording_save", path=path, overwrite=overwrite)["path"]
 
     def recording_clear(self):
         return self.call("recording_clear")
@@ -215,9 +218,9 @@ class StepClient:
     def recording_status(self):
         return self.call("recording_status")
 
-    def snapshot_save(self, path):
-        """Saves the simulation's full state to `path`; returns its simulated time."""
-        return self.call("snapshot_save", path=path)["time"]
+    def snapshot_save(self, path, overwrite=False):
+        """Saves the simulation's full state to the file named `path`; returns its time."""
+        return self.call("snapshot_save", path=path, overwrite=overwrite)["time"]
 
     def snapshot_load(self, path):
         """Restores a snapshot of this model (applied before the reply); returns its time."""
@@ -246,6 +249,14 @@ class StepClient:
 
     def replay_stop(self):
         return self.call("replay_stop")
+
+    def replay_unload(self, session=None):
+        """Releases a loaded recording (default: the active one), stopping its playback."""
+        return self.call("replay_unload", **({} if session is None else {"session": session}))
+
+    def cancel(self):
+        """Cancels the lockstep steps this session queued; returns how many requests."""
+        return self.call("cancel")["cancelled"]
 
     def replay_status(self):
         return self.call("replay_status")

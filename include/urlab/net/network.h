@@ -48,6 +48,11 @@ struct NetworkOptions {
   int io_nice = 5;
   // Frames the I/O thread may fall behind the physics thread before frames are dropped.
   std::size_t ring_capacity = 4096;
+  // The folder whose files step-server clients name (snapshots, recordings, replays): relative
+  // to the working folder; "" : recordings/ there. The scene's inputs are never written.
+  std::string files_dir;
+  // Lockstep steps one client may have queued (beyond: queue_full).
+  std::size_t max_queued_steps = 100000;
 };
 
 // The endpoints a scene file's `network:` section names (protocol.md's defaults otherwise).

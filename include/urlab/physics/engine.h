@@ -83,6 +83,11 @@ struct AppliedCommand {
   std::string error;                // non-empty when it failed
 };
 
+// The error a step command finishes with when it was cancelled (PhysicsEngine::
+// CancelStepsThrough) instead of running all its iterations.
+inline constexpr std::string_view kStepCancelled = "step: cancelled";
+inline bool IsCancelledStep(std::string_view error) { return error.starts_with(kStepCancelled); }
+
 class PhysicsEngine {
  public:
   // A hook run with the step mutex held. The model is const: change it via WithLockedData.
@@ -178,6 +183,11 @@ class PhysicsEngine {
   CommandResult WaitForCommand(std::uint64_t seq, std::chrono::steady_clock::duration timeout);
   // Newest command applied (every older one is applied too).
   std::uint64_t last_applied_command() const { return commands_.last_applied(); }
+  // Step commands with a sequence number up to `seq` that have not finished stop: a queued one
+  // never runs, a running one stops after its current iteration. Each finishes failed with an
+  // error starting kStepCancelled; commands of other kinds are untouched (and no longer wait
+  // behind them). A lockstep server cancels queued work this way.
+  void CancelStepsThrough(std::uint64_t seq);
   // Wrappers of Submit. mj_resetData + mj_forward.
   std::uint64_t Reset();
   // mj_resetDataKeyframe + mj_forward. Throws Error for a bad key id / unknown name.
@@ -295,7 +305,9 @@ class PhysicsEngine {
   int step_budget_ = 0;         // mutex held: iterations left in a step command's window
   bool window_ended_ = false;   // mutex held: a step command's window ended this iteration
   std::uint64_t step_seq_ = 0;  // mutex held: that step command
-  std::mutex wake_mutex_;       // with wake_cv_: a paused loop waits for commands
+  int step_total_ = 0;          // mutex held: its n
+  std::atomic<std::uint64_t> cancel_steps_through_{0};  // CancelStepsThrough's mark
+  std::mutex wake_mutex_;  // with wake_cv_: a paused loop waits for commands
   std::condition_variable wake_cv_;
   std::vector<cmd::ApplyForce> one_shot_;  // mutex held: forces for the next step
   bool one_shot_added_ = false;            // mutex held: one_shot_ is in xfrc_applied now

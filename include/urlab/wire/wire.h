@@ -24,6 +24,14 @@ inline constexpr std::size_t kTwistBytes = 12;      // f32 vx, vy, yaw_rate
 inline constexpr std::size_t kActionsBytes = 4;     // int32 bitmask
 // Largest control message accepted: 4 + 8 n bytes for n actuators.
 inline constexpr std::int32_t kMaxControlCount = 1 << 16;
+// Largest payload of an inbound topic (control, set_gains): the largest control message. Larger
+// payloads are dropped as too_large before they are decoded. fuzz/net_control_fuzz.cc takes
+// inputs of up to one byte more (its kind byte), so fuzzing reaches this limit.
+inline constexpr std::size_t kMaxInboundPayloadBytes =
+    4 + 8 * static_cast<std::size_t>(kMaxControlCount);
+// set_gains is an object of objects of numbers: JSON nested deeper is dropped as bad_json
+// before it is parsed.
+inline constexpr std::size_t kMaxSetGainsDepth = 2;
 
 // ---- Topic names ----
 std::string JointTopic(std::string_view art, std::string_view joint);      // {art}/joint/{joint}
@@ -65,6 +73,7 @@ enum class Drop {
   kUnknownField,     // a set_gains field other than kp, kv, torque_limit
   kNoController,     // set_gains for an articulation whose controller has no gains
   kBadFraming,       // not exactly two frames [topic][payload]
+  kTooLarge,         // a payload larger than kMaxInboundPayloadBytes
   kCount_,           // number of reasons (not a reason)
 };
 inline constexpr int kNumDrops = static_cast<int>(Drop::kCount_);

@@ -10,6 +10,7 @@
 // features that do not exist yet (recording, lights...) are refused as "not
 // supported yet". Thread: any (pure parsing).
 #include <array>
+#include <cstddef>
 #include <map>
 #include <optional>
 #include <string>
@@ -171,6 +172,10 @@ struct NetworkConfig {
   std::string step_mode = "live";            // live | direct (lockstep)
   std::string full_state = "standard";       // state/full level: minimal|standard|full|none
   std::string camera_base_port = "5558";
+  // The folder whose files step-server clients name (absolute; relative in the scene: to the
+  // scene file's folder). "" : recordings/ in the working folder of the run.
+  std::string files_dir;
+  std::size_t max_queued_steps = 100000;  // lockstep steps one client may queue
 };
 
 struct SceneConfig {
