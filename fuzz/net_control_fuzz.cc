@@ -25,7 +25,7 @@
 namespace {
 
 using urlab::net::ArticulationTopics;
-namespace wire = urlab::net::wire;
+namespace wire = urlab::wire;
 
 struct Fixture {
   std::shared_ptr<urlab::world::Session> session = urlab::fuzz::MakeArmSession();
