@@ -50,7 +50,9 @@ void CheckCompiles(const convert::PropDocument& prop, const std::string& mesh) {
       element = map[*line - 1]->Describe();
       element = element.substr(0, element.find(" at "));
     }
-    if (const auto cut = message.find("\nElement"); cut != std::string::npos) message.erase(cut);
+    for (const char* generated : {"\nElement", "\nObject"}) {
+      if (const auto cut = message.find(generated); cut != std::string::npos) message.erase(cut);
+    }
     throw InputError({mesh, 0}, "the converted model does not compile: " + message +
                                     (element.empty() ? "" : " (in " + element + ")"));
   }

@@ -72,7 +72,9 @@ void CheckVisualMesh(const PropSpec& spec, const std::string& file) {
   if (spec.scale != std::array<double, 3>{1, 1, 1}) {
     mesh.SetReals("scale", std::vector<double>(spec.scale.begin(), spec.scale.end()));
   }
-  document::Element& geom = doc.Section("worldbody").AddChild("geom");
+  // In a body, as in the prop: MuJoCo weighs a body's meshes (even at density 0), a world
+  // geom's never.
+  document::Element& geom = doc.Section("worldbody").AddChild("body").AddChild("geom");
   geom.Set("type", "mesh");
   geom.Set("mesh", kVisualGeomName);
   geom.SetInt("contype", 0);
@@ -82,9 +84,11 @@ void CheckVisualMesh(const PropSpec& spec, const std::string& file) {
     physics::CompileXmlString(mjcf::WriteString(doc));
   } catch (const physics::CompileError& e) {
     std::string message = e.what();
-    if (const auto cut = message.find("\nElement"); cut != std::string::npos) {
-      message.erase(cut);  // the line of the generated check model means nothing to the user
+    for (const char* generated : {"\nElement", "\nObject"}) {
+      // The line of the generated check model means nothing to the user.
+      if (const auto cut = message.find(generated); cut != std::string::npos) message.erase(cut);
     }
+    if (message.starts_with("Error: ")) message.erase(0, 7);
     std::string hint;
     if (message.find("volume") != std::string::npos) {
       hint =

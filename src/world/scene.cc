@@ -443,16 +443,19 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
     }
     CheckCompiledScene(scene, compiled, sink);
     const mjModel* m = compiled.model.get();
+    // Begin-play computes the initial state (mj_forward) before anything steps: an engine error
+    // there (the stack overflowing) is found here too.
+    const physics::DataPtr d = physics::MakeData(m);
+    mj_forward(m, d.get());
     report.sizes = {"nq " + std::to_string(m->nq), "nv " + std::to_string(m->nv),
                     "nu " + std::to_string(m->nu), "nbody " + std::to_string(m->nbody)};
   } catch (const InputError& e) {
     sink.Add(e);
-  } catch (const physics::CompileError& e) {
-    // A MuJoCo compile error: its message names the element and file:line itself.
-    sink.Error({}, e.what());
   } catch (const Error& e) {
-    // An engine error while compiling (e.g. the stack overflows in mj_setConst): located at the
-    // file validated, with the hint `run` prints.
+    // A MuJoCo compile error names the element and its file:line in its text when it can; an
+    // engine error while compiling (2.2.2's compiler runs the model: "engine error: Stack
+    // overflow") names nothing. Either is located at the file validated, with the hint `run`
+    // prints.
     const std::string hint = MujocoHint(e.what());
     sink.Error({fs::absolute(path).lexically_normal().string(), 0},
                std::string(e.what()) + (hint.empty() ? "" : "\n  hint: " + hint));

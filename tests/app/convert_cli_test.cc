@@ -38,39 +38,28 @@ class ConvertCliTest : public ::testing::Test {
   std::string dir_;
 };
 
-TEST_F(ConvertCliTest, CtrlCStopsTheDecompositionPromptlyAndWritesNothing) {
-  // A finely tessellated torus with a tight threshold: seconds of cutting on any machine.
+TEST_F(ConvertCliTest, CtrlCStopsTheDecompositionAndWritesNothing) {
+  // A finely tessellated torus with a tight threshold: minutes of cutting on a loaded machine.
+  // The old convert finished it, wrote OUT.xml and OUT_parts/, then exited 130. (How promptly
+  // the workers stop is measured against a whole decomposition in tests/convert.)
   const std::string mesh = dir_ + "/torus.stl";
   convert::testing::Write(mesh, convert::StlBytes(convert::testing::Torus(0.05, 0.015, 360, 180)));
-  const std::string args = "convert " + mesh + " --threshold 0.002 --max-parts 64 --threads 2";
-  // Baseline: the whole conversion, in this process's conditions.
-  const auto t0 = Clock::now();
-  std::string out;
-  ASSERT_EQ(RunCommand(UrlabBinary() + " " + args + " -o " + dir_ + "/full.xml --cache-dir " +
-                           dir_ + "/cache_full",
-                       &out),
-            0)
-      << out;
-  const auto full = Clock::now() - t0;
-  ASSERT_TRUE(fs::exists(dir_ + "/full.xml"));
-  // Interrupted while cutting.
-  testing::UrlabProcess p(args + " -o " + dir_ + "/out.xml --cache-dir " + dir_ + "/cache",
+  testing::UrlabProcess p("convert " + mesh + " --threshold 0.002 --max-parts 64 --threads 2 -o " +
+                              dir_ + "/out.xml --cache-dir " + dir_ + "/cache",
                           dir_ + "/convert.txt");
-  ASSERT_TRUE(p.WaitFor("cutting")) << p.output();
+  ASSERT_TRUE(p.WaitFor("cutting", std::chrono::seconds(120))) << p.output();
   const auto sent = Clock::now();
   p.Signal(SIGINT);
-  EXPECT_EQ(p.Wait(std::chrono::minutes(5)), 130) << p.output();
-  const auto stopped = Clock::now() - sent;
-  EXPECT_LT(stopped * 4, full) << std::chrono::duration<double>(stopped).count() << " s after "
-                               << "SIGINT; the whole conversion took "
-                               << std::chrono::duration<double>(full).count() << " s\n"
-                               << p.output();
+  EXPECT_EQ(p.Wait(std::chrono::minutes(10)), 130) << p.output();
+  const double seconds = std::chrono::duration<double>(Clock::now() - sent).count();
   EXPECT_TRUE(Has(p.output(), "interrupted by SIGINT")) << p.output();
+  EXPECT_FALSE(Has(p.output(), "[100%]")) << seconds << " s after SIGINT\n" << p.output();
   EXPECT_FALSE(Has(p.output(), "wrote ")) << p.output();
   EXPECT_FALSE(fs::exists(dir_ + "/out.xml"));
   EXPECT_FALSE(fs::exists(dir_ + "/out_parts"));
   EXPECT_FALSE(fs::exists(dir_ + "/out_parts.partial"));
   EXPECT_EQ(CachedDecompositions(dir_ + "/cache"), 0);
+  std::printf("convert stopped %.3f s after SIGINT\n", seconds);
 }
 
 TEST_F(ConvertCliTest, AFlatMeshIsRefusedBeforeTheDecomposition) {
