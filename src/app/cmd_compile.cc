@@ -160,7 +160,8 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
       "validate",
       "Check a scene (YAML) or MJCF file without running it or writing anything: read, compose "
       "and compile as `urlab run` does, run every check begin-play runs, and report every "
-      "problem found with its file and line. Exit code 1 when there is any error.");
+      "problem found with its file and line. Meshes are converted and decomposed in a temporary "
+      "folder removed at the end (never in the cache). Exit code 1 when there is any error.");
   static ValidateArgs vargs;
   val->add_option("FILE", vargs.file, "scene (.yaml) or MJCF (.xml) file");
   val->add_flag("--bridge-rules", vargs.bridge_rules,

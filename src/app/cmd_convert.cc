@@ -2,6 +2,8 @@
 // model (the editor's Decompose Mesh button): the visual mesh in group 2, the convex parts of
 // our decomposition (written as STL files in OUT_parts/) in group 3. The model is compiled as a
 // check before OUT.xml and OUT_parts/ are written, so a model MuJoCo refuses leaves nothing.
+// Ctrl-C, SIGTERM or SIGHUP reach the decomposition's worker threads: it stops within a unit of
+// work, nothing is written and the exit code is 128+signal.
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -13,6 +15,7 @@
 
 #include "app/commands.h"
 #include "app/signals.h"
+#include "app/validators.h"
 #include "urlab/convert/prop.h"
 #include "urlab/core/files.h"
 #include "urlab/document/element.h"
@@ -33,6 +36,29 @@ struct ConvertArgs {
   std::optional<double> mass, density;
 };
 
+// The prop model compiled as a check; a MuJoCo message is located at the mesh file, naming the
+// generated element (the generated text's line numbers mean nothing to the user).
+void CheckCompiles(const convert::PropDocument& prop, const std::string& mesh) {
+  mjcf::LineMap map;
+  const std::string xml = mjcf::WriteString(prop.doc, {}, &map);  // absolute paths
+  try {
+    physics::CompileXmlString(xml);
+  } catch (const physics::CompileError& e) {
+    std::string message = e.what();
+    std::string element;
+    if (const auto line = mjcf::CompileMessageLine(message);
+        line && *line >= 1 && *line <= map.size() && map[*line - 1]) {
+      element = map[*line - 1]->Describe();
+      element = element.substr(0, element.find(" at "));
+    }
+    for (const char* generated : {"\nElement", "\nObject"}) {
+      if (const auto cut = message.find(generated); cut != std::string::npos) message.erase(cut);
+    }
+    throw InputError({mesh, 0}, "the converted model does not compile: " + message +
+                                    (element.empty() ? "" : " (in " + element + ")"));
+  }
+}
+
 int Convert(const ConvertArgs& args) {
   namespace fs = std::filesystem;
   CurrentInput() = args.mesh;
@@ -47,6 +73,8 @@ int Convert(const ConvertArgs& args) {
   spec.decompose.max_parts = args.max_parts;
   spec.decompose.resolution = args.resolution;
   spec.decompose.threads = args.threads;
+  // Ctrl-C in graceful mode is polled by the decomposition's threads (an atomic load).
+  spec.decompose.cancelled = [] { return StopSignal() != 0; };
   const bool tty = isatty(fileno(stderr));
   int last_percent = -1;
   spec.decompose.progress = [&](double f, std::string_view stage) {
@@ -82,7 +110,13 @@ int Convert(const ConvertArgs& args) {
   try {
     prop = convert::BuildPropDocument(spec, cache, staging);
     for (const std::string& line : prop.report) spdlog::info("{}", line);
-    physics::CompileXmlString(mjcf::WriteString(prop.doc));  // absolute paths
+    convert::ThrowIfCancelled(spec.decompose);
+    CheckCompiles(prop, spec.mesh);
+    convert::ThrowIfCancelled(spec.decompose);
+  } catch (const convert::Cancelled&) {
+    fs::remove_all(staging);
+    if (last_percent >= 0 && tty) std::fprintf(stderr, "\n");
+    return ExitCodeForSignal(StopSignal());  // leaving the graceful scope reports the signal
   } catch (...) {
     fs::remove_all(staging);
     throw;
@@ -113,7 +147,10 @@ void RegisterConvertCommand(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "convert",
       "Convex-decompose a mesh (STL, OBJ, PLY, glTF/GLB, FBX, DAE...) into a stand-alone MJCF "
-      "model: visual mesh in group 2, convex parts (OUT_parts/partN.stl) in group 3.");
+      "model: visual mesh in group 2, convex parts (OUT_parts/partN.stl) in group 3. The visual "
+      "mesh is checked with MuJoCo first (a flat or inconsistently oriented mesh fails in "
+      "seconds); the model is compiled before anything is written. Ctrl-C stops the "
+      "decomposition promptly, writes nothing and exits 130.");
   cmd->add_option("mesh", args->mesh, "mesh file")->required();
   cmd->add_option("-o,--output", args->out, "MJCF file to write")->required()->check(OutputPath());
   cmd->add_option("--threshold", args->threshold,
@@ -129,8 +166,8 @@ void RegisterConvertCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--mode", args->mode, "static, dynamic (free joint) or mocap")
       ->check(CLI::IsMember({"static", "dynamic", "mocap"}));
   cmd->add_option("--mass", args->mass, "total mass in kg (parts share it by volume)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--density", args->density, "density in kg/m^3")->check(CLI::PositiveNumber);
+      ->check(kFinitePositive);
+  cmd->add_option("--density", args->density, "density in kg/m^3")->check(kFinitePositive);
   cmd->add_option("--cache-dir", args->cache_dir,
                   "decomposition cache (default $URLAB_CACHE_DIR or ~/.cache/urlab)");
   cmd->add_flag("--no-cache", args->no_cache, "decompose even when a cached result exists");

@@ -1,7 +1,10 @@
 // `urlab run`: the headless main job. Plays a scene with the Manager, ticking it at ~60 Hz on the
 // main thread, logs the real-time factor and step rate once a second and stops cleanly on
-// Ctrl-C / SIGTERM / SIGHUP (exit 128+signal) or after --duration (exit 0). A MuJoCo error while
-// playing stops it with MuJoCo's message and a hint (exit 1) unless --reset-on-divergence.
+// Ctrl-C / SIGTERM / SIGHUP (exit 128+signal) or after --duration (exit 0). A MuJoCo error or a
+// divergence (NaN/Inf, MuJoCo's instability warnings) while playing stops it with the message and
+// a hint (exit 1) unless --reset-on-divergence: after a divergence MuJoCo has already reset the
+// state to qpos0 behind the controllers' back, so going on would run a different experiment
+// than the one asked for.
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -17,6 +20,7 @@
 
 #include "app/commands.h"
 #include "app/signals.h"
+#include "app/validators.h"
 #include "urlab/camera/camera_subsystem.h"
 #include "urlab/camera/video_recorder.h"
 #include "urlab/core/mujoco_handlers.h"
@@ -26,6 +30,7 @@
 #include "urlab/replay/recorder.h"
 #include "urlab/viewer/viewer.h"
 #include "urlab/world/manager.h"
+#include "world/realtime_watch.h"
 
 namespace urlab::app {
 
@@ -141,11 +146,14 @@ int Run(const RunArgs& args) {
     video = std::make_unique<camera::CameraVideo>(*cameras, args.video[0], args.video[1]);
   }
   SetImmediateExit(false);  // playing: a signal stops the loop, which ends cleanly
-  // MuJoCo errors reach us as engine events (delivered inside Tick, on this thread).
+  // MuJoCo errors and divergences reach us as engine events (delivered inside Tick, on this
+  // thread). With auto-reset the engine has reset after a divergence already; errors still come.
   std::optional<physics::EngineEvent> error;
   std::uint64_t errors = 0;
   manager.AddEventListener([&](const physics::EngineEvent& e) {
-    if (e.kind != physics::EngineEventKind::kError) return;
+    const bool fatal_divergence =
+        e.kind == physics::EngineEventKind::kDivergence && !args.reset_on_divergence;
+    if (e.kind != physics::EngineEventKind::kError && !fatal_divergence) return;
     ++errors;
     if (!error) error = e;
   });
@@ -164,6 +172,7 @@ int Run(const RunArgs& args) {
   std::uint64_t last_steps = engine.step_count();
   const std::uint64_t first_steps = last_steps;
   std::optional<physics::EngineEvent> fatal;
+  world::RealTimeWatch realtime;  // warns when a paced run stays behind real time
   while (StopSignal() == 0) {
     manager.Tick();
     if (video) video->Poll();
@@ -172,6 +181,11 @@ int Run(const RunArgs& args) {
       spdlog::info("{} by SIGUSR1", engine.paused() ? "paused" : "resumed");
     }
     const auto now = Clock::now();
+    if (auto behind =
+            realtime.Update(now, engine.real_time_factor(), engine.speed_percent() / 100.0,
+                            !engine.paused() && !engine.as_fast_as_possible())) {
+      spdlog::warn("{}", *behind);
+    }
     if (error) {
       if (!args.reset_on_divergence) {
         fatal = std::move(error);
@@ -261,9 +275,11 @@ int Run(const RunArgs& args) {
   }
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();
   const double sim = sim_time;
-  const std::string how = signal  ? std::string(" (stopped by signal ") + SignalName(signal) + ")"
-                          : fatal ? " (stopped by a MuJoCo error)"
-                                  : "";
+  const bool diverged = fatal && fatal->kind == physics::EngineEventKind::kDivergence;
+  const std::string how = signal ? std::string(" (stopped by signal ") + SignalName(signal) + ")"
+                          : diverged ? " (stopped: the simulation diverged)"
+                          : fatal    ? " (stopped by a MuJoCo error)"
+                                     : "";
   std::printf("summary: sim_time=%.3f s steps=%llu wall=%.3f s mean_rtf=%.3f%s\n", sim,
               static_cast<unsigned long long>(steps), wall, wall > 0 ? sim / wall : 0.0,
               how.c_str());
@@ -274,6 +290,9 @@ int Run(const RunArgs& args) {
     if (message.starts_with(kEnginePrefix)) message.erase(0, kEnginePrefix.size());
     std::cerr << "urlab: error: " << args.scene << ": at t=" << fatal->sim_time
               << " s: " << WithHint(message)
+              << (diverged ? "\n  hint: a smaller timestep, more damping or armature, or gains "
+                             "the actuators can follow usually keep it stable"
+                           : "")
               << "\n  (--reset-on-divergence resets and goes on instead)\n";
   }
   for (const std::string& f : failures) std::cerr << "urlab: error: " << f << "\n";
@@ -281,22 +300,6 @@ int Run(const RunArgs& args) {
   if (signal) return ExitCodeForSignal(signal);
   return failures.empty() ? 0 : 1;
 }
-
-// A number that must be finite and > 0 (CLI::PositiveNumber lets NaN through).
-const CLI::Validator kFinitePositive(
-    [](std::string& text) -> std::string {
-      double v = 0;
-      std::size_t used = 0;
-      try {
-        v = std::stod(text, &used);
-      } catch (const std::exception&) {
-        return "'" + text + "' is not a number";
-      }
-      if (used != text.size()) return "'" + text + "' is not a number";
-      if (!std::isfinite(v) || v <= 0) return "must be a finite number > 0, not " + text;
-      return {};
-    },
-    "FINITE > 0");
 
 // An integer written as one (CLI11 would otherwise report a fraction as a conversion error).
 const CLI::Validator kInteger(
@@ -356,8 +359,9 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                   "scene's network.files_dir (default: recordings/ in the working folder)")
       ->check(kFolderOrAbsent);
   cmd->add_flag("--reset-on-divergence", args.reset_on_divergence,
-                "reset to the initial state when the simulation diverges or MuJoCo reports an "
-                "error (instead of stopping with exit 1)");
+                "reset to the initial state when the simulation diverges (NaN/Inf, MuJoCo's "
+                "instability warnings) or MuJoCo reports an error, and go on (by default either "
+                "stops the run with its message and exit 1)");
 }
 
 void AddViewOptions(CLI::App* cmd, RunArgs& args) {
@@ -451,11 +455,12 @@ void RegisterRunCommand(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "run",
       "Play a scene (YAML) or a single MJCF model headless: physics on its own thread, "
-      "controllers, initial keyframes. Logs the real-time factor once a second. Ctrl-C, SIGTERM "
+      "controllers, initial keyframes. Logs the real-time factor once a second and warns when "
+      "it stays below 95 % of the speed asked for (3 s, then every 30 s). Ctrl-C, SIGTERM "
       "or SIGHUP stops it cleanly, prints a summary and exits 128+signal (130, 143, 129); "
       "--duration ends it with exit 0; during loading a signal exits at once (a second one "
-      "forces a stuck stop). SIGUSR1 toggles pause. A MuJoCo error stops it with MuJoCo's "
-      "message and exit 1 unless --reset-on-divergence.");
+      "forces a stuck stop). SIGUSR1 toggles pause. A MuJoCo error or a divergence stops it "
+      "with the message and exit 1 unless --reset-on-divergence.");
   static RunArgs args;
   AddRunOptions(cmd, args);
   cmd->add_option("--record", args.record,

@@ -693,6 +693,7 @@ std::vector<double> Scores(const Part& part, const std::vector<Plane>& cands, co
                            const Context& ctx) {
   std::vector<double> score(cands.size());
   internal::ParallelFor(static_cast<int>(cands.size()), ctx.threads, [&](int i) {
+    ThrowIfCancelled(ctx.options);
     score[static_cast<std::size_t>(i)] =
         ScoreCut(part, cands[static_cast<std::size_t>(i)], detail, ctx);
   });
@@ -827,6 +828,7 @@ struct Prepared {
 Prepared Prepare(TriMesh mesh, const DecomposeOptions& options) {
   CheckOptions(options);
   auto progress = [&](double f, std::string_view what) {
+    ThrowIfCancelled(options);
     if (options.progress) options.progress(f, what);
   };
   Prepared p;
@@ -848,6 +850,7 @@ Prepared Prepare(TriMesh mesh, const DecomposeOptions& options) {
         "simplified from {} to {} triangles (vertex clustering, {} cells{})", before,
         mesh.triangles.size(), cells,
         dropped ? fmt::format("; {} triangles on non-manifold edges dropped", dropped) : ""));
+    ThrowIfCancelled(options);
     clean = CleanMesh(mesh);  // whether the simplified surface is closed decides the terms
   }
   const Bounds b = ComputeBounds(mesh);
@@ -897,7 +900,9 @@ Prepared Prepare(TriMesh mesh, const DecomposeOptions& options) {
   }
   progress(0.01, "voxelizing");
   p.ctx.grid = internal::Voxelize(p.mesh, p.ctx.box, options.resolution);
+  ThrowIfCancelled(options);
   if (p.ctx.solid) p.ctx.inside = internal::InsideTest(p.mesh, options.resolution);
+  ThrowIfCancelled(options);
   if (p.ctx.solid && p.ctx.grid.interior.empty()) {
     p.ctx.solid = false;
     p.notes.push_back("thinner than one voxel: concavity from the surface term only");
@@ -971,10 +976,15 @@ bool Touch(const Bounds& a, const Bounds& b, double margin) {
 
 }  // namespace
 
+void ThrowIfCancelled(const DecomposeOptions& options) {
+  if (options.cancelled && options.cancelled()) throw Cancelled();
+}
+
 Decomposition Decompose(TriMesh mesh, const DecomposeOptions& options) {
   Prepared p = Prepare(std::move(mesh), options);
   const Context& ctx = p.ctx;
   auto progress = [&](double f, std::string_view what) {
+    ThrowIfCancelled(options);
     if (options.progress) options.progress(std::clamp(f, 0.0, 1.0), what);
   };
   Decomposition out;
@@ -1023,6 +1033,7 @@ Decomposition Decompose(TriMesh mesh, const DecomposeOptions& options) {
     ++out.cuts;
     std::vector<Piece> evaluated(pieces.size());
     internal::ParallelFor(static_cast<int>(pieces.size()), ctx.threads, [&](int i) {
+      ThrowIfCancelled(options);
       evaluated[static_cast<std::size_t>(i)] = ToPiece(pieces[static_cast<std::size_t>(i)], ctx);
     });
     for (std::size_t i = 0; i < pieces.size(); ++i) {
@@ -1056,6 +1067,7 @@ Decomposition Decompose(TriMesh mesh, const DecomposeOptions& options) {
   auto evaluate = [&](const std::vector<std::pair<std::size_t, std::size_t>>& list) {
     std::vector<Pair> result(list.size());
     internal::ParallelFor(static_cast<int>(list.size()), ctx.threads, [&](int i) {
+      ThrowIfCancelled(options);
       const auto [a, b] = list[static_cast<std::size_t>(i)];
       result[static_cast<std::size_t>(i)] = {a, b, MergePieces(parts[a], parts[b], ctx)};
     });
@@ -1102,6 +1114,7 @@ Decomposition Decompose(TriMesh mesh, const DecomposeOptions& options) {
   progress(0.95, "hulls");
   out.parts.resize(parts.size());
   internal::ParallelFor(static_cast<int>(parts.size()), ctx.threads, [&](int i) {
+    ThrowIfCancelled(options);
     out.parts[static_cast<std::size_t>(i)] = FinishPiece(parts[static_cast<std::size_t>(i)], p);
   });
   for (const ConvexPart& part : out.parts) out.concavity = std::max(out.concavity, part.concavity);

@@ -11,6 +11,7 @@
 #include <fstream>
 
 #include "assimp_reader.h"
+#include "ply_header.h"
 #include "urlab/core/error.h"
 #include "urlab/core/files.h"
 
@@ -27,8 +28,21 @@ std::string Extension(const std::string& path) {
   return Lower(std::filesystem::path(path).extension().string());
 }
 
+// True when every byte is printable ASCII or white space (an ASCII STL); binary triangle records
+// hold NULs and control bytes (float bits) within their first few records.
+bool LooksLikeText(std::string_view bytes) {
+  for (char ch : bytes) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 && c != '\t' && c != '\n' && c != '\r' && c != '\f' && c != '\v') return false;
+    if (c == 0x7f) return false;
+  }
+  return true;
+}
+
 bool IsAsciiStl(std::string_view bytes) {
-  // "solid" starts ASCII files, but also some binary headers: binary wins when its size matches.
+  // "solid" starts ASCII files, but also some binary headers: binary wins when its size matches,
+  // and when the bytes after the 80-byte header are not text (a binary file whose count is
+  // wrong must not be read as ASCII and lose its triangles).
   if (bytes.size() >= 84) {
     std::uint32_t n = 0;
     std::memcpy(&n, bytes.data() + 80, 4);
@@ -36,7 +50,8 @@ bool IsAsciiStl(std::string_view bytes) {
   }
   std::size_t i = 0;
   while (i < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[i]))) ++i;
-  return bytes.substr(i, 5) == "solid";
+  if (bytes.substr(i, 5) != "solid") return false;
+  return LooksLikeText(bytes.substr(0, 84 + 50 * 64));
 }
 
 // Whitespace-separated tokens of a line.
@@ -118,6 +133,14 @@ TriMesh ParseStl(std::string_view bytes, const std::string& name) {
     throw InputError({name, 0}, fmt::format("binary STL truncated: header says {} triangles, the "
                                             "file holds {}",
                                             n, (bytes.size() - 84) / 50));
+  }
+  // More whole triangle records than the header counts: reading n would silently drop the rest.
+  // (A few trailing bytes, less than one record, are padding some exporters write.)
+  if (const std::uint64_t held = (bytes.size() - 84) / 50; held > n) {
+    throw InputError({name, 0}, fmt::format("binary STL: the header says {} triangles but the "
+                                            "file holds {} triangle records; its triangle count "
+                                            "(bytes 80-83) is wrong",
+                                            n, held));
   }
   CheckTriangleCount(n, name);
   TriMesh m;
@@ -238,6 +261,14 @@ TriMesh ReadMesh(const std::string& path) {
     const std::string bytes = ReadInputFile(path, "mesh file", {}, kMaxMeshFileBytes);
     m = e == ".stl" ? ParseStl(bytes, path) : ParseObj(bytes, path);
   } else if (internal::AssimpCanRead(e)) {
+    if (e == ".ply") {
+      // Declared counts against the file's size before assimp allocates for them.
+      std::ifstream in(path, std::ios::binary);
+      std::string head(internal::kMaxPlyHeaderBytes, '\0');
+      in.read(head.data(), static_cast<std::streamsize>(head.size()));
+      head.resize(static_cast<std::size_t>(in.gcount()));
+      internal::CheckPlyHeader(head, std::filesystem::file_size(path), path);
+    }
     m = internal::AssimpRead(path);
   } else {
     throw InputError({path, 0}, "unknown mesh format '" + e +

@@ -10,6 +10,8 @@
 #include "urlab/core/error.h"
 #include "urlab/core/files.h"
 #include "urlab/document/element.h"
+#include "urlab/mjcf/writer.h"
+#include "urlab/physics/model.h"
 
 namespace urlab::convert {
 
@@ -58,6 +60,50 @@ std::string VisualFile(const std::string& source, const TriMesh& mesh, const std
   return out;
 }
 
+// The visual mesh alone, compiled by MuJoCo as the prop's model will compile it: a mesh MuJoCo
+// 2.2.2 refuses (flat: no volume; faces it finds inconsistently oriented) is reported before
+// minutes of decomposition, not after.
+void CheckVisualMesh(const PropSpec& spec, const std::string& file) {
+  document::Document doc(spec.name);
+  doc.Section("compiler").Set("angle", "radian");
+  document::Element& mesh = doc.Section("asset").AddChild("mesh");
+  mesh.Set("name", kVisualGeomName);
+  mesh.Set("file", file);
+  if (spec.scale != std::array<double, 3>{1, 1, 1}) {
+    mesh.SetReals("scale", std::vector<double>(spec.scale.begin(), spec.scale.end()));
+  }
+  // In a body, as in the prop: MuJoCo weighs a body's meshes (even at density 0), a world
+  // geom's never.
+  document::Element& geom = doc.Section("worldbody").AddChild("body").AddChild("geom");
+  geom.Set("type", "mesh");
+  geom.Set("mesh", kVisualGeomName);
+  geom.SetInt("contype", 0);
+  geom.SetInt("conaffinity", 0);
+  geom.SetReal("density", 0);
+  try {
+    physics::CompileXmlString(mjcf::WriteString(doc));
+  } catch (const physics::CompileError& e) {
+    std::string message = e.what();
+    for (const char* generated : {"\nElement", "\nObject"}) {
+      // The line of the generated check model means nothing to the user.
+      if (const auto cut = message.find(generated); cut != std::string::npos) message.erase(cut);
+    }
+    if (message.starts_with("Error: ")) message.erase(0, 7);
+    std::string hint;
+    if (message.find("volume") != std::string::npos) {
+      hint =
+          "; the mesh is flat or encloses no volume: MuJoCo 2.2.2 needs a closed solid, so "
+          "give the surface a thickness (e.g. extrude it) before converting";
+    } else if (message.find("orientation") != std::string::npos) {
+      hint =
+          "; its faces are not consistently oriented (a non-manifold surface): repair it "
+          "(e.g. merge duplicate vertices, remove faces sharing an edge three ways)";
+    }
+    throw InputError({spec.mesh, 0},
+                     "MuJoCo 2.2.2 cannot use this mesh as the visual mesh: " + message + hint);
+  }
+}
+
 }  // namespace
 
 const char* PropModeName(PropMode mode) {
@@ -96,7 +142,10 @@ PropDocument BuildPropDocument(const PropSpec& spec, const std::string& cache_di
   const auto t0 = std::chrono::steady_clock::now();
   TriMesh mesh = ReadMesh(spec.mesh);
   out.report.push_back(fmt::format("read {}: {} triangles", spec.mesh, mesh.triangles.size()));
+  ThrowIfCancelled(spec.decompose);
+  // The visual mesh first: what MuJoCo refuses is found before the decomposition runs.
   const std::string visual = VisualFile(spec.mesh, mesh, cache_dir, &out.report);
+  CheckVisualMesh(spec, visual);
   for (Vec3& v : mesh.vertices) {
     for (int k = 0; k < 3; ++k) v[k] *= spec.scale[k];
   }
@@ -104,9 +153,12 @@ PropDocument BuildPropDocument(const PropSpec& spec, const std::string& cache_di
     out.decomposition = DecomposeCached(mesh, spec.decompose, cache_dir, &out.cache_hit);
   } catch (const InputError&) {
     throw;
+  } catch (const Cancelled&) {
+    throw;
   } catch (const Error& e) {
     throw InputError({spec.mesh, 0}, e.what());
   }
+  ThrowIfCancelled(spec.decompose);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.report.push_back(fmt::format(
@@ -119,6 +171,9 @@ PropDocument BuildPropDocument(const PropSpec& spec, const std::string& cache_di
   document::Document doc(spec.name);
   doc.Section("compiler").Set("angle", "radian");
   document::Element& asset = doc.Section("asset");
+  // Every generated element is located at the mesh file, so a MuJoCo message about one names
+  // the file the user gave, not a line of text they never saw (a scene relocates them to its
+  // entry).
   document::Element& vmesh = asset.AddChild("mesh");
   vmesh.Set("name", kVisualGeomName);
   vmesh.Set("file", visual);
@@ -167,6 +222,7 @@ PropDocument BuildPropDocument(const PropSpec& spec, const std::string& cache_di
       g.SetReal("density", *spec.density);
     }
   }
+  doc.root().Visit([&](document::Element& e) { e.set_location({spec.mesh, 0}); });
   out.doc = std::move(doc);
   return out;
 }

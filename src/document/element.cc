@@ -360,6 +360,11 @@ std::string CheckValue(const AttributeSpec& spec, std::string_view value) {
           }
         }
       }
+      // Infinity is refused like NaN: MuJoCo 2.2.2 takes it and computes garbage (an infinite
+      // size, mass or range) instead of an error.
+      for (double x : *v) {
+        if (std::isinf(x)) return "'" + std::string(value) + "' contains an infinite value";
+      }
       const int n = static_cast<int>(v->size());
       if (spec.max_count >= 0 && n > spec.max_count) {
         return "expected at most " + CountText(spec.max_count, spec) + ", got " + std::to_string(n);

@@ -5,6 +5,7 @@
 #include <array>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -261,9 +262,18 @@ void FindMissingFiles(const Document& doc, Diagnostics& sink, const std::string&
       if (!a.spec || a.spec->type != document::ValueType::kFile) continue;
       const std::optional<std::string> path = e.ResolvedFile(a.name);
       std::error_code ec;
-      if (path && !fs::is_regular_file(*path, ec)) {
+      if (!path || fs::is_regular_file(*path, ec)) continue;
+      if (!fs::exists(*path, ec)) {
         sink.Error(e.location(), label + "<" + e.tag() + "> " + a.name + " '" + a.value +
                                      "' not found (looked for " + *path + ")");
+        continue;
+      }
+      // It exists but is a folder, a device, a FIFO...: say what it is (CheckInputFile's words).
+      try {
+        CheckInputFile(*path, "<" + e.tag() + "> " + a.name, e.location(),
+                       std::numeric_limits<std::uintmax_t>::max());
+      } catch (const InputError& problem) {
+        sink.Error(e.location(), label + problem.message());
       }
     }
   });

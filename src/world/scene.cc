@@ -1,6 +1,7 @@
 #include "urlab/world/scene.h"
 
 #include <spdlog/spdlog.h>
+#include <stdlib.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -8,6 +9,7 @@
 #include "urlab/convert/mesh_assets.h"
 #include "urlab/convert/prop.h"
 #include "urlab/core/files.h"
+#include "urlab/core/mujoco_hints.h"
 #include "urlab/mjcf/bridge.h"
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
@@ -58,10 +60,10 @@ document::Document ReadBridged(const std::string& path, const std::string& label
 // Mesh files MuJoCo 2.2.2 cannot load are converted (cached); each step is logged, warnings
 // (a dropped visual mesh) are kept for the user; face orientation repairs join the bridge report
 // (rule mesh.orientation).
-void PrepareMeshes(document::Document& doc, const std::string& label,
+void PrepareMeshes(document::Document& doc, const std::string& label, const std::string& cache_dir,
                    std::vector<document::Diagnostic>* warnings, mjcf::BridgeReport* bridge) {
   try {
-    const convert::MeshAssetReport r = convert::PrepareMeshAssets(doc, convert::DefaultCacheDir());
+    const convert::MeshAssetReport r = convert::PrepareMeshAssets(doc, cache_dir);
     for (const std::string& step : r.steps) spdlog::info("{}{}", label, step);
     for (const Diagnostic& w : r.warnings) {
       warnings->push_back(w);
@@ -150,11 +152,14 @@ void SaveDebug(const document::Document& doc, const mjModel* m, const std::strin
   spdlog::info("saved {} and {}", xml, mjb);
 }
 
-// A document the scene generated (a prop, a terrain) as a composition input at its placement;
-// it takes the scene's options.
+// A document the scene generated (a prop, a terrain, a launcher) as a composition input at its
+// placement; it takes the scene's options. Its elements are located at the scene entry that made
+// them, so a MuJoCo message about one names the scene file's line, not the generated text's.
 mjcf::ArticulationInput GeneratedInput(const std::string& name, document::Document doc,
                                        const std::array<double, 3>& pos,
-                                       const std::array<double, 4>& quat) {
+                                       const std::array<double, 4>& quat,
+                                       const SourceLocation& where) {
+  doc.root().Visit([&](document::Element& e) { e.set_location(where); });
   mjcf::ArticulationInput in;
   in.name = name;
   in.doc = std::move(doc);
@@ -193,7 +198,18 @@ bool IsConvertedPropPart(const CompiledScene& scene, int geom) {
   return false;
 }
 
-CompiledScene BuildScene(const SceneConfig& scene) {
+namespace {
+
+// An error of a prop or terrain entry at the scene file's line, naming the file it concerns.
+InputError AtEntry(const SourceLocation& entry, const std::string& name, const InputError& e) {
+  const std::string file = e.where().str();
+  return InputError(entry, name + ": " + (file.empty() ? "" : file + ": ") + e.message());
+}
+
+}  // namespace
+
+CompiledScene BuildScene(const SceneConfig& scene, const std::string& cache) {
+  const std::string cache_dir = cache.empty() ? convert::DefaultCacheDir() : cache;
   std::vector<mjcf::ArticulationInput> inputs;
   physics::SoftwareModelSpec software;
   std::string bridge_text;
@@ -203,7 +219,7 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     in.name = a.name;
     mjcf::BridgeReport report;
     in.doc = ReadBridged(a.mjcf, a.name + ": ", &report);
-    PrepareMeshes(in.doc, a.name + ": ", &mesh_warnings, &report);
+    PrepareMeshes(in.doc, a.name + ": ", cache_dir, &mesh_warnings, &report);
     AddBridgeRuntime(report, a.name + "_", &software);
     NoteBridge(report, a.name + ": ", &bridge_text);
     in.placement.pos = a.pos;
@@ -217,27 +233,26 @@ CompiledScene BuildScene(const SceneConfig& scene) {
   for (const PropConfig& p : scene.props) {
     convert::PropDocument built;
     try {
-      built = convert::BuildPropDocument(p.spec, convert::DefaultCacheDir());
+      built = convert::BuildPropDocument(p.spec, cache_dir);
     } catch (const InputError& e) {
-      throw InputError(e.where(), p.spec.name + ": " + e.message());
+      throw AtEntry(p.where, p.spec.name, e);
     }
     for (const std::string& line : built.report) spdlog::info("{}: {}", p.spec.name, line);
     prop_cache_hits.push_back(built.cache_hit ? 1 : 0);
-    inputs.push_back(GeneratedInput(p.spec.name, std::move(built.doc), p.pos, p.quat));
+    inputs.push_back(GeneratedInput(p.spec.name, std::move(built.doc), p.pos, p.quat, p.where));
   }
   // Terrain: heightfields sampled from meshes (cached) or PNG height maps, composed last.
   std::vector<bool> terrain_cached;
   for (const TerrainConfig& t : scene.terrain) {
     convert::TerrainDocument built;
     try {
-      built = convert::BuildTerrainDocument(t.spec, convert::DefaultCacheDir());
+      built = convert::BuildTerrainDocument(t.spec, cache_dir);
     } catch (const InputError& e) {
-      throw InputError(e.where().file.empty() ? t.where : e.where(),
-                       t.spec.name + ": " + e.message());
+      throw AtEntry(t.where, t.spec.name, e);
     }
     for (const std::string& line : built.report) spdlog::info("{}: {}", t.spec.name, line);
     terrain_cached.push_back(built.cache_hit);
-    inputs.push_back(GeneratedInput(t.spec.name, std::move(built.doc), t.pos, t.quat));
+    inputs.push_back(GeneratedInput(t.spec.name, std::move(built.doc), t.pos, t.quat, t.where));
   }
   // Impulse launchers: their trays and projectile pools, in world coordinates.
   for (const LauncherConfig& l : scene.launchers) {
@@ -247,7 +262,7 @@ CompiledScene BuildScene(const SceneConfig& scene) {
     } catch (const InputError& e) {
       throw InputError(l.where, e.message());
     }
-    inputs.push_back(GeneratedInput(l.spec.name, std::move(doc), {0, 0, 0}, {1, 0, 0, 0}));
+    inputs.push_back(GeneratedInput(l.spec.name, std::move(doc), {0, 0, 0}, {1, 0, 0, 0}, l.where));
   }
   mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs), scene.options);
   // Scene overrides: only the fields set, over whatever the articulations gave.
@@ -294,7 +309,7 @@ CompiledScene BuildModel(const std::string& mjcf_path) {
   document::Document doc = ReadBridged(mjcf_path, "", &report);
   CompiledScene out;
   out.diagnostics = doc.diagnostics();
-  PrepareMeshes(doc, "", &out.diagnostics, &report);
+  PrepareMeshes(doc, "", convert::DefaultCacheDir(), &out.diagnostics, &report);
   out.model = CompileDocument(doc, nullptr);
   physics::SoftwareModelSpec software;
   AddBridgeRuntime(report, "", &software);
@@ -335,6 +350,34 @@ std::vector<std::string> SceneInputFiles(const SceneConfig& scene) {
   return files;
 }
 
+namespace {
+
+// A fresh private folder under the system's temporary folder, removed with everything in it when
+// this ends: validate's cache (converted meshes, decompositions, height grids), so that it
+// writes nothing where the user keeps anything.
+class ScratchDir {
+ public:
+  ScratchDir() {
+    std::string pattern = (fs::temp_directory_path() / "urlab-validate-XXXXXX").string();
+    if (!::mkdtemp(pattern.data())) {
+      throw Error("cannot create a temporary folder in " + fs::temp_directory_path().string());
+    }
+    path_ = pattern;
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+}  // namespace
+
 ValidationReport Validate(const std::string& path, bool bridge_report) {
   ValidationReport report;
   Diagnostics& sink = report.diagnostics;
@@ -346,6 +389,7 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
     return report;
   }
   scene.save_debug_xml.clear();  // validate writes nothing
+  const ScratchDir cache;        // not even into the user's cache
   // A single MJCF file is a scene of one articulation: its findings carry no label.
   const bool is_scene = IsSceneFile(path);
   for (const ArticulationConfig& a : scene.articulations) {
@@ -366,8 +410,7 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
         // Mesh repairs are bridge changes too; a mesh that cannot be read is reported by
         // FindMissingFiles above and by the composition below.
         try {
-          const convert::MeshAssetReport meshes =
-              convert::PrepareMeshAssets(doc, convert::DefaultCacheDir());
+          const convert::MeshAssetReport meshes = convert::PrepareMeshAssets(doc, cache.path());
           bridged.changes.insert(bridged.changes.end(), meshes.bridge_changes.begin(),
                                  meshes.bridge_changes.end());
         } catch (const InputError&) {
@@ -390,7 +433,7 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
   CheckSceneConfig(scene, sink);
   if (sink.has_errors()) return report;
   try {
-    CompiledScene compiled = BuildScene(scene);
+    CompiledScene compiled = BuildScene(scene, cache.path());
     // Composition repeats each file's own findings (reported above, labelled); add only its own.
     for (const Diagnostic& d : compiled.diagnostics) {
       const bool reported = std::any_of(sink.all().begin(), sink.all().end(), [&](const auto& e) {
@@ -400,13 +443,22 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
     }
     CheckCompiledScene(scene, compiled, sink);
     const mjModel* m = compiled.model.get();
+    // Begin-play computes the initial state (mj_forward) before anything steps: an engine error
+    // there (the stack overflowing) is found here too.
+    const physics::DataPtr d = physics::MakeData(m);
+    mj_forward(m, d.get());
     report.sizes = {"nq " + std::to_string(m->nq), "nv " + std::to_string(m->nv),
                     "nu " + std::to_string(m->nu), "nbody " + std::to_string(m->nbody)};
   } catch (const InputError& e) {
     sink.Add(e);
   } catch (const Error& e) {
-    // A MuJoCo compile error: its message names the element and file:line itself.
-    sink.Error({}, e.what());
+    // A MuJoCo compile error names the element and its file:line in its text when it can; an
+    // engine error while compiling (2.2.2's compiler runs the model: "engine error: Stack
+    // overflow") names nothing. Either is located at the file validated, with the hint `run`
+    // prints.
+    const std::string hint = MujocoHint(e.what());
+    sink.Error({fs::absolute(path).lexically_normal().string(), 0},
+               std::string(e.what()) + (hint.empty() ? "" : "\n  hint: " + hint));
   }
   return report;
 }

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "urlab/world/controller_factory.h"
+#include "world/binding_checks.h"
 
 namespace urlab::world {
 
@@ -110,6 +111,7 @@ void CheckCompiledScene(const SceneConfig& scene, const CompiledScene& compiled,
     }
     if (i < compiled.articulations.size()) {
       CheckKeyframeLengths(a, compiled.articulations[i], compiled, sink);
+      CheckArticulationBindings(scene, a, compiled.articulations[i], m, sink);
     }
     CheckController(a, m, prefix, sink);
   }

@@ -16,6 +16,8 @@
 #include "urlab/document/element.h"
 #include "urlab/document/grammar.h"
 #include "urlab/document/orientation.h"
+#include "world/input_keys.h"
+#include "world/scene_names.h"
 
 namespace urlab::world {
 
@@ -327,12 +329,17 @@ class Parser {
     return quat;
   }
 
-  // The name of a prop or terrain entry: required, non-empty, no spaces or '/'.
+  // The name of an articulation, prop, terrain or launcher entry: required, of the scene name
+  // character set (world/scene_names.h).
   std::string EntryName(const YAML::Node& n, const std::string& kind) const {
-    if (!n["name"]) Fail(n, "a " + kind + " needs a name");
-    std::string name = String(n["name"], "name");
-    if (name.empty() || name.find_first_of(" /\t") != std::string::npos) {
-      Fail(n["name"], kind + " name '" + name + "' must be non-empty without spaces or /");
+    if (!n["name"])
+      Fail(n, "a" + std::string(kind == "articulation" ? "n " : " ") + kind + " needs a name");
+    std::string name = String(n["name"], kind + ".name");
+    if (const std::string problem = SceneNameProblem(name); !problem.empty()) {
+      std::string shown;
+      for (char c : name) shown += c == '\n' ? std::string("\\n") : std::string(1, c);
+      Fail(n["name"],
+           kind + " name '" + shown + "' " + problem + " (names use " + kSceneNameRule + ")");
     }
     return name;
   }
@@ -596,7 +603,14 @@ class Parser {
     const int sources =
         (n["key"] ? 1 : 0) + (n["gamepad_axis"] ? 1 : 0) + (n["gamepad_button"] ? 1 : 0);
     if (sources != 1) Fail(n, where + ": give exactly one of key, gamepad_axis, gamepad_button");
-    if (n["key"]) b.key = String(n["key"], where + ".key");
+    if (n["key"]) {
+      b.key = String(n["key"], where + ".key");
+      if (!IsKnownKeyName(b.key)) {
+        Fail(n["key"], where + ": " +
+                           (b.key.empty() ? "an empty key" : "unknown key '" + b.key + "'") +
+                           " (keys: " + KnownKeyNamesText() + ")");
+      }
+    }
     if (n["gamepad_axis"]) b.gamepad_axis = Index(n["gamepad_axis"], where + ".gamepad_axis", 5);
     if (n["gamepad_button"]) {
       b.gamepad_button = Index(n["gamepad_button"], where + ".gamepad_button", 14);
@@ -655,11 +669,7 @@ class Parser {
          "controller", "keyframe", "hold_keyframe", "include_world", "cameras", "twist", "input"});
     ArticulationConfig a;
     a.where = At(n);
-    if (!n["name"]) Fail(n, "an articulation needs a name");
-    a.name = String(n["name"], "name");
-    if (a.name.empty() || a.name.find_first_of(" /\t") != std::string::npos) {
-      Fail(n["name"], "articulation name '" + a.name + "' must be non-empty without spaces or /");
-    }
+    a.name = EntryName(n, "articulation");
     if (!n["mjcf"]) Fail(n, a.name + ": an articulation needs an mjcf file");
     // Relative to the scene file's folder as written (a symlinked folder is not resolved first,
     // so "../models" means the folder next to the link, as users expect).
@@ -705,9 +715,14 @@ class Parser {
     return out;
   }
 
-  int Pixels(const YAML::Node& n, const std::string& what) const {
-    return static_cast<int>(Number(n, what, Range{1, 8192}));
+  // A whole number in [min, max] (a fraction is refused, never truncated).
+  int Whole(const YAML::Node& n, const std::string& what, int min, int max) const {
+    const double v = Number(n, what, Range{static_cast<double>(min), static_cast<double>(max)});
+    if (v != std::floor(v)) Fail(n, what + " must be a whole number, not " + n.Scalar());
+    return static_cast<int>(v);
   }
+
+  int Pixels(const YAML::Node& n, const std::string& what) const { return Whole(n, what, 1, 8192); }
 
   std::vector<std::string> Modes(const YAML::Node& n, const std::string& what) const {
     std::vector<std::string> modes =
@@ -738,8 +753,7 @@ class Parser {
     if (n["modes"]) c.modes = Modes(n["modes"], "cameras.modes");
     if (n["shadows"]) c.shadows = Bool(n["shadows"], "cameras.shadows");
     if (n["reflections"]) c.reflections = Bool(n["reflections"], "cameras.reflections");
-    if (n["samples"])
-      c.samples = static_cast<int>(Number(n["samples"], "cameras.samples", {0, 16}));
+    if (n["samples"]) c.samples = Whole(n["samples"], "cameras.samples", 0, 16);
     if (n["gl"]) {
       c.gl = String(n["gl"], "cameras.gl");
       if (c.gl != "auto" && c.gl != "egl" && c.gl != "osmesa") {
@@ -866,7 +880,11 @@ class Parser {
           throw InputError(At(n["step_mode"]), "network.step_mode must be live or direct");
         }
       }
-      if (n["camera_base_port"]) s.network.camera_base_port = String(n["camera_base_port"], "port");
+      if (n["camera_base_port"]) {
+        // A TCP port: the first camera stream binds it, the next ones the ports above.
+        s.network.camera_base_port =
+            std::to_string(Whole(n["camera_base_port"], "network.camera_base_port", 1, 65535));
+      }
       if (const auto d = n["files_dir"]) {
         const std::string text = String(d, "network.files_dir");
         if (text.empty()) Fail(d, "network.files_dir must name a folder (or leave it out)");
@@ -879,9 +897,8 @@ class Parser {
         }
       }
       if (const auto q = n["max_queued_steps"]) {
-        const double v = Number(q, "network.max_queued_steps", Range{1, 1e7});
-        if (v != std::floor(v)) Fail(q, "network.max_queued_steps must be a whole number");
-        s.network.max_queued_steps = static_cast<std::size_t>(v);
+        s.network.max_queued_steps =
+            static_cast<std::size_t>(Whole(q, "network.max_queued_steps", 1, 10000000));
       }
     }
     if (const auto n = root["save_debug_xml"]) {

@@ -43,6 +43,10 @@ constexpr BadValue kBad[] = {
     {"worldbody", R"(<geom size="1" pos="1 two 3"/>)", "is not a list of numbers"},
     {"worldbody", R"(<geom size="1" pos="1,2,3"/>)", "is not a list of numbers"},
     {"worldbody", R"(<geom size="1" pos="nan 0 0"/>)", "contains NaN"},
+    // infinity, refused like NaN (2.2.2 would compile an infinite geom)
+    {"worldbody", R"(<geom size="inf"/>)", "contains an infinite value"},
+    {"worldbody", R"(<geom size="1" pos="0 -inf 0"/>)", "contains an infinite value"},
+    {"worldbody", R"(<body><joint range="-1 INF"/><geom size="1"/></body>)", "infinite"},
     // ints: MuJoCo's strtol would read "5e+06" as 5 and "0x10" as 0
     {"size", R"(<size nstack="5e+06"/>)", "plain decimal digits"},
     {"size", R"(<size nuserdata="0x10"/>)", "plain decimal digits"},
@@ -106,6 +110,7 @@ TEST_F(ValueCheckTest, SetRefusesWhatTheGrammarRefuses) {
   EXPECT_THROW(doc.Section("size").Set("nstack", "5e+06"), InputError);
   EXPECT_THROW(doc.Section("option").SetReal("timestep", 0), InputError);
   EXPECT_THROW(doc.Section("option").SetReal("timestep", std::nan("")), InputError);
+  EXPECT_THROW(geom.SetReal("size", std::numeric_limits<double>::infinity()), InputError);
   EXPECT_NO_THROW(geom.Set("fromto", "0 0 0 1 1 1"));
   // A whole number is written in plain digits, so an int attribute reads it back as itself.
   doc.Section("size").SetReal("nstack", 5000000);

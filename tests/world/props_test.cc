@@ -164,5 +164,28 @@ TEST_F(PropsTest, BadPropEntriesNameTheLine) {
   EXPECT_NE(missing.find("nowhere.stl"), std::string::npos) << missing;
 }
 
+TEST_F(PropsTest, ErrorsBuildingAPropNameItsSceneLineThenItsFile) {
+  // They used to name only the mesh file (line 0) or the generated model.
+  testing::WriteTextFile(dir_, "flat.obj",
+                         "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+  std::ofstream(dir_ + "/empty.stl", std::ios::binary) << std::string(84, '\0');
+  for (const auto& [mesh, what] : {std::pair{"flat.obj", "cannot use this mesh as the visual mesh"},
+                                   {"empty.stl", "the mesh has no triangles"}}) {
+    const world::SceneConfig scene = world::ParseScene(
+        std::string("articulations:\n  - {name: table, mjcf: table.xml}\nprops:\n  - name: p\n"
+                    "    mesh: ") +
+            mesh + "\n",
+        dir_ + "/scene.yaml");
+    try {
+      world::BuildScene(scene);
+      ADD_FAILURE() << mesh << " built";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where().str(), dir_ + "/scene.yaml:4") << e.what();
+      EXPECT_NE(e.message().find("p: " + dir_ + "/" + mesh + ": "), std::string::npos) << e.what();
+      EXPECT_NE(e.message().find(what), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace urlab

@@ -101,6 +101,82 @@ TEST_F(SceneChecksTest, ControllerAndKeyframeNamesAreCheckedAgainstTheCompiledMo
   EXPECT_THROW(world::BuildCheckedScene(world::LoadSceneFile(dir_ + "/s.yaml")), InputError);
 }
 
+// Two small models in `dir`: a fixed-base arm with a camera, and a cart.
+void WriteBindingModels(const std::string& dir) {
+  testing::WriteTextFile(dir, "arm.xml", R"(<mujoco>
+  <worldbody>
+    <body name="link"><joint name="hinge"/><geom size="0.1" mass="1"/>
+      <camera name="eye" pos="0 0 1"/></body>
+  </worldbody>
+  <actuator><motor name="lift" joint="hinge"/></actuator>
+</mujoco>
+)");
+  testing::WriteTextFile(dir, "cart.xml", R"(<mujoco>
+  <worldbody>
+    <body name="cart" pos="3 0 0"><joint name="slide" type="slide"/><geom size="0.1" mass="1"/></body>
+  </worldbody>
+  <actuator><motor name="drive" joint="slide"/></actuator>
+</mujoco>
+)");
+}
+
+TEST_F(SceneChecksTest, CamerasTwistAndInputBindingsAreCheckedAgainstTheCompiledModel) {
+  // `run` and `view` used to refuse (or silently ignore) these only once subsystems started;
+  // `validate` said OK.
+  WriteBindingModels(dir_);
+  const std::string yaml =
+      "articulations:\n"
+      "  - name: a\n"  // 2
+      "    mjcf: arm.xml\n"
+      "    cameras: [eye, nose]\n"
+      "    twist: {max_vx: 1}\n"
+      "    input:\n"
+      "      - {actuator: lift, key: J}\n"              // 7: fine
+      "      - {actuator: ghost, key: K}\n"             // 8
+      "      - {actuator: hinge, key: L}\n"             // 9: a joint
+      "      - {actuator: drive, key: M}\n"             // 10: b's actuator, short name
+      "      - {actuator: b_drive, gamepad_axis: 1}\n"  // 11: b's actuator, full name
+      "  - name: b\n"                                   // 12
+      "    mjcf: cart.xml\n"
+      "cameras:\n"
+      "  streams:\n"
+      "    a/eye: {rate: 5}\n"    // 16: fine
+      "    b/mouth: {rate: 5}\n"  // 17
+      "network: {enabled: false}\n";
+  const auto errors = ValidateErrors(yaml);
+  for (const std::string& want : {
+           std::string("s.yaml:2: a.cameras: articulation 'a' has no camera 'nose'"),
+           std::string("(it has: eye)"),
+           std::string("s.yaml:2: a: twist needs a free base"),
+           std::string("s.yaml:8: a.input: no actuator 'ghost'"),
+           std::string("s.yaml:9: a.input: no actuator 'hinge'"),
+           std::string("'hinge' is a joint: name the actuator that drives it"),
+           std::string("s.yaml:10: a.input: no actuator 'drive'"),
+           std::string("s.yaml:11: a.input: no actuator 'b_drive'"),
+           std::string("it is an actuator of articulation 'b'"),
+           std::string("(its actuators: lift)"),
+           std::string("s.yaml:17: cameras.streams.b/mouth: articulation 'b' has no camera "
+                       "'mouth'"),
+       }) {
+    EXPECT_TRUE(AnyContains(errors, want)) << want << " missing in:\n" << Joined(errors);
+  }
+  EXPECT_EQ(errors.size(), 7u) << Joined(errors);
+  // Begin-play (run, view, compile, bench) refuses the same scene.
+  try {
+    world::BuildCheckedScene(world::LoadSceneFile(dir_ + "/s.yaml"));
+    FAIL() << "built it";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("(and 6 more problem(s))"), std::string::npos) << e.what();
+  }
+  // The good bindings alone pass.
+  Write("ok.yaml",
+        "articulations:\n  - name: a\n    mjcf: arm.xml\n    cameras: [eye]\n"
+        "    input:\n      - {actuator: lift, key: Space}\n"
+        "cameras:\n  streams:\n    a/eye: {rate: 5}\n");
+  const world::ValidationReport ok = world::Validate(dir_ + "/ok.yaml");
+  EXPECT_TRUE(ok.ok()) << (ok.diagnostics.errors().empty() ? "" : ok.diagnostics.errors()[0].str());
+}
+
 TEST_F(SceneChecksTest, ValidateStartsNothingAndWritesNothing) {
   const std::string yaml =
       "articulations:\n  - {name: a, mjcf: " + kArm + "}\nsave_debug_xml: debug_out\n";

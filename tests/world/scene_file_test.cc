@@ -136,6 +136,30 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       {WithArm("launchers:\n  - {name: gun, direction: [1, 0, 0]}\n"), 5,
        "unknown key 'direction' in launcher"},
       {WithArm("launchers:\n  - {name: a}\n"), 5, "the name 'a' is used twice"},
+      // newer keys: whole numbers, ports, key names (these were accepted or truncated)
+      {WithArm("network: {camera_base_port: abc}\n"), 4, "network.camera_base_port must be"},
+      {WithArm("network:\n  camera_base_port: -1\n"), 5,
+       "network.camera_base_port must be 1 to 65535, not -1"},
+      {WithArm("network: {camera_base_port: 99999}\n"), 4, "must be 1 to 65535, not 99999"},
+      {WithArm("network: {camera_base_port: 5558.5}\n"), 4, "whole number"},
+      {WithArm("cameras: {width: 640.5}\n"), 4, "cameras.width must be a whole number, not 640.5"},
+      {WithArm("cameras:\n  height: 479.9\n"), 5, "cameras.height must be a whole number"},
+      {WithArm("cameras: {samples: 2.5}\n"), 4, "cameras.samples must be a whole number"},
+      {WithArm("cameras:\n  streams:\n    a/head: {width: 10.5}\n"), 6, "whole number"},
+      {WithArm("    input:\n      - {actuator: shoulder_motor, key: F13}\n"), 5,
+       "unknown key 'F13'"},
+      {WithArm("    input:\n      - {actuator: shoulder_motor, key: \"\"}\n"), 5, "an empty key"},
+      // names: a documented character set
+      {"articulations:\n  - name: \"a\\nb\"\n    mjcf: " + kArm + "\n", 2,
+       "articulation name 'a\\nb' contains a newline"},
+      {"articulations:\n  - name: \"a b\"\n    mjcf: " + kArm + "\n", 2, "contains a space"},
+      {"articulations:\n  - {name: a/b, mjcf: " + kArm + "}\n", 2, "contains '/'"},
+      {"articulations:\n  - {name: \"\", mjcf: " + kArm + "}\n", 2, "is empty"},
+      {"articulations:\n  - {name: 1arm, mjcf: " + kArm + "}\n", 2,
+       "must start with a letter or '_'"},
+      {"articulations:\n  - {name: \"arm\\t\", mjcf: " + kArm + "}\n", 2, "contains a tab"},
+      {WithArm("launchers:\n  - {name: \"gun\\r\"}\n"), 5, "launcher name"},
+      {WithArm("props:\n  - {name: \"p\\u00e9\", mesh: x.stl}\n"), 5, "non-ASCII"},
   };
   for (const Case& c : cases) {
     try {

@@ -11,7 +11,7 @@
 //
 // The result depends only on the mesh and the options (threads change the time, never the
 // parts). Thread: Decompose may be called from any thread; it runs its own worker threads and
-// calls `progress` from the calling thread only.
+// calls `progress` from the calling thread only; `cancelled` is polled from every thread.
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -19,8 +19,16 @@
 #include <vector>
 
 #include "urlab/convert/mesh.h"
+#include "urlab/core/error.h"
 
 namespace urlab::convert {
+
+// Thrown by Decompose (and what calls it) once DecomposeOptions::cancelled said so: nothing of
+// the decomposition is kept or cached.
+class Cancelled : public Error {
+ public:
+  Cancelled() : Error("cancelled") {}
+};
 
 struct DecomposeOptions {
   double threshold = 0.05;     // concavity limit, as a fraction of the bounding-box diagonal
@@ -35,7 +43,15 @@ struct DecomposeOptions {
   std::size_t max_triangles = 200000;
   // Called with a fraction in [0, 1] and what is being done (on the calling thread).
   std::function<void(double fraction, std::string_view stage)> progress;
+  // Polled between stages and before each unit of parallel work, on the calling thread and the
+  // worker threads (so it must be thread-safe and cheap, e.g. an atomic load); once it returns
+  // true the decomposition stops within one unit of work and throws Cancelled. Not part of the
+  // result (nor of OptionsKey).
+  std::function<bool()> cancelled;
 };
+
+// Throws Cancelled when `options.cancelled` says so.
+void ThrowIfCancelled(const DecomposeOptions& options);
 
 struct ConvexPart {
   TriMesh hull;          // outward triangles

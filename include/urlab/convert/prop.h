@@ -54,8 +54,12 @@ struct PropDocument {
 // Reads, cleans and decomposes the prop's mesh (cached in `cache_dir`) and builds its document:
 // meshes inline (vertex and face lists), so nothing but the source mesh file is referenced (a
 // source MuJoCo cannot load is written as OBJ into `cache_dir`). With `parts_dir` set, the part
-// meshes are written there as STL files and referenced instead (for `urlab convert`). Throws
-// InputError naming the mesh file for a mesh that cannot be read or decomposed.
+// meshes are written there as STL files and referenced instead (for `urlab convert`). The
+// visual mesh is compiled alone with MuJoCo before the decomposition runs, so a mesh MuJoCo
+// refuses (flat, inconsistently oriented) fails in seconds. Throws InputError naming the mesh
+// file for a mesh that cannot be read, used or decomposed, and Cancelled (nothing written or
+// cached) once spec.decompose.cancelled says so. The document's elements are located at the
+// mesh file.
 PropDocument BuildPropDocument(const PropSpec& spec, const std::string& cache_dir,
                                const std::string& parts_dir = {});
 

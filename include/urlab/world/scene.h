@@ -60,8 +60,10 @@ void AddBridgeRuntime(const mjcf::BridgeReport& report, const std::string& prefi
                       physics::SoftwareModelSpec* spec);
 
 // Composes and compiles a scene. Throws InputError / CompileError with the articulation, element
-// and file:line of the problem.
-CompiledScene BuildScene(const SceneConfig& scene);
+// and file:line of the problem (a prop's, terrain's or launcher's at its entry in the scene file).
+// Converted meshes, decompositions and height grids are cached in `cache_dir` (default:
+// convert::DefaultCacheDir()).
+CompiledScene BuildScene(const SceneConfig& scene, const std::string& cache_dir = {});
 
 // A single MJCF file compiled on its own, without a prefix: read, bridge, export, compile. Not a
 // check (LoadSceneOrModel + BuildScene is the path every command checks and runs); `urlab compile
@@ -73,7 +75,9 @@ CompiledScene BuildModel(const std::string& mjcf_path);
 // files, bridge refusals and dangling references, then the scene checks begin-play runs
 // (world/scene_checks.h) and, when all that was clean, composition and compilation exactly as
 // `urlab run` does them (a single MJCF file is a scene of one articulation). Starts nothing and
-// writes no file (a scene's save_debug_xml is ignored).
+// writes no file: a scene's save_debug_xml is ignored, and meshes are converted and decomposed
+// in a temporary folder removed before it returns (so a scene with large props validates as
+// slowly as its first run, whatever the user's cache holds).
 struct ValidationReport {
   Diagnostics diagnostics;                  // errors and warnings, each with file:line
   std::vector<std::string> sizes;           // "nq 28" ... when it compiled

@@ -16,8 +16,10 @@ void CheckSceneConfig(const SceneConfig& scene, Diagnostics& sink);
 // Checks against the composed and compiled scene: each articulation's initial keyframe exists,
 // its keyframes have exactly its own number of qpos/qvel/act/ctrl/mocap values (MuJoCo refuses
 // a single model's wrong-length key; composition fills keys after compiling, so this is checked
-// here), and its controller names only joints, actuators and keyframes it has
-// (world::CheckController).
+// here), its controller names only joints, actuators and keyframes it has
+// (world::CheckController), and what its entry names besides exists in its MJCF: the cameras of
+// `cameras:` and `cameras.streams`, a free base for `twist:`, its own actuators for `input:`
+// bindings (src/world/binding_checks.h).
 void CheckCompiledScene(const SceneConfig& scene, const CompiledScene& compiled, Diagnostics& sink);
 
 // CheckSceneConfig (throws the first error), BuildScene, CheckCompiledScene (throws the first

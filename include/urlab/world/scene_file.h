@@ -6,9 +6,11 @@
 // option overrides,
 // network endpoints and the debug-XML switch. Unknown keys, duplicate keys, keys that are not
 // strings, wrong types and numbers out of range (gains, torque limits, hold/blend times, options
-// checked against the MJCF grammar, size fields) are InputErrors with file and line; sections of
-// features that do not exist yet (recording, lights...) are refused as "not
-// supported yet". Thread: any (pure parsing).
+// checked against the MJCF grammar, size fields), fractions where a whole number is meant
+// (pixels, samples, ports) and names outside the scene name character set
+// (world/scene_names.h) are InputErrors with file and line; sections of features that do not
+// exist yet (recording, lights...) are refused as "not supported yet". Thread: any (pure
+// parsing).
 #include <array>
 #include <cstddef>
 #include <map>
@@ -55,8 +57,9 @@ struct ControllerConfig {
 
 // Input mapping (the description's MjInputMapping): a key or gamepad axis/button drives one
 // actuator's target on the `input` control source, as value * scale (a key or button is 1 while
-// held, an axis -1..1). Exactly one of key, gamepad_axis, gamepad_button. The viewer resolves the
-// key name and the actuator when it starts (errors at the binding's file:line).
+// held, an axis -1..1). Exactly one of key, gamepad_axis, gamepad_button. Loading the scene
+// refuses an unknown or empty key name (world/input_keys.h) and begin-play's checks an actuator
+// that is not the articulation's own (world::CheckCompiledScene), at the binding's file:line.
 struct InputBindingConfig {
   std::string actuator;     // short name in the articulation
   std::string key;          // "J", "7", "Space", "Up", ... ("" when a gamepad drives it)
@@ -171,7 +174,7 @@ struct NetworkConfig {
   std::string rpc = "tcp://127.0.0.1:5559";  // the step server (request/reply)
   std::string step_mode = "live";            // live | direct (lockstep)
   std::string full_state = "standard";       // state/full level: minimal|standard|full|none
-  std::string camera_base_port = "5558";
+  std::string camera_base_port = "5558";  // a port number 1..65535 (checked when parsed)
   // The folder whose files step-server clients name (absolute; relative in the scene: to the
   // scene file's folder). "" : recordings/ in the working folder of the run.
   std::string files_dir;

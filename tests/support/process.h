@@ -1,0 +1,74 @@
+#pragma once
+// A background `urlab` (the real binary) with its stdout and stderr in a file, for tests that
+// signal it or watch its output while it runs.
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <string>
+#include <thread>
+
+#include "mujoco_test.h"
+
+extern char** environ;
+
+namespace urlab::testing {
+
+class UrlabProcess {
+ public:
+  using Clock = std::chrono::steady_clock;
+  // `args` after the binary (shell words); the output goes to `log`.
+  UrlabProcess(const std::string& args, const std::string& log) : log_(log) {
+    const std::string cmd = "exec " + UrlabBinary() + " " + args + " > " + log + " 2>&1";
+    const char* argv[] = {"/bin/sh", "-c", cmd.c_str(), nullptr};
+    if (posix_spawn(&pid_, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ) != 0) {
+      pid_ = -1;
+    }
+  }
+  ~UrlabProcess() {
+    if (pid_ > 0 && !done_) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  UrlabProcess(const UrlabProcess&) = delete;
+  UrlabProcess& operator=(const UrlabProcess&) = delete;
+
+  // True once the output holds `text`; false after `limit` or when the process ended without it.
+  bool WaitFor(const std::string& text, std::chrono::seconds limit = std::chrono::seconds(60)) {
+    const auto start = Clock::now();
+    while (output().find(text) == std::string::npos) {
+      if (Clock::now() - start > limit || Ended()) return output().find(text) != std::string::npos;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return true;
+  }
+  void Signal(int sig) { kill(pid_, sig); }
+  // Exit code (128+N when killed by signal N), or -1 after `limit`.
+  int Wait(std::chrono::milliseconds limit) {
+    const auto start = Clock::now();
+    while (!Ended()) {
+      if (Clock::now() - start > limit) return -1;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return code_;
+  }
+  std::string output() const { return ReadTextFile(log_); }
+
+ private:
+  bool Ended() {
+    if (done_) return true;
+    int status = 0;
+    if (waitpid(pid_, &status, WNOHANG) != pid_) return false;
+    done_ = true;
+    code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return true;
+  }
+  std::string log_;
+  pid_t pid_ = -1;
+  bool done_ = false;
+  int code_ = -1;
+};
+
+}  // namespace urlab::testing
