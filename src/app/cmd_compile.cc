@@ -66,8 +66,18 @@ int Compile(const CompileArgs& args) {
       spdlog::info("saved {}", args.save_xml);
     }
     if (!args.save_mjb.empty()) {
-      WriteFileAtomic(args.save_mjb, world::MjbBytes(out.model.get()));
+      WriteFileAtomic(args.save_mjb, out.model.Mjb());
       spdlog::info("saved {}", args.save_mjb);
+      const physics::SoftwareModelSpec& ext = out.model.extensions();
+      if (!ext.empty()) {
+        // An MJB holds MuJoCo's model only (docs/recording.md, "The model and its extensions").
+        spdlog::warn(
+            "{}: the MJB does not carry what URLab computes for this model beside MuJoCo ({} "
+            "software sensor(s), {} gravity-compensated body(ies), {} dead-band spring(s)); "
+            "MuJoCo alone leaves those sensors at 0 and omits those forces. Run the XML, or "
+            "replay a recording, which stores them beside its MJB",
+            args.save_mjb, ext.sensors.size(), ext.gravcomp.size(), ext.deadband_springs.size());
+      }
     }
   }
   const auto sizes = ModelSizes(checked.model.get());
@@ -142,7 +152,9 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
                   "also save the exported MJCF (a single model keeps its own names, a scene is "
                   "saved as composed; asset paths relative to its folder; loadable on its own)");
   cmd->add_option("--save-mjb", args.save_mjb,
-                  "also save the compiled model as MuJoCo binary (same model as --save-xml)");
+                  "also save the compiled model as MuJoCo binary (same model as --save-xml; what "
+                  "URLab computes beside MuJoCo for a 3.x model, such as gravcomp or "
+                  "jointactuatorfrc sensors, is not in it: a warning says so)");
   cmd->callback([&exit_code] { exit_code = Compile(args); });
 
   CLI::App* val = app.add_subcommand(
