@@ -70,7 +70,7 @@ int Compile(const CompileArgs& args) {
       spdlog::info("saved {}", args.save_mjb);
       const physics::SoftwareModelSpec& ext = out.model.extensions();
       if (!ext.empty()) {
-        // An MJB holds MuJoCo's model only (docs/recording.md, "The model and its extensions").
+        // An MJB holds MuJoCo's model only (physics/model.h: recordings store the extensions).
         spdlog::warn(
             "{}: the MJB does not carry what URLab computes for this model beside MuJoCo ({} "
             "software sensor(s), {} gravity-compensated body(ies), {} dead-band spring(s)); "

@@ -10,12 +10,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <iterator>
 #include <thread>
 
 #include "replay/format.h"
 #include "support/mujoco_test.h"
 #include "support/wait.h"
-#include "urlab/core/files.h"
 #include "urlab/physics/engine.h"
 #include "urlab/physics/model.h"
 #include "urlab/replay/player.h"
@@ -68,9 +69,11 @@ physics::Model Compile(double gravcomp = 1.0) {
 class ModelExtensionsTest : public urlab::testing::MujocoTest {
  protected:
   // Records `steps` steps of `engine` (driven with changing controls) to `name`.
-  std::string Record(PhysicsEngine& engine, const std::string& name, int steps,
-                     bool sensordata = true) {
+  // `before_start` runs between the recorder's construction (in begin-play) and its Start.
+  std::string RecordRun(PhysicsEngine& engine, const std::string& name, int steps,
+                        bool sensordata = true, const std::function<void()>& before_start = {}) {
     Recorder recorder(engine, {{"arm"}, "", ""}, 1 << 14);
+    if (before_start) before_start();
     engine.AddPreStepCallback(
         [](const mjModel*, mjData* d) { d->ctrl[0] = std::sin(5 * d->time); });
     RecorderOptions o;
@@ -87,7 +90,7 @@ class ModelExtensionsTest : public urlab::testing::MujocoTest {
 TEST_F(ModelExtensionsTest, ARecordingReSimulatesWithItsExtensionsFromTheFileAlone) {
   PhysicsEngine engine(Compile());
   engine.SetPaused(true);
-  const std::string path = Record(engine, "ext.urrec", 400);
+  const std::string path = RecordRun(engine, "ext.urrec", 400);
   const RecordingReader reader = RecordingReader::Open(path);
   EXPECT_EQ(reader.info().format_version, kRecordingFormatVersion);
   EXPECT_EQ(reader.info().extensions, engine.owned_model().extension_text());
@@ -116,7 +119,7 @@ TEST_F(ModelExtensionsTest, ARecordingReSimulatesWithItsExtensionsFromTheFileAlo
 TEST_F(ModelExtensionsTest, OtherExtensionsAreAnotherModel) {
   PhysicsEngine engine(Compile(1.0));
   engine.SetPaused(true);
-  const RecordingReader reader = RecordingReader::Open(Record(engine, "a.urrec", 50));
+  const RecordingReader reader = RecordingReader::Open(RecordRun(engine, "a.urrec", 50));
   const physics::Model half = Compile(0.5);  // the same MJB, other gravity compensation
   try {
     Resimulate(reader, &half);
@@ -130,9 +133,11 @@ TEST_F(ModelExtensionsTest, OtherExtensionsAreAnotherModel) {
 TEST_F(ModelExtensionsTest, OptionsChangedAtRunTimeAreRecordedAndReplayed) {
   PhysicsEngine engine(Compile());
   engine.SetPaused(true);
-  // As the step server's set_sim_options does, before the recording starts.
-  engine.Submit(physics::cmd::SetOptions{[](mjOption& o) { o.gravity[2] = -3; }, "low gravity"});
-  const std::string path = Record(engine, "options.urrec", 300);
+  // As the step server's set_sim_options does while the simulation plays, before the recording
+  // starts.
+  const std::string path = RecordRun(engine, "options.urrec", 300, true, [&engine] {
+    engine.Submit(physics::cmd::SetOptions{[](mjOption& o) { o.gravity[2] = -3; }, "low gravity"});
+  });
   const RecordingReader reader = RecordingReader::Open(path);
   // The engine that made it accepts it (replay_load's check), as does a player on it.
   EXPECT_NO_THROW(CheckSameModel(reader, engine.CopyModel()));
@@ -149,9 +154,13 @@ TEST_F(ModelExtensionsTest, OptionsChangedAtRunTimeAreRecordedAndReplayed) {
 
 // Rewrites a recording of a model without extensions as format 1 wrote it: file header version
 // 1, the header chunk without the extensions section, the data and end chunks as they are.
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
 std::string AsFormat1(const std::string& path, const std::string& out) {
-  InputFile in(path);
-  const std::string bytes = in.Read(0, in.size());
+  const std::string bytes = Slurp(path);
   format::ChunkHeader h;
   EXPECT_TRUE(format::DecodeChunkHeader(
       std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()) + format::kFileHeaderSize,
@@ -179,7 +188,7 @@ std::string AsFormat1(const std::string& path, const std::string& out) {
 TEST_F(ModelExtensionsTest, Format1RecordingsAreStillReadAndOthersRefusedByVersion) {
   PhysicsEngine engine(physics::CompileXmlString(kXml));  // no extensions, as format 1 knew
   engine.SetPaused(true);
-  const std::string v2 = Record(engine, "v2.urrec", 100, false);
+  const std::string v2 = RecordRun(engine, "v2.urrec", 100, false);
   const std::string v1 = AsFormat1(v2, dir_ + "/v1.urrec");
   const RecordingReader reader = RecordingReader::Open(v1);
   EXPECT_EQ(reader.info().format_version, 1u);
@@ -187,11 +196,7 @@ TEST_F(ModelExtensionsTest, Format1RecordingsAreStillReadAndOthersRefusedByVersi
   const ResimReport r = Resimulate(reader);
   EXPECT_TRUE(r.identical) << r.str();
 
-  std::string bytes;
-  {
-    InputFile in(v2);
-    bytes = in.Read(0, in.size());
-  }
+  std::string bytes = Slurp(v2);
   bytes[8] = 3;
   const std::string v3 = dir_ + "/v3.urrec";
   std::ofstream(v3, std::ios::binary) << bytes;
