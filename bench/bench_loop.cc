@@ -22,9 +22,9 @@ int main(int argc, char** argv) {
   const std::string path = argc > 3 ? argv[3] : "/usr/share/mujoco/model/humanoid/humanoid.xml";
   options.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
 
-  const urlab::physics::ModelPtr model = urlab::physics::LoadXmlFile(path);
+  const urlab::physics::Model model(urlab::physics::LoadXmlFile(path));
   std::printf("model %s\n", path.c_str());
-  const urlab::world::LoopBenchResult r = urlab::world::RunLoopBench(model.get(), options);
+  const urlab::world::LoopBenchResult r = urlab::world::RunLoopBench(model, options);
   std::printf("ratio=%.4f\n", r.ratio);
   return 0;
 }

@@ -96,7 +96,7 @@ int BenchLoop(const BenchLoopArgs& args) {
               art.controller.type.c_str());
   if (args.view) {
     const viewer::ViewBenchResult v =
-        viewer::RunLoopBenchWithView(compiled.model.get(), options, viewer::ViewerOptions{});
+        viewer::RunLoopBenchWithView(compiled.model, options, viewer::ViewerOptions{});
     std::printf("viewer: %llu frames at 1280x720, %.1f frames/s of drawing time\n",
                 static_cast<unsigned long long>(v.frames), v.fps);
     std::printf("view_ratio=%.4f\n", v.loop.attached_ratio);
@@ -104,7 +104,7 @@ int BenchLoop(const BenchLoopArgs& args) {
     std::fflush(stdout);
     return 0;
   }
-  const world::LoopBenchResult r = world::RunLoopBench(compiled.model.get(), options);
+  const world::LoopBenchResult r = world::RunLoopBench(compiled.model, options);
   if (args.record) {
     recorder.reset();
     std::error_code ec;

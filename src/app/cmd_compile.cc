@@ -70,10 +70,20 @@ int Compile(const CompileArgs& args) {
           std::filesystem::absolute(args.save_xml).parent_path().lexically_normal().string();
       outputs.Add(args.save_xml, mjcf::WriteString(out.doc, o));
     }
-    if (!args.save_mjb.empty()) outputs.Add(args.save_mjb, world::MjbBytes(out.model.get()));
+    if (!args.save_mjb.empty()) outputs.Add(args.save_mjb, out.model.Mjb());
     outputs.Commit();
     for (const std::string& saved : {args.save_xml, args.save_mjb}) {
       if (!saved.empty()) spdlog::info("saved {}", saved);
+    }
+    const physics::SoftwareModelSpec& ext = out.model.extensions();
+    if (!args.save_mjb.empty() && !ext.empty()) {
+      // An MJB holds MuJoCo's model only (physics/model.h: recordings store the extensions).
+      spdlog::warn(
+          "{}: the MJB does not carry what URLab computes for this model beside MuJoCo ({} "
+          "software sensor(s), {} gravity-compensated body(ies), {} dead-band spring(s)); "
+          "MuJoCo alone leaves those sensors at 0 and omits those forces. Run the XML, or "
+          "replay a recording, which stores them beside its MJB",
+          args.save_mjb, ext.sensors.size(), ext.gravcomp.size(), ext.deadband_springs.size());
     }
   }
   const auto sizes = ModelSizes(checked.model.get());
@@ -152,7 +162,9 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
                   "saved as composed; asset paths relative to its folder; loadable on its own)")
       ->check(OutputPath());
   cmd->add_option("--save-mjb", args.save_mjb,
-                  "also save the compiled model as MuJoCo binary (same model as --save-xml)")
+                  "also save the compiled model as MuJoCo binary (same model as --save-xml; what "
+                  "URLab computes beside MuJoCo for a 3.x model, such as gravcomp or "
+                  "jointactuatorfrc sensors, is not in it: a warning says so)")
       ->check(OutputPath());
   cmd->callback([&exit_code] { exit_code = Compile(args); });
 

@@ -23,6 +23,7 @@
 #include "urlab/replay/trajectory.h"
 #include "urlab/viewer/viewer.h"
 #include "urlab/world/manager.h"
+#include "urlab/world/scene_checks.h"
 #include "urlab/world/scene_file.h"
 #include "urlab/world/session.h"
 
@@ -75,6 +76,15 @@ int Info(const RecordingReader& r) {
       "nsensordata %d, timestep %g\n",
       replay::HashText(i.model_hash).c_str(), t.nq, t.nv, t.na, t.nu, t.nbody, t.nmocap,
       t.nsensordata, t.timestep);
+  if (i.extensions.empty()) {
+    std::printf("extensions:  none%s\n", i.format_version < 2 ? " (format 1 records none)" : "");
+  } else {
+    const physics::SoftwareModelSpec e = physics::ParseExtensions(i.extensions);
+    std::printf(
+        "extensions:  %zu software sensor(s), %zu gravity-compensated body(ies), %zu dead-band "
+        "spring(s), %zu site equality(ies) (in the hash)\n",
+        e.sensors.size(), e.gravcomp.size(), e.deadband_springs.size(), e.site_equalities.size());
+  }
   std::string arts;
   for (const std::string& a : t.articulations) arts += (arts.empty() ? "" : ", ") + a;
   std::printf("articulations: %s; %zu joints, %zu actuators, %zu sensors\n",
@@ -178,14 +188,21 @@ ExportRows ToRows(const RecordingReader& r, std::size_t segment) {
   return out;
 }
 
-int Check(const RecordingReader& r) {
+// Re-simulates on the recorded model, or with --scene on that scene's (checked to be the same).
+int Check(const ReplayArgs& args, const RecordingReader& r) {
+  world::CompiledScene scene;
+  if (!args.scene.empty()) {
+    CurrentInput() = args.scene;
+    scene = world::BuildCheckedScene(world::LoadSceneOrModel(args.scene));
+  }
   replay::ResimOptions o;
   o.progress = [](std::uint64_t done, std::uint64_t total) {
     spdlog::info("re-simulated {} of {} steps", done, total);
   };
   o.progress_every = 20000;
   const auto start = Clock::now();
-  const replay::ResimReport rep = replay::Resimulate(r, nullptr, o);
+  const replay::ResimReport rep =
+      replay::Resimulate(r, args.scene.empty() ? nullptr : &scene.model, o);
   std::printf("%s (%.2f s)\n", rep.str().c_str(),
               std::chrono::duration<double>(Clock::now() - start).count());
   return rep.identical ? 0 : 3;
@@ -377,7 +394,7 @@ int Replay(const ReplayArgs& args) {
     }
     return 0;
   }
-  if (args.check) return Check(r);
+  if (args.check) return Check(args, r);
   if (args.view) return View(args, r);
   return Play(args, r);
 }
@@ -398,8 +415,9 @@ void RegisterReplayCommand(CLI::App& app, int& exit_code) {
   static ReplayArgs args;
   cmd->add_option("FILE", args.file, "the recording (.urrec)")->required();
   cmd->add_option("--scene", args.scene,
-                  "play on this scene's model instead of the recorded one (it must be the same "
-                  "model: the hashes are compared)");
+                  "play (or --check) on this scene's model instead of the recorded one (it must "
+                  "be the same model with the same extensions: the hashes are compared, the "
+                  "physics options apart, which the recording re-applies)");
   cmd->add_option("--speed", args.speed, "recorded seconds per second of wall time (default 1)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--fast", args.fast, "play as fast as possible (ignores --speed)");

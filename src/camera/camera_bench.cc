@@ -244,7 +244,7 @@ CameraBenchResult RunCameraBench(const world::SceneConfig& scene_in, const Camer
       }
     };
     lo.report = o.report;
-    const world::LoopBenchResult lr = world::RunLoopBench(one.model.get(), lo);
+    const world::LoopBenchResult lr = world::RunLoopBench(one.model, lo);
     r.loop_ratio = lr.attached_ratio;
     r.loop_median_ratio = lr.attached_median_ratio;
     report(fmt::format(

@@ -271,7 +271,7 @@ LatencyBenchResult RunLatencyBench(world::SceneConfig scene, const LatencyBenchO
   physics::PhysicsEngine& engine = manager.session().engine();
   const world::Articulation& a = manager.session().articulations().front();
   const mjModel* m = engine.model();
-  const physics::ModelPtr bare_model(mj_copyModel(nullptr, m));
+  const physics::Model bare_model = engine.CopyModel();  // with the model's extensions
   const physics::DataPtr bare_data = physics::MakeData(bare_model.get());
   mj_forward(bare_model.get(), bare_data.get());
   if (a.control->num_actuators() == 0)

@@ -23,13 +23,6 @@ namespace {
 
 using Reason = replay::RecordingError::Reason;
 
-// A copy of the engine's model taken with the step mutex held (options may change meanwhile).
-physics::ModelPtr ModelCopy(physics::PhysicsEngine& engine) {
-  physics::ModelPtr copy;
-  engine.WithLockedData([&copy](mjModel* m, mjData*) { copy.reset(mj_copyModel(nullptr, m)); });
-  return copy;
-}
-
 double OptionalNumber(const Json& body, const char* field, double fallback) {
   const auto it = body.find(field);
   return it == body.end() || it->is_null() ? fallback : Number(*it, field);
@@ -152,10 +145,10 @@ StepServer::Outcome StepServer::SnapshotSave(Request& r) {
   physics::PhysicsEngine& engine = session_.engine();
   // The state and the model it belongs to, taken together (the options may change).
   physics::PhysicsState state;
-  physics::ModelPtr model;
-  engine.WithLockedData([&state, &model](mjModel* m, mjData* d) {
+  physics::Model model;
+  engine.WithLockedData([&engine, &state, &model](mjModel* m, mjData* d) {
     state = physics::CaptureState(m, d);
-    model.reset(mj_copyModel(nullptr, m));
+    model = engine.owned_model().Copy();  // with its extensions
   });
   replay::RecordingInfo info;
   replay::Recorder* recorder = recorder_ ? recorder_->recorder() : nullptr;
@@ -166,7 +159,7 @@ StepServer::Outcome StepServer::SnapshotSave(Request& r) {
     for (const ArticulationTopics& t : tables_) names.push_back(t.name);
     info.tables = replay::ModelTables::Of(model.get(), names);
   }
-  replay::DescribeModel(model.get(), &info);  // the model as it is now
+  replay::DescribeModel(model, &info);  // the model as it is now
   RunFileOp([&] { replay::SaveSnapshot(path, info, state); }, "path_not_writable");
   return {Json{{"op", "snapshot_save_ok"}, {"path", path}, {"time", state.time}}};
 }
@@ -174,9 +167,9 @@ StepServer::Outcome StepServer::SnapshotSave(Request& r) {
 StepServer::Outcome StepServer::SnapshotLoad(Request& r) {
   const std::string path = files_.ForReading(String(r.body["path"], "path"), "path");
   physics::PhysicsEngine& engine = session_.engine();
-  const physics::ModelPtr model = ModelCopy(engine);
+  const physics::Model model = engine.CopyModel();
   physics::PhysicsState state;
-  RunFileOp([&] { state = replay::LoadSnapshot(path, model.get()); }, "path_not_readable");
+  RunFileOp([&] { state = replay::LoadSnapshot(path, model); }, "path_not_readable");
   const double time = state.time;
   Outcome out;
   out.reply = Json{{"op", "snapshot_load_ok"}, {"path", path}, {"time", time}};
@@ -200,7 +193,7 @@ StepServer::Outcome StepServer::ReplayLoad(Request& r) {
       [&] {
         reader = std::make_unique<replay::RecordingReader>(
             replay::RecordingReader::Open(path, {.allow_partial = true}));
-        replay::CheckSameModel(*reader, ModelCopy(session_.engine()).get());
+        replay::CheckSameModel(*reader, session_.engine().CopyModel());
       },
       "path_not_readable");
   if (reader->info().kind != "recording") {

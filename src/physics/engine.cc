@@ -84,9 +84,9 @@ struct IteratingScope {
 // ---------------------------------------------------------------------------------------------
 // PhysicsEngine: construction and lifecycle
 
-PhysicsEngine::PhysicsEngine(ModelPtr model) : PhysicsEngine(std::move(model), Options{}) {}
+PhysicsEngine::PhysicsEngine(Model model) : PhysicsEngine(std::move(model), Options{}) {}
 
-PhysicsEngine::PhysicsEngine(ModelPtr model, Options options)
+PhysicsEngine::PhysicsEngine(Model model, Options options)
     : model_(model ? std::move(model) : throw Error("PhysicsEngine needs a compiled model")),
       publisher_(model_.get()) {
   data_ = MakeData(model_.get());
@@ -137,6 +137,12 @@ void PhysicsEngine::WithLockedData(const std::function<void(mjModel*, mjData*)>&
   ThrowIfOnPhysicsThread("WithLockedData");
   std::lock_guard<std::mutex> lock(step_mutex_);
   fn(model_.get(), data_.get());
+}
+
+Model PhysicsEngine::CopyModel() {
+  ThrowIfOnPhysicsThread("CopyModel");
+  std::lock_guard<std::mutex> lock(step_mutex_);
+  return model_.Copy();
 }
 
 void PhysicsEngine::ThrowIfOnPhysicsThread(const char* what) const {

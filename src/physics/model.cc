@@ -20,6 +20,17 @@ struct VfsDeleter {
     delete v;
   }
 };
+using VfsPtr = std::unique_ptr<mjVFS, VfsDeleter>;
+
+// A VFS holding one file `name` with `bytes`; nullptr when MuJoCo cannot allocate it.
+VfsPtr VfsWith(const char* name, std::string_view bytes) {
+  VfsPtr vfs(new mjVFS);
+  mj_defaultVFS(vfs.get());
+  if (mj_makeEmptyFileVFS(vfs.get(), name, static_cast<int>(bytes.size())) != 0) return nullptr;
+  const int index = mj_findFileVFS(vfs.get(), name);
+  if (!bytes.empty()) std::memcpy(vfs->filedata[index], bytes.data(), bytes.size());
+  return vfs;
+}
 
 // mj_loadXML reports compiler warnings through its error buffer with a non-null model.
 ModelPtr FinishLoad(mjModel* m, const char* error) {
@@ -31,13 +42,8 @@ ModelPtr FinishLoad(mjModel* m, const char* error) {
 }  // namespace
 
 ModelPtr CompileXmlString(const std::string& xml) {
-  std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
-  mj_defaultVFS(vfs.get());
-  if (mj_makeEmptyFileVFS(vfs.get(), kVirtualName, static_cast<int>(xml.size())) != 0) {
-    throw CompileError("could not allocate the in-memory model file");
-  }
-  const int index = mj_findFileVFS(vfs.get(), kVirtualName);
-  std::memcpy(vfs->filedata[index], xml.data(), xml.size());
+  VfsPtr vfs = VfsWith(kVirtualName, xml);
+  if (!vfs) throw CompileError("could not allocate the in-memory model file");
   char error[kErrorSize] = "";
   mjModel* m = mj_loadXML(kVirtualName, vfs.get(), error, kErrorSize);
   return FinishLoad(m, error);
@@ -56,12 +62,92 @@ DataPtr MakeData(const mjModel* m) {
   return DataPtr(d);
 }
 
-void SaveMjb(const mjModel* m, const std::string& path) {
+std::string MjbBytes(const mjModel* m) {
   const int size = mj_sizeModel(m);
-  std::string buf(static_cast<size_t>(size), '\0');
-  mj_saveModel(m, nullptr, buf.data(), size);
-  WriteFileAtomic(path, buf);  // the output rule of urlab/core/files.h
+  std::string bytes(static_cast<size_t>(size), '\0');
+  mj_saveModel(m, nullptr, bytes.data(), size);
+  return bytes;
 }
+
+ModelPtr LoadMjbBytes(std::string_view mjb) {
+  if (mjb.empty()) throw Error("no model (empty MJB)");
+  constexpr const char* kName = "urlab_model.mjb";
+  VfsPtr vfs = VfsWith(kName, mjb);
+  if (!vfs) throw Error("the MJB does not fit in memory");
+  mjModel* m = nullptr;
+  std::string error;
+  try {
+    m = mj_loadModel(kName, vfs.get());  // our handler turns mju_error into an exception
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  if (!m) {
+    throw Error("MuJoCo cannot load the MJB" + (error.empty() ? std::string() : ": " + error));
+  }
+  return ModelPtr(m);
+}
+
+std::uint64_t ContentHash(std::string_view mjb, std::string_view extensions) {
+  std::uint64_t h = 1469598103934665603ull;
+  const auto add = [&h](std::string_view bytes) {
+    for (unsigned char c : bytes) {
+      h ^= c;
+      h *= 1099511628211ull;
+    }
+  };
+  add(mjb);
+  add(extensions);  // nothing when empty: a model without extensions hashes as its MJB
+  return h;
+}
+
+// ---- Model
+
+Model::Model(ModelPtr model) : model_(std::move(model)) {}
+
+Model::Model(ModelPtr model, SoftwareModelSpec extensions) : model_(std::move(model)) {
+  if (!model_) throw Error("no model");
+  ApplySiteEqualities(model_.get(), extensions);
+  registration_ = RegisterSoftwareModel(model_.get(), extensions);
+  extension_text_ = SerializeExtensions(extensions);
+  extensions_ = std::make_shared<const SoftwareModelSpec>(std::move(extensions));
+}
+
+Model Model::FromMjb(std::string_view mjb, std::string_view extensions) {
+  return Model(LoadMjbBytes(mjb), ParseExtensions(extensions));
+}
+
+Model::Model(Model&& o) noexcept
+    : model_(std::move(o.model_)),
+      extensions_(o.extensions_),
+      extension_text_(std::move(o.extension_text_)),
+      registration_(std::move(o.registration_)) {}
+
+Model& Model::operator=(Model&& o) noexcept {
+  if (this != &o) {
+    registration_ = SoftwareSensorRegistration();  // unregistered before the model is freed
+    model_ = std::move(o.model_);
+    extensions_ = o.extensions_;
+    extension_text_ = std::move(o.extension_text_);
+    registration_ = std::move(o.registration_);
+  }
+  return *this;
+}
+
+Model::~Model() { registration_ = SoftwareSensorRegistration(); }
+
+Model Model::Copy() const {
+  if (!model_) throw Error("copy of an empty model");
+  ModelPtr copy(mj_copyModel(nullptr, model_.get()));
+  if (!copy) throw Error("MuJoCo could not copy the model");
+  Model out(std::move(copy));
+  out.extensions_ = extensions_;
+  out.extension_text_ = extension_text_;
+  // The copy has the site equalities' data already (mj_copyModel copied eq_data).
+  out.registration_ = RegisterSoftwareModel(out.model_.get(), *extensions_);
+  return out;
+}
+
+std::uint64_t Model::Hash() const { return ContentHash(Mjb(), extension_text_); }
 
 std::string MujocoVersion() {
   const int v = mj_version();

@@ -254,27 +254,6 @@ int RegisteredSoftwareSensorModels() {
   return static_cast<int>(r.models.size());
 }
 
-void ComputeSoftwareSensors(const mjModel* m, mjData* d) {
-  Registry& r = TheRegistry();
-  std::shared_lock lock(r.mutex);
-  auto it = r.models.find(m);
-  if (it != r.models.end()) {
-    for (int stage : {mjSTAGE_POS, mjSTAGE_VEL, mjSTAGE_ACC})
-      Compute(m, d, it->second.entries, stage);
-  }
-}
-
-}  // namespace urlab::physics
-
-namespace urlab::physics {
-
-void ComputeSoftwarePassive(const mjModel* m, mjData* d) {
-  Registry& r = TheRegistry();
-  std::shared_lock lock(r.mutex);
-  auto it = r.models.find(m);
-  if (it != r.models.end()) Passive(m, d, it->second);
-}
-
 }  // namespace urlab::physics
 
 namespace urlab::physics {

@@ -115,19 +115,21 @@ std::string FileHeader() {
   return h;
 }
 
-void CheckFileHeader(std::span<const std::uint8_t> bytes, const std::string& path) {
+std::uint32_t CheckFileHeader(std::span<const std::uint8_t> bytes, const std::string& path) {
   if (bytes.size() < kFileHeaderSize || std::memcmp(bytes.data(), kFileMagic, 8) != 0) {
     throw RecordingError(RecordingError::Reason::kNotARecording, path,
                          "not a URLab recording (no URLABREC magic number at the start)");
   }
   std::uint32_t version = 0;
   std::memcpy(&version, bytes.data() + 8, 4);
-  if (version != kRecordingFormatVersion) {
+  if (version < kOldestRecordingFormatVersion || version > kRecordingFormatVersion) {
     throw RecordingError(RecordingError::Reason::kVersion, path,
                          "recording format version " + std::to_string(version) +
-                             " is not supported (this URLab reads version " +
+                             " is not supported (this URLab reads versions " +
+                             std::to_string(kOldestRecordingFormatVersion) + " to " +
                              std::to_string(kRecordingFormatVersion) + ")");
   }
+  return version;
 }
 
 namespace {
@@ -294,7 +296,7 @@ std::string EncodeInfo(const RecordingInfo& info) {
   for (const physics::CommandGroupLayout& g : t.command_groups) {
     groups.push_back({g.name, g.actuators});
   }
-  nlohmann::json j = {{"format_version", info.format_version},
+  nlohmann::json j = {{"format_version", kRecordingFormatVersion},
                       {"kind", info.kind},
                       {"urlab_version", info.urlab_version},
                       {"model_hash", HashText(info.model_hash)},
@@ -327,16 +329,22 @@ std::string EncodeInfo(const RecordingInfo& info) {
   out += info.mjcf;
   Put<std::uint64_t>(&out, info.mjb.size());
   out += info.mjb;
+  Put<std::uint64_t>(&out, info.extensions.size());
+  out += info.extensions;
   return out;
 }
 
-RecordingInfo DecodeInfo(std::string_view payload) {
+RecordingInfo DecodeInfo(std::string_view payload, std::uint32_t version) {
   Cursor c(payload, "header chunk");
   const std::string_view text = c.GetBytes(c.Get<std::uint64_t>());
   RecordingInfo info;
   info.mjcf = std::string(c.GetBytes(c.Get<std::uint64_t>()));
   info.mjb = std::string(c.GetBytes(c.Get<std::uint64_t>()));
-  if (!c.done()) throw std::runtime_error("header chunk has bytes after the model");
+  if (version >= 2) info.extensions = std::string(c.GetBytes(c.Get<std::uint64_t>()));
+  if (!c.done()) {
+    throw std::runtime_error(version >= 2 ? "header chunk has bytes after the model's extensions"
+                                          : "header chunk has bytes after the model");
+  }
   try {
     const nlohmann::json j = nlohmann::json::parse(text);
     info.format_version = j.at("format_version").get<std::uint32_t>();

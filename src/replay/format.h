@@ -48,8 +48,9 @@ struct ChunkHeader {
 inline constexpr std::uint32_t kStartsWithState = 1;
 
 std::string FileHeader();
-// Throws RecordingError (kNotARecording / kVersion) naming `path`.
-void CheckFileHeader(std::span<const std::uint8_t> bytes, const std::string& path);
+// The file's format version. Throws RecordingError (kNotARecording / kVersion, naming the
+// version) naming `path`.
+std::uint32_t CheckFileHeader(std::span<const std::uint8_t> bytes, const std::string& path);
 
 // The 64 header bytes, CRC computed over them and `stored` payload.
 std::string EncodeChunk(ChunkHeader header, std::string_view stored);
@@ -70,10 +71,12 @@ std::string EncodeFileStart(const RecordingInfo& info, Codec codec, int level = 
 // The end chunk numbered `number`, its payload the totals as JSON text (stored).
 std::string EncodeEndChunk(std::uint32_t number, std::string_view totals_json);
 
-// The header chunk's payload: u64 length + JSON, u64 length + MJCF, u64 length + MJB.
+// The header chunk's payload (format 2): u64 length + JSON, u64 length + MJCF, u64 length + MJB,
+// u64 length + the model's extensions. Always written in the current format.
 std::string EncodeInfo(const RecordingInfo& info);
-// Throws std::runtime_error naming the field at fault.
-RecordingInfo DecodeInfo(std::string_view payload);
+// Reads a header chunk of format `version` (1: without the extensions section). Throws
+// std::runtime_error naming the field at fault.
+RecordingInfo DecodeInfo(std::string_view payload, std::uint32_t version = kRecordingFormatVersion);
 
 // Encodes records into one chunk's raw payload. Array fields of a frame are stored XORed with
 // the previous frame's bits (zstd then compresses the mostly-zero bytes well); mocap poses and

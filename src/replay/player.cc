@@ -103,62 +103,63 @@ std::string ResimReport::str() const {
   return fmt::format("re-simulation stopped after {} steps: {}", steps_checked, stopped);
 }
 
-physics::ModelPtr LoadRecordedModel(const RecordingReader& reader) {
-  const std::string& mjb = reader.info().mjb;
-  if (mjb.empty()) {
+physics::Model LoadRecordedModel(const RecordingReader& reader) {
+  const RecordingInfo& info = reader.info();
+  if (info.mjb.empty()) {
     throw RecordingError(Reason::kCorrupt, reader.path(), "the recording holds no model");
   }
-  if (MjbHash(mjb) != reader.info().model_hash) {
+  if (physics::ContentHash(info.mjb, info.extensions) != info.model_hash) {
     throw RecordingError(Reason::kCorrupt, reader.path(),
                          "the recorded model does not match the header's model hash");
   }
-  auto vfs = std::make_unique<mjVFS>();
-  mj_defaultVFS(vfs.get());
-  constexpr const char* kName = "recorded.mjb";
-  if (mj_makeEmptyFileVFS(vfs.get(), kName, static_cast<int>(mjb.size())) != 0) {
-    mj_deleteVFS(vfs.get());
-    throw RecordingError(Reason::kCorrupt, reader.path(), "the recorded model does not fit");
-  }
-  const int i = mj_findFileVFS(vfs.get(), kName);
-  std::memcpy(vfs->filedata[i], mjb.data(), mjb.size());
-  mjModel* m = nullptr;
-  std::string error;
   try {
-    m = mj_loadModel(kName, vfs.get());
-  } catch (const std::exception& e) {
-    error = e.what();
+    return physics::Model::FromMjb(info.mjb, info.extensions);
+  } catch (const Error& e) {
+    throw RecordingError(Reason::kCorrupt, reader.path(),
+                         std::string("the recorded model cannot be loaded: ") + e.what());
   }
-  mj_deleteVFS(vfs.get());
-  if (!m) {
-    throw RecordingError(
-        Reason::kCorrupt, reader.path(),
-        "MuJoCo cannot load the recorded model" + (error.empty() ? std::string() : ": " + error));
-  }
-  return physics::ModelPtr(m);
 }
 
-void CheckSameModel(const RecordingReader& reader, const mjModel* m) {
-  const std::uint64_t h = ModelHash(m);
-  if (h != reader.info().model_hash) {
+void CheckSameModel(const RecordingReader& reader, const physics::Model& m, bool compare_options) {
+  const RecordingInfo& info = reader.info();
+  std::uint64_t h = 0;
+  if (compare_options) {
+    h = m.Hash();
+  } else {
+    // `m` with the recorded options (read from the recorded MJB) hashes as the recorded model
+    // when it is that model, whatever options it runs with now.
+    physics::ModelPtr recorded;
+    try {
+      recorded = physics::LoadMjbBytes(info.mjb);
+    } catch (const Error& e) {
+      throw RecordingError(Reason::kCorrupt, reader.path(),
+                           std::string("the recorded model cannot be loaded: ") + e.what());
+    }
+    physics::ModelPtr probe(mj_copyModel(nullptr, m.get()));
+    if (!probe) throw Error("MuJoCo could not copy the model");
+    probe->opt = recorded->opt;
+    h = physics::ContentHash(physics::MjbBytes(probe.get()), m.extension_text());
+  }
+  if (h != info.model_hash) {
     throw RecordingError(
         Reason::kWrongModel, reader.path(),
         fmt::format("recorded with another model (recording model hash {}, this model {}): "
                     "play it without --scene to use the model it carries",
-                    HashText(reader.info().model_hash), HashText(h)));
+                    HashText(info.model_hash), HashText(h)));
   }
 }
 
-ResimReport Resimulate(const RecordingReader& reader, const mjModel* given,
+ResimReport Resimulate(const RecordingReader& reader, const physics::Model* given,
                        const ResimOptions& options) {
-  physics::ModelPtr owned;
+  physics::Model owned;
   if (given) {
-    CheckSameModel(reader, given);
-    owned.reset(mj_copyModel(nullptr, given));
+    CheckSameModel(reader, *given);
+    owned = given->Copy();
   } else {
     owned = LoadRecordedModel(reader);
   }
   mjModel* m = owned.get();
-  physics::DataPtr data(mj_makeData(m));
+  physics::DataPtr data = physics::MakeData(m);
   mjData* d = data.get();
   const ModelTables& t = reader.info().tables;
   ResimReport r;
@@ -439,7 +440,7 @@ void Player::Impl::Step(const mjModel* m, mjData* d) {
 
 Player::Player(physics::PhysicsEngine& engine, const RecordingReader& reader, PlayerOptions options)
     : impl_(std::make_unique<Impl>(engine, reader)) {
-  CheckSameModel(reader, engine.model());
+  CheckSameModel(reader, engine.CopyModel());
   if (!(options.speed > 0) || !std::isfinite(options.speed)) {
     throw Error("playback speed must be a finite number > 0");
   }

@@ -130,7 +130,7 @@ Recorder::Recorder(physics::PhysicsEngine& engine, RecorderSource source, std::s
     : impl_(std::make_unique<Impl>(engine)) {
   Impl& s = *impl_;
   const mjModel* m = engine.model();
-  DescribeModel(m, &s.info);
+  DescribeModel(engine.owned_model(), &s.info);
   s.info.mjcf = std::move(source.mjcf);
   s.info.scene = std::move(source.scene);
   s.info.tables = ModelTables::Of(m, source.articulations);
@@ -194,6 +194,10 @@ void Recorder::Start(RecorderOptions options) {
                     fmt::format("urlab-{}-{}.urrec", ::getpid(), s.next_token.load()))
                        .string();
   }
+  // The model as it is now: its physics options may have changed since construction (the step
+  // server's set_sim_options), and the header's MJB and hash carry those in effect at the start.
+  s.engine.WithLockedData(
+      [&s](mjModel*, mjData*) { DescribeModel(s.engine.owned_model(), &s.info); });
   s.info.sensordata = options.sensordata;
   s.info.keyframe_interval = options.keyframe_interval;
   s.info.compression = options.compress ? "zstd" : "none";

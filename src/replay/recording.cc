@@ -9,28 +9,17 @@
 #include "replay/io.h"
 #include "urlab/core/files.h"
 #include "urlab/core/version.h"
-#include "urlab/world/scene.h"
 
 namespace urlab::replay {
 
 namespace fs = std::filesystem;
 using Reason = RecordingError::Reason;
 
-std::uint64_t MjbHash(std::string_view mjb) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : mjb) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
-std::uint64_t ModelHash(const mjModel* m) { return MjbHash(world::MjbBytes(m)); }
-
-void DescribeModel(const mjModel* m, RecordingInfo* info) {
+void DescribeModel(const physics::Model& m, RecordingInfo* info) {
   info->urlab_version = kVersion;
-  info->mjb = world::MjbBytes(m);
-  info->model_hash = MjbHash(info->mjb);
+  info->mjb = m.Mjb();
+  info->extensions = m.extension_text();
+  info->model_hash = physics::ContentHash(info->mjb, info->extensions);
 }
 
 std::string HashText(std::uint64_t hash) { return fmt::format("{:016x}", hash); }
@@ -59,7 +48,7 @@ RecordingReader RecordingReader::Open(const std::string& path, Options options) 
   r.file_size_ = file.size();
   const std::string head =
       file.Read(0, std::min<std::uint64_t>(format::kFileHeaderSize, r.file_size_));
-  format::CheckFileHeader(
+  const std::uint32_t file_version = format::CheckFileHeader(
       std::span(reinterpret_cast<const std::uint8_t*>(head.data()), head.size()), path);
 
   // A structural problem ends the readable prefix: thrown, or kept in problem_.
@@ -119,15 +108,16 @@ RecordingReader RecordingReader::Open(const std::string& path, Options options) 
       }
       try {
         r.info_ = format::DecodeInfo(
-            format::Decompress(stored, h.codec, h.raw_size, format::kMaxHeaderChunkRawBytes));
+            format::Decompress(stored, h.codec, h.raw_size, format::kMaxHeaderChunkRawBytes),
+            file_version);
       } catch (const std::exception& e) {
         throw RecordingError(Reason::kCorrupt, path, name + " (header): " + e.what());
       }
-      if (r.info_.format_version != kRecordingFormatVersion) {
+      if (r.info_.format_version != file_version) {
         throw RecordingError(Reason::kVersion, path,
-                             fmt::format("header chunk says format version {}; this URLab reads "
-                                         "version {}",
-                                         r.info_.format_version, kRecordingFormatVersion));
+                             fmt::format("header chunk says format version {}, the file header "
+                                         "{}",
+                                         r.info_.format_version, file_version));
       }
     } else if (h.kind == format::ChunkKind::kEnd) {
       r.finished_ = true;

@@ -28,11 +28,11 @@ class NoInput : public internal::InputHandler {
 
 }  // namespace
 
-ViewBenchResult RunLoopBenchWithView(const mjModel* model, world::LoopBenchOptions options,
+ViewBenchResult RunLoopBenchWithView(const physics::Model& model, world::LoopBenchOptions options,
                                      const ViewerOptions& view) {
   NoInput input;
   internal::Window window(view.width, view.height, view.title, &input, /*imgui=*/false);
-  internal::SceneView scene(model, 40000);
+  internal::SceneView scene(model.get(), 40000);
   scene.MakeContext();
   if (window.software_renderer()) {
     scene.scene().flags[mjRND_SHADOW] = 0;

@@ -25,12 +25,6 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-physics::ModelPtr CopyModel(const mjModel* m) {
-  physics::ModelPtr copy(mj_copyModel(nullptr, m));
-  if (!copy) throw Error("RunLoopBench: could not copy the model");
-  return copy;
-}
-
 template <typename... Args>
 std::string Format(const char* fmt, Args... args) {
   char buf[512];
@@ -125,17 +119,18 @@ void SetBenchTargets(control::ArticulationControl& articulation) {
   }
 }
 
-LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& options) {
+LoopBenchResult RunLoopBench(const physics::Model& model, const LoopBenchOptions& options) {
   const int steps = options.steps;
   if (steps < 1 || options.trials < 1) throw Error("RunLoopBench: steps and trials must be >= 1");
   const auto report = [&](const std::string& line) {
     if (options.report) options.report(line);
   };
 
-  physics::ModelPtr bare_model = CopyModel(model);
+  // Both loops step copies with the model's extensions (software sensors, passive forces).
+  const physics::Model bare_model = model.Copy();
   physics::DataPtr bare_data = physics::MakeData(bare_model.get());
 
-  physics::PhysicsEngine engine(CopyModel(model));
+  physics::PhysicsEngine engine(model.Copy());
   engine.SetAsFastAsPossible(true);
   control::ControlSystem controls;
   engine.WithLockedData([&](mjModel* m, mjData* d) {

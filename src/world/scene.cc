@@ -148,7 +148,7 @@ void SaveDebug(const document::Document& doc, const mjModel* m, const std::strin
   RefuseOverwritingInput(xml, inputs, "save_debug_xml");
   RefuseOverwritingInput(mjb, inputs, "save_debug_xml");
   mjcf::WriteFile(doc, xml);
-  WriteFileAtomic(mjb, MjbBytes(m));
+  WriteFileAtomic(mjb, physics::MjbBytes(m));
   spdlog::info("saved {} and {}", xml, mjb);
 }
 
@@ -269,11 +269,10 @@ CompiledScene BuildScene(const SceneConfig& scene, const std::string& cache) {
   for (const auto& [k, v] : scene.options) mjcf::SetOptionAttribute(composed.doc, k, v);
   for (const auto& [k, v] : scene.size) composed.doc.Section("size").Set(k, v);
   CompiledScene out;
-  out.model = CompileDocument(composed.doc, &composed.articulations);
-  physics::ApplySiteEqualities(out.model.get(), software);
+  out.model =
+      physics::Model(CompileDocument(composed.doc, &composed.articulations), std::move(software));
   mjcf::ApplyArticulationKeyframes(composed.articulations, out.model.get());
   WriteKeyframeValues(composed.doc, out.model.get());
-  out.software_sensors = physics::RegisterSoftwareModel(out.model.get(), software);
   out.bridge_report = std::move(bridge_text);
   if (!scene.save_debug_xml.empty()) {
     SaveDebug(composed.doc, out.model.get(), scene.save_debug_xml, SceneInputFiles(scene));
@@ -310,21 +309,12 @@ CompiledScene BuildModel(const std::string& mjcf_path) {
   CompiledScene out;
   out.diagnostics = doc.diagnostics();
   PrepareMeshes(doc, "", convert::DefaultCacheDir(), &out.diagnostics, &report);
-  out.model = CompileDocument(doc, nullptr);
   physics::SoftwareModelSpec software;
   AddBridgeRuntime(report, "", &software);
-  physics::ApplySiteEqualities(out.model.get(), software);
-  out.software_sensors = physics::RegisterSoftwareModel(out.model.get(), software);
+  out.model = physics::Model(CompileDocument(doc, nullptr), std::move(software));
   NoteBridge(report, "", &out.bridge_report);
   out.doc = std::move(doc);
   return out;
-}
-
-std::string MjbBytes(const mjModel* m) {
-  const int size = mj_sizeModel(m);
-  std::string bytes(static_cast<size_t>(size), '\0');
-  mj_saveModel(m, nullptr, bytes.data(), size);
-  return bytes;
 }
 
 std::vector<std::string> SceneInputFiles(const SceneConfig& scene) {

@@ -19,8 +19,7 @@ std::shared_ptr<Session> Session::Create(const SceneConfig& scene, SessionOption
 
 Session::~Session() {
   Stop();
-  // What the compiled scene keeps registered against the model (software sensors) goes first:
-  // the model itself lives in the engine.
+  // The model (with its extensions) lives in the engine.
   compiled_ = CompiledScene{};
   articulations_.clear();
   engine_.reset();

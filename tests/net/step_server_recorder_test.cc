@@ -179,6 +179,31 @@ TEST_F(StepServerRecorderTest, SnapshotSaveAndLoadRoundTrip) {
       << other.dump();
 }
 
+// Options changed at run time are part of the recording (its model and hash are taken when it
+// starts): the server that made it loads it, and the recording re-simulates with them.
+TEST_F(StepServerRecorderTest, ReplayLoadAcceptsARecordingMadeAfterSetSimOptions) {
+  Play();
+  ASSERT_EQ(c().Op("set_mode", {{"mode", "direct"}})["op"], "set_mode_ok");
+  ASSERT_EQ(c().Op("set_sim_options", {{"options", {{"timestep", 0.001}}}})["op"],
+            "set_sim_options_ok");
+  const std::string path = dir_ + "/options.urrec";
+  ASSERT_EQ(c().Op("recording_start", {{"path", path}})["op"], "recording_start_ok");
+  ASSERT_TRUE(WaitFor([&] {
+    Drive(1);
+    return c().Op("recording_status")["frames"] > 0;
+  }));
+  Drive(40);
+  ASSERT_TRUE(WaitFor([&] { return c().Op("recording_status")["frames"] >= 40; }));
+  ASSERT_EQ(c().Op("recording_stop")["op"], "recording_stop_ok");
+
+  const Json load = c().Op("replay_load", {{"path", path}});
+  EXPECT_EQ(load["op"], "replay_load_ok") << load.dump();
+  const replay::RecordingReader reader = replay::RecordingReader::Open(path);
+  EXPECT_EQ(replay::LoadRecordedModel(reader)->opt.timestep, 0.001);
+  const replay::ResimReport report = replay::Resimulate(reader);
+  EXPECT_TRUE(report.identical) << report.str();
+}
+
 TEST_F(StepServerRecorderTest, ReplaySessionsAndKinematicPlayback) {
   Play();
   const Json missing = c().Op("replay_load", {{"path", "missing.urrec"}});

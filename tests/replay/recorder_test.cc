@@ -85,7 +85,7 @@ std::string RecordBusyRun(PhysicsEngine& engine, Recorder& recorder, const std::
 TEST_F(RecorderTest, RecordsEveryStepAndReSimulatesBitForBit) {
   PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
   Recorder recorder(engine, {{"arm"}, "<mujoco/>", "arm.xml"}, kDeepRing);
-  const std::uint64_t hash = ModelHash(engine.model());  // the run changes the options
+  const std::uint64_t hash = engine.owned_model().Hash();  // the run changes the options
   const std::string path = RecordBusyRun(engine, recorder, dir_ + "/arm.urrec");
   ASSERT_TRUE(fs::exists(path));
   EXPECT_FALSE(fs::exists(path + ".part"));
@@ -398,7 +398,8 @@ TEST_F(BadFileTest, WrongModelIsRefusedWithBothHashes) {
   std::string what;
   EXPECT_EQ(ReasonOf([&] { Player p(other, r, {}); }, &what), RecordingError::Reason::kWrongModel);
   EXPECT_NE(what.find(HashText(r.info().model_hash)), std::string::npos) << what;
-  EXPECT_EQ(ReasonOf([&] { Resimulate(r, other.model()); }, &what),
+  const physics::Model other_model = other.CopyModel();
+  EXPECT_EQ(ReasonOf([&] { Resimulate(r, &other_model); }, &what),
             RecordingError::Reason::kWrongModel);
 }
 

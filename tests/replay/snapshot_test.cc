@@ -11,7 +11,6 @@
 #include "urlab/physics/model.h"
 #include "urlab/physics/state.h"
 #include "urlab/replay/recording.h"
-#include "urlab/world/scene.h"
 
 namespace urlab::replay {
 namespace {
@@ -23,8 +22,7 @@ class SnapshotTest : public urlab::testing::MujocoTest {
   void SetUp() override {
     model_ = physics::CompileXmlString(urlab::testing::kArmXml);
     data_ = physics::MakeData(model_.get());
-    info_.model_hash = ModelHash(model_.get());
-    info_.mjb = world::MjbBytes(model_.get());
+    DescribeModel(model_, &info_);
     info_.tables = ModelTables::Of(model_.get(), {"arm"});
     // A state worth saving: moving, actuated, with a mocap body moved and forces applied.
     mjData* d = data_.get();
@@ -41,7 +39,7 @@ class SnapshotTest : public urlab::testing::MujocoTest {
   }
 
   std::string dir_ = urlab::testing::MakeTempDir("snapshot");
-  physics::ModelPtr model_;
+  physics::Model model_;
   physics::DataPtr data_;
   RecordingInfo info_;
 };
@@ -55,7 +53,7 @@ TEST_F(SnapshotTest, RoundTripIsBitForBitAndContinuesLikeTheOriginal) {
   EXPECT_EQ(reader.info().kind, "snapshot");
   EXPECT_TRUE(reader.finished());
 
-  const physics::PhysicsState loaded = LoadSnapshot(path, model_.get());
+  const physics::PhysicsState loaded = LoadSnapshot(path, model_);
   EXPECT_TRUE(loaded.BitwiseEquals(saved));
 
   physics::DataPtr other = physics::MakeData(model_.get());
@@ -71,15 +69,15 @@ TEST_F(SnapshotTest, AnotherModelIsRefusedNamingBothHashes) {
   SaveSnapshot(path, info_, physics::CaptureState(model_.get(), data_.get()));
   std::string xml = urlab::testing::kArmXml;
   xml.replace(xml.find("timestep=\"0.002\""), 16, "timestep=\"0.001\"");
-  const physics::ModelPtr other = physics::CompileXmlString(xml);
+  const physics::Model other = physics::CompileXmlString(xml);
   try {
-    LoadSnapshot(path, other.get());
+    LoadSnapshot(path, other);
     FAIL() << "loaded on another model";
   } catch (const RecordingError& e) {
     EXPECT_EQ(e.reason(), RecordingError::Reason::kWrongModel);
     const std::string what = e.what();
     EXPECT_NE(what.find(HashText(info_.model_hash)), std::string::npos) << what;
-    EXPECT_NE(what.find(HashText(ModelHash(other.get()))), std::string::npos) << what;
+    EXPECT_NE(what.find(HashText(other.Hash())), std::string::npos) << what;
   }
 }
 
@@ -88,7 +86,7 @@ TEST_F(SnapshotTest, ARecordingIsNotASnapshot) {
   WriteRecording(path, info_,
                  {{Record{StateRecord{0, physics::CaptureState(model_.get(), data_.get())}}}});
   try {
-    LoadSnapshot(path, model_.get());
+    LoadSnapshot(path, model_);
     FAIL() << "a recording loaded as a snapshot";
   } catch (const RecordingError& e) {
     const std::string what = e.what();
@@ -101,10 +99,10 @@ TEST_F(SnapshotTest, ATruncatedFileIsRefused) {
   const std::string path = dir_ + "/state.urrec";
   SaveSnapshot(path, info_, physics::CaptureState(model_.get(), data_.get()));
   fs::resize_file(path, fs::file_size(path) - 40);
-  EXPECT_THROW(LoadSnapshot(path, model_.get()), RecordingError);
+  EXPECT_THROW(LoadSnapshot(path, model_), RecordingError);
   fs::resize_file(path, 10);
-  EXPECT_THROW(LoadSnapshot(path, model_.get()), RecordingError);
-  EXPECT_THROW(LoadSnapshot(dir_ + "/missing.urrec", model_.get()), Error);
+  EXPECT_THROW(LoadSnapshot(path, model_), RecordingError);
+  EXPECT_THROW(LoadSnapshot(dir_ + "/missing.urrec", model_), Error);
 }
 
 }  // namespace

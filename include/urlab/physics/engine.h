@@ -21,6 +21,7 @@
 //   Snapshot, the pacing setters, the measurement getters (atomics) and WithLockedData. Commands
 //   are applied by the physics thread at its next iteration when it runs, immediately (under the
 //   mutex, on the caller's thread) when it does not.
+// - CopyModel and WithLockedData: any thread, not from inside a callback.
 // - Main thread: Start, Stop, the destructor, callback and listener registration, state
 //   subscriptions (before Start), and event delivery (PollEvents/DrainEvents). Reset
 //   notifications, divergence and error reports are queued by the physics thread and only
@@ -111,9 +112,10 @@ class PhysicsEngine {
     bool log_events = true;
   };
 
-  // Takes ownership of a compiled model and allocates its data (mj_forward applied). Main thread.
-  explicit PhysicsEngine(ModelPtr model);
-  PhysicsEngine(ModelPtr model, Options options);
+  // Takes ownership of a compiled model with its extensions (model.h) and allocates its data
+  // (mj_forward applied). Main thread.
+  explicit PhysicsEngine(Model model);
+  PhysicsEngine(Model model, Options options);
   ~PhysicsEngine();  // Stops the thread.
   PhysicsEngine(const PhysicsEngine&) = delete;
   PhysicsEngine& operator=(const PhysicsEngine&) = delete;
@@ -122,6 +124,12 @@ class PhysicsEngine {
   // commands), so while the loop runs read it under WithLockedData, or use timestep(). Any
   // thread.
   const mjModel* model() const { return model_.get(); }
+  // The model with its extensions (model.h): the same contract as model(); copy it with
+  // CopyModel, or with owned_model().Copy() inside WithLockedData.
+  const Model& owned_model() const { return model_; }
+  // A copy of the model with its extensions and the options in effect now, taken with the step
+  // mutex held. Any thread except from inside a step callback.
+  Model CopyModel();
   // The model's current timestep (follows SetOptions). Any thread.
   double timestep() const { return timestep_.load(std::memory_order_relaxed); }
 
@@ -276,7 +284,7 @@ class PhysicsEngine {
   // Resolves a qpos (is_qpos) or dof index to a joint id, -1 when out of range.
   int JointOfIndex(int index, bool is_qpos) const;
 
-  ModelPtr model_;
+  Model model_;
   DataPtr data_;
 
   // Serialises every access to model_/data_ once the engine is constructed.

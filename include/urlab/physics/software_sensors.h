@@ -10,13 +10,26 @@
 //   tendon actuator force = sum of actuator_force over actuators whose
 //                           transmission is that tendon (gear not applied) (3.x tendonactuatorfrc)
 //
-// mjcb_sensor and mjcb_passive are process-global, so registrations are kept per mjModel pointer in
-// one registry; each callback dispatches by model and chains to a callback installed before
-// ours. 3.x's `cutoff` is applied (as MuJoCo does for its own sensors).
+// 3.x's `cutoff` is applied (as MuJoCo does for its own sensors). A physics::Model (model.h)
+// owns its registration: it is the way to keep a model's extensions with it; the functions here
+// are its mechanism (and are used directly by tests of single computations).
 //
-// Thread: RegisterSoftwareSensors / the registration's destructor may run on any thread; the
-// callback runs on whichever thread steps the model (mj_step / mj_forward). The registry is
-// guarded by a reader-writer lock; the callback only takes the shared side.
+// Threading contract
+// - mjcb_sensor and mjcb_passive are process-global. Registrations are kept in one registry, per
+//   mjModel pointer: the callbacks (installed once, on the first non-empty registration, chaining
+//   to callbacks installed before them) look up the state of the model MuJoCo passes them, so
+//   any number of models step at once on their own threads (the physics thread, a re-simulation,
+//   a renderer, tests), each with its own sensors and forces; a model not registered gets
+//   nothing added.
+// - The registry is guarded by a reader-writer lock: the callbacks take its shared side only
+//   (held while they compute, so the state they read cannot go away under them);
+//   RegisterSoftwareModel and the registration's destructor or assignment take the exclusive
+//   side, from any thread. Neither side is held while another lock is taken, except that a
+//   callback may run with its caller's locks held (the engine's step mutex): never register or
+//   unregister while holding a lock a stepping thread takes around mj_step.
+// - A registration unregisters its model when it dies, and only the registration it made (a
+//   newer registration of the same pointer is left alone); the model must outlive it.
+// - ApplySiteEqualities writes the mjModel: before any mjData made from it steps.
 #include <mujoco/mujoco.h>
 
 #include <map>
@@ -92,8 +105,8 @@ struct DeadbandSpringSpec {
   double lo = 0, hi = 0;
 };
 
-// Everything the runtime computes for one model: sensors (mjcb_sensor) and passive forces
-// (mjcb_passive). One registry serves both callbacks.
+// Everything the runtime computes for one model (its extensions): sensors (mjcb_sensor), passive
+// forces (mjcb_passive) and the site equalities' data. One registry serves both callbacks.
 struct SoftwareModelSpec {
   std::vector<SoftwareSensorSpec> sensors;
   std::vector<GravityCompensationSpec> gravcomp;
@@ -121,14 +134,5 @@ SoftwareSensorRegistration RegisterSoftwareSensors(const mjModel* m,
 
 // Number of models currently registered (tests, diagnostics).
 int RegisteredSoftwareSensorModels();
-
-// Adds the registered passive forces of `m` to d->qfrc_passive (what the mjcb_passive callback
-// does). No-op when `m` is not registered.
-void ComputeSoftwarePassive(const mjModel* m, mjData* d);
-
-// Computes the registered sensors of `m` into d->sensordata directly (what the callback does at
-// the acceleration stage); for callers that run the pipeline piecewise. No-op when `m` is not
-// registered.
-void ComputeSoftwareSensors(const mjModel* m, mjData* d);
 
 }  // namespace urlab::physics

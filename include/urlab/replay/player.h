@@ -1,7 +1,8 @@
 #pragma once
 // Playing recordings back.
 //
-// - LoadRecordedModel: the model a recording carries (its MJB), so playback needs no other file.
+// - LoadRecordedModel: the model a recording carries (its MJB and its extensions, physics/model.h),
+//   so playback needs no other file.
 // - Resimulate: dynamic re-simulation without a physics thread: restore the first state, then
 //   for every recorded step re-apply its inputs (ctrl, mocap poses, applied forces; the states
 //   and options recorded at each jump) and mj_step, comparing time, qpos, qvel and act bit for
@@ -29,11 +30,16 @@
 
 namespace urlab::replay {
 
-// The recording's compiled model. Throws RecordingError (kCorrupt) when MuJoCo refuses it.
-physics::ModelPtr LoadRecordedModel(const RecordingReader& reader);
+// The recording's compiled model with its extensions, checked against the header's model hash.
+// Throws RecordingError (kCorrupt) when they do not match or MuJoCo refuses the MJB.
+physics::Model LoadRecordedModel(const RecordingReader& reader);
 
 // Throws RecordingError (kWrongModel) naming both hashes when `m` is not the recorded model.
-void CheckSameModel(const RecordingReader& reader, const mjModel* m);
+// Unless `compare_options`, the physics options are not compared (a recording carries those in
+// effect at its start and every change, and re-applies them): `m` is hashed with the recorded
+// options. `m` must not be stepping meanwhile (pass the engine's CopyModel()).
+void CheckSameModel(const RecordingReader& reader, const physics::Model& m,
+                    bool compare_options = false);
 
 struct ResimReport {
   bool identical = false;  // every checked step matched bit for bit
@@ -58,9 +64,9 @@ struct ResimOptions {
   std::uint64_t progress_every = 10000;
 };
 
-// Re-simulates the whole recording on `m` (the recorded model when null). Throws
-// RecordingError for a damaged chunk or another model.
-ResimReport Resimulate(const RecordingReader& reader, const mjModel* m = nullptr,
+// Re-simulates the whole recording on a copy of `m` (with its extensions; the recorded model
+// when null). Throws RecordingError for a damaged chunk or another model.
+ResimReport Resimulate(const RecordingReader& reader, const physics::Model* m = nullptr,
                        const ResimOptions& options = {});
 
 // Landmarks of a recording for a timeline: where its keyframes are (seeks there are cheapest)

@@ -81,7 +81,8 @@ struct RecorderSource {
 class Recorder {
  public:
   // Subscribes a ring of `ring_frames` frames (inactive) and a command listener on `engine`,
-  // which must not be running; computes the model hash and keeps the compiled model. Main thread.
+  // which must not be running; describes the model (MJB, extensions, hash; again at each Start,
+  // with the physics options then in effect). Main thread.
   Recorder(physics::PhysicsEngine& engine, RecorderSource source, std::size_t ring_frames = 2048);
   // Stops a running recording (finishing its file) and removes the listener.
   ~Recorder();

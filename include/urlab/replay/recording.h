@@ -6,15 +6,23 @@
 // codec, stored and raw payload sizes, a CRC-32 of the header's other fields and the stored
 // payload, and the chunk's first/last step, first/last time and frame count) and its payload,
 // zstd-compressed or stored:
-// - chunk 0, the header: JSON metadata (format, URLab version, model hash, creation time, scene,
-//   options, the name tables), the composed scene's MJCF text and the compiled model (MJB), so
-//   a recording replays without the files it was made from;
+// - chunk 0, the header, four sections each a u64 length and its bytes: JSON metadata (format,
+//   URLab version, model hash, creation time, scene, options, the name tables), the composed
+//   scene's MJCF text, the compiled model (MJB) as it was when the recording started (its
+//   physics options included), and the model's extensions (physics/model.h: the software
+//   sensors, passive forces and site equalities URLab computes beside MuJoCo, as canonical JSON;
+//   empty when it has none), so a recording replays without the files it was made from. The
+//   model hash is physics::ContentHash over the MJB and the extensions' text: a model without
+//   extensions hashes as its MJB alone, as in format 1;
 // - data chunks: records in order. Every data chunk normally starts with a full PhysicsState
 //   (a keyframe: seeking restores it), then frames (one per physics step: time, step, qpos,
 //   qvel, act, ctrl, and when they changed the mocap poses and applied forces; sensordata when
 //   recorded), markers where the state jumped (reset, restore, set state, options), the state
 //   right after each jump, changed physics options, and gaps (frames the recorder's ring lost);
 // - an end chunk (totals) once the recording was finished and renamed into place.
+// Format 1 (before the extensions section: three header sections) is still read, as a model
+// without extensions; a recording of a model that had some replays without them (it diverges
+// where they act). Other versions are refused, naming the version.
 // A recorder writes "NAME.part" and renames it when finished; a crash leaves the .part file with
 // every chunk flushed before it (a chunk spans at most about a second). A truncated or damaged
 // chunk ends the readable prefix: the chunks before it stay readable, and the error names it.
@@ -29,12 +37,15 @@
 #include <vector>
 
 #include "urlab/core/error.h"
+#include "urlab/physics/model.h"
 #include "urlab/physics/state.h"
 #include "urlab/replay/tables.h"
 
 namespace urlab::replay {
 
-inline constexpr std::uint32_t kRecordingFormatVersion = 1;
+// The version written; kOldestRecordingFormatVersion..kRecordingFormatVersion are read.
+inline constexpr std::uint32_t kRecordingFormatVersion = 2;
+inline constexpr std::uint32_t kOldestRecordingFormatVersion = 1;
 
 // A file that is not a readable recording (bad magic, unsupported version, damaged or truncated
 // chunk, wrong model). what() names the file, and the chunk when one is at fault.
@@ -61,23 +72,21 @@ struct RecordingInfo {
   std::uint32_t format_version = kRecordingFormatVersion;
   std::string kind = "recording";  // "recording" or "snapshot"
   std::string urlab_version;
-  std::uint64_t model_hash = 0;  // ModelHash of the compiled model
+  std::uint64_t model_hash = 0;  // physics::Model::Hash of the recorded model
   std::string created;           // UTC, ISO 8601
   std::string scene;             // the scene file it was recorded from ("" when unknown)
   std::string mjcf;              // the composed scene's MJCF
   std::string mjb;               // the compiled model, MuJoCo binary
+  std::string extensions;        // its extensions' canonical text ("" : none; format 1: none)
   ModelTables tables;
   bool sensordata = false;           // frames carry sensordata
   double keyframe_interval = 1;      // simulated seconds between keyframes
   std::string compression = "zstd";  // "zstd" or "none"
 };
 
-// FNV-1a 64 of the model's MJB bytes: equal models (same compilation) hash equal.
-std::uint64_t ModelHash(const mjModel* m);
-// The same hash of MJB bytes already at hand (world::MjbBytes).
-std::uint64_t MjbHash(std::string_view mjb);
-// Sets info->urlab_version, info->mjb and info->model_hash from `m` (saving the model once).
-void DescribeModel(const mjModel* m, RecordingInfo* info);
+// Sets info->urlab_version, info->mjb, info->extensions and info->model_hash from `m` (saving
+// the model once). Reads the mjModel: where its owner allows (the engine's: WithLockedData).
+void DescribeModel(const physics::Model& m, RecordingInfo* info);
 // 16 hexadecimal digits.
 std::string HashText(std::uint64_t hash);
 

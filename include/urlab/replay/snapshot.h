@@ -21,6 +21,6 @@ void SaveSnapshot(const std::string& path, const RecordingInfo& model_info,
 // The state a snapshot file holds. Throws RecordingError naming the file when it is not a
 // readable snapshot (a recording, a damaged or truncated file), kWrongModel naming both hashes
 // when it was taken on another model than `m`.
-physics::PhysicsState LoadSnapshot(const std::string& path, const mjModel* m);
+physics::PhysicsState LoadSnapshot(const std::string& path, const physics::Model& m);
 
 }  // namespace urlab::replay

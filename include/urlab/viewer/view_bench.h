@@ -19,7 +19,7 @@ struct ViewBenchResult {
 };
 
 // `options.attach` and `options.toggle` are the viewer's (any given are replaced).
-ViewBenchResult RunLoopBenchWithView(const mjModel* model, world::LoopBenchOptions options,
+ViewBenchResult RunLoopBenchWithView(const physics::Model& model, world::LoopBenchOptions options,
                                      const ViewerOptions& view);
 
 }  // namespace urlab::viewer

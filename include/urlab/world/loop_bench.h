@@ -62,6 +62,6 @@ ArticulationConfig DriveFirstArticulation(const SceneConfig& scene, const Compil
                                           LoopBenchOptions* options);
 
 // Runs the benchmark on copies of `model`. Throws Error for steps or trials < 1.
-LoopBenchResult RunLoopBench(const mjModel* model, const LoopBenchOptions& options);
+LoopBenchResult RunLoopBench(const physics::Model& model, const LoopBenchOptions& options);
 
 }  // namespace urlab::world

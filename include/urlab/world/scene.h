@@ -39,11 +39,10 @@ struct TerrainLayout {
 };
 
 struct CompiledScene {
-  physics::ModelPtr model;
-  // Sensors and passive forces 2.2.2 lacks (3.x jointactuatorfrc/tendonactuatorfrc, gravcomp),
-  // computed by the runtime; kept
-  // registered while this lives (declared after `model`, so it is released first).
-  physics::SoftwareSensorRegistration software_sensors;
+  // The compiled model with its extensions: the sensors and passive forces 2.2.2 lacks (3.x
+  // jointactuatorfrc/tendonactuatorfrc, gravcomp, dead-band springs) that the runtime computes,
+  // and the site equalities' data (physics/model.h).
+  physics::Model model;
   std::string bridge_report;  // what the dialect bridge changed ("" when nothing)
   // The scene's articulations in order, then its props (their layouts follow the articulations').
   std::vector<mjcf::ArticulationLayout> articulations;
@@ -94,8 +93,5 @@ std::vector<std::string> SceneInputFiles(const SceneConfig& scene);
 
 // True when geom `geom` of `scene`'s model is a convex part of a converted prop.
 bool IsConvertedPropPart(const CompiledScene& scene, int geom);
-
-// A compiled model as MuJoCo binary (.mjb) bytes, e.g. for WriteFileAtomic.
-std::string MjbBytes(const mjModel* m);
 
 }  // namespace urlab::world
