@@ -90,8 +90,8 @@ struct ValidateArgs {
 // The dialect bridge's rule table, one line per rule.
 void PrintBridgeRules() {
   for (const mjcf::BridgeRule& rule : mjcf::BridgeRules()) {
-    std::cout << rule.id << "\t" << mjcf::BridgeKindName(rule.kind) << "\t" << rule.function << "\t"
-              << rule.construct << "\n";
+    std::cout << rule.id << "\t" << mjcf::BridgeKindName(rule.kind) << "\t"
+              << mjcf::BridgeRulePasses(rule) << "\t" << rule.construct << "\n";
   }
 }
 

@@ -5,6 +5,7 @@
 #include <map>
 #include <set>
 
+#include "mjcf/bridge_pass.h"
 #include "mjcf/bridge_rules.h"
 #include "mjcf/compose_steps.h"
 #include "mjcf/trial_compile.h"
@@ -100,7 +101,8 @@ void AppendPrefixed(BridgeReport& into, const BridgeReport& from, const std::str
 // element to go to. Empty, with the compiler's message, when the child alone does not compile.
 std::vector<AttachedKey> ChildKeys(Document& child, std::string* error) {
   NameUnnamed(child);
-  mjModel* m = TrialCompile(WriteString(child), error);
+  const physics::ModelPtr model = TrialCompile(WriteString(child), error);
+  const mjModel* m = model.get();
   if (!m) return {};
   auto name = [&](mjtObj type, int id) {
     const char* n = mj_id2name(m, type, id);
@@ -136,7 +138,6 @@ std::vector<AttachedKey> ChildKeys(Document& child, std::string* error) {
       out.mquat[name(mjOBJ_BODY, b)].assign(q, q + 4);
     }
   }
-  mj_deleteModel(m);
   return keys;
 }
 
@@ -381,5 +382,12 @@ void ExpandAttachments(Document& doc, BridgeReport& report, std::vector<Attached
     m->parent()->RemoveChild(m);
   }
 }
+
+namespace bridge {
+
+// The pass of bridge.cc's table: every <attach> of the document, keys kept for PadKeyframes.
+void Attachments(State& s) { ExpandAttachments(s.doc, s.report, &s.attached_keys); }
+
+}  // namespace bridge
 
 }  // namespace urlab::mjcf

@@ -27,9 +27,9 @@ ModelPtr FinishLoad(mjModel* m, const char* error) {
   return ModelPtr(m);
 }
 
-}  // namespace
-
-ModelPtr CompileXmlString(const std::string& xml) {
+// mj_loadXML of `xml` from an in-memory VFS holding only that text (the VFS is 2 MB: on the
+// heap). `error` receives the compiler's message (or warning when the model compiled).
+mjModel* LoadFromMemory(const std::string& xml, char* error) {
   std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
   mj_defaultVFS(vfs.get());
   if (mj_makeEmptyFileVFS(vfs.get(), kVirtualName, static_cast<int>(xml.size())) != 0) {
@@ -37,9 +37,22 @@ ModelPtr CompileXmlString(const std::string& xml) {
   }
   const int index = mj_findFileVFS(vfs.get(), kVirtualName);
   std::memcpy(vfs->filedata[index], xml.data(), xml.size());
+  return mj_loadXML(kVirtualName, vfs.get(), error, kErrorSize);
+}
+
+}  // namespace
+
+ModelPtr CompileXmlString(const std::string& xml) {
   char error[kErrorSize] = "";
-  mjModel* m = mj_loadXML(kVirtualName, vfs.get(), error, kErrorSize);
+  mjModel* m = LoadFromMemory(xml, error);
   return FinishLoad(m, error);
+}
+
+ModelPtr TryCompileXmlString(const std::string& xml, std::string* error) {
+  char buf[kErrorSize] = "";
+  ModelPtr m(LoadFromMemory(xml, buf));
+  if (!m) *error = buf[0] ? buf : "MuJoCo could not compile the model";
+  return m;
 }
 
 ModelPtr LoadXmlFile(const std::string& path) {

@@ -884,7 +884,7 @@ TEST(BridgeRulesTest, RuleIdsAreUniqueAndPoliciesNameRules) {
   std::set<std::string> ids;
   for (const mjcf::BridgeRule& r : mjcf::BridgeRules()) {
     EXPECT_TRUE(ids.insert(r.id).second) << "duplicate rule " << r.id;
-    EXPECT_FALSE(std::string(r.function).empty()) << r.id;
+    EXPECT_FALSE(mjcf::BridgeRuleFunction(r).empty()) << r.id;
     EXPECT_FALSE(std::string(r.construct).empty()) << r.id;
   }
   for (const mjcf::AttributePolicy& p : mjcf::AttributePolicies()) {
