@@ -1,19 +1,13 @@
 // The dialect bridge's actuator passes: armature/damping moved to the transmission target,
 // joint/tendon actuatorfrcrange, the position/intvelocity shortcuts (kv, dampratio, timeconst,
 // inheritrange), filterexact, and the order 2.2.2 wants (stateless actuators first).
-#include <fmt/format.h>
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstring>
-#include <filesystem>
-#include <map>
 #include <memory>
 #include <set>
-#include <sstream>
-#include <type_traits>
 
 #include "mjcf/bridge_pass.h"
 #include "mjcf/trial_compile.h"
@@ -24,17 +18,11 @@ namespace urlab::mjcf::bridge {
 
 namespace {
 
-namespace fs = std::filesystem;
 using document::Attribute;
-using document::CompilerSettings;
-using document::Document;
 using document::Element;
 using document::FormatReal;
 using document::FormatReals;
 using document::ParseReals;
-using document::Quat;
-using document::Vec3;
-using Kind = BridgeChange::Kind;
 
 class ActuatorsPasses : public Pass {
  public:

@@ -1,18 +1,5 @@
 // The dialect bridge's asset and render passes: discardvisual, render-only elements, mesh
 // inertia.
-#include <fmt/format.h>
-#include <mujoco/mujoco.h>
-
-#include <algorithm>
-#include <array>
-#include <cmath>
-#include <cstring>
-#include <filesystem>
-#include <map>
-#include <memory>
-#include <set>
-#include <sstream>
-#include <type_traits>
 
 #include "mjcf/bridge_pass.h"
 #include "urlab/document/orientation.h"
@@ -21,17 +8,7 @@ namespace urlab::mjcf::bridge {
 
 namespace {
 
-namespace fs = std::filesystem;
-using document::Attribute;
-using document::CompilerSettings;
-using document::Document;
 using document::Element;
-using document::FormatReal;
-using document::FormatReals;
-using document::ParseReals;
-using document::Quat;
-using document::Vec3;
-using Kind = BridgeChange::Kind;
 
 class AssetsPasses : public Pass {
  public:

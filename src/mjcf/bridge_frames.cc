@@ -4,15 +4,10 @@
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <cstring>
-#include <filesystem>
 #include <map>
 #include <memory>
 #include <set>
-#include <sstream>
-#include <type_traits>
 
 #include "mjcf/bridge_pass.h"
 #include "mjcf/trial_compile.h"
@@ -23,17 +18,11 @@ namespace urlab::mjcf::bridge {
 
 namespace {
 
-namespace fs = std::filesystem;
 using document::Attribute;
-using document::CompilerSettings;
-using document::Document;
 using document::Element;
-using document::FormatReal;
 using document::FormatReals;
-using document::ParseReals;
 using document::Quat;
 using document::Vec3;
-using Kind = BridgeChange::Kind;
 
 class FramesPasses : public Pass {
  public:

@@ -1,17 +1,9 @@
 // The dialect bridge's keyframe pass: keys shorter than the model padded as 3.x does, and the
 // keys of attached models written at their elements' addresses.
-#include <fmt/format.h>
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
-#include <array>
-#include <cmath>
-#include <cstring>
-#include <filesystem>
-#include <map>
 #include <memory>
-#include <set>
-#include <sstream>
 #include <type_traits>
 
 #include "mjcf/bridge_pass.h"
@@ -23,17 +15,8 @@ namespace urlab::mjcf::bridge {
 
 namespace {
 
-namespace fs = std::filesystem;
-using document::Attribute;
-using document::CompilerSettings;
-using document::Document;
 using document::Element;
-using document::FormatReal;
-using document::FormatReals;
 using document::ParseReals;
-using document::Quat;
-using document::Vec3;
-using Kind = BridgeChange::Kind;
 
 class KeyframesPasses : public Pass {
  public:

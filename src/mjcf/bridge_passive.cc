@@ -1,18 +1,6 @@
 // The dialect bridge's passive-force passes: body gravcomp, dead-band tendon springs (both
 // computed by the runtime through mjcb_passive) and the spring/damper flags 3.x split.
-#include <fmt/format.h>
 #include <mujoco/mujoco.h>
-
-#include <algorithm>
-#include <array>
-#include <cmath>
-#include <cstring>
-#include <filesystem>
-#include <map>
-#include <memory>
-#include <set>
-#include <sstream>
-#include <type_traits>
 
 #include "mjcf/bridge_pass.h"
 #include "urlab/document/orientation.h"
@@ -21,17 +9,10 @@ namespace urlab::mjcf::bridge {
 
 namespace {
 
-namespace fs = std::filesystem;
-using document::Attribute;
-using document::CompilerSettings;
-using document::Document;
 using document::Element;
 using document::FormatReal;
 using document::FormatReals;
 using document::ParseReals;
-using document::Quat;
-using document::Vec3;
-using Kind = BridgeChange::Kind;
 
 class PassiveForcesPasses : public Pass {
  public:

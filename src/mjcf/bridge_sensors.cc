@@ -1,18 +1,9 @@
 // The dialect bridge's sensor passes: actuator-force sensors and the sensors the runtime
 // computes (energies, insidesite, contact) as <user> sensors.
-#include <fmt/format.h>
 #include <mujoco/mujoco.h>
 
-#include <algorithm>
-#include <array>
-#include <cmath>
-#include <cstring>
-#include <filesystem>
 #include <map>
-#include <memory>
-#include <set>
 #include <sstream>
-#include <type_traits>
 
 #include "mjcf/bridge_pass.h"
 #include "urlab/document/orientation.h"
@@ -21,16 +12,7 @@ namespace urlab::mjcf::bridge {
 
 namespace {
 
-namespace fs = std::filesystem;
-using document::Attribute;
-using document::CompilerSettings;
-using document::Document;
 using document::Element;
-using document::FormatReal;
-using document::FormatReals;
-using document::ParseReals;
-using document::Quat;
-using document::Vec3;
 using Kind = BridgeChange::Kind;
 
 class SensorsPasses : public Pass {

@@ -2,11 +2,13 @@
 // is checked by what it does in simulation (or in the compiled model), not by the text written.
 #include "urlab/mjcf/bridge.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
 
+#include "mjcf/bridge_pass.h"
 #include "mjcf/bridge_rules.h"
 #include "mujoco_test.h"
 #include "urlab/document/grammar.h"
@@ -885,6 +887,15 @@ TEST(BridgeRulesTest, RuleIdsAreUniqueAndPoliciesNameRules) {
   for (const mjcf::BridgeRule& r : mjcf::BridgeRules()) {
     EXPECT_TRUE(ids.insert(r.id).second) << "duplicate rule " << r.id;
     EXPECT_FALSE(mjcf::BridgeRuleFunction(r).empty()) << r.id;
+    // Every pass a rule names runs: it is a row of the pass table (names and files come from it).
+    const auto passes = mjcf::bridge::Passes();
+    for (mjcf::BridgePassFn fn : r.passes) {
+      if (!fn) continue;
+      EXPECT_TRUE(std::any_of(passes.begin(), passes.end(),
+                              [&](const mjcf::bridge::PassEntry& p) { return p.run == fn; }))
+          << r.id;
+    }
+    EXPECT_TRUE(r.passes[0] || r.elsewhere) << r.id;
     EXPECT_FALSE(std::string(r.construct).empty()) << r.id;
   }
   for (const mjcf::AttributePolicy& p : mjcf::AttributePolicies()) {
