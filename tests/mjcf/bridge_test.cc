@@ -778,6 +778,29 @@ TEST_F(BridgeTest, ReplicateFollowsTheReferenceExample) {
   EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "refers into a <replicate>"));
 }
 
+// A model attached many times brings, each time, the assets and referring elements of every
+// section of its kind (finger.xml keeps its pad material in a second <asset> and a sensor in a
+// second <sensor>): they used to stop at the first section, leaving every copy's pad material
+// dangling. MuJoCo 3.3.8 loads many.xml with 8 materials, 4 textures and 8 sensors.
+TEST_F(BridgeTest, ModelAttachedManyTimesKeepsEverySectionsAssets) {
+  const Bridged b = LoadFile(testing::TestData("mjcf/bridge3x/attach/many.xml"));
+  EXPECT_FALSE(b.report.HasRefusals()) << b.report.Format();
+  const mjModel* m = b.model.get();
+  EXPECT_EQ(m->nmat, 8);
+  EXPECT_EQ(m->ntex, 4);
+  EXPECT_EQ(m->nsensor, 8);
+  EXPECT_EQ(m->nu, 4);
+  for (const std::string f : {"f1_", "f2_", "f3_", "f4_"}) {
+    const int pad = Id(m, mjOBJ_MATERIAL, (f + "pad").c_str());
+    const int body = Id(m, mjOBJ_BODY, (f + "knuckle").c_str());
+    int pads = 0;
+    for (int g = 0; g < m->ngeom; ++g) pads += m->geom_bodyid[g] == body && m->geom_matid[g] == pad;
+    EXPECT_EQ(pads, 1) << f;
+    EXPECT_EQ(m->mat_texid[pad], Id(m, mjOBJ_TEXTURE, (f + "ridges").c_str())) << f;
+    EXPECT_GE(Id(m, mjOBJ_SENSOR, (f + "tip_pos").c_str()), 0) << f;
+  }
+}
+
 // Keyframes of an attached model join the parent's as "{prefix}{name}": the attached joints',
 // actuators' (activations included) values from the child's key, everything else (a joint and
 // a mocap body of the child outside the attached subtree, the parent's own) as qpos0 / zero /
