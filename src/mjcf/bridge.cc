@@ -55,7 +55,7 @@ class Detection : public Pass {
 // settings first (autolimits, assetdir, angle units), then the passes that change the body tree
 // (attach, replicate, frame: everything after sees plain bodies), then per construct family; the
 // generic attribute policies and the leftovers come after every pass that consumes 3.x
-// attributes. The last three need a trial compile of the bridged model, so they run only when
+// attributes. The last four need a trial compile of the bridged model, so they run only when
 // nothing was refused.
 // clang-format off
 constexpr PassEntry kPasses[] = {
@@ -86,6 +86,7 @@ constexpr PassEntry kPasses[] = {
     {"AlignFreeBodies",          "src/mjcf/bridge_frames.cc",      &AlignFreeBodies,            true},
     {"DampRatio",                "src/mjcf/bridge_actuators.cc",   &DampRatio,                  true},
     {"PadKeyframes",             "src/mjcf/bridge_keyframes.cc",   &PadKeyframes,               true},
+    {"SizeStack",                "src/mjcf/bridge_compiler.cc",    &SizeStack,                  true},
 };
 // clang-format on
 

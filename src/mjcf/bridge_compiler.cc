@@ -1,37 +1,24 @@
 // The dialect bridge's compiler and option passes: <compiler> settings whose 3.x meaning differs
 // (autolimits, assetdir, alignfree, ...), <option>/<flag>/<size> (see docs/dialect-bridge.md).
-#include <fmt/format.h>
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
-#include <array>
-#include <cmath>
-#include <cstring>
+#include <cstdlib>
 #include <filesystem>
-#include <map>
 #include <memory>
-#include <set>
-#include <sstream>
-#include <type_traits>
 
 #include "mjcf/bridge_pass.h"
+#include "mjcf/trial_compile.h"
 #include "urlab/document/orientation.h"
+#include "urlab/mjcf/writer.h"
 
 namespace urlab::mjcf::bridge {
 
 namespace {
 
 namespace fs = std::filesystem;
-using document::Attribute;
-using document::CompilerSettings;
-using document::Document;
 using document::Element;
-using document::FormatReal;
-using document::FormatReals;
 using document::ParseReals;
-using document::Quat;
-using document::Vec3;
-using Kind = BridgeChange::Kind;
 
 class CompilerOptionsPasses : public Pass {
  public:
@@ -192,13 +179,19 @@ class CompilerOptionsPasses : public Pass {
         if (unit == 'M' || unit == 'm') bytes *= 1024 * 1024;
         if (unit == 'G' || unit == 'g') bytes *= 1024.0 * 1024 * 1024;
         s->Unset("memory");
+        // The stack is sized after a trial compile (SizeStack): 3.x's arena also holds the
+        // contacts and constraints and its sparse solver needs less, so a memory sized for 3.x
+        // can be too small a stack for 2.2.2, whose own estimate then applies.
         if (!s->Has("nstack") && bytes > 0) {
-          s->SetInt("nstack", static_cast<int>(std::min(bytes / 8, 2e9)));
+          state_.memory_size = s;
+          state_.memory_bytes = bytes;
         }
         Note("size.memory", *s,
              "size memory=\"" + text +
-                 "\" -> nstack (2.2.2 sizes its arena in mjtNums; "
-                 "njmax/nconmax keep their 2.2.2 defaults)");
+                 "\" -> nstack: memory / 8 (2.2.2 sizes its stack in mjtNums) when that is more "
+                 "than MuJoCo 2.2.2's own estimate for the model, otherwise 2.2.2's estimate (3.x "
+                 "sizes its arena for its own solver and contacts); njmax/nconmax keep their 2.2.2 "
+                 "defaults");
       }
     }
   }
@@ -251,6 +244,18 @@ class CompilerOptionsPasses : public Pass {
       }
     }
   }
+
+  // ---- the stack of a model that gave 3.x a memory size ----
+  void SizeStack() {
+    Element* s = state_.memory_size;
+    if (!s) return;
+    const double words = std::min(state_.memory_bytes / 8, 2e9);
+    std::string error;
+    const physics::ModelPtr model = TrialCompile(WriteString(doc_), &error);
+    // 2.2.2's estimate (nstack unset) holds what the model needs; a larger memory is kept.
+    if (model && model->nstack >= words) return;
+    s->SetInt("nstack", static_cast<int>(words));
+  }
 };
 
 }  // namespace
@@ -259,6 +264,7 @@ void Compiler(State& s) {
   CompilerOptionsPasses(s).Compiler();
   s.compiler = s.doc.Compiler();  // the passes after see the settings as written
 }
+void SizeStack(State& s) { CompilerOptionsPasses(s).SizeStack(); }
 void Options(State& s) { CompilerOptionsPasses(s).Options(); }
 
 }  // namespace urlab::mjcf::bridge

@@ -1,7 +1,7 @@
 #pragma once
 // The dialect bridge's passes (internal to the mjcf module). ApplyBridge (bridge.cc) runs them in
 // the order of its pass table over one `State`; each construct family has its own file:
-//   bridge_compiler.cc     <compiler>, <option>, <flag>, <size>
+//   bridge_compiler.cc     <compiler>, <option>, <flag>, <size> (and the stack size)
 //   bridge_attach.cc       <attach>/<model> (driven by the `Attachments` pass)
 //   bridge_frames.cc       <replicate>, <frame>, free-body alignment
 //   bridge_constraints.cc  equalities on sites, polycoef
@@ -60,6 +60,8 @@ struct State {
     double ratio;
   };
   std::vector<PendingDampRatio> pending;
+  Element* memory_size = nullptr;  // <size> whose 3.x memory the stack is sized from (Options)
+  double memory_bytes = 0;         // -> SizeStack
 };
 
 // Every pass, in the order ApplyBridge runs them (bridge.cc's pass table).
@@ -89,6 +91,7 @@ void Leftovers(State& s);
 void AlignFreeBodies(State& s);
 void DampRatio(State& s);
 void PadKeyframes(State& s);
+void SizeStack(State& s);
 
 // One row of the pass table (bridge.cc): the pass's name and file (for the rule listing), the
 // function, and whether it runs only when nothing was refused (those need a trial compile).

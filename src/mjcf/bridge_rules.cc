@@ -75,7 +75,7 @@ constexpr BridgeRule kRules[] = {
     {"option.o_friction",               "option o_friction without override",                kD, {&bridge::Options}},
     {"option.o_friction.refused",       "option o_friction with override",                   kR, {&bridge::Options}},
     {"option.implicitfast",             "option integrator=\"implicitfast\"",                kA, {&bridge::Options}},
-    {"size.memory",                     "size memory",                                       kA, {&bridge::Options}},
+    {"size.memory",                     "size memory",                                       kA, {&bridge::Options, &bridge::SizeStack}},
     {"flag.spring_damper",              "flag spring/damper equal",                          kT, {&bridge::Options}},
     {"flag.spring_damper.split",        "flag spring/damper different",                      kT, {&bridge::Options, &bridge::PassiveFlags}},
     {"actuator.filterexact",            "general dyntype=\"filterexact\"",                   kT, {&bridge::FilterExact}},

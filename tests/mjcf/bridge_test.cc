@@ -720,6 +720,24 @@ TEST_F(BridgeTest, OptionsMiscLoadsAndTranslatesWhatIsExact) {
   EXPECT_FALSE(b.report.HasRefusals());
 }
 
+// A memory sized for 3.x's arena (which also holds contacts and constraints, for a sparse
+// solver) used to become a 2.2.2 stack too small for 2.2.2's dense solver: 64 resting spheres
+// overflowed it on the first step. 2.2.2's own estimate applies when it is larger.
+TEST_F(BridgeTest, MemorySizedFor3xLeaves222EnoughStack) {
+  Bridged b = LoadFile(testing::TestData("mjcf/bridge3x/memory_contacts.xml"));
+  const mjModel* m = b.model.get();
+  EXPECT_GT(m->nstack, 2 * 1024 * 1024 / 8);  // 2.2.2's estimate, not memory / 8
+  for (int i = 0; i < 200; ++i) mj_step(m, b.data.get());
+  EXPECT_EQ(b.data->ncon, 64);
+  EXPECT_TRUE(Mentions(b.report, Kind::kApproximated, "size memory=\"2M\""));
+  // A memory larger than 2.2.2's estimate is kept as the stack (in mjtNums).
+  Bridged big = Load(R"(<mujoco>
+  <size memory="64M"/>
+  <worldbody><body><freejoint/><geom size="0.1"/></body></worldbody>
+</mujoco>)");
+  EXPECT_EQ(big.model->nstack, 64 * 1024 * 1024 / 8);
+}
+
 TEST_F(BridgeTest, RefusalsAreAllListedWithLines) {
   const mjcf::BridgeReport r = ReportOf(R"(<mujoco>
   <worldbody>
