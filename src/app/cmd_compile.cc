@@ -106,8 +106,8 @@ struct ValidateArgs {
 // The dialect bridge's rule table, one line per rule.
 void PrintBridgeRules() {
   for (const mjcf::BridgeRule& rule : mjcf::BridgeRules()) {
-    std::cout << rule.id << "\t" << mjcf::BridgeKindName(rule.kind) << "\t" << rule.function << "\t"
-              << rule.construct << "\n";
+    std::cout << rule.id << "\t" << mjcf::BridgeKindName(rule.kind) << "\t"
+              << mjcf::BridgeRulePasses(rule) << "\t" << rule.construct << "\n";
   }
 }
 
@@ -177,7 +177,7 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
   static ValidateArgs vargs;
   val->add_option("FILE", vargs.file, "scene (.yaml) or MJCF (.xml) file");
   val->add_flag("--bridge-rules", vargs.bridge_rules,
-                "print the dialect bridge's rule table (id, kind, function, construct)");
+                "print the dialect bridge's rule table (id, kind, passes, construct)");
   val->add_flag("--bridge-report", vargs.bridge_report,
                 "list every change the MuJoCo 3.x dialect bridge makes, with file and line");
   val->callback([&exit_code] {

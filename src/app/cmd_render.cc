@@ -59,7 +59,7 @@ int Render(const RenderArgs& args) {
   if (reader.info().kind != "recording") {
     throw InputError({args.file, 0}, "not a recording (a " + reader.info().kind + ")");
   }
-  const physics::ModelPtr model = replay::LoadRecordedModel(reader);
+  const physics::Model model = replay::LoadRecordedModel(reader);
   const render::ViewCamera camera = render::ParseViewCamera(model.get(), args.camera, "--camera");
   replay::FrameSampler sampler(reader);
   const std::uint64_t frames = sampler.FrameCount(static_cast<double>(args.fps));

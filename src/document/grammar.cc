@@ -257,4 +257,21 @@ const ElementSpec* Grammar::Find(std::string_view id) const {
   return nullptr;
 }
 
+std::span<const std::string> ActuatorTags() {
+  static const std::vector<std::string> tags = [] {
+    std::vector<std::string> out;
+    const Grammar& g = Grammar::Get();
+    for (const ElementSpec* c : g.Find("actuator")->children) {
+      if (!c->dialect && g.Find("default." + c->tag)) out.push_back(c->tag);
+    }
+    return out;
+  }();
+  return tags;
+}
+
+bool IsActuatorTag(std::string_view tag) {
+  const auto tags = ActuatorTags();
+  return std::find(tags.begin(), tags.end(), tag) != tags.end();
+}
+
 }  // namespace urlab::document

@@ -64,11 +64,6 @@ const Element* FindDefaultClass(const Document& doc, const std::string& name) {
   return found;
 }
 
-bool IsActuatorTag(std::string_view t) {
-  return t == "general" || t == "motor" || t == "position" || t == "velocity" || t == "cylinder" ||
-         t == "muscle" || t == "adhesion" || t == "intvelocity" || t == "damper";
-}
-
 // The template in default class `d` for elements with tag `tag` that sets `name` (last wins).
 const std::string* TemplateValue(const Element& d, const std::string& tag, std::string_view name) {
   const std::string* value = nullptr;

@@ -5,6 +5,7 @@
 #include <map>
 #include <set>
 
+#include "mjcf/bridge_pass.h"
 #include "mjcf/bridge_rules.h"
 #include "mjcf/compose_steps.h"
 #include "mjcf/trial_compile.h"
@@ -48,6 +49,15 @@ bool RefersTo(const Element& root, const NameSets& names) {
     }
   });
   return found;
+}
+
+// The top-level sections of `doc` with tag `tag`, in document order.
+std::vector<Element*> Sections(Document& doc, const char* tag) {
+  std::vector<Element*> out;
+  for (const auto& c : doc.root().children()) {
+    if (c->tag() == tag) out.push_back(c.get());
+  }
+  return out;
 }
 
 // The childclass `e` inherits from its ancestors in its own document ("" when none).
@@ -100,7 +110,8 @@ void AppendPrefixed(BridgeReport& into, const BridgeReport& from, const std::str
 // element to go to. Empty, with the compiler's message, when the child alone does not compile.
 std::vector<AttachedKey> ChildKeys(Document& child, std::string* error) {
   NameUnnamed(child);
-  mjModel* m = TrialCompile(WriteString(child), error);
+  const physics::ModelPtr model = TrialCompile(WriteString(child), error);
+  const mjModel* m = model.get();
   if (!m) return {};
   auto name = [&](mjtObj type, int id) {
     const char* n = mj_id2name(m, type, id);
@@ -136,7 +147,6 @@ std::vector<AttachedKey> ChildKeys(Document& child, std::string* error) {
       out.mquat[name(mjOBJ_BODY, b)].assign(q, q + 4);
     }
   }
-  mj_deleteModel(m);
   return keys;
 }
 
@@ -220,8 +230,11 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
   // The child's keyframes, read from the child compiled alone (its own bridge padded them).
   std::vector<AttachedKey> child_keys;
   std::vector<std::string> key_names;
-  if (Element* section = child.root().FirstChild("keyframe")) {
-    for (const auto& k : section->children()) key_names.push_back(k->Name());
+  const std::vector<Element*> key_sections = Sections(child, "keyframe");
+  if (!key_sections.empty()) {
+    for (const Element* section : key_sections) {
+      for (const auto& k : section->children()) key_names.push_back(k->Name());
+    }
     std::string error;
     child_keys = ChildKeys(child, &error);
     if (child_keys.size() < key_names.size()) {
@@ -234,7 +247,7 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
                "parent");
       return;
     }
-    child.root().RemoveChild(section);
+    for (Element* section : key_sections) child.root().RemoveChild(section);
   }
   ConvertAngleUnits(child, child.Compiler(), doc.Compiler());
   PrefixNames(child, *prefix);
@@ -281,7 +294,9 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
   }
   // Assets: all of them (3.x copies every asset of the child, referenced or not).
   int assets = 0;
-  if (Element* a = child.root().FirstChild("asset")) {
+  // A model may have several sections of a kind (an <asset> for materials, another for meshes):
+  // every one of them counts.
+  for (Element* a : Sections(child, "asset")) {
     Element& into = doc.Section("asset");
     while (!a->children().empty()) {
       into.InsertChild(into.children().size(), a->RemoveChild(a->children()[0].get()));
@@ -291,18 +306,18 @@ void Attach(Document& doc, Element& attach, const std::map<std::string, std::str
   // Elements outside the tree that refer into it; tendons first (actuators may use them).
   int referring = 0;
   for (const char* section : {"tendon", "equality", "contact", "actuator", "sensor"}) {
-    Element* s = child.root().FirstChild(section);
-    if (!s) continue;
-    std::vector<Element*> refs;
-    for (const auto& c : s->children()) {
-      if (RefersTo(*c, inside)) refs.push_back(c.get());
-    }
-    if (refs.empty()) continue;
-    Element& into = doc.Section(section);
-    for (Element* r : refs) {
-      DefinedNames(*r, &inside);
-      into.InsertChild(into.children().size(), s->RemoveChild(r));
-      ++referring;
+    for (Element* s : Sections(child, section)) {
+      std::vector<Element*> refs;
+      for (const auto& c : s->children()) {
+        if (RefersTo(*c, inside)) refs.push_back(c.get());
+      }
+      if (refs.empty()) continue;
+      Element& into = doc.Section(section);
+      for (Element* r : refs) {
+        DefinedNames(*r, &inside);
+        into.InsertChild(into.children().size(), s->RemoveChild(r));
+        ++referring;
+      }
     }
   }
   // Keyframes: after the parent's own, named "{prefix}{name}" (an unnamed one: the prefix).
@@ -381,5 +396,12 @@ void ExpandAttachments(Document& doc, BridgeReport& report, std::vector<Attached
     m->parent()->RemoveChild(m);
   }
 }
+
+namespace bridge {
+
+// The pass of bridge.cc's table: every <attach> of the document, keys kept for PadKeyframes.
+void Attachments(State& s) { ExpandAttachments(s.doc, s.report, &s.attached_keys); }
+
+}  // namespace bridge
 
 }  // namespace urlab::mjcf

@@ -1,12 +1,14 @@
 // The dialect bridge's rule table and attribute policies (see bridge_rules.h). One row per rule:
-// id, the MuJoCo 3.x construct, what the bridge does with it (kind), and the function of
-// bridge.cc that applies it. docs/dialect-bridge.md explains each construct; `urlab validate
+// id, the MuJoCo 3.x construct, what the bridge does with it (kind), and the pass(es) applying it
+// (functions of bridge_pass.h, so the compiler checks them; "elsewhere" for the one rule applied
+// outside the bridge). docs/dialect-bridge.md explains each construct; `urlab validate
 // --bridge-report` names the rule of every change it lists.
 #include "mjcf/bridge_rules.h"
 
 #include <algorithm>
 #include <string>
 
+#include "mjcf/bridge_pass.h"
 #include "urlab/core/error.h"
 
 namespace urlab::mjcf {
@@ -21,96 +23,96 @@ constexpr K kR = K::kRefused;
 
 // clang-format off
 constexpr BridgeRule kRules[] = {
-    // id                                construct                                            kind  function
-    {"compiler.autolimits",             "compiler autolimits (3.x default true)",            kT, "Compiler"},
-    {"compiler.assetdir",               "compiler assetdir",                                 kT, "Compiler"},
-    {"compiler.alignfree",              "compiler alignfree=\"true\"",                       kT, "Compiler, FreeJointAlign"},
-    {"compiler.alignfree.false",        "compiler alignfree=\"false\"",                      kD, "Compiler"},
-    {"compiler.saveinertial",           "compiler saveinertial",                             kD, "Compiler"},
-    {"compiler.conflict",               "compiler conflict",                                 kD, "Compiler"},
-    {"compiler.discardvisual",          "compiler discardvisual=\"true\"",                   kT, "KeepVisualGeoms"},
-    {"compiler.lengthrange.interval",   "lengthrange interval",                              kT, "Compiler"},
-    {"attach",                          "<attach model body|frame prefix> of a <model>",    kT, "src/mjcf/bridge_attach.cc ExpandAttachments"},
-    {"attach.model",                    "<model> asset",                                     kT, "src/mjcf/bridge_attach.cc ExpandAttachments"},
-    {"attach.defaults",                 "<attach> under a parent with top-level defaults",   kA, "src/mjcf/bridge_attach.cc ExpandAttachments"},
-    {"attach.keyframe",                 "keyframes of an attached model",                    kT, "src/mjcf/bridge_attach.cc Attach, src/mjcf/bridge.cc WriteAttachedKey"},
-    {"attach.refused",                  "self-attachment, keys of a child that fails alone", kR, "src/mjcf/bridge_attach.cc ExpandAttachments"},
-    {"replicate",                       "<replicate> count/offset/euler/sep",                kT, "Replicate"},
-    {"replicate.reference",             "element referring into a <replicate>",              kT, "Replicate"},
-    {"replicate.invalid",               "<replicate> without a positive count",              kR, "Replicate"},
-    {"frame",                           "<frame>",                                           kT, "FlattenFrames"},
-    {"frame.child",                     "element that cannot move inside a posed <frame>",   kR, "FlattenFrames"},
-    {"equality.site",                   "equality connect site1/site2",                      kT, "SiteEqualities"},
-    {"equality.site.weld",              "equality weld site1/site2",                         kA, "SiteEqualities"},
-    {"freejoint.align",                 "freejoint align (simple free body)",                kT, "FreeJointAlign, AlignFreeBodies"},
-    {"freejoint.align.nochildren",      "freejoint align on a body with child bodies",       kD, "FreeJointAlign"},
-    {"freejoint.align.refused",         "freejoint align with body-frame equality anchors",  kR, "FreeJointAlign, AlignFreeBodies"},
-    {"equality.weld",                   "equality weld on bodies (3.x's weld rows)",         kA, "SiteEqualities"},
-    {"equality.site.refused",           "equality with only one of site1/site2",             kR, "SiteEqualities"},
-    {"actuator.armature_damping",       "actuator armature/damping on a joint or tendon",    kT, "ActuatorArmatureDamping"},
-    {"actuator.armature_damping.default", "default actuator armature/damping",               kT, "ActuatorArmatureDamping"},
-    {"actuator.armature_damping.refused", "actuator polynomial damping, other transmissions", kR, "ActuatorArmatureDamping"},
-    {"gravcomp",                        "body gravcomp",                                     kT, "GravityCompensation"},
-    {"gravcomp.zero",                   "body gravcomp=\"0\"",                               kD, "GravityCompensation"},
-    {"gravcomp.actuator",               "joint actuatorgravcomp=\"true\"",                   kT, "GravityCompensation"},
-    {"gravcomp.actuator.clamped",       "joint actuatorgravcomp with actuatorfrcrange",      kA, "GravityCompensation"},
-    {"actuatorfrcrange.one",            "joint/tendon actuatorfrcrange, one actuator",       kT, "ActuatorForceRanges"},
-    {"actuatorfrcrange.inactive",       "actuatorfrcrange never active or disabled",         kD, "ActuatorForceRanges"},
-    {"actuatorfrcrange.refused",        "actuatorfrcrange shared by actuators, invalid",     kR, "ActuatorForceRanges"},
-    {"actuatorfrcrange.default",        "default actuatorfrcrange",                          kT, "ActuatorForceRanges"},
-    {"position.shortcut",               "position/intvelocity kv, timeconst",                kT, "PositionShortcuts"},
-    {"position.timeconst.rk4",          "position timeconst with RK4",                       kA, "PositionShortcuts"},
-    {"position.inheritrange",           "position/intvelocity inheritrange",                 kT, "PositionShortcuts"},
-    {"position.refused",                "kv with dampratio, negative values, bad inheritrange", kR, "PositionShortcuts"},
-    {"position.default",                "default kv/dampratio/timeconst/inheritrange",       kT, "PositionShortcuts"},
-    {"position.dampratio",              "position/intvelocity dampratio",                    kT, "DampRatio"},
-    {"position.dampratio.refused",      "dampratio when the trial compile fails",            kR, "DampRatio"},
-    {"option.approximated",             "option ls_iterations/ls_tolerance",                 kA, "Options"},
-    {"option.dropped",                  "option sdf_*, sleep_tolerance",                     kD, "Options"},
-    {"option.ccd",                      "option ccd_iterations/ccd_tolerance",               kA, "Options"},
-    {"option.actuatorgroupdisable",     "option actuatorgroupdisable (no actuator hit)",     kD, "Options"},
-    {"option.actuatorgroupdisable.refused", "option actuatorgroupdisable",                   kR, "Options"},
-    {"option.o_friction",               "option o_friction without override",                kD, "Options"},
-    {"option.o_friction.refused",       "option o_friction with override",                   kR, "Options"},
-    {"option.implicitfast",             "option integrator=\"implicitfast\"",                kA, "Options"},
-    {"size.memory",                     "size memory",                                       kA, "Options"},
-    {"flag.spring_damper",              "flag spring/damper equal",                          kT, "Flags"},
-    {"flag.spring_damper.split",        "flag spring/damper different",                      kT, "Flags, PassiveFlags"},
-    {"actuator.filterexact",            "general dyntype=\"filterexact\"",                   kT, "FilterExact"},
-    {"actuator.filterexact.rk4",        "general dyntype=\"filterexact\" with RK4",          kA, "FilterExact"},
-    {"actuator.filterexact.default",    "default general dyntype=\"filterexact\"",           kT, "FilterExact"},
-    {"actuator.filterexact.refused",    "filterexact without a positive time constant",      kR, "FilterExact"},
-    {"equality.polycoef",               "equality joint/tendon polycoef with < 5 numbers",   kT, "PolyCoef"},
-    {"tendon.springlength.deadband",    "tendon springlength=\"lo hi\" (dead band)",         kT, "SpringLength"},
-    {"tendon.springlength.single",      "tendon springlength=\"x x\"",                       kT, "SpringLength"},
-    {"tendon.springlength.nostiffness", "tendon springlength=\"lo hi\" without stiffness",   kD, "SpringLength"},
-    {"tendon.springlength.refused",     "tendon springlength with lo > hi",                  kR, "SpringLength"},
-    {"tendon.springlength.default",     "default tendon springlength=\"lo hi\"",             kT, "SpringLength"},
-    {"material.layer",                  "<material><layer>",                                 kD, "VisualOnly"},
-    {"flag.default",                    "flag autoreset/diagexact/.../sleep at 3.x default", kD, "Flags"},
-    {"flag.other",                      "flag autoreset/diagexact/.../sleep otherwise",      kA, "Flags"},
-    {"mesh.shell",                      "mesh inertia=\"shell\"",                            kR, "MeshInertia"},
-    {"mesh.inertia",                    "mesh inertia legacy/convex/exact",                  kT, "MeshInertia"},
-    {"mesh.exactmeshinertia",           "mesh volumes (all exact or inline)",                kT, "MeshInertia"},
-    {"mesh.exactmeshinertia.nonconvex", "mesh volumes (files that may be non-convex)",       kA, "MeshInertia"},
-    {"mesh.orientation",                "mesh file whose faces disagree (or face inwards)",  kT, "src/convert/mesh_assets.cc OrientedFile"},
-    {"light.directional",               "light type=\"directional\"",                        kT, "LightType"},
-    {"camera.intrinsics",               "camera sensorsize/focal/focalpixel/resolution",     kT, "CameraIntrinsics"},
-    {"camera.principal",                "camera principal/principalpixel",                   kA, "CameraIntrinsics"},
-    {"sensor.actuatorfrc",              "sensor jointactuatorfrc/tendonactuatorfrc",         kT, "Sensors"},
-    {"sensor.unnamed",                  "unnamed software sensor",                           kT, "Sensors"},
-    {"sensor.refused",                  "sensor without its target, invalid data/num",       kR, "Sensors, ComputedSensors"},
-    {"sensor.computed",                 "sensor e_kinetic/e_potential/insidesite/contact",   kT, "ComputedSensors"},
-    {"sensor.contact.netforce",         "contact sensor reduce=\"netforce\"",                kR, "ComputedSensors"},
-    {"actuator.order",                  "stateful actuators before stateless ones",          kT, "OrderActuators"},
-    {"keyframe.pad",                    "<key> shorter than the model",                      kT, "PadKeyframes"},
-    {"leftover",                        "any other 3.x element or attribute",                kR, "Leftovers"},
-    {"refused.element",                 "flexcomp, deformable, extension, plugin",           kR, "Leftovers"},
-    {"refused.sdf",                     "geom type=\"sdf\"",                                 kR, "Leftovers"},
+    // id                                construct                                            kind  passes
+    {"compiler.autolimits",             "compiler autolimits (3.x default true)",            kT, {&bridge::Compiler}},
+    {"compiler.assetdir",               "compiler assetdir",                                 kT, {&bridge::Compiler}},
+    {"compiler.alignfree",              "compiler alignfree=\"true\"",                       kT, {&bridge::Compiler, &bridge::FreeJointAlign}},
+    {"compiler.alignfree.false",        "compiler alignfree=\"false\"",                      kD, {&bridge::Compiler}},
+    {"compiler.saveinertial",           "compiler saveinertial",                             kD, {&bridge::Compiler}},
+    {"compiler.conflict",               "compiler conflict",                                 kD, {&bridge::Compiler}},
+    {"compiler.discardvisual",          "compiler discardvisual=\"true\"",                   kT, {&bridge::KeepVisualGeoms}},
+    {"compiler.lengthrange.interval",   "lengthrange interval",                              kT, {&bridge::Compiler}},
+    {"attach",                          "<attach model body|frame prefix> of a <model>",    kT, {&bridge::Attachments}},
+    {"attach.model",                    "<model> asset",                                     kT, {&bridge::Attachments}},
+    {"attach.defaults",                 "<attach> under a parent with top-level defaults",   kA, {&bridge::Attachments}},
+    {"attach.keyframe",                 "keyframes of an attached model",                    kT, {&bridge::Attachments, &bridge::PadKeyframes}},
+    {"attach.refused",                  "self-attachment, keys of a child that fails alone", kR, {&bridge::Attachments}},
+    {"replicate",                       "<replicate> count/offset/euler/sep",                kT, {&bridge::Replicates}},
+    {"replicate.reference",             "element referring into a <replicate>",              kT, {&bridge::Replicates}},
+    {"replicate.invalid",               "<replicate> without a positive count",              kR, {&bridge::Replicates}},
+    {"frame",                           "<frame>",                                           kT, {&bridge::FlattenFrames}},
+    {"frame.child",                     "element that cannot move inside a posed <frame>",   kR, {&bridge::FlattenFrames}},
+    {"equality.site",                   "equality connect site1/site2",                      kT, {&bridge::SiteEqualities}},
+    {"equality.site.weld",              "equality weld site1/site2",                         kA, {&bridge::SiteEqualities}},
+    {"freejoint.align",                 "freejoint align (simple free body)",                kT, {&bridge::FreeJointAlign, &bridge::AlignFreeBodies}},
+    {"freejoint.align.nochildren",      "freejoint align on a body with child bodies",       kD, {&bridge::FreeJointAlign}},
+    {"freejoint.align.refused",         "freejoint align with body-frame equality anchors",  kR, {&bridge::FreeJointAlign, &bridge::AlignFreeBodies}},
+    {"equality.weld",                   "equality weld on bodies (3.x's weld rows)",         kA, {&bridge::SiteEqualities}},
+    {"equality.site.refused",           "equality with only one of site1/site2",             kR, {&bridge::SiteEqualities}},
+    {"actuator.armature_damping",       "actuator armature/damping on a joint or tendon",    kT, {&bridge::ActuatorArmatureDamping}},
+    {"actuator.armature_damping.default", "default actuator armature/damping",               kT, {&bridge::ActuatorArmatureDamping}},
+    {"actuator.armature_damping.refused", "actuator polynomial damping, other transmissions", kR, {&bridge::ActuatorArmatureDamping}},
+    {"gravcomp",                        "body gravcomp",                                     kT, {&bridge::GravityCompensation}},
+    {"gravcomp.zero",                   "body gravcomp=\"0\"",                               kD, {&bridge::GravityCompensation}},
+    {"gravcomp.actuator",               "joint actuatorgravcomp=\"true\"",                   kT, {&bridge::GravityCompensation}},
+    {"gravcomp.actuator.clamped",       "joint actuatorgravcomp with actuatorfrcrange",      kA, {&bridge::GravityCompensation}},
+    {"actuatorfrcrange.one",            "joint/tendon actuatorfrcrange, one actuator",       kT, {&bridge::ActuatorForceRanges}},
+    {"actuatorfrcrange.inactive",       "actuatorfrcrange never active or disabled",         kD, {&bridge::ActuatorForceRanges}},
+    {"actuatorfrcrange.refused",        "actuatorfrcrange shared by actuators, invalid",     kR, {&bridge::ActuatorForceRanges}},
+    {"actuatorfrcrange.default",        "default actuatorfrcrange",                          kT, {&bridge::ActuatorForceRanges}},
+    {"position.shortcut",               "position/intvelocity kv, timeconst",                kT, {&bridge::PositionShortcuts}},
+    {"position.timeconst.rk4",          "position timeconst with RK4",                       kA, {&bridge::PositionShortcuts}},
+    {"position.inheritrange",           "position/intvelocity inheritrange",                 kT, {&bridge::PositionShortcuts}},
+    {"position.refused",                "kv with dampratio, negative values, bad inheritrange", kR, {&bridge::PositionShortcuts}},
+    {"position.default",                "default kv/dampratio/timeconst/inheritrange",       kT, {&bridge::PositionShortcuts}},
+    {"position.dampratio",              "position/intvelocity dampratio",                    kT, {&bridge::DampRatio}},
+    {"position.dampratio.refused",      "dampratio when the trial compile fails",            kR, {&bridge::DampRatio}},
+    {"option.approximated",             "option ls_iterations/ls_tolerance",                 kA, {&bridge::Options}},
+    {"option.dropped",                  "option sdf_*, sleep_tolerance",                     kD, {&bridge::Options}},
+    {"option.ccd",                      "option ccd_iterations/ccd_tolerance",               kA, {&bridge::Options}},
+    {"option.actuatorgroupdisable",     "option actuatorgroupdisable (no actuator hit)",     kD, {&bridge::Options}},
+    {"option.actuatorgroupdisable.refused", "option actuatorgroupdisable",                   kR, {&bridge::Options}},
+    {"option.o_friction",               "option o_friction without override",                kD, {&bridge::Options}},
+    {"option.o_friction.refused",       "option o_friction with override",                   kR, {&bridge::Options}},
+    {"option.implicitfast",             "option integrator=\"implicitfast\"",                kA, {&bridge::Options}},
+    {"size.memory",                     "size memory",                                       kA, {&bridge::Options, &bridge::SizeStack}},
+    {"flag.spring_damper",              "flag spring/damper equal",                          kT, {&bridge::Options}},
+    {"flag.spring_damper.split",        "flag spring/damper different",                      kT, {&bridge::Options, &bridge::PassiveFlags}},
+    {"actuator.filterexact",            "general dyntype=\"filterexact\"",                   kT, {&bridge::FilterExact}},
+    {"actuator.filterexact.rk4",        "general dyntype=\"filterexact\" with RK4",          kA, {&bridge::FilterExact}},
+    {"actuator.filterexact.default",    "default general dyntype=\"filterexact\"",           kT, {&bridge::FilterExact}},
+    {"actuator.filterexact.refused",    "filterexact without a positive time constant",      kR, {&bridge::FilterExact}},
+    {"equality.polycoef",               "equality joint/tendon polycoef with < 5 numbers",   kT, {&bridge::PolyCoef}},
+    {"tendon.springlength.deadband",    "tendon springlength=\"lo hi\" (dead band)",         kT, {&bridge::SpringLength}},
+    {"tendon.springlength.single",      "tendon springlength=\"x x\"",                       kT, {&bridge::SpringLength}},
+    {"tendon.springlength.nostiffness", "tendon springlength=\"lo hi\" without stiffness",   kD, {&bridge::SpringLength}},
+    {"tendon.springlength.refused",     "tendon springlength with lo > hi",                  kR, {&bridge::SpringLength}},
+    {"tendon.springlength.default",     "default tendon springlength=\"lo hi\"",             kT, {&bridge::SpringLength}},
+    {"material.layer",                  "<material><layer>",                                 kD, {&bridge::VisualOnly}},
+    {"flag.default",                    "flag autoreset/diagexact/.../sleep at 3.x default", kD, {&bridge::Options}},
+    {"flag.other",                      "flag autoreset/diagexact/.../sleep otherwise",      kA, {&bridge::Options}},
+    {"mesh.shell",                      "mesh inertia=\"shell\"",                            kR, {&bridge::MeshInertia}},
+    {"mesh.inertia",                    "mesh inertia legacy/convex/exact",                  kT, {&bridge::MeshInertia}},
+    {"mesh.exactmeshinertia",           "mesh volumes (all exact or inline)",                kT, {&bridge::MeshInertia}},
+    {"mesh.exactmeshinertia.nonconvex", "mesh volumes (files that may be non-convex)",       kA, {&bridge::MeshInertia}},
+    {"mesh.orientation",                "mesh file whose faces disagree (or face inwards)",  kT, {}, "src/convert/mesh_assets.cc OrientedFile"},
+    {"light.directional",               "light type=\"directional\"",                        kT, {&bridge::GenericAttributes}},
+    {"camera.intrinsics",               "camera sensorsize/focal/focalpixel/resolution",     kT, {&bridge::GenericAttributes}},
+    {"camera.principal",                "camera principal/principalpixel",                   kA, {&bridge::GenericAttributes}},
+    {"sensor.actuatorfrc",              "sensor jointactuatorfrc/tendonactuatorfrc",         kT, {&bridge::Sensors}},
+    {"sensor.unnamed",                  "unnamed software sensor",                           kT, {&bridge::Sensors}},
+    {"sensor.refused",                  "sensor without its target, invalid data/num",       kR, {&bridge::Sensors, &bridge::ComputedSensors}},
+    {"sensor.computed",                 "sensor e_kinetic/e_potential/insidesite/contact",   kT, {&bridge::ComputedSensors}},
+    {"sensor.contact.netforce",         "contact sensor reduce=\"netforce\"",                kR, {&bridge::ComputedSensors}},
+    {"actuator.order",                  "stateful actuators before stateless ones",          kT, {&bridge::OrderActuators}},
+    {"keyframe.pad",                    "<key> shorter than the model",                      kT, {&bridge::PadKeyframes}},
+    {"leftover",                        "any other 3.x element or attribute",                kR, {&bridge::Leftovers}},
+    {"refused.element",                 "flexcomp, deformable, extension, plugin",           kR, {&bridge::Leftovers}},
+    {"refused.sdf",                     "geom type=\"sdf\"",                                 kR, {&bridge::Leftovers}},
     // attribute policies (AttributePolicies below), applied by GenericAttribute
-    {"attr.dropped",                    "3.x attribute without effect here",                 kD, "GenericAttribute"},
-    {"attr.approximated",               "3.x attribute approximated",                        kA, "GenericAttribute"},
-    {"attr.refused",                    "3.x attribute changing the physics",                kR, "GenericAttribute"},
+    {"attr.dropped",                    "3.x attribute without effect here",                 kD, {&bridge::GenericAttributes}},
+    {"attr.approximated",               "3.x attribute approximated",                        kA, {&bridge::GenericAttributes}},
+    {"attr.refused",                    "3.x attribute changing the physics",                kR, {&bridge::GenericAttributes}},
 };
 
 constexpr AttributePolicy kPolicies[] = {
@@ -161,13 +163,34 @@ std::span<const RefusedElement> RefusedElements() { return kRefused; }
 
 std::span<const BridgeRule> BridgeRules() { return kRules; }
 
-std::string BridgeRuleFunction(const BridgeRule& rule) {
-  const std::string f = rule.function;
-  if (f.find(".cc ") != std::string::npos) return f;
-  std::string out = "src/mjcf/bridge.cc ";  // no "literal" + string: GCC 12 -O3 -Wrestrict
-  out += f;
+namespace {
+
+// The names of the rule's passes, with their files when `files` ("" when a pass is missing from
+// the pass table: bridge_test checks that none is).
+std::string PassNames(const BridgeRule& rule, bool files) {
+  if (rule.elsewhere) return rule.elsewhere;
+  std::string out;
+  for (BridgePassFn fn : rule.passes) {
+    if (!fn) continue;
+    const auto passes = bridge::Passes();
+    const auto p = std::find_if(passes.begin(), passes.end(),
+                                [&](const bridge::PassEntry& e) { return e.run == fn; });
+    if (p == passes.end()) continue;
+    if (!out.empty()) out += ", ";
+    if (files) {
+      out += p->file;
+      out += " ";
+    }
+    out += p->name;
+  }
   return out;
 }
+
+}  // namespace
+
+std::string BridgeRulePasses(const BridgeRule& rule) { return PassNames(rule, false); }
+
+std::string BridgeRuleFunction(const BridgeRule& rule) { return PassNames(rule, true); }
 
 std::span<const AttributePolicy> AttributePolicies() { return kPolicies; }
 

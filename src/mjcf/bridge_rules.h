@@ -1,9 +1,9 @@
 #pragma once
 // The dialect bridge's rules as data (internal to the mjcf module). Every change the bridge makes
 // names one row of the rule table (`BridgeRules()` in include/urlab/mjcf/bridge.h: construct,
-// kind, the function that applies it). Attributes that are only dropped, approximated or refused
-// according to their value are handled by one generic mechanism driven by the attribute-policy
-// table below; everything that needs computation has its own function in bridge.cc.
+// kind, the passes that apply it, as functions of bridge_pass.h). Attributes that are only dropped,
+// approximated or refused according to their value are handled by one generic pass driven by the
+// attribute-policy table below; everything that needs computation has its own pass.
 //
 // Thread: immutable tables; any thread may read.
 #include <span>

@@ -158,11 +158,9 @@ void ApplyPrefix(Document& doc, const std::string& prefix) {
 // nullptr when the articulation has no defaults.
 // True when default class `d` (not its children classes) has a template for elements `tag`.
 bool HasTemplate(const Element& d, const std::string& tag) {
-  static const std::unordered_set<std::string> kActuators = {"general",  "motor",       "position",
-                                                             "velocity", "cylinder",    "muscle",
-                                                             "adhesion", "intvelocity", "damper"};
+  using document::IsActuatorTag;
   for (const auto& c : d.children()) {
-    if (c->tag() == tag || (kActuators.count(tag) && kActuators.count(c->tag()))) return true;
+    if (c->tag() == tag || (IsActuatorTag(tag) && IsActuatorTag(c->tag()))) return true;
   }
   return false;
 }

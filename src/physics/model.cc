@@ -39,14 +39,27 @@ ModelPtr FinishLoad(mjModel* m, const char* error) {
   return ModelPtr(m);
 }
 
+// mj_loadXML of `xml` from an in-memory VFS holding only that text (the VFS is 2 MB: on the
+// heap). `error` receives the compiler's message (or warning when the model compiled).
+mjModel* LoadFromMemory(const std::string& xml, char* error) {
+  VfsPtr vfs = VfsWith(kVirtualName, xml);
+  if (!vfs) throw CompileError("could not allocate the in-memory model file");
+  return mj_loadXML(kVirtualName, vfs.get(), error, kErrorSize);
+}
+
 }  // namespace
 
 ModelPtr CompileXmlString(const std::string& xml) {
-  VfsPtr vfs = VfsWith(kVirtualName, xml);
-  if (!vfs) throw CompileError("could not allocate the in-memory model file");
   char error[kErrorSize] = "";
-  mjModel* m = mj_loadXML(kVirtualName, vfs.get(), error, kErrorSize);
+  mjModel* m = LoadFromMemory(xml, error);
   return FinishLoad(m, error);
+}
+
+ModelPtr TryCompileXmlString(const std::string& xml, std::string* error) {
+  char buf[kErrorSize] = "";
+  ModelPtr m(LoadFromMemory(xml, buf));
+  if (!m) *error = buf[0] ? buf : "MuJoCo could not compile the model";
+  return m;
 }
 
 ModelPtr LoadXmlFile(const std::string& path) {

@@ -463,6 +463,21 @@ TEST_F(GrammarTest, DialectKeepsThe222Rows) {
   }
 }
 
+// The one list of actuator elements (used by the bridge, the composer and default resolution)
+// comes from the table: the <actuator> section's children with a default template of their own,
+// MuJoCo 2.2.2's nine, in table order; neither <include> nor 3.x additions are actuators.
+TEST_F(GrammarTest, ActuatorTagsComeFromTheTable) {
+  const auto tags = document::ActuatorTags();
+  const std::vector<std::string> expected = {"general",  "motor",       "position",
+                                             "velocity", "intvelocity", "damper",
+                                             "cylinder", "muscle",      "adhesion"};
+  EXPECT_EQ(std::vector<std::string>(tags.begin(), tags.end()), expected);
+  for (const std::string& t : expected) EXPECT_TRUE(document::IsActuatorTag(t)) << t;
+  for (const char* t : {"include", "plugin", "joint", "actuator", "default"}) {
+    EXPECT_FALSE(document::IsActuatorTag(t)) << t;
+  }
+}
+
 TEST_F(GrammarTest, StructureIsConsistent) {
   const ElementSpec* include = g_.Find("include");
   ASSERT_NE(include, nullptr);

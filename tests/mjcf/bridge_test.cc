@@ -2,11 +2,13 @@
 // is checked by what it does in simulation (or in the compiled model), not by the text written.
 #include "urlab/mjcf/bridge.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
 
+#include "mjcf/bridge_pass.h"
 #include "mjcf/bridge_rules.h"
 #include "mujoco_test.h"
 #include "urlab/document/grammar.h"
@@ -718,6 +720,24 @@ TEST_F(BridgeTest, OptionsMiscLoadsAndTranslatesWhatIsExact) {
   EXPECT_FALSE(b.report.HasRefusals());
 }
 
+// A memory sized for 3.x's arena (which also holds contacts and constraints, for a sparse
+// solver) used to become a 2.2.2 stack too small for 2.2.2's dense solver: 64 resting spheres
+// overflowed it on the first step. 2.2.2's own estimate applies when it is larger.
+TEST_F(BridgeTest, MemorySizedFor3xLeaves222EnoughStack) {
+  Bridged b = LoadFile(testing::TestData("mjcf/bridge3x/memory_contacts.xml"));
+  const mjModel* m = b.model.get();
+  EXPECT_GT(m->nstack, 2 * 1024 * 1024 / 8);  // 2.2.2's estimate, not memory / 8
+  for (int i = 0; i < 200; ++i) mj_step(m, b.data.get());
+  EXPECT_EQ(b.data->ncon, 64);
+  EXPECT_TRUE(Mentions(b.report, Kind::kApproximated, "size memory=\"2M\""));
+  // A memory larger than 2.2.2's estimate is kept as the stack (in mjtNums).
+  Bridged big = Load(R"(<mujoco>
+  <size memory="64M"/>
+  <worldbody><body><freejoint/><geom size="0.1"/></body></worldbody>
+</mujoco>)");
+  EXPECT_EQ(big.model->nstack, 64 * 1024 * 1024 / 8);
+}
+
 TEST_F(BridgeTest, RefusalsAreAllListedWithLines) {
   const mjcf::BridgeReport r = ReportOf(R"(<mujoco>
   <worldbody>
@@ -774,6 +794,29 @@ TEST_F(BridgeTest, ReplicateFollowsTheReferenceExample) {
   }
   EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "<replicate count=2>"));
   EXPECT_TRUE(Mentions(b.report, Kind::kTranslated, "refers into a <replicate>"));
+}
+
+// A model attached many times brings, each time, the assets and referring elements of every
+// section of its kind (finger.xml keeps its pad material in a second <asset> and a sensor in a
+// second <sensor>): they used to stop at the first section, leaving every copy's pad material
+// dangling. MuJoCo 3.3.8 loads many.xml with 8 materials, 4 textures and 8 sensors.
+TEST_F(BridgeTest, ModelAttachedManyTimesKeepsEverySectionsAssets) {
+  const Bridged b = LoadFile(testing::TestData("mjcf/bridge3x/attach/many.xml"));
+  EXPECT_FALSE(b.report.HasRefusals()) << b.report.Format();
+  const mjModel* m = b.model.get();
+  EXPECT_EQ(m->nmat, 8);
+  EXPECT_EQ(m->ntex, 4);
+  EXPECT_EQ(m->nsensor, 8);
+  EXPECT_EQ(m->nu, 4);
+  for (const std::string f : {"f1_", "f2_", "f3_", "f4_"}) {
+    const int pad = Id(m, mjOBJ_MATERIAL, (f + "pad").c_str());
+    const int body = Id(m, mjOBJ_BODY, (f + "knuckle").c_str());
+    int pads = 0;
+    for (int g = 0; g < m->ngeom; ++g) pads += m->geom_bodyid[g] == body && m->geom_matid[g] == pad;
+    EXPECT_EQ(pads, 1) << f;
+    EXPECT_EQ(m->mat_texid[pad], Id(m, mjOBJ_TEXTURE, (f + "ridges").c_str())) << f;
+    EXPECT_GE(Id(m, mjOBJ_SENSOR, (f + "tip_pos").c_str()), 0) << f;
+  }
 }
 
 // Keyframes of an attached model join the parent's as "{prefix}{name}": the attached joints',
@@ -884,7 +927,16 @@ TEST(BridgeRulesTest, RuleIdsAreUniqueAndPoliciesNameRules) {
   std::set<std::string> ids;
   for (const mjcf::BridgeRule& r : mjcf::BridgeRules()) {
     EXPECT_TRUE(ids.insert(r.id).second) << "duplicate rule " << r.id;
-    EXPECT_FALSE(std::string(r.function).empty()) << r.id;
+    EXPECT_FALSE(mjcf::BridgeRuleFunction(r).empty()) << r.id;
+    // Every pass a rule names runs: it is a row of the pass table (names and files come from it).
+    const auto passes = mjcf::bridge::Passes();
+    for (mjcf::BridgePassFn fn : r.passes) {
+      if (!fn) continue;
+      EXPECT_TRUE(std::any_of(passes.begin(), passes.end(),
+                              [&](const mjcf::bridge::PassEntry& p) { return p.run == fn; }))
+          << r.id;
+    }
+    EXPECT_TRUE(r.passes[0] || r.elsewhere) << r.id;
     EXPECT_FALSE(std::string(r.construct).empty()) << r.id;
   }
   for (const mjcf::AttributePolicy& p : mjcf::AttributePolicies()) {

@@ -158,6 +158,12 @@ class Grammar {
   std::vector<ElementSpec> elements_;
 };
 
+// The actuator elements of MuJoCo 2.2.2 (general, motor, position, ...): the children of the
+// grammar table's <actuator> row that have a default template of their own, in table order. The
+// one list every module uses (the bridge, the composer, default-class resolution).
+std::span<const std::string> ActuatorTags();
+bool IsActuatorTag(std::string_view tag);
+
 // The table itself (src/document/grammar_table.cc).
 std::span<const GrammarRow> GrammarTable();
 // MuJoCo 3.x additions the dialect bridge handles (src/document/grammar_dialect_table.cc).

@@ -14,6 +14,7 @@
 //
 // Thread: plain function over a document the caller owns. Translating `dampratio` compiles a
 // trial copy of the model with MuJoCo (no global state other than MuJoCo's handlers).
+#include <array>
 #include <map>
 #include <span>
 #include <string>
@@ -32,17 +33,27 @@ struct BridgeChange {
   std::string rule;  // id of the BridgeRules() row that made this change
 };
 
+namespace bridge {
+struct State;  // the passes' shared state (src/mjcf/bridge_pass.h)
+}
+// A pass of the bridge: one function per construct family step (src/mjcf/bridge_pass.h).
+using BridgePassFn = void (*)(bridge::State&);
+
 // One rule of the bridge (the rule table, src/mjcf/bridge_rules.cc): a MuJoCo 3.x construct, what
-// the bridge does with it and the function that does it (of src/mjcf/bridge.cc, or "FILE Function"
-// for the few rules applied elsewhere: attachments, mesh face orientation).
+// the bridge does with it and the pass(es) that do it, named by their functions (so a row cannot
+// name a pass that does not exist), or `elsewhere` for the one rule applied outside the bridge
+// (mesh face orientation, by the mesh preparation).
 struct BridgeRule {
   const char* id;
   const char* construct;
   BridgeChange::Kind kind;
-  const char* function;
+  std::array<BridgePassFn, 2> passes;  // unused slots nullptr
+  const char* elsewhere = nullptr;     // "FILE Function" of a rule applied outside the bridge
 };
 
-// "src/mjcf/bridge.cc Function", or the rule's own "FILE Function".
+// The rule's passes by name ("FlattenFrames", "Compiler, FreeJointAlign"), or `elsewhere`.
+std::string BridgeRulePasses(const BridgeRule& rule);
+// The same with their files ("src/mjcf/bridge_frames.cc FlattenFrames"), or `elsewhere`.
 std::string BridgeRuleFunction(const BridgeRule& rule);
 
 // Every rule, in the order the bridge applies them.

@@ -55,6 +55,11 @@ class CompileError : public Error {
 // ReportMujocoWarning. Throws CompileError.
 ModelPtr CompileXmlString(const std::string& xml);
 
+// The same compile for a trial whose result only informs a later compile (the dialect bridge's):
+// nullptr and MuJoCo's message in `error` when MuJoCo refuses the model; compiler warnings are
+// not reported (the real compile reports them).
+ModelPtr TryCompileXmlString(const std::string& xml, std::string* error);
+
 // Loads an MJCF file from disk with MuJoCo's own mj_loadXML (baseline for comparisons).
 // Throws CompileError.
 ModelPtr LoadXmlFile(const std::string& path);
