@@ -60,6 +60,21 @@ std::string WithHint(const std::string& message) {
   return hint.empty() ? message : message + "\n  hint: " + hint;
 }
 
+// Without a network nothing writes the network control source: articulations on it take the ui
+// source instead (the panel's sliders), so the panel never shows a source nobody drives.
+void NetworkSourcesToUi(world::SceneConfig& scene) {
+  using control::ControlSource;
+  bool changed = scene.control_source == ControlSource::kNetwork;
+  if (changed) scene.control_source = ControlSource::kUi;
+  for (world::ArticulationConfig& a : scene.articulations) {
+    if (a.control_source == ControlSource::kNetwork) {
+      a.control_source = ControlSource::kUi;
+      changed = true;
+    }
+  }
+  if (changed) spdlog::info("no network: the network control source is replaced by ui");
+}
+
 int Run(const RunArgs& args) {
   CurrentInput() = args.scene;
   world::ManagerOptions options;
@@ -70,6 +85,7 @@ int Run(const RunArgs& args) {
   world::Manager manager(options);
   // Loading and compiling: a signal ends the process at once (nothing runs, nothing is written).
   world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
+  if (args.no_network || !scene.network.enabled) NetworkSourcesToUi(scene);
   if (!args.video.empty()) {
     CheckOutputs({{args.video[1], "--video"}}, world::SceneInputFiles(scene));
     camera::RequestVideoCamera(scene, args.video[0]);
@@ -140,8 +156,9 @@ int Run(const RunArgs& args) {
   auto last_log = start;
   auto last_error_log = start - kLogPeriod;
   std::uint64_t errors_logged = 0;
-  std::uint64_t last_steps = engine.step_count();
-  const std::uint64_t first_steps = last_steps;
+  // Counted from the engine's start (BeginPlay started it): a recording holds every step since.
+  std::uint64_t last_steps = 0;
+  const std::uint64_t first_steps = 0;
   std::optional<physics::EngineEvent> fatal;
   while (StopSignal() == 0) {
     manager.Tick();
@@ -189,6 +206,9 @@ int Run(const RunArgs& args) {
     std::this_thread::sleep_until(next_frame);
   }
   const int signal = StopSignal();
+  // The physics thread stops first, so that the summary, the recording and the video all end at
+  // the same step.
+  manager.session().Stop();
   const std::uint64_t steps = engine.step_count() - first_steps;
   sim_time += static_cast<double>(engine.step_count() - last_steps) * engine.timestep();
   std::optional<replay::RecorderStatus> recorded;
@@ -209,11 +229,11 @@ int Run(const RunArgs& args) {
   }
   if (recorded) {
     std::printf(
-        "recording: %s steps=%llu sim=%.3f s bytes=%llu (%.1f bytes/step, %.1f before "
-        "compression) dropped=%llu%s\n",
+        "recording: %s steps=%llu sim=%.3f s bytes=%llu (%.1f bytes/step in data chunks, "
+        "%.1f before compression; the embedded model not counted) dropped=%llu%s\n",
         recorded->path.c_str(), static_cast<unsigned long long>(recorded->frames),
         recorded->duration, static_cast<unsigned long long>(recorded->bytes),
-        recorded->frames ? static_cast<double>(recorded->bytes) / recorded->frames : 0.0,
+        recorded->frames ? static_cast<double>(recorded->data_bytes) / recorded->frames : 0.0,
         recorded->frames ? static_cast<double>(recorded->raw_bytes) / recorded->frames : 0.0,
         static_cast<unsigned long long>(recorded->dropped),
         recorded->stopped_because.starts_with("error")
@@ -318,7 +338,8 @@ void AddViewOptions(CLI::App* cmd, RunArgs& args) {
   cmd->add_option("--video", v.video, "record the window to a video file (.mp4 or .webm; ffmpeg)");
   cmd->add_option("--video-fps", v.video_fps, "frames per second of --video (default 30)")
       ->check(CLI::Range(1, 240));
-  cmd->add_flag("!--no-panel", v.panel, "no simulate panel");
+  cmd->add_flag_callback(
+      "--no-panel", [&v] { v.panel = false; }, "no simulate panel");
 }
 
 void AddRecordOptions(CLI::App* cmd, RunArgs& args) {
