@@ -65,8 +65,8 @@ assert list(z["sensor_names"]) == ["arm/shoulder_pos", "arm/tip_pos[0]", "arm/ti
 assert list(z["articulations"]) == ["arm"] and list(z["joint_names"]) == ["shoulder", "elbow"]
 rows = z["time"].shape[0]
 assert rows > 100 and z["sensordata"].shape == (rows, 4), z["sensordata"].shape
-# jointpos is qpos at the end of the step the row records.
-assert np.array_equal(z["sensordata"][:, 0], z["qpos"][:, 0]), "sensor != qpos"
+# mj_step computes sensors before it integrates: a row's jointpos is the previous row's qpos.
+assert np.array_equal(z["sensordata"][1:, 0], z["qpos"][:-1, 0]), "sensor != qpos"
 with open(csv_path, newline="") as f:
     table = list(csv.reader(f))
 header, body = table[0], table[1:]
