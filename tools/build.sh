@@ -2,6 +2,7 @@
 # Configures and builds URLab into ./build (or $URLAB_BUILD_DIR), through ccache when present.
 # A development build: warnings are errors (URLAB_WARNINGS_AS_ERRORS=ON; pass
 # -DURLAB_WARNINGS_AS_ERRORS=OFF to turn that off). Extra args go to cmake.
+# URLAB_BUILD_TARGETS="urlab ..." builds only those targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR="${URLAB_BUILD_DIR:-build}"
@@ -14,4 +15,6 @@ if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
 else
   cmake -S . -B "$BUILD_DIR" "$@" >/dev/null
 fi
-cmake --build "$BUILD_DIR" -j"$(nproc)"
+TARGETS=()
+for t in ${URLAB_BUILD_TARGETS:-}; do TARGETS+=(--target "$t"); done
+cmake --build "$BUILD_DIR" -j"$(nproc)" "${TARGETS[@]}"

@@ -1,16 +1,31 @@
 #!/usr/bin/env bash
-# The main job: installs dependencies, builds, and runs URLab on the bundled example.
+# The main job: installs dependencies, builds what it runs (the urlab CLI and one C++ example, not
+# the tests or benchmarks), runs the bundled two-arm scene and leaves something to look at: a
+# screenshot and a short video of that scene, rendered on a virtual X server (xvfb-run, no display
+# needed), named in the last lines beside the run's summary.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/install-deps.sh
-tools/build.sh
 BUILD_DIR="${URLAB_BUILD_DIR:-build}"
+URLAB_BUILD_TARGETS="urlab example_build_articulation" tools/build.sh
 OUT="${URLAB_DEMO_OUT:-out/demo}"
 mkdir -p "$OUT"
+URLAB="$BUILD_DIR/urlab"
+SCENE=examples/scenes/two_arms.yaml
 echo "== urlab compile examples/models/pendulum_arm.xml (debug XML and MJB into $OUT)"
-"$BUILD_DIR/urlab" compile examples/models/pendulum_arm.xml \
-  --save-xml "$OUT/scene_compiled.xml" --save-mjb "$OUT/scene_compiled.mjb"
+"$URLAB" compile examples/models/pendulum_arm.xml \
+  --save-xml "$OUT/pendulum_arm_compiled.xml" --save-mjb "$OUT/pendulum_arm_compiled.mjb"
 echo "== user-built articulation (C++ API)"
 "$BUILD_DIR/example_build_articulation"
-echo "== urlab run examples/scenes/two_arms.yaml --duration 5 (two arms held raised under PD)"
-"$BUILD_DIR/urlab" run examples/scenes/two_arms.yaml --duration 5
+echo "== urlab run $SCENE --duration 5 (two arms held raised under PD)"
+"$URLAB" run "$SCENE" --duration 5 --no-network | tee "$OUT/run.log"
+echo "== pictures of $SCENE (off-screen: a virtual X server)"
+# Software rendering on a virtual display; --at and --duration count simulated / wall seconds.
+xvfb-run -a -s "-screen 0 1280x1024x24" "$URLAB" view "$SCENE" --no-network --debug-all \
+  --screenshot "$OUT/two_arms.png" --at 1.5 >"$OUT/view.log" 2>&1
+xvfb-run -a -s "-screen 0 1280x1024x24" "$URLAB" view "$SCENE" --no-network --no-panel \
+  --width 640 --height 480 --video "$OUT/two_arms.mp4" --duration 4 >>"$OUT/view.log" 2>&1
+echo "== done"
+grep '^summary:' "$OUT/run.log"
+echo "screenshot: $OUT/two_arms.png"
+echo "video:      $OUT/two_arms.mp4"

@@ -17,6 +17,12 @@ PACKAGES=(
   # cameras: off-screen rendering (EGL surfaceless on Mesa, OSMesa fallback)
   libegl-dev libegl1-mesa-dev libosmesa6-dev
 )
+# Everything present already (a second run, a prepared machine): no apt-get, no network.
+PRESENT=$(dpkg-query -W -f='${db:Status-Abbrev}\n' "${PACKAGES[@]}" 2>/dev/null | grep -c '^ii' || true)
+if [ "$PRESENT" -eq "${#PACKAGES[@]}" ]; then
+  echo "install-deps: ${#PACKAGES[@]} packages present"
+  exit 0
+fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${PACKAGES[@]}" >/dev/null

@@ -181,7 +181,8 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
       "ZeroMQ ping-pong of the same kind measured in the same run (the echo in its own ZeroMQ "
       "context, like another process), and steps per second through the step server (n=1, "
       "n=10) against a bare mj_step loop: with one request in flight (a learning loop; printed "
-      "beside the ceiling the raw round trip sets) and with 4 in flight (the server's capacity). "
+      "beside what adding the raw round trip's median to each step would give: an estimate a "
+      "run can beat, not a bound) and with 4 in flight (the server's capacity). "
       "The scene's first articulation runs with passthrough control, as fast as possible. The "
       "last lines are key=value ratios for scripts.");
   static BenchLatencyArgs latency_args;

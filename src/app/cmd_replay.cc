@@ -141,9 +141,10 @@ int Info(const RecordingReader& r) {
 // back, at a reset) as a trajectory, with the ctrl and the applied command targets of each row.
 struct ExportRows {
   replay::Trajectory traj;
-  std::vector<double> ctrl;     // rows x nu
-  std::vector<double> targets;  // rows x (command targets), empty without command groups
-  std::size_t segments = 0;     // in the whole recording
+  std::vector<double> ctrl;        // rows x nu
+  std::vector<double> targets;     // rows x (command targets), empty without command groups
+  std::vector<double> sensordata;  // rows x nsensordata, empty unless recorded
+  std::size_t segments = 0;        // in the whole recording
 };
 
 // Segment `segment` (1-based; 0: the recording must have a single segment) of the recording.
@@ -172,6 +173,7 @@ ExportRows ToRows(const RecordingReader& r, std::size_t segment) {
       t.qvel.insert(t.qvel.end(), f->qvel.begin(), f->qvel.end());
       out.ctrl.insert(out.ctrl.end(), f->ctrl.begin(), f->ctrl.end());
       out.targets.insert(out.targets.end(), f->commands.targets.begin(), f->commands.targets.end());
+      out.sensordata.insert(out.sensordata.end(), f->sensordata.begin(), f->sensordata.end());
     }
   }
   out.segments = current;
@@ -378,18 +380,20 @@ int Replay(const ReplayArgs& args) {
       CheckOutputs({{args.export_csv, "--export-csv"}}, {args.file});
       replay::CsvExportOptions o;
       o.short_names = args.short_names;
+      if (!rows.sensordata.empty()) o.sensordata = &rows.sensordata;
       replay::ExportCsv(args.export_csv, r.info().tables, t, o);
       std::printf("wrote %s: %zu rows%s\n", args.export_csv.c_str(), t.rows(), which.c_str());
     }
     if (!args.export_npz.empty()) {
       CheckOutputs({{args.export_npz, "--export-npz"}}, {args.file});
       const replay::ModelTables& tables = r.info().tables;
-      std::vector<replay::NpyArray> extra;
-      extra.push_back({"ctrl", {t.rows(), static_cast<std::size_t>(tables.nu)}, rows.ctrl});
-      if (!rows.targets.empty() && t.rows() > 0) {
-        extra.push_back({"targets", {t.rows(), rows.targets.size() / t.rows()}, rows.targets});
+      replay::NpzExtras extras;
+      extras.ctrl = rows.ctrl;
+      if (t.rows() > 0) {
+        extras.targets = rows.targets;
+        extras.sensordata = rows.sensordata;
       }
-      replay::ExportNpz(args.export_npz, tables, t, extra);
+      replay::ExportNpz(args.export_npz, tables, t, replay::ExportArrays(tables, t.rows(), extras));
       std::printf("wrote %s: %zu rows%s\n", args.export_npz.c_str(), t.rows(), which.c_str());
     }
     return 0;

@@ -77,6 +77,21 @@ std::string WithHint(const std::string& message) {
   return hint.empty() ? message : message + "\n  hint: " + hint;
 }
 
+// Without a network nothing writes the network control source: articulations on it take the ui
+// source instead (the panel's sliders), so the panel never shows a source nobody drives.
+void NetworkSourcesToUi(world::SceneConfig& scene) {
+  using control::ControlSource;
+  bool changed = scene.control_source == ControlSource::kNetwork;
+  if (changed) scene.control_source = ControlSource::kUi;
+  for (world::ArticulationConfig& a : scene.articulations) {
+    if (a.control_source == ControlSource::kNetwork) {
+      a.control_source = ControlSource::kUi;
+      changed = true;
+    }
+  }
+  if (changed) spdlog::info("no network: the network control source is replaced by ui");
+}
+
 int Run(const RunArgs& args) {
   CurrentInput() = args.scene;
   world::ManagerOptions options;
@@ -90,6 +105,7 @@ int Run(const RunArgs& args) {
   if (!args.files_dir.empty()) {
     scene.network.files_dir = std::filesystem::absolute(args.files_dir).lexically_normal().string();
   }
+  if (args.no_network || !scene.network.enabled) NetworkSourcesToUi(scene);
   if (!args.video.empty()) {
     CheckOutputs({{args.video[1], "--video"}}, world::SceneInputFiles(scene));
     camera::RequestVideoCamera(scene, args.video[0]);
@@ -169,8 +185,9 @@ int Run(const RunArgs& args) {
   auto last_log = start;
   auto last_error_log = start - kLogPeriod;
   std::uint64_t errors_logged = 0;
-  std::uint64_t last_steps = engine.step_count();
-  const std::uint64_t first_steps = last_steps;
+  // Counted from the engine's start (BeginPlay started it): a recording holds every step since.
+  std::uint64_t last_steps = 0;
+  const std::uint64_t first_steps = 0;
   std::optional<physics::EngineEvent> fatal;
   world::RealTimeWatch realtime;  // warns when a paced run stays behind real time
   while (StopSignal() == 0) {
@@ -229,6 +246,9 @@ int Run(const RunArgs& args) {
     std::this_thread::sleep_until(next_frame);
   }
   const int signal = StopSignal();
+  // The physics thread stops first, so that the summary, the recording and the video all end at
+  // the same step.
+  manager.session().Stop();
   const std::uint64_t steps = engine.step_count() - first_steps;
   sim_time += static_cast<double>(engine.step_count() - last_steps) * engine.timestep();
   std::optional<replay::RecorderStatus> recorded;
@@ -260,11 +280,11 @@ int Run(const RunArgs& args) {
   }
   if (recorded) {
     std::printf(
-        "recording: %s steps=%llu sim=%.3f s bytes=%llu (%.1f bytes/step, %.1f before "
-        "compression) dropped=%llu%s\n",
+        "recording: %s steps=%llu sim=%.3f s bytes=%llu (%.1f bytes/step in data chunks, "
+        "%.1f before compression; the embedded model not counted) dropped=%llu%s\n",
         recorded->path.c_str(), static_cast<unsigned long long>(recorded->frames),
         recorded->duration, static_cast<unsigned long long>(recorded->bytes),
-        recorded->frames ? static_cast<double>(recorded->bytes) / recorded->frames : 0.0,
+        recorded->frames ? static_cast<double>(recorded->data_bytes) / recorded->frames : 0.0,
         recorded->frames ? static_cast<double>(recorded->raw_bytes) / recorded->frames : 0.0,
         static_cast<unsigned long long>(recorded->dropped),
         recorded->stopped_because.starts_with("error") ? " (FAILED)" : "");
@@ -388,7 +408,8 @@ void AddViewOptions(CLI::App* cmd, RunArgs& args) {
       ->check(OutputPath());
   cmd->add_option("--video-fps", v.video_fps, "frames per second of --video (default 30)")
       ->check(CLI::Range(1, 240));
-  cmd->add_flag("!--no-panel", v.panel, "no simulate panel");
+  cmd->add_flag_callback(
+      "--no-panel", [&v] { v.panel = false; }, "no simulate panel");
 }
 
 void AddRecordOptions(CLI::App* cmd, RunArgs& args) {

@@ -59,9 +59,10 @@ Endpoints Endpoints::OnHost(const std::string& host) {
 
 int Robot::ActuatorId(std::string_view n) const {
   for (std::size_t i = 0; i < actuator_names.size(); ++i) {
-    const std::string& full = actuator_names[i];
-    if (full == n || (full.size() == name.size() + 1 + n.size() && full.starts_with(name + "_") &&
-                      full.ends_with(n))) {
+    // The short name, or the full "{robot}_{actuator}" name.
+    const std::string& short_name = actuator_names[i];
+    if (short_name == n || (n.size() == name.size() + 1 + short_name.size() &&
+                            n.starts_with(name + "_") && n.ends_with(short_name))) {
       return actuator_ids[i];
     }
   }

@@ -29,6 +29,23 @@ double ActuatorBinding::ClampCtrl(double u) const {
   return ctrl_limited ? std::clamp(u, ctrl_range[0], ctrl_range[1]) : u;
 }
 
+bool ActuatorBinding::TargetRange(bool position_targets, double range[2]) const {
+  if (position_targets && has_joint()) {
+    if (!joint_limited) return false;
+    range[0] = joint_range[0];
+    range[1] = joint_range[1];
+    if (!motor && ctrl_limited) {
+      range[0] = std::clamp(range[0], ctrl_range[0], ctrl_range[1]);
+      range[1] = std::clamp(range[1], ctrl_range[0], ctrl_range[1]);
+    }
+    return true;
+  }
+  if (!ctrl_limited) return false;
+  range[0] = ctrl_range[0];
+  range[1] = ctrl_range[1];
+  return true;
+}
+
 ActuatorBinding MakeActuatorBinding(const mjModel* m, int id) {
   ActuatorBinding b;
   b.actuator_id = id;

@@ -407,11 +407,11 @@ LatencyBenchResult RunLatencyBench(world::SceneConfig scene, const LatencyBenchO
   report(Format("bare mj_step                 %9.0f steps/s (median of rounds)", r.bare_rate));
   report(
       Format("lockstep throughput n=1      %9.0f steps/s (median ratio %.3f of bare; the raw "
-             "round trip caps any server at %.3f)",
+             "round trip p50 added to each step would give %.3f)",
              r.lockstep_rate_n1, r.throughput_ratio_n1, r.ceiling_n1));
   report(
       Format("lockstep throughput n=10     %9.0f steps/s (median ratio %.3f of bare; the raw "
-             "round trip caps any server at %.3f)",
+             "round trip p50 added to each step would give %.3f)",
              r.lockstep_rate_n10, r.throughput_ratio_n10, r.ceiling_n10));
   report(
       Format("server capacity (%d step requests in flight): n=1 ratio %.3f, n=10 ratio %.3f "

@@ -17,6 +17,7 @@
 #include "urlab/control/controller.h"
 #include "urlab/core/version.h"
 #include "urlab/replay/tables.h"
+#include "urlab/world/names.h"
 #include "wire/request_limits.h"
 
 namespace urlab::net {
@@ -627,9 +628,16 @@ StepServer::Outcome StepServer::Hello(Request& r) {
     a["joints"] = std::move(joints);
     Json actuators = Json::array();
     for (std::size_t i = 0; i < t.actuator_ids.size(); ++i) {
+      const int id = t.actuator_ids[i];
+      const bool limited = m->actuator_ctrllimited[id] != 0;
+      // target_range: what the controller takes (a PD actuator's joint range); ctrlrange: the
+      // actuator's own, null when unlimited.
       actuators.push_back(Json{{"name", t.actuator_names[i]},
-                               {"id", t.actuator_ids[i]},
-                               {"ctrlrange", {t.mins[i], t.maxs[i]}}});
+                               {"id", id},
+                               {"target_range", {t.mins[i], t.maxs[i]}},
+                               {"ctrlrange", limited ? Json{m->actuator_ctrlrange[2 * id],
+                                                            m->actuator_ctrlrange[2 * id + 1]}
+                                                     : Json(nullptr)}});
     }
     a["actuators"] = std::move(actuators);
     Json sensors = Json::array();
@@ -814,7 +822,15 @@ StepServer::Outcome StepServer::Reset(Request& r) {
   int key = -1;
   if (const auto it = r.body.find("keyframe_name"); it != r.body.end() && !it->is_null()) {
     const std::string name = String(*it, "keyframe_name");
-    key = mj_name2id(m, mjOBJ_KEY, name.c_str());
+    // Short ("home") or full ("dog_home") name; a short name two articulations share is
+    // ambiguous (world/names.h).
+    std::vector<std::string> prefixes;
+    for (const world::Articulation& a : session_.articulations()) prefixes.push_back(a.prefix);
+    try {
+      key = world::FindNamed(m, mjOBJ_KEY, prefixes, name);
+    } catch (const Error& e) {
+      Fail("ambiguous_keyframe", e.what());
+    }
     if (key < 0) Fail("unknown_keyframe", "no keyframe '" + name + "' (see list_keyframes)");
   }
   physics::cmd::SetState joints_after;  // per_articulation_qpos, written after the reset

@@ -16,6 +16,7 @@
 #include "net/step_server.h"
 #include "net/value_ranges.h"
 #include "urlab/control/controllers.h"
+#include "urlab/world/names.h"
 
 namespace urlab::net {
 
@@ -74,10 +75,15 @@ StepServer::Outcome StepServer::ReadMocapPose(Request& r) {
 
 StepServer::Outcome StepServer::ListKeyframes(Request&) {
   const mjModel* m = session_.engine().model();
+  // Each keyframe by short name beside its articulation (world/names.h); the full name is what
+  // `reset {keyframe_name}` always accepts.
   Json keys = Json::array();
   for (int k = 0; k < m->nkey; ++k) {
     const char* name = mj_id2name(m, mjOBJ_KEY, k);
-    keys.push_back(name ? name : "");
+    const world::Articulation* owner = name ? session_.OwnerOf(name) : nullptr;
+    keys.push_back(Json{{"name", world::ShortNameOf(m, mjOBJ_KEY, k, owner ? owner->prefix : "")},
+                        {"articulation", owner ? Json(owner->name()) : Json(nullptr)},
+                        {"full_name", name ? name : ""}});
   }
   return {Json{{"op", "list_keyframes_ok"}, {"keyframes", keys}}};
 }

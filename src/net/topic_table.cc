@@ -1,6 +1,7 @@
 #include "net/topic_table.h"
 
 #include "urlab/wire/wire.h"
+#include "urlab/world/names.h"
 
 namespace urlab::net {
 
@@ -47,14 +48,19 @@ std::vector<ArticulationTopics> BuildTopicTables(world::Session& session) {
       if (v.act_adr >= 0) t.act_adrs.push_back(v.act_adr);
     }
     const std::vector<int>& ids = a.control->actuator_ids();
+    const control::Controller* controller = a.control->controller();
+    const bool positions = controller && controller->TargetsArePositions();
     for (std::size_t i = 0; i < ids.size(); ++i) {
       const int id = ids[i];
       t.actuator_ids.push_back(id);
       const char* name = mj_id2name(m, mjOBJ_ACTUATOR, id);
-      t.actuator_names.push_back(name ? name : "");
-      const bool limited = m->actuator_ctrllimited[id] != 0;
-      t.mins.push_back(limited ? m->actuator_ctrlrange[2 * id] : -100.0);
-      t.maxs.push_back(limited ? m->actuator_ctrlrange[2 * id + 1] : 100.0);
+      t.actuator_names.push_back(world::ShortNameOf(m, mjOBJ_ACTUATOR, id, a.prefix));
+      // The range of the target the articulation's controller takes (a PD controller's is the
+      // joint's range, not the actuator's ctrlrange).
+      double range[2] = {-100.0, 100.0};
+      control::MakeActuatorBinding(m, id).TargetRange(positions, range);
+      t.mins.push_back(range[0]);
+      t.maxs.push_back(range[1]);
       t.index_of_actuator[id] = static_cast<int>(i);
       if (name) {
         t.gain_index[name] = static_cast<int>(i);

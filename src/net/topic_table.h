@@ -32,8 +32,10 @@ struct ArticulationTopics {
   std::vector<SensorTopicEntry> sensors;  // in id order
   // Actuators in the articulation's order (the command frame's order).
   std::vector<int> actuator_ids;
-  std::vector<std::string> actuator_names;         // full (prefixed) names, for discovery
-  std::vector<double> mins, maxs;                  // ctrlrange when limited, else -100/100
+  std::vector<std::string> actuator_names;  // short names (world/names.h)
+  // The target range (ActuatorBinding::TargetRange: a PD actuator's is its joint's range), or
+  // -100/100 when unbounded.
+  std::vector<double> mins, maxs;
   std::unordered_map<int, int> index_of_actuator;  // global id -> frame index
   // set_gains: short or prefixed actuator names, and joint names (the actuator driving it).
   std::unordered_map<std::string, int> gain_index;

@@ -18,6 +18,9 @@ namespace urlab::replay {
 
 namespace {
 
+// Sensor columns start with this; import skips them.
+constexpr std::string_view kSensorColumn = "sensor:";
+
 // Below this norm a quaternion is zero (MuJoCo's mjMINVAL).
 constexpr double kMinQuatNorm = 1e-15;
 // A quaternion whose norm is off 1 by at most this is kept as it is (bit for bit).
@@ -268,6 +271,7 @@ class Parser {
         target.kind = Target::kTime;
         continue;
       }
+      if (name.starts_with(kSensorColumn)) continue;  // recorded sensor values: not state
       const ColumnMatch m = MatchColumn(tables_, name);
       switch (m.kind) {
         case ColumnMatch::kNone:
@@ -467,6 +471,26 @@ void AppendNumber(std::string* out, double v) {
   out->append(buf, ptr);
 }
 
+// A name without its articulation's "{art}_" (the longest articulation prefix), else itself.
+std::string ShortOf(const ModelTables& tables, const std::string& full) {
+  std::size_t best = 0;
+  for (const std::string& a : tables.articulations) {
+    if (full.size() > a.size() + 1 && full.starts_with(a) && full[a.size()] == '_') {
+      best = std::max(best, a.size() + 1);
+    }
+  }
+  return full.substr(best);
+}
+
+// True when no other sensor has the same short name.
+bool SensorShortNameUnique(const ModelTables& tables, const NamedRange& s) {
+  const std::string mine = ShortOf(tables, s.name);
+  for (const NamedRange& o : tables.sensors) {
+    if (&o != &s && ShortOf(tables, o.name) == mine) return false;
+  }
+  return mine != "time" && mine.find_first_of("\r\n") == std::string::npos;
+}
+
 }  // namespace
 
 Trajectory ImportCsv(const std::string& path, const ModelTables& tables,
@@ -496,6 +520,11 @@ void ExportCsv(const std::string& path, const ModelTables& tables, const Traject
     names.push_back(use_short ? j.short_name : j.name);
   }
   const bool velocities = options.velocities && traj.has_qvel();
+  const std::vector<double>* sensors = options.sensordata;
+  if (sensors && sensors->size() != traj.rows() * static_cast<std::size_t>(tables.nsensordata)) {
+    throw Error(fmt::format("{}: {} sensor values for {} rows of {}", path, sensors->size(),
+                            traj.rows(), tables.nsensordata));
+  }
 
   std::string out;
   const std::size_t values_per_row =
@@ -518,6 +547,17 @@ void ExportCsv(const std::string& path, const ModelTables& tables, const Traject
       }
     }
   }
+  if (sensors) {
+    for (const NamedRange& s : tables.sensors) {
+      const bool use_short = options.short_names && SensorShortNameUnique(tables, s);
+      const std::string name =
+          std::string(kSensorColumn) + (use_short ? ShortOf(tables, s.name) : s.name);
+      for (int k = 0; k < s.dim; ++k) {
+        out += ',';
+        AppendName(&out, s.dim == 1 ? name : fmt::format("{}[{}]", name, k));
+      }
+    }
+  }
   out += '\n';
   for (std::size_t r = 0; r < traj.rows(); ++r) {
     AppendNumber(&out, traj.time[r]);
@@ -534,6 +574,15 @@ void ExportCsv(const std::string& path, const ModelTables& tables, const Traject
         for (int k = 0; k < j.nv; ++k) {
           out += ',';
           AppendNumber(&out, qvel[j.dofadr + k]);
+        }
+      }
+    }
+    if (sensors) {
+      const double* row = sensors->data() + r * static_cast<std::size_t>(tables.nsensordata);
+      for (const NamedRange& s : tables.sensors) {
+        for (int k = 0; k < s.dim; ++k) {
+          out += ',';
+          AppendNumber(&out, row[s.adr + k]);
         }
       }
     }

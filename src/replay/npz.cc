@@ -3,12 +3,14 @@
 #include <fmt/format.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <bit>
 #include <climits>
 #include <cstdint>
 #include <cstring>
 #include <limits>
 #include <set>
+#include <string>
 #include <string_view>
 
 #include "urlab/core/error.h"
@@ -37,13 +39,14 @@ void Put32(std::string* out, std::uint64_t v) {
 
 // The NPY 1.0 preamble of an array: magic, version, header length and the header dictionary,
 // padded with spaces and ended by "\n" so the data starts at a multiple of 64 bytes.
-std::string NpyHeader(const std::vector<std::size_t>& shape) {
+std::string NpyHeader(const std::vector<std::size_t>& shape, const std::string& descr) {
   std::string dims;
   for (std::size_t i = 0; i < shape.size(); ++i) {
     dims += (i ? ", " : "") + std::to_string(shape[i]);
   }
   if (shape.size() == 1) dims += ',';
-  std::string dict = "{'descr': '<f8', 'fortran_order': False, 'shape': (" + dims + "), }";
+  std::string dict =
+      "{'descr': '" + descr + "', 'fortran_order': False, 'shape': (" + dims + "), }";
   const std::size_t preamble = 10;  // magic (6), version (2), header length (2)
   const std::size_t unpadded = preamble + dict.size() + 1;
   dict.append((64 - unpadded % 64) % 64, ' ');
@@ -55,17 +58,55 @@ std::string NpyHeader(const std::vector<std::size_t>& shape) {
   return out + dict;
 }
 
-// An array to write, without copying its values.
+// An array to write, without copying its values: doubles, or strings when `text` is set.
 struct ArrayView {
   std::string_view name;
   std::vector<std::size_t> shape;
   const std::vector<double>& data;
+  const std::vector<std::string>* text = nullptr;
 };
+
+// UTF-8 to code points (a malformed sequence becomes U+FFFD).
+std::u32string Utf32(std::string_view s) {
+  std::u32string out;
+  for (std::size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    const int extra = c < 0x80         ? 0
+                      : (c >> 5) == 6  ? 1
+                      : (c >> 4) == 14 ? 2
+                      : (c >> 3) == 30 ? 3
+                                       : -1;
+    char32_t cp = extra == 0 ? c : extra == 1 ? c & 0x1F : extra == 2 ? c & 0x0F : c & 0x07;
+    bool ok = extra >= 0 && i + static_cast<std::size_t>(extra) < s.size();
+    for (int k = 1; ok && k <= extra; ++k) {
+      const auto n = static_cast<unsigned char>(s[i + static_cast<std::size_t>(k)]);
+      ok = (n & 0xC0) == 0x80;
+      cp = (cp << 6) | (n & 0x3F);
+    }
+    out += ok ? cp : U'\uFFFD';
+    i += ok ? 1 + static_cast<std::size_t>(extra) : 1;
+  }
+  return out;
+}
+
+// The payload of a string array: each string as `width` UTF-32LE code units, zero padded.
+std::string TextPayload(const std::vector<std::u32string>& strings, std::size_t width) {
+  std::string out;
+  out.reserve(strings.size() * width * 4);
+  for (const std::u32string& s : strings) {
+    for (std::size_t k = 0; k < width; ++k) {
+      const std::uint32_t v = k < s.size() ? static_cast<std::uint32_t>(s[k]) : 0;
+      for (int b = 0; b < 4; ++b) out += static_cast<char>((v >> (8 * b)) & 0xFF);
+    }
+  }
+  return out;
+}
 
 struct Entry {
   std::string file_name;  // name.npy
   std::string npy_header;
   const ArrayView* array = nullptr;
+  std::string text;          // the payload of a string array
   std::uint64_t size = 0;    // npy header + data
   std::uint64_t offset = 0;  // of the local header in the archive
   std::uint32_t crc = 0;
@@ -127,15 +168,27 @@ void Write(const std::string& path, const std::vector<ArrayView>& arrays) {
       }
       count *= d;
     }
-    if (count != a.data.size()) {
+    const std::size_t values = a.text ? a.text->size() : a.data.size();
+    if (count != values || (a.text && !a.data.empty())) {
       fail(fmt::format("array '{}': its shape holds {} values but it has {}", Printable(a.name),
-                       count, a.data.size()));
+                       count, a.text && !a.data.empty() ? a.data.size() + values : values));
     }
     Entry e;
+    std::string descr = "<f8";
+    if (a.text) {
+      std::vector<std::u32string> strings;
+      std::size_t width = 1;  // numpy's '<U0' is odd; one code unit at least
+      for (const std::string& s : *a.text) {
+        strings.push_back(Utf32(s));
+        width = std::max(width, strings.back().size());
+      }
+      descr = "<U" + std::to_string(width);
+      e.text = TextPayload(strings, width);
+    }
     e.file_name = std::string(a.name) + ".npy";
     if (e.file_name.size() > 0xFFFF)
       fail(fmt::format("array name '{}' is too long", Printable(a.name)));
-    e.npy_header = NpyHeader(a.shape);
+    e.npy_header = NpyHeader(a.shape, descr);
     if (e.npy_header.size() - 10 > 0xFFFF) {
       fail(fmt::format("array '{}' has too many dimensions for an NPY 1.0 header",
                        Printable(a.name)));
@@ -144,7 +197,10 @@ void Write(const std::string& path, const std::vector<ArrayView>& arrays) {
     if (a.data.size() > (kZipLimit - e.npy_header.size()) / sizeof(double)) {
       fail(fmt::format("array '{}' is 4 GiB or more (ZIP64 is not supported)", Printable(a.name)));
     }
-    e.size = e.npy_header.size() + a.data.size() * sizeof(double);
+    if (e.text.size() > kZipLimit - e.npy_header.size()) {
+      fail(fmt::format("array '{}' is 4 GiB or more (ZIP64 is not supported)", Printable(a.name)));
+    }
+    e.size = e.npy_header.size() + (a.text ? e.text.size() : a.data.size() * sizeof(double));
     e.offset = offset;
     offset += kLocalHeaderBytes + e.file_name.size() + e.size;
     entries.push_back(std::move(e));
@@ -175,7 +231,9 @@ void Write(const std::string& path, const std::vector<ArrayView>& arrays) {
     const std::size_t data_at = out.size();
     out += e.npy_header;
     const std::vector<double>& data = e.array->data;
-    if constexpr (std::endian::native == std::endian::little) {
+    if (e.array->text) {
+      out += e.text;
+    } else if constexpr (std::endian::native == std::endian::little) {
       out.append(reinterpret_cast<const char*>(data.data()), data.size() * sizeof(double));
     } else {
       for (const double v : data) {
@@ -223,7 +281,9 @@ void Write(const std::string& path, const std::vector<ArrayView>& arrays) {
 void WriteNpz(const std::string& path, const std::vector<NpyArray>& arrays) {
   std::vector<ArrayView> views;
   views.reserve(arrays.size());
-  for (const NpyArray& a : arrays) views.push_back({a.name, a.shape, a.data});
+  for (const NpyArray& a : arrays) {
+    views.push_back({a.name, a.shape, a.data, a.strings ? &a.text : nullptr});
+  }
   Write(path, views);
 }
 
@@ -232,13 +292,98 @@ void ExportNpz(const std::string& path, const ModelTables& tables, const Traject
   traj.Check(tables);
   const std::size_t rows = traj.rows();
   std::vector<ArrayView> arrays;
-  arrays.push_back({"time", {rows}, traj.time});
-  arrays.push_back({"qpos", {rows, static_cast<std::size_t>(traj.nq)}, traj.qpos});
+  arrays.push_back({"time", {rows}, traj.time, nullptr});
+  arrays.push_back({"qpos", {rows, static_cast<std::size_t>(traj.nq)}, traj.qpos, nullptr});
   if (traj.has_qvel()) {
-    arrays.push_back({"qvel", {rows, static_cast<std::size_t>(traj.nv)}, traj.qvel});
+    arrays.push_back({"qvel", {rows, static_cast<std::size_t>(traj.nv)}, traj.qvel, nullptr});
   }
-  for (const NpyArray& a : extra) arrays.push_back({a.name, a.shape, a.data});
+  for (const NpyArray& a : extra) {
+    arrays.push_back({a.name, a.shape, a.data, a.strings ? &a.text : nullptr});
+  }
   Write(path, arrays);
+}
+
+namespace {
+
+// "{art}/{short}" for an element of an articulation (the longest prefix), else the full name.
+std::string Display(const std::vector<std::string>& articulations, const std::string& full) {
+  const std::string* best = nullptr;
+  for (const std::string& a : articulations) {
+    if (full.size() > a.size() + 1 && full.starts_with(a) && full[a.size()] == '_' &&
+        (!best || a.size() > best->size())) {
+      best = &a;
+    }
+  }
+  return best ? *best + "/" + full.substr(best->size() + 1) : full;
+}
+
+// One name per value: `name` alone for one value, "name[i]" for each of several.
+void AddValues(std::vector<std::string>* out, const std::string& name, int count) {
+  for (int k = 0; k < count; ++k)
+    out->push_back(count == 1 ? name : fmt::format("{}[{}]", name, k));
+}
+
+NpyArray Names(std::string name, std::vector<std::string> values) {
+  NpyArray a;
+  a.name = std::move(name);
+  a.shape = {values.size()};
+  a.text = std::move(values);
+  a.strings = true;
+  return a;
+}
+
+}  // namespace
+
+std::vector<NpyArray> ExportArrays(const ModelTables& tables, std::size_t rows,
+                                   const NpzExtras& extras) {
+  std::vector<NpyArray> out;
+  const auto per_row = [rows](const std::vector<double>& v) { return rows ? v.size() / rows : 0; };
+  out.push_back({"ctrl", {rows, static_cast<std::size_t>(tables.nu)}, extras.ctrl, {}, false});
+  if (!extras.targets.empty()) {
+    out.push_back({"targets", {rows, per_row(extras.targets)}, extras.targets, {}, false});
+  }
+  if (!extras.sensordata.empty()) {
+    out.push_back({"sensordata", {rows, per_row(extras.sensordata)}, extras.sensordata, {}, false});
+  }
+  const std::vector<std::string>& arts = tables.articulations;
+  std::vector<std::string> qpos(static_cast<std::size_t>(tables.nq));
+  std::vector<std::string> qvel(static_cast<std::size_t>(tables.nv));
+  std::vector<std::string> joints, owners;
+  for (const JointEntry& j : tables.joints) {
+    const std::string shown = j.articulation.empty() ? j.name : j.articulation + "/" + j.short_name;
+    joints.push_back(j.short_name.empty() ? j.name : j.short_name);
+    owners.push_back(j.articulation);
+    for (int k = 0; k < j.nq; ++k) {
+      qpos.at(static_cast<std::size_t>(j.qposadr + k)) =
+          j.nq == 1 ? shown : fmt::format("{}[{}]", shown, k);
+    }
+    for (int k = 0; k < j.nv; ++k) {
+      qvel.at(static_cast<std::size_t>(j.dofadr + k)) =
+          j.nv == 1 ? shown : fmt::format("{}[{}]", shown, k);
+    }
+  }
+  std::vector<std::string> ctrl(static_cast<std::size_t>(tables.nu));
+  for (const NamedRange& a : tables.actuators) {
+    if (a.adr >= 0 && a.adr < tables.nu)
+      ctrl[static_cast<std::size_t>(a.adr)] = Display(arts, a.name);
+  }
+  std::vector<std::string> targets;
+  for (const physics::CommandGroupLayout& g : tables.command_groups) {
+    for (int id : g.actuators) {
+      targets.push_back(id >= 0 && id < tables.nu ? ctrl[static_cast<std::size_t>(id)] : "?");
+    }
+  }
+  std::vector<std::string> sensors;
+  for (const NamedRange& s : tables.sensors) AddValues(&sensors, Display(arts, s.name), s.dim);
+  out.push_back(Names("qpos_names", std::move(qpos)));
+  out.push_back(Names("qvel_names", std::move(qvel)));
+  out.push_back(Names("ctrl_names", std::move(ctrl)));
+  if (!extras.targets.empty()) out.push_back(Names("target_names", std::move(targets)));
+  out.push_back(Names("sensor_names", std::move(sensors)));
+  out.push_back(Names("joint_names", std::move(joints)));
+  out.push_back(Names("joint_articulations", std::move(owners)));
+  out.push_back(Names("articulations", arts));
+  return out;
 }
 
 }  // namespace urlab::replay

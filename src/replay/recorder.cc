@@ -350,8 +350,11 @@ void Recorder::Impl::WriteChunk(HeldChunk chunk) {
       kept -= held.front().duration;
       held.pop_front();
     }
+    std::uint64_t data = 0;
+    for (const HeldChunk& c : held) data += format::EncodeChunk(c.header, c.stored).size();
     std::lock_guard<std::mutex> st(status_mutex);
     status.chunks = held.size();
+    status.data_bytes = data;
     return;
   }
   chunk.header.number = next_chunk++;
@@ -359,6 +362,7 @@ void Recorder::Impl::WriteChunk(HeldChunk chunk) {
   file->Append(bytes);
   std::lock_guard<std::mutex> st(status_mutex);
   status.bytes = file->bytes();
+  status.data_bytes += bytes.size();
   ++status.chunks;
 }
 

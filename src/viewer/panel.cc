@@ -147,12 +147,10 @@ void Panel::DrawArticulation(ViewerCore& core) {
       const int id = ctl.actuator_ids()[static_cast<std::size_t>(i)];
       double lo = -1, hi = 1;
       if (controller && static_cast<std::size_t>(i) < controller->bindings().size()) {
+        // The range of the target the controller takes (the step server's hello reports it too).
         const control::ActuatorBinding& b = controller->bindings()[static_cast<std::size_t>(i)];
-        if (controller->TargetsArePositions() && b.joint_limited) {
-          lo = b.joint_range[0], hi = b.joint_range[1];
-        } else if (b.ctrl_limited) {
-          lo = b.ctrl_range[0], hi = b.ctrl_range[1];
-        }
+        double range[2];
+        if (b.TargetRange(controller->TargetsArePositions(), range)) lo = range[0], hi = range[1];
       } else if (m->actuator_ctrllimited[id]) {
         lo = m->actuator_ctrlrange[2 * id], hi = m->actuator_ctrlrange[2 * id + 1];
       }
@@ -227,6 +225,8 @@ void Panel::DrawArticulation(ViewerCore& core) {
                      arts[static_cast<std::size_t>(possession.articulation())].name(), t.vx, t.vy,
                      t.yaw_rate, possession.actions()));
     if (ImGui::Button("Release (Tab)")) core.Perform(Action::kTogglePossess);
+  } else if (!ctl.twist()) {
+    ImGui::TextDisabled("no free base: nothing to possess");  // a fixed or static articulation
   } else if (ImGui::Button("Possess (Tab)")) {
     core.Perform(Action::kTogglePossess);
   }

@@ -1,10 +1,12 @@
 #include "urlab/world/controller_factory.h"
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "urlab/control/gait.h"
+#include "urlab/world/names.h"
 
 namespace urlab::world {
 
@@ -18,11 +20,16 @@ std::string ShortName(const mjModel* m, mjtObj type, int id, const std::string& 
   return full.starts_with(prefix) ? std::string(full.substr(prefix.size())) : "";
 }
 
-// True when a gains key names binding `b`'s actuator or the joint it drives (short names).
+// True when a gains key names binding `b`'s actuator or the joint it drives (short or full name,
+// world/names.h).
 bool GainKeyMatches(const mjModel* m, const control::ActuatorBinding& b, const std::string& prefix,
                     const std::string& key) {
-  return ShortName(m, mjOBJ_ACTUATOR, b.actuator_id, prefix) == key ||
-         ShortName(m, mjOBJ_JOINT, b.joint_id, prefix) == key;
+  const auto named = [&](mjtObj type, int id) {
+    if (id < 0 || ShortName(m, type, id, prefix).empty()) return false;
+    const std::vector<int> ids = NameCandidates(m, type, prefix, key);
+    return std::find(ids.begin(), ids.end(), id) != ids.end();
+  };
+  return named(mjOBJ_ACTUATOR, b.actuator_id) || named(mjOBJ_JOINT, b.joint_id);
 }
 
 // Applies the per-joint/actuator gains of `config` over the controller's defaults (the keys were
@@ -94,10 +101,14 @@ void CheckController(const ArticulationConfig& config, const mjModel* m, const s
   }
   if (c.type == "keyframe") {
     for (const KeyframeStep& step : c.sequence) {
-      // Only this articulation's keyframes (an exact scene name could be another's).
-      if (mj_name2id(m, mjOBJ_KEY, (prefix + step.keyframe).c_str()) < 0) {
-        sink.Error(c.where, config.name + ": controller sequence: keyframe '" + step.keyframe +
-                                "' is not in " + config.mjcf);
+      // Only this articulation's keyframes, by short or full name (world/names.h).
+      try {
+        if (FindNamed(m, mjOBJ_KEY, prefix, step.keyframe) < 0) {
+          sink.Error(c.where, config.name + ": controller sequence: keyframe '" + step.keyframe +
+                                  "' is not in " + config.mjcf);
+        }
+      } catch (const Error& e) {
+        sink.Error(c.where, config.name + ": controller sequence: " + e.what());
       }
     }
   }
@@ -152,8 +163,8 @@ void InstallController(const ArticulationConfig& config, control::ArticulationCo
     auto& kf = control.Use(std::make_unique<control::KeyframeController>(options, defaults));
     ApplyJointGains(config, control, m, kf);
     for (const KeyframeStep& step : c.sequence) {
-      // Only this articulation's keyframes (an exact scene name could be another's).
-      const int key = mj_name2id(m, mjOBJ_KEY, (control.prefix() + step.keyframe).c_str());
+      // Only this articulation's keyframes (checked above).
+      const int key = FindNamed(m, mjOBJ_KEY, control.prefix(), step.keyframe);
       kf.AddPose(kf.PoseFromModelKey(m, key, step.blend, step.hold));
     }
   } else if (c.type == "gait") {

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "urlab/world/controller_factory.h"
+#include "urlab/world/names.h"
 #include "world/binding_checks.h"
 
 namespace urlab::world {
@@ -106,8 +107,14 @@ void CheckCompiledScene(const SceneConfig& scene, const CompiledScene& compiled,
     const ArticulationConfig& a = scene.articulations[i];
     const std::string prefix =
         i < compiled.articulations.size() ? compiled.articulations[i].prefix : a.name + "_";
-    if (!a.keyframe.empty() && mj_name2id(m, mjOBJ_KEY, (prefix + a.keyframe).c_str()) < 0) {
-      sink.Error(a.where, a.name + ": keyframe '" + a.keyframe + "' is not in " + a.mjcf);
+    if (!a.keyframe.empty()) {
+      try {
+        if (FindNamed(m, mjOBJ_KEY, prefix, a.keyframe) < 0) {
+          sink.Error(a.where, a.name + ": keyframe '" + a.keyframe + "' is not in " + a.mjcf);
+        }
+      } catch (const Error& e) {
+        sink.Error(a.where, a.name + ": " + e.what());
+      }
     }
     if (i < compiled.articulations.size()) {
       CheckKeyframeLengths(a, compiled.articulations[i], compiled, sink);

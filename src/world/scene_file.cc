@@ -16,6 +16,7 @@
 #include "urlab/document/element.h"
 #include "urlab/document/grammar.h"
 #include "urlab/document/orientation.h"
+#include "urlab/world/names.h"
 #include "world/input_keys.h"
 #include "world/scene_names.h"
 
@@ -28,11 +29,15 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Top-level sections of features that do not exist yet: refused with a clear message instead of
-// "unknown key" (and never silently accepted).
+// Top-level sections a scene does not take, with where the setting lives instead: refused with a
+// clear message instead of "unknown key" (and never silently accepted).
 constexpr std::pair<const char*, const char*> kNotYetSupported[] = {
-    {"recording", "recording"}, {"replay", "replay"},       {"viewer", "the viewer"},
-    {"input", "input devices"}, {"debug", "debug drawing"}, {"lights", "scene lights"},
+    {"recording", "recordings are made with `urlab record` or `urlab run --record`"},
+    {"replay", "recordings are played with `urlab replay`"},
+    {"viewer", "the viewer is set up on the command line (`urlab view --help`)"},
+    {"input", "input bindings go in an articulation's `input:` list"},
+    {"debug", "debug drawing is toggled in the viewer (keys 1-5, `--debug-all`)"},
+    {"lights", "scene lights are not supported; put <light> elements in an articulation's MJCF"},
 };
 
 // A closed or half-open interval a number must lie in; NaN never does.
@@ -812,8 +817,8 @@ class Parser {
         if (!kv.first.IsScalar()) continue;  // reported by CheckKeys
         for (const auto& [key, feature] : kNotYetSupported) {
           if (kv.first.Scalar() == key) {
-            Fail(kv.first, "'" + std::string(key) + ":' is not supported yet: URLab has no " +
-                               feature + " in scenes so far; remove the section");
+            Fail(kv.first, "'" + std::string(key) + ":' is not a scene section: " + feature +
+                               "; remove the section");
           }
         }
       }
@@ -947,11 +952,7 @@ SceneConfig LoadSceneOrModel(const std::string& path) {
   if (IsSceneFile(path)) return LoadSceneFile(path);
   const std::string shown = fs::absolute(path).lexically_normal().string();
   CheckInputFile(shown, "model file");
-  std::string name = fs::path(path).stem().string();
-  for (char& c : name) {
-    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-  }
-  if (name.empty()) name = "model";
+  const std::string name = ModelArticulationName(shown);
   SceneConfig scene;
   scene.path = shown;
   ArticulationConfig a;

@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "urlab/world/controller_factory.h"
+#include "urlab/world/names.h"
 #include "urlab/world/scene_checks.h"
 
 namespace urlab::world {
@@ -55,7 +56,11 @@ void Session::Build(const SceneConfig& scene) {
       InstallController(ac, *a.control, m);
       InstallTwist(ac, *a.bindings, *a.control, m);
       if (!ac.keyframe.empty()) {
-        a.initial_key = mj_name2id(m, mjOBJ_KEY, (a.prefix + ac.keyframe).c_str());
+        try {
+          a.initial_key = FindNamed(m, mjOBJ_KEY, a.prefix, ac.keyframe);
+        } catch (const Error& e) {
+          throw InputError(ac.where, ac.name + ": " + e.what());
+        }
         if (a.initial_key < 0) {
           throw InputError(ac.where,
                            ac.name + ": keyframe '" + ac.keyframe + "' is not in " + ac.mjcf);
@@ -133,10 +138,14 @@ std::uint64_t Session::ResetArticulation(std::string_view name, std::string_view
     if (a.initial_key < 0) {
       throw Error("ResetArticulation: '" + a.name() + "' has no initial keyframe; name one");
     }
-    return controls_->RequestKeyframeReset(*engine_, a.prefix, a.prefix + a.config.keyframe);
+    return controls_->RequestKeyframeReset(*engine_, a.prefix,
+                                           mj_id2name(engine_->model(), mjOBJ_KEY, a.initial_key));
   }
-  // Only this articulation's keyframes: "{prefix}{key}".
-  return controls_->RequestKeyframeReset(*engine_, a.prefix, a.prefix + std::string(key));
+  // Only this articulation's keyframes, by short or full name (world/names.h).
+  const int id =
+      RequireNamed(engine_->model(), mjOBJ_KEY, a.prefix, key, "articulation '" + a.name() + "'");
+  return controls_->RequestKeyframeReset(*engine_, a.prefix,
+                                         mj_id2name(engine_->model(), mjOBJ_KEY, id));
 }
 
 std::uint64_t Session::QueueInitialReset(bool full) {

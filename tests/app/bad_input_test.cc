@@ -255,7 +255,7 @@ TEST_F(CliBadInputTest, ErrorsAlwaysHaveALocation) {
   const std::string future = Write(
       "f.yaml", "articulations:\n  - {name: a, mjcf: " + kArm + "}\nlights: [{pos: [0, 0, 3]}]\n");
   EXPECT_EQ(Urlab("validate " + future, &out), 1) << out;
-  EXPECT_TRUE(Has(out, future + ":3: 'lights:' is not supported yet")) << out;
+  EXPECT_TRUE(Has(out, future + ":3: 'lights:' is not a scene section")) << out;
 }
 
 TEST_F(CliBadInputTest, SignalsDuringALongCompileStopAtOnce) {

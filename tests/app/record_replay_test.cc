@@ -84,7 +84,10 @@ TEST(RecordReplayTest, RecordsReSimulatesAndRoundTripsThroughCsv) {
                        &out),
             0)
       << out;
-  EXPECT_NE(out.find("['ctrl', 'qpos', 'qvel', 'targets', 'time'] True True"), std::string::npos)
+  EXPECT_NE(out.find("'ctrl', 'ctrl_names', "), std::string::npos) << out;
+  EXPECT_NE(out.find("'qpos', 'qpos_names', 'qvel', 'qvel_names', 'sensor_names', "
+                     "'target_names', 'targets', 'time'] True True"),
+            std::string::npos)
       << out;
 
   const std::string csv = dir + "/h.csv";

@@ -45,8 +45,7 @@ TEST_F(ClientTest, StreamingDiscoverDriveAndReadBack) {
   StreamClient c(endpoints_);
   const auto& robots = c.Discover(5000ms, {"arm"});
   const Robot& arm = robots.at("arm");
-  EXPECT_EQ(arm.actuator_names,
-            (std::vector<std::string>{"arm_shoulder_motor", "arm_elbow_motor"}));
+  EXPECT_EQ(arm.actuator_names, (std::vector<std::string>{"shoulder_motor", "elbow_motor"}));
   EXPECT_EQ(arm.ActuatorId("shoulder_motor"), arm.ActuatorId("arm_shoulder_motor"));
   EXPECT_THROW(arm.ActuatorId("knee"), std::out_of_range);
   EXPECT_THROW(c.SendControl("leg", {{"x", 1}}), std::out_of_range);

@@ -137,11 +137,11 @@ TEST_F(NetworkTest, DiscoveryListsEachRobotsOwnActuators) {
   EXPECT_EQ(keys, (std::vector<std::string>{"type", "robot", "names", "ids", "mins", "maxs",
                                             "camera_list"}));
   EXPECT_EQ(a["type"], "actuator_list");
-  EXPECT_EQ(a["names"], (std::vector<std::string>{"a_hinge_motor", "a_spare"}));
+  EXPECT_EQ(a["names"], (std::vector<std::string>{"hinge_motor", "spare"}));  // short names
   EXPECT_EQ(a["ids"], (std::vector<int>{Actuator("a_hinge_motor"), Actuator("a_spare")}));
   EXPECT_EQ(a["mins"], (std::vector<double>{-5, -100}));
   EXPECT_EQ(a["maxs"], (std::vector<double>{5, 100}));
-  EXPECT_EQ(robots["b"]["names"][0], "b_hinge_motor");
+  EXPECT_EQ(robots["b"]["names"][0], "hinge_motor");
 }
 
 TEST_F(NetworkTest, StateTopicsCarryEveryJointKindAndSensors) {

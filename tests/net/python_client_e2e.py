@@ -43,7 +43,7 @@ launchers:
         with StreamClient(state=endpoints[0], control=endpoints[1], info=endpoints[2]) as client:
             robots = client.discover(timeout=10, expect=["arm"])
             arm = robots["arm"]
-            assert arm.actuator_names == ["arm_shoulder_motor", "arm_elbow_motor"], arm
+            assert arm.actuator_names == ["shoulder_motor", "elbow_motor"], arm
             end = time.monotonic() + 15
             q = None
             while time.monotonic() < end:

@@ -94,7 +94,8 @@ TEST_F(StepServerTest, HelloDescribesTheSceneAndMetaListsTheOperations) {
   EXPECT_EQ(arm["default_control_mode"], "raw");
   EXPECT_EQ(arm["joints"][0]["name"], "hinge");
   EXPECT_EQ(arm["joints"][0]["type"], "hinge");
-  EXPECT_EQ(arm["actuators"][0]["name"], "arm_motor");
+  EXPECT_EQ(arm["actuators"][0]["name"], "motor");  // short, like joints and sensors
+  EXPECT_TRUE(arm["actuators"][0].contains("target_range"));
   EXPECT_EQ(arm["sensors"][0]["name"], "angle");
   const Json meta = c.Call({{"op", "meta"}});
   ASSERT_EQ(meta["op"], "meta_ok");
@@ -159,8 +160,12 @@ TEST_F(StepServerTest, ResetQposMocapOptionsAndKeyframesTakeEffectBeforeTheReply
   Client c(ctx_, rpc());
   c.Hello({{"observations", "minimal"}});
   const Json keys = c.Op("list_keyframes");
-  EXPECT_EQ(keys["keyframes"], Json::array({"arm_bent"}));
-  Json r = c.Op("reset", {{"keyframe_name", "arm_bent"}});
+  // Short names beside their articulation (world/names.h); reset takes the short or full name.
+  EXPECT_EQ(
+      keys["keyframes"],
+      Json::array({Json{{"name", "bent"}, {"articulation", "arm"}, {"full_name", "arm_bent"}}}));
+  EXPECT_EQ(c.Op("reset", {{"keyframe_name", "arm_bent"}})["op"], "reset_ok");
+  Json r = c.Op("reset", {{"keyframe_name", "bent"}});
   ASSERT_EQ(r["op"], "reset_ok") << r.dump();
   EXPECT_DOUBLE_EQ(r["per_articulation"]["arm"]["qpos"][0], 0.7);
   EXPECT_EQ(r["time"], 0.0);
@@ -308,7 +313,7 @@ TEST_F(StepServerTest, ConfigureControllerPatchesGainsAndEchoesThemAll) {
       {{"articulation", "arm"}, {"params", {{"kv", 3}, {"gains", {{"hinge", {{"kp", 50}}}}}}}});
   ASSERT_EQ(r["op"], "configure_controller_ok") << r.dump();
   EXPECT_EQ(r["kind"], "pd");
-  const Json& g = r["params"]["gains"]["arm_motor"];
+  const Json& g = r["params"]["gains"]["motor"];
   EXPECT_EQ(g["kp"], 50.0);
   EXPECT_EQ(g["kv"], 3.0);
   // Refused as a whole: nothing of a bad patch is applied.
@@ -324,7 +329,7 @@ TEST_F(StepServerTest, ConfigureControllerPatchesGainsAndEchoesThemAll) {
       "controller_schema_violation");
   const Json same =
       c.Op("configure_controller", {{"articulation", "arm"}, {"params", Json::object()}});
-  EXPECT_EQ(same["params"]["gains"]["arm_motor"]["kv"], 3.0);
+  EXPECT_EQ(same["params"]["gains"]["motor"]["kv"], 3.0);
   EXPECT_EQ(c.Op("set_twist", {{"articulation", "arm"}})["code"], "no_twist_controller")
       << "a fixed base has no twist controller";
   EXPECT_EQ(c.Op("set_twist", {{"articulation", "leg"}})["code"], "unknown_articulation");

@@ -25,11 +25,11 @@ constexpr const char* kXml = R"(<mujoco model="slider">
 // `steps` steps at constant velocity, a keyframe every 300 steps, and a reset back to t = 0
 // before step `reset_at` (none when 0).
 std::string Write(const std::string& dir, int steps, int reset_at) {
-  const physics::ModelPtr model = physics::CompileXmlString(kXml);
+  const physics::Model model(physics::CompileXmlString(kXml));
   const mjModel* m = model.get();
   RecordingInfo info;
   info.tables = ModelTables::Of(m);
-  DescribeModel(m, &info);
+  DescribeModel(model, &info);
   physics::DataPtr data = physics::MakeData(m);
   mjData* d = data.get();
   d->qvel[0] = 1;

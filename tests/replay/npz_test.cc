@@ -122,6 +122,36 @@ TEST_F(NpzTest, ExportNpzWritesTimeQposQvel) {
   EXPECT_THROW(ExportNpz(dir_ + "/nan.npz", tables, traj), Error);
 }
 
+TEST_F(NpzTest, StringArraysAreUnicodeNumpyReadsWithoutPickle) {
+  NpyArray names;
+  names.name = "names";
+  names.shape = {3};
+  names.text = {"arm/shoulder", "h\xc3\xbc" "ft", ""};  // UTF-8 "hüft"
+  names.strings = true;
+  NpyArray none;  // an empty name list is still a string array
+  none.name = "none";
+  none.shape = {0};
+  none.strings = true;
+  const std::string path = dir_ + "/names.npz";
+  WriteNpz(path, {names, none, {"values", {2}, {1.5, 2.5}, {}, false}});
+  if (RunCommand("/usr/bin/python3 -c 'import numpy'") != 0) GTEST_SKIP() << "no numpy";
+  const std::string script = WriteTextFile(dir_, "names.py", R"(import sys
+import numpy as np
+z = np.load(sys.argv[1], allow_pickle=False)
+print(z["names"].dtype.str, z["names"].tolist() == ["arm/shoulder", "h\u00fcft", ""],
+      z["none"].dtype.str, z["none"].shape, z["values"].tolist())
+)");
+  std::string out;
+  ASSERT_EQ(RunCommand("/usr/bin/python3 " + script + " " + path, &out), 0) << out;
+  EXPECT_EQ(out, "<U12 True <U1 (0,) [1.5, 2.5]\n");
+  // Strings and doubles in one array, or a count the shape does not hold, are refused.
+  names.data = {1};
+  EXPECT_THROW(WriteNpz(dir_ + "/bad.npz", {names}), Error);
+  names.data.clear();
+  names.shape = {2};
+  EXPECT_THROW(WriteNpz(dir_ + "/bad.npz", {names}), Error);
+}
+
 TEST_F(NpzTest, BadNamesAndShapesAreErrors) {
   const auto message = [&](const std::vector<NpyArray>& arrays) {
     try {

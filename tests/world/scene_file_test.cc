@@ -116,7 +116,7 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
        7, "times must increase"},
       {WithArm("cinematic:\n  path:\n    - {t: 0, pos: [1, 0, 0], look_at: [1, 0, 0]}\n"), 6,
        "pos and look_at must differ"},
-      {WithArm("recording: {file: r.bin}\n"), 4, "'recording:' is not supported yet"},
+      {WithArm("recording: {file: r.bin}\n"), 4, "'recording:' is not a scene section"},
       // impulse launchers
       {WithArm("launchers: {name: gun}\n"), 4, "launchers must be a list"},
       {WithArm("launchers:\n  - {pos: [0, 0, 1]}\n"), 5, "a launcher needs a name"},

@@ -118,7 +118,8 @@ class StepClient:
         return reply
 
     def reset(self, keyframe=None, qpos=None):
-        """Resets to a keyframe (full name) or the scene's initial state; qpos {art: {joint: v}}."""
+        """Resets to a keyframe (short name, e.g. "home", when only one articulation has it, or the
+        full name "dog_home") or the scene's initial state; qpos {art: {joint: v}}."""
         fields = {}
         if keyframe:
             fields["keyframe_name"] = keyframe

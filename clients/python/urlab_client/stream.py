@@ -12,23 +12,21 @@ class Robot:
 
     def __init__(self, info):
         self.name = info["robot"]
-        self.actuator_names = list(info["names"])      # full names: "{robot}_{actuator}"
+        self.actuator_names = list(info["names"])      # short names, as in the robot's MJCF
         self.actuator_ids = list(info["ids"])
         self.mins = list(info["mins"])
         self.maxs = list(info["maxs"])
         self.cameras = list(info.get("camera_list", []))
         prefix = self.name + "_"
         self._ids = {}
-        for full, aid in zip(self.actuator_names, self.actuator_ids):
-            self._ids[full] = aid
-            if full.startswith(prefix):
-                self._ids[full[len(prefix):]] = aid
+        for short, aid in zip(self.actuator_names, self.actuator_ids):
+            self._ids[short] = aid              # "shoulder_motor"
+            self._ids[prefix + short] = aid     # the full name "arm_shoulder_motor" too
 
     @property
     def actuator_names_short(self):
-        """Actuator names as written in the robot's own MJCF (without the "{robot}_" prefix)."""
-        prefix = self.name + "_"
-        return [n[len(prefix):] if n.startswith(prefix) else n for n in self.actuator_names]
+        """Actuator names as written in the robot's own MJCF (what actuator_names holds)."""
+        return list(self.actuator_names)
 
     def actuator_id(self, name_or_id):
         """The global id of an actuator given by short name, full name or id."""

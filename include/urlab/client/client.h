@@ -33,7 +33,7 @@ struct Endpoints {
 // One articulation as discovery describes it.
 struct Robot {
   std::string name;
-  std::vector<std::string> actuator_names;  // full names: "{robot}_{actuator}"
+  std::vector<std::string> actuator_names;  // short names, as in the robot's MJCF
   std::vector<int> actuator_ids;            // global ids
   std::vector<double> mins, maxs;
   // The global id of an actuator by short or full name; throws std::out_of_range.

@@ -54,6 +54,11 @@ struct ActuatorBinding {
   double ClampToJoint(double q) const;
   // Clamps a control to the control range (when limited).
   double ClampCtrl(double u) const;
+  // The range of the target this actuator takes, into range[0..1]; false when unbounded. With
+  // position targets (PD, keyframe controllers) it is the joint's range when limited (narrowed to
+  // the ctrlrange for a non-motor actuator, whose control is the target itself); with raw
+  // controls, or without a joint, the ctrlrange when limited.
+  bool TargetRange(bool position_targets, double range[2]) const;
 };
 
 // Resolves the binding of actuator `id` of model `m`.

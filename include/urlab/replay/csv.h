@@ -62,6 +62,9 @@ struct CsvExportOptions {
   bool short_names = false;
   // Write the qvel columns too (when the trajectory has qvel).
   bool velocities = true;
+  // Recorded sensor values (rows x nsensordata) to write as columns "sensor:{name}" (and
+  // "sensor:{name}[i]" for a sensor of several values) after the joints; ImportCsv skips them.
+  const std::vector<double>* sensordata = nullptr;
 };
 
 // Writes `traj` as CSV to `path` atomically (WriteFileAtomic): the header `time` and every joint's

@@ -61,14 +61,15 @@ struct RecorderOptions {
 struct RecorderStatus {
   bool active = false;
   std::string path;
-  std::uint64_t frames = 0;     // steps recorded
-  std::uint64_t chunks = 0;     // data chunks written (or held, in ring mode)
-  std::uint64_t bytes = 0;      // file bytes so far
-  std::uint64_t raw_bytes = 0;  // uncompressed record bytes so far
-  std::uint64_t dropped = 0;    // frames the ring lost
-  std::uint64_t markers = 0;    // discontinuities recorded
-  double duration = 0;          // simulated seconds recorded
-  std::string stopped_because;  // "", "stopped", "max_duration", "max_bytes", "error: ..."
+  std::uint64_t frames = 0;      // steps recorded
+  std::uint64_t chunks = 0;      // data chunks written (or held, in ring mode)
+  std::uint64_t bytes = 0;       // file bytes so far (the header and the embedded model included)
+  std::uint64_t data_bytes = 0;  // bytes of the data chunks (the steps) so far: per-step figures
+  std::uint64_t raw_bytes = 0;   // uncompressed record bytes so far
+  std::uint64_t dropped = 0;     // frames the ring lost
+  std::uint64_t markers = 0;     // discontinuities recorded
+  double duration = 0;           // simulated seconds recorded
+  std::string stopped_because;   // "", "stopped", "max_duration", "max_bytes", "error: ..."
 };
 
 // What the recorder needs to know of the model, besides the engine.

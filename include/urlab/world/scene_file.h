@@ -202,7 +202,8 @@ SceneConfig LoadSceneFile(const std::string& path);
 SceneConfig ParseScene(const std::string& yaml, const std::string& path);
 
 // The scene every command builds from a path: a scene file (.yaml/.yml), or one MJCF file as a
-// scene of one articulation named after the file stem (non-alphanumerics become '_'), composed
+// scene of one articulation named by ModelArticulationName (world/names.h: the folder for a
+// `scene.xml`, else `<mujoco model>`, else the file stem), composed
 // with its prefix exactly like an articulation of a scene, so a file that validates is a file
 // that runs. Paths are made absolute without resolving symlinks. Throws InputError for a bad or
 // missing file, a FIFO or device, or a file larger than kMaxTextInputBytes.
