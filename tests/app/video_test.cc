@@ -100,7 +100,7 @@ void WritePendulumRecording(const mjModel* m, const std::string& path, int steps
   replay::RecordingInfo info;
   info.tables = replay::ModelTables::Of(m);
   info.mjcf = kPendulumXml;
-  replay::DescribeModel(m, &info);
+  replay::DescribeModel(physics::Model(physics::ModelPtr(mj_copyModel(nullptr, m))), &info);
   physics::DataPtr data = physics::MakeData(m);
   mjData* d = data.get();
   mj_forward(m, d);

@@ -750,12 +750,11 @@ namespace {
 // A recording of the bot on the session's own model: 900 steps, a keyframe every 300, and a
 // reset back to the initial state after step 450 (as the recorder writes one).
 std::string WriteBotRecording(physics::PhysicsEngine& engine, const std::string& path) {
-  physics::ModelPtr model;
-  engine.WithLockedData([&model](mjModel* m, mjData*) { model.reset(mj_copyModel(nullptr, m)); });
+  const physics::Model model = engine.CopyModel();
   const mjModel* m = model.get();
   replay::RecordingInfo info;
   info.tables = replay::ModelTables::Of(m, {"bot"});
-  replay::DescribeModel(m, &info);
+  replay::DescribeModel(model, &info);
   physics::DataPtr data = physics::MakeData(m);
   mjData* d = data.get();
   mj_forward(m, d);
