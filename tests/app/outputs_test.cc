@@ -19,6 +19,7 @@ namespace fs = std::filesystem;
 using testing::RunCommand;
 using testing::SourcePath;
 using testing::UrlabBinary;
+using testing::XvfbRun;
 
 // A device node like /dev/null (1,3) or /dev/full (1,7) in `dir` (so that a wrong rename replaces
 // ours, not the system's), or the system's when we may not make one.
@@ -209,7 +210,7 @@ TEST(OutputsCli, AFailedViewerVideoExitsOne) {
   testing::WriteTextFile(dir, "file.txt", "not a folder");
   const std::string video = dir + "/file.txt/window.mp4";
   std::string out;
-  EXPECT_EQ(RunCommand("xvfb-run -a -s '-screen 0 1280x1024x24' " + UrlabBinary() + " view " +
+  EXPECT_EQ(RunCommand(XvfbRun("1280x1024x24") + UrlabBinary() + " view " +
                            SourcePath("examples/models/pendulum_arm.xml") +
                            " --no-network --no-cameras --duration 1 --width 160 --height 120 "
                            "--video " +

@@ -273,13 +273,13 @@ TEST(ViewScreenshot, AtTimeShowsTheStateAtThatTime) {
   const std::string xml = testing::WriteTextFile(dir, "pendulum.xml", kPendulumXml);
   const std::string shot = dir + "/shot.png";
   std::string log;
-  ASSERT_EQ(testing::RunCommand("xvfb-run -a -s '-screen 0 640x480x24' " + testing::UrlabBinary() +
-                                    " view " + xml +
-                                    " --no-network --no-cameras --no-panel --width 320 "
-                                    "--height 240 --screenshot " +
-                                    shot + " --at 0.3",
-                                &log),
-            0)
+  ASSERT_EQ(
+      testing::RunCommand(testing::XvfbRun("640x480x24") + testing::UrlabBinary() + " view " + xml +
+                              " --no-network --no-cameras --no-panel --width 320 "
+                              "--height 240 --screenshot " +
+                              shot + " --at 0.3",
+                          &log),
+      0)
       << log;
   const std::vector<std::uint8_t> image = Decode(shot, dir + "/shot.rgb");
   constexpr int w = 320, h = 240;
@@ -323,8 +323,8 @@ TEST(ReplayView, WatchesARecordingWithTheTimelineAtAnExactTime) {
       << log;
   const std::string shot = dir + "/timeline.png";
   ASSERT_EQ(testing::RunCommand(
-                "xvfb-run -a -s '-screen 0 1024x768x24' " + testing::UrlabBinary() + " replay " +
-                    rec + " --view --width 1200 --height 500 --screenshot " + shot + " --at 0.5",
+                testing::XvfbRun("1024x768x24") + testing::UrlabBinary() + " replay " + rec +
+                    " --view --width 1200 --height 500 --screenshot " + shot + " --at 0.5",
                 &log),
             0)
       << log;

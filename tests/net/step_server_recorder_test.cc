@@ -186,8 +186,8 @@ TEST_F(StepServerRecorderTest, ReplayLoadAcceptsARecordingMadeAfterSetSimOptions
   ASSERT_EQ(c().Op("set_mode", {{"mode", "direct"}})["op"], "set_mode_ok");
   ASSERT_EQ(c().Op("set_sim_options", {{"options", {{"timestep", 0.001}}}})["op"],
             "set_sim_options_ok");
-  const std::string path = dir_ + "/options.urrec";
-  ASSERT_EQ(c().Op("recording_start", {{"path", path}})["op"], "recording_start_ok");
+  const std::string path = dir_ + "/options.urrec";  // clients name files under files_dir
+  ASSERT_EQ(c().Op("recording_start", {{"path", "options.urrec"}})["op"], "recording_start_ok");
   ASSERT_TRUE(WaitFor([&] {
     Drive(1);
     return c().Op("recording_status")["frames"] > 0;
@@ -196,7 +196,7 @@ TEST_F(StepServerRecorderTest, ReplayLoadAcceptsARecordingMadeAfterSetSimOptions
   ASSERT_TRUE(WaitFor([&] { return c().Op("recording_status")["frames"] >= 40; }));
   ASSERT_EQ(c().Op("recording_stop")["op"], "recording_stop_ok");
 
-  const Json load = c().Op("replay_load", {{"path", path}});
+  const Json load = c().Op("replay_load", {{"path", "options.urrec"}});
   EXPECT_EQ(load["op"], "replay_load_ok") << load.dump();
   const replay::RecordingReader reader = replay::RecordingReader::Open(path);
   EXPECT_EQ(replay::LoadRecordedModel(reader)->opt.timestep, 0.001);

@@ -67,7 +67,8 @@ std::string CraftedRecording(std::uint64_t raw_size, const std::string& stored,
   const std::string header_stored =
       seed.substr(format::kFileHeaderSize + format::kChunkHeaderSize, h.stored_size);
   if (header_raw_size) h.raw_size = header_raw_size;
-  std::string out = format::FileHeader() + format::EncodeChunk(h, header_stored);
+  // The seed's own file header: its header chunk is of the seed's format version.
+  std::string out = seed.substr(0, format::kFileHeaderSize) + format::EncodeChunk(h, header_stored);
   format::ChunkHeader d;
   d.kind = format::ChunkKind::kData;
   d.number = 1;

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 namespace urlab::testing {
@@ -56,6 +57,12 @@ std::string SourcePath(const std::string& relative) {
 }
 
 std::string UrlabBinary() { return URLAB_BINARY; }
+
+std::string XvfbRun(const std::string& screen) {
+  std::random_device random;
+  const unsigned first = 200 + random() % 20000;
+  return "xvfb-run -a -n " + std::to_string(first) + " -s '-screen 0 " + screen + "' ";
+}
 
 int RunCommand(const std::string& command, std::string* output) {
   std::string full = command + " 2>&1";

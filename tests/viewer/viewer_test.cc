@@ -467,7 +467,8 @@ TEST_F(ViewerTest, PossessDrivesTheTwistTopicFromKeys) {
   more_.push_back(std::move(network));
   viewer::ViewerOptions vo;
   vo.panel = false;
-  Play(kBotXml, vo, /*paused=*/false, "    twist: {mode: hover, max_vx: 0.8, max_vy: 0.4, max_yaw_rate: 1.0}\n");
+  Play(kBotXml, vo, /*paused=*/false,
+       "    twist: {mode: hover, max_vx: 0.8, max_vy: 0.4, max_yaw_rate: 1.0}\n");
   zmq::context_t ctx;
   zmq::socket_t sub(ctx, zmq::socket_type::sub);
   sub.set(zmq::sockopt::subscribe, "bot/twist");
@@ -579,13 +580,13 @@ TEST_F(ViewerTest, InputMappingErrorsNameTheBinding) {
   for (const auto& [binding, message] :
        {std::pair<std::string, std::string>{"{actuator: servo, key: Hyper}", "unknown key 'Hyper'"},
         {"{actuator: nope, key: J}", "no actuator 'nope'"}}) {
-    const world::SceneConfig scene = world::ParseScene(
-        "articulations:\n  - name: bot\n    mjcf: bot.xml\n    input:\n      - " + binding + "\n",
-        dir_ + "/scene.yaml");
     world::Manager manager;
     auto v = std::make_unique<viewer::ViewerSubsystem>(vo);
     manager.AddSubsystem(std::move(v));
-    try {
+    try {  // an unknown key is refused when the scene is read, a wrong actuator when it is built
+      const world::SceneConfig scene = world::ParseScene(
+          "articulations:\n  - name: bot\n    mjcf: bot.xml\n    input:\n      - " + binding + "\n",
+          dir_ + "/scene.yaml");
       manager.BeginPlay(scene);
       ADD_FAILURE() << "accepted " << binding;
     } catch (const InputError& e) {
@@ -896,6 +897,7 @@ TEST_F(ViewerTest, StepServerReplayShowsOnTheTimelineAndTheTimelineDrivesIt) {
   playback_ = std::make_shared<replay::PlaybackSlot>();
   net::NetworkOptions no;
   no.state = no.control = no.info = no.rpc = "tcp://127.0.0.1:*";
+  no.files_dir = dir_;  // clients name files in the test's folder
   auto network = std::make_unique<net::NetworkSubsystem>(no);
   net::NetworkSubsystem* net = network.get();
   network->SetPlayback(playback_);
@@ -913,7 +915,7 @@ TEST_F(ViewerTest, StepServerReplayShowsOnTheTimelineAndTheTimelineDrivesIt) {
   zmq::context_t ctx;
   net::test_client::Client client(ctx, net->endpoints().rpc);
   client.Hello();
-  ASSERT_EQ(client.Op("replay_load", {{"path", path}})["op"], "replay_load_ok");
+  ASSERT_EQ(client.Op("replay_load", {{"path", "bot.urrec"}})["op"], "replay_load_ok");
   EXPECT_FALSE(core().replay_mode());
   ASSERT_EQ(client.Op("replay_start", {{"mode", "kinematic"}})["op"], "replay_start_ok");
   ASSERT_TRUE(TickUntil([&] { return core().replay_mode(); }));
