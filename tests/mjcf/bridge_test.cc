@@ -932,9 +932,9 @@ TEST(BridgeRulesTest, RuleIdsAreUniqueAndPoliciesNameRules) {
     const auto passes = mjcf::bridge::Passes();
     for (mjcf::BridgePassFn fn : r.passes) {
       if (!fn) continue;
-      EXPECT_TRUE(std::any_of(passes.begin(), passes.end(),
-                              [&](const mjcf::bridge::PassEntry& p) { return p.run == fn; }))
-          << r.id;
+      EXPECT_TRUE(std::any_of(passes.begin(), passes.end(), [&](const mjcf::bridge::PassEntry& p) {
+        return p.run == fn;
+      })) << r.id;
     }
     EXPECT_TRUE(r.passes[0] || r.elsewhere) << r.id;
     EXPECT_FALSE(std::string(r.construct).empty()) << r.id;

@@ -126,7 +126,10 @@ TEST_F(NpzTest, StringArraysAreUnicodeNumpyReadsWithoutPickle) {
   NpyArray names;
   names.name = "names";
   names.shape = {3};
-  names.text = {"arm/shoulder", "h\xc3\xbc" "ft", ""};  // UTF-8 "hüft"
+  names.text = {"arm/shoulder",
+                "h\xc3\xbc"
+                "ft",
+                ""};  // UTF-8 "hüft"
   names.strings = true;
   NpyArray none;  // an empty name list is still a string array
   none.name = "none";

@@ -174,7 +174,7 @@ struct NetworkConfig {
   std::string rpc = "tcp://127.0.0.1:5559";  // the step server (request/reply)
   std::string step_mode = "live";            // live | direct (lockstep)
   std::string full_state = "standard";       // state/full level: minimal|standard|full|none
-  std::string camera_base_port = "5558";  // a port number 1..65535 (checked when parsed)
+  std::string camera_base_port = "5558";     // a port number 1..65535 (checked when parsed)
   // The folder whose files step-server clients name (absolute; relative in the scene: to the
   // scene file's folder). "" : recordings/ in the working folder of the run.
   std::string files_dir;
