@@ -5,6 +5,8 @@
 # URLAB_BUILD_TARGETS="urlab ..." builds only those targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# ccache caches files built with a precompiled header only with these (cmake/pch.cmake).
+export CCACHE_SLOPPINESS="${CCACHE_SLOPPINESS:-pch_defines,time_macros,include_file_mtime,include_file_ctime}"
 BUILD_DIR="${URLAB_BUILD_DIR:-build}"
 GEN=()
 if command -v ninja >/dev/null 2>&1; then GEN=(-G Ninja); fi

@@ -4,16 +4,16 @@
 #   main        GCC build (RelWithDebInfo: -O2, line tables) of everything + every test (ctest);
 #               the same build is the one installed by the install stage
 #   tsan        ThreadSanitizer (-O1): the core, physics, control, world, replay, net and client tests
-#   asan        ASan + UBSan (-O1): the decoders of untrusted bytes and the model readers (core,
-#               document, mjcf, replay tests)
-#   clang       clang -O0 build of the libraries, the CLI and the fast unit tests (core, document,
-#               control), which it runs
+#   asan        clang build with AddressSanitizer + UndefinedBehaviorSanitizer and libFuzzer's
+#               coverage (-O1, assertions on, no precompiled headers, so every file's own includes
+#               are checked): the CLI, the fuzz targets, and the decoders' and model readers' tests
+#               plus the fast unit tests (core, document, mjcf, replay, control), which it runs
 #   install     cmake --install of the main build, examples/find_package built against it
-#   fuzz        every libFuzzer target for URLAB_FUZZ_SECONDS (default 30) s (tools/fuzz.sh)
+#   fuzz        every libFuzzer target (built by asan) for URLAB_FUZZ_SECONDS (default 30) s
 # Every stage builds with warnings as errors (URLAB_WARNINGS_AS_ERRORS=ON). A user's plain
 # `cmake -DCMAKE_BUILD_TYPE=Release` build keeps warnings as warnings.
-# Build folders: $URLAB_BUILD_DIR (default build) and beside it ${URLAB_BUILD_DIR}-tsan, -asan,
-# -clang, -fuzz. ccache is used when present. Skip stages with
+# Build folders: $URLAB_BUILD_DIR (default build) and beside it ${URLAB_BUILD_DIR}-tsan and
+# -asan. ccache is used when present. Skip stages with
 # URLAB_SKIP_STAGES="tsan asan ..." (URLAB_SKIP_TSAN=1 still skips tsan).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -24,6 +24,8 @@ JOBS="${URLAB_JOBS:-$(nproc)}"
 SKIP=" ${URLAB_SKIP_STAGES:-} "
 if [ "${URLAB_SKIP_TSAN:-0}" = "1" ]; then SKIP="$SKIP tsan "; fi
 export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
+# ccache caches files built with a precompiled header only with these (cmake/pch.cmake).
+export CCACHE_SLOPPINESS="${CCACHE_SLOPPINESS:-pch_defines,time_macros,include_file_mtime,include_file_ctime}"
 GEN=()
 if command -v ninja >/dev/null 2>&1; then GEN=(-G Ninja); fi
 LAUNCHER=()
@@ -74,7 +76,7 @@ configure() {  # configure DIR [cmake args...] (once; later runs keep the cache)
 
 # Sanitizer builds at -O1 (what the sanitizers' documentation suggests): about 40% less compile
 # time than -O2 with UBSan's checks, stack traces keep their lines.
-SANITIZER_OPT="-O1 -g -DNDEBUG"
+SANITIZER_OPT="-O1 -g1 -DNDEBUG"
 
 main_stage() {
   # Line tables only (-g1): enough for stack traces, a third less to compile and link than -g.
@@ -102,29 +104,22 @@ tsan_stage() {
     -j"$JOBS" --timeout 900
 }
 
-asan_stage() {
+asan_stage() {  # also CI's clang build and its build with assertions on
   local dir="${BUILD_DIR}-asan"
-  configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_SANITIZE=address,undefined \
-    -DURLAB_BUILD_BENCH=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=$SANITIZER_OPT"
-  cmake --build "$dir" -j"$JOBS" --target urlab_tests_core urlab_tests_mjcf urlab_tests_document \
-    urlab_tests_replay
+  # URLAB_BUILD_FUZZ instruments every library for ASan, UBSan and libFuzzer's coverage (the
+  # tests link the sanitizer runtimes alone), so one build serves these tests and the fuzz stage.
+  CC=clang CXX=clang++ configure "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DURLAB_BUILD_FUZZ=ON \
+    -DURLAB_BUILD_BENCH=OFF -DURLAB_PCH=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1"
+  cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_core urlab_tests_mjcf \
+    urlab_tests_document urlab_tests_replay urlab_tests_control fuzz_mjcf_reader fuzz_scene \
+    fuzz_net_control fuzz_step_request fuzz_recording fuzz_mesh
   # The MuJoCo 3.x reference the main stage installed (the 3.x comparison tests skip without it).
   local js="$BUILD_DIR/mujoco-js"
   [[ "$js" == /* ]] || js="$PWD/$js"
   URLAB_MUJOCO_JS="$js" \
     ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1" \
-    ctest --test-dir "$dir" -L 'core|mjcf|document|replay' --output-on-failure -j"$JOBS" --timeout 900
-}
-
-clang_stage() {  # also the Debug (-O0, assertions on) build of CI
-  local dir="${BUILD_DIR}-clang"
-  # No debug information: this stage checks that clang builds the libraries and the CLI
-  # warning-free and runs the fast tests; leaving out -g takes about a fifth off its compile time.
-  CC=clang CXX=clang++ configure "$dir" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-O0 \
-    -DURLAB_BUILD_BENCH=OFF
-  cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_core urlab_tests_document \
-    urlab_tests_control
-  ctest --test-dir "$dir" -L 'core|document|control' --output-on-failure -j"$JOBS" --timeout 900
+    ctest --test-dir "$dir" -L 'core|mjcf|document|replay|control' --output-on-failure \
+    -j"$JOBS" --timeout 900
 }
 
 check_client_links() {  # check_client_links BINARY...: fails when one links a server library
@@ -158,13 +153,12 @@ install_stage() {
 }
 
 fuzz_stage() {
-  URLAB_FUZZ_BUILD_DIR="${BUILD_DIR}-fuzz" URLAB_JOBS="$JOBS" \
+  URLAB_FUZZ_BUILD_DIR="${BUILD_DIR}-asan" URLAB_JOBS="$JOBS" \
     tools/fuzz.sh "${URLAB_FUZZ_SECONDS:-30}"
 }
 
 stage main main_stage
 stage tsan tsan_stage
 stage asan asan_stage
-stage clang clang_stage
 stage install install_stage
 stage fuzz fuzz_stage
