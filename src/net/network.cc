@@ -363,12 +363,12 @@ struct NetworkSubsystem::Impl {
   void Sleep() {
     bell->Arm();
     // Checked after arming: work that arrived before Arm() is seen here, work after it rings.
-    if (ring->size() > 0 || (server && server->has_ready()) ||
+    if (ring->size() > 0 || (server && (server->has_ready() || server->shm_request_waiting())) ||
         stop.load(std::memory_order_acquire)) {
       bell->Clear();
       return;
     }
-    zmq::pollitem_t items[4];
+    zmq::pollitem_t items[5];
     int n = 0;
     items[n++] = {nullptr, bell->fd(), ZMQ_POLLIN, 0};
     if (pub) items[n++] = {static_cast<void*>(*pub), 0, ZMQ_POLLIN, 0};  // subscriptions
@@ -376,18 +376,34 @@ struct NetworkSubsystem::Impl {
     if (server && server->socket()) {
       items[n++] = {static_cast<void*>(*server->socket()), 0, ZMQ_POLLIN, 0};
     }
-    // A parked reply (a lockstep window under way) is due within a few steps: watch for it
-    // without sleeping for a while, since a wake-up from poll costs more than the round trip.
-    if (server && server->has_pending()) {
+    if (server && server->shm_wake_fd() >= 0)
+      items[n++] = {nullptr, server->shm_wake_fd(), ZMQ_POLLIN, 0};
+    // A parked reply (a lockstep window under way) is due within a few steps, and a client on
+    // shared memory that just got its reply sends the next request soon: watch for them without
+    // sleeping for a while, since a wake-up from poll costs more than the round trip. Sockets
+    // are polled every few turns only (a system call each).
+    if (server && (server->has_pending() || server->shm_expecting(Clock::now()))) {
+      unsigned turn = 0;
       if (spin.Spin(kReplySpin, [&] {
-            return ring->size() > 0 || server->has_ready() ||
+            if (ring->size() > 0 || server->has_ready() || server->shm_request_waiting()) {
+              return true;
+            }
+            if (!server->has_pending() && !server->shm_expecting(Clock::now())) return true;
+            return (++turn & 7) == 0 &&
                    zmq::poll(items, static_cast<std::size_t>(n), std::chrono::milliseconds(0)) > 0;
           })) {
         bell->Clear();
         return;
       }
     }
+    // Clients on shared memory send a wake-up while the server sleeps (checked once more after
+    // telling them).
+    if (server && server->ShmPrepareSleep()) {
+      bell->Clear();
+      return;
+    }
     zmq::poll(items, static_cast<std::size_t>(n), kIdlePeriod);
+    if (server) server->ShmAwake();
     bell->Clear();
   }
 
@@ -499,6 +515,8 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
     so.mode = options_.step_mode;
     so.lease_timeout = options_.lease_timeout;
     so.limits.max_queued_steps = options_.max_queued_steps;
+    so.shared_memory = options_.shared_memory;
+    so.shm.folder = options_.shm_dir;
     if (!options_.files_dir.empty()) so.files_dir = options_.files_dir;
     so.inputs = world::SceneInputFiles(session.scene_config());
     impl_->server = std::make_unique<StepServer>(
