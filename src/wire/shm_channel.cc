@@ -145,8 +145,7 @@ ShmChannel ShmChannel::Create(const std::string& path, std::size_t request_bytes
   Word64(c.at(L::kGeneration)).store(RandomNonZero(), std::memory_order_relaxed);
   Word(c.at(L::kServerPid)).store(static_cast<std::uint32_t>(getpid()), std::memory_order_relaxed);
   std::memcpy(c.at(L::kWakeName), wake_name.data(), wake_name.size());
-  // The magic last: a reader that sees it sees the whole header.
-  std::atomic_thread_fence(std::memory_order_release);
+  // The magic last (a release store): a reader that sees it sees the whole header.
   Word64(c.at(L::kMagic))
       .store(*reinterpret_cast<const std::uint64_t*>(L::kMagicText), std::memory_order_release);
   return c;
