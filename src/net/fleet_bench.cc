@@ -358,6 +358,9 @@ std::vector<FleetFigure> RunFleetBench(world::SceneConfig scene, const FleetBenc
   NetworkOptions no;
   no.state = no.control = no.info = no.rpc = "tcp://127.0.0.1:*";
   no.full_state = "";
+  // Lockstep from the start (and again whenever a client leaves): the physics thread waits for
+  // step requests, so it never competes with the bare loop.
+  no.step_mode = "direct";
   world::ManagerOptions mo;
   mo.as_fast_as_possible = true;
   world::Manager manager(mo);

@@ -361,13 +361,10 @@ struct NetworkSubsystem::Impl {
   // Sleeps until a socket has a message, the physics thread published a frame (or finished a
   // command), or the idle period ends (paused republishing, lease expiry, drop logging).
   void Sleep() {
-    bell->Arm();
-    // Checked after arming: work that arrived before Arm() is seen here, work after it rings.
-    if (ring->size() > 0 || (server && (server->has_ready() || server->shm_request_waiting())) ||
-        stop.load(std::memory_order_acquire)) {
-      bell->Clear();
-      return;
-    }
+    const auto work = [&] {
+      return ring->size() > 0 || (server && (server->has_ready() || server->shm_request_waiting()));
+    };
+    if (work() || stop.load(std::memory_order_acquire)) return;
     zmq::pollitem_t items[5];
     int n = 0;
     items[n++] = {nullptr, bell->fd(), ZMQ_POLLIN, 0};
@@ -376,29 +373,30 @@ struct NetworkSubsystem::Impl {
     if (server && server->socket()) {
       items[n++] = {static_cast<void*>(*server->socket()), 0, ZMQ_POLLIN, 0};
     }
-    if (server && server->shm_wake_fd() >= 0)
+    if (server && server->shm_wake_fd() >= 0) {
       items[n++] = {nullptr, server->shm_wake_fd(), ZMQ_POLLIN, 0};
+    }
     // A parked reply (a lockstep window under way) is due within a few steps, and a client on
     // shared memory that just got its reply sends the next request soon: watch for them without
-    // sleeping for a while, since a wake-up from poll costs more than the round trip. Sockets
-    // are polled every few turns only (a system call each).
+    // sleeping for a while, since a wake-up from poll costs more than the round trip. The
+    // doorbell is not armed meanwhile (the physics thread then makes no system call to ring it),
+    // and sockets are polled every few turns only (a system call each).
     if (server && (server->has_pending() || server->shm_expecting(Clock::now()))) {
       unsigned turn = 0;
       if (spin.Spin(kReplySpin, [&] {
-            if (ring->size() > 0 || server->has_ready() || server->shm_request_waiting()) {
-              return true;
-            }
+            if (work()) return true;
             if (!server->has_pending() && !server->shm_expecting(Clock::now())) return true;
             return (++turn & 7) == 0 &&
                    zmq::poll(items, static_cast<std::size_t>(n), std::chrono::milliseconds(0)) > 0;
           })) {
-        bell->Clear();
         return;
       }
     }
+    bell->Arm();
+    // Checked after arming: work that arrived before Arm() is seen here, work after it rings.
     // Clients on shared memory send a wake-up while the server sleeps (checked once more after
     // telling them).
-    if (server && server->ShmPrepareSleep()) {
+    if (work() || stop.load(std::memory_order_acquire) || (server && server->ShmPrepareSleep())) {
       bell->Clear();
       return;
     }
