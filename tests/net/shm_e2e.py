@@ -7,8 +7,8 @@ ephemeral ports, Python clients in their own processes), killed with SIGKILL on 
    file of the server's is left in /dev/shm.
 2. A client waits for a long step when the server is killed: it gets ShmError (the server died),
    not a timeout, and nothing is left in /dev/shm.
-3. A server killed while an offer was not yet taken leaves its file; the next server removes it
-   when it starts.
+3. A server stopped with SIGINT removes the file of an offer not taken; one killed with SIGKILL
+   leaves it, and the next server removes it when it starts.
 Usage: shm_e2e.py URLAB_BINARY SOURCE_DIR
 """
 import glob
@@ -122,7 +122,7 @@ articulations:
     if files_of(proc):
         fail(f"files left: {files_of(proc)}")
 
-    # 3. An offer never taken, then the server killed: its file is reclaimed by the next server.
+    # 3. An offer never taken: removed by SIGINT; left by SIGKILL and reclaimed by the next server.
     proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
     ctx = zmq.Context.instance()
     s = ctx.socket(zmq.REQ)
@@ -134,9 +134,22 @@ articulations:
     s.close(0)
     if not offer or not os.path.exists(offer["path"]):
         fail(f"no offer file: {offer}", proc)
+    # A server stopped with SIGINT withdraws its offers: the file goes with it.
+    proc.send_signal(signal.SIGINT)
+    proc.communicate(timeout=30)
+    if os.path.exists(offer["path"]):
+        fail(f"SIGINT left {offer['path']}")
+    proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
+    s = ctx.socket(zmq.REQ)
+    s.setsockopt(zmq.LINGER, 0)
+    s.setsockopt(zmq.RCVTIMEO, 10000)
+    s.connect(endpoints[3])
+    s.send(msgpack.packb({"op": "hello", "shm": True}))
+    offer = msgpack.unpackb(s.recv(), raw=False).get("shm")
+    s.close(0)
     proc.kill()
     proc.wait()
-    if not os.path.exists(offer["path"]):
+    if not offer or not os.path.exists(offer["path"]):
         fail("the killed server's file is gone already (nothing to reclaim)")
     proc2, _ = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
     try:
