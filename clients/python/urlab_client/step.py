@@ -28,14 +28,19 @@ class UrlabError(RuntimeError):
         self.message = message
 
 
+_F8 = np.dtype("<f8")
+
+
 def _arrays(value):
     """Lists of numbers become numpy arrays, recursively. Packed f64 bytes become read-only
-    views on the decoded bytes (no copy; .copy() one to modify it)."""
-    if isinstance(value, dict):
+    views on the decoded bytes (no copy; .copy() one to modify it). Runs once per reply, so
+    exact type tests (cheaper than isinstance) and a prepared dtype."""
+    t = type(value)
+    if t is dict:
         return {k: _arrays(v) for k, v in value.items()}
-    if isinstance(value, (bytes, bytearray)):
-        return np.frombuffer(value, dtype="<f8")
-    if isinstance(value, list) and value and all(isinstance(x, (int, float)) for x in value):
+    if t is bytes or t is bytearray:
+        return np.frombuffer(value, dtype=_F8)
+    if t is list and value and all(isinstance(x, (int, float)) for x in value):
         return np.asarray(value, dtype=float)
     return value
 
