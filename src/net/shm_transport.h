@@ -53,6 +53,7 @@ class ShmTransport {
   // Answers the request taken last on `channel`: false when the channel is gone or the reply
   // does not fit (nothing written).
   bool Reply(std::uint64_t channel, std::span<const std::uint8_t> bytes, Clock::time_point now);
+  bool Has(std::uint64_t channel) const { return channels_.count(channel) > 0; }
   // True when a channel has a request not yet taken.
   bool RequestWaiting() const;
   // True while a client is expected to send its next request soon (the I/O thread spins rather

@@ -255,6 +255,7 @@ void StepServer::Send(const Route& envelope, Json& reply, bool json,
     bytes = {reinterpret_cast<const std::uint8_t*>(writer_.data()), writer_.size()};
   }
   if (envelope.shm != 0) {
+    if (!shm_->Has(envelope.shm)) return;  // its client went away
     if (shm_->Reply(envelope.shm, bytes, Clock::now()) || reply.value("op", "") == "error") return;
     // Larger than the channel's reply capacity (the operation took effect): say so instead.
     Json error{{"op", "error"},
