@@ -2,6 +2,7 @@
 """End to end: the step server's shared-memory channel with real processes (`urlab run` on
 ephemeral ports, Python clients in their own processes), killed with SIGKILL on either side.
 
+0. The same lockstep rollout over the channel and over ZeroMQ gives the same observations.
 1. A Python client on the channel drives in lockstep, then is killed: the server notices within
    its sweep (the log says so), frees the lease (another client drives without force) and no
    file of the server's is left in /dev/shm.
@@ -76,9 +77,23 @@ articulations:
     controller: {{type: pd, kp: 400, kv: 20}}
 """)
 
-    # 1. A killed client.
+    # 0. The same rollout over shared memory and over ZeroMQ: the same observations.
     proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
     rpc = endpoints[3]
+    runs = {}
+    for shm in (True, False):
+        with StepClient(rpc, shared_memory=shm) as c:
+            if c.transport != ("shm" if shm else "zmq"):
+                fail(f"transport {c.transport} with shared_memory={shm}", proc)
+            c.set_mode("direct")
+            c.reset()
+            runs[shm] = [c.step(2, controls={"arm": [0.3 * (i % 7) / 7, -0.2]})["per_articulation"]
+                         ["arm"]["qpos"].tolist() for i in range(200)]
+    if runs[True] != runs[False]:
+        fail("the rollouts over shared memory and ZeroMQ differ", proc)
+    print("the same 200-request rollout over shared memory and over ZeroMQ")
+
+    # 1. A killed client.
     client = subprocess.Popen([sys.executable, "-c", CLIENT, os.path.join(SOURCE, "clients",
                                                                           "python"), rpc],
                               stdout=subprocess.PIPE, text=True)
