@@ -6,9 +6,11 @@
 // Thread: main (the bench's), like the producers.
 #include <mujoco/mujoco.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "urlab/net/fleet_bench.h"
