@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "urlab/camera/camera_bench.h"
 #include "urlab/net/broadcast_bench.h"
+#include "urlab/net/fleet_bench.h"
 #include "urlab/net/latency_bench.h"
 #include "urlab/replay/recorder.h"
 #include "urlab/viewer/view_bench.h"
@@ -192,6 +193,48 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
   latency->add_option("--samples", latency_args.samples, "round trips per measurement")
       ->check(CLI::Range(10, 1000000));
   latency->callback([&exit_code] { exit_code = BenchLatency(latency_args); });
+
+  CLI::App* fleet = bench->add_subcommand(
+      "fleet",
+      "Driving simulations from learning code: lockstep steps per second through the step "
+      "server (n=1 and n=10 steps per request) over ZeroMQ and over the shared-memory channel, "
+      "from C++ and from a Python client in its own process, as ratios of a bare single-thread "
+      "mj_step loop measured in the same run (alternating rounds, medians), beside raw ZeroMQ "
+      "and raw shared-memory ping-pongs and the step server's round trips. The scene's first "
+      "articulation runs with passthrough control, as fast as possible. Prints one key=value "
+      "line per figure last (bare_steps_per_s, raw_zmq_rtt_p50_us, raw_shm_rtt_p50_us, zmq_n1, "
+      "zmq_n10, zmq_step_rtt_p50_us, zmq_rtt_p50_us, shm_n1, shm_n10, shm_step_rtt_p50_us, "
+      "shm_rtt_p50_us, zmq_python_n1, shm_python_n1).");
+  static net::FleetBenchOptions fleet_args;
+  static std::string fleet_scene;
+#ifdef URLAB_PYTHON_CLIENT_DIR
+  fleet_args.python_client = URLAB_PYTHON_CLIENT_DIR;
+#endif
+  fleet->add_option("SCENE", fleet_scene, "scene file (.yaml) or MJCF model (.xml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  fleet->add_option("--steps", fleet_args.steps, "steps per throughput figure (all rounds)")
+      ->check(CLI::Range(10, 100000000));
+  fleet->add_option("--rounds", fleet_args.rounds, "alternations of bare and measured loops")
+      ->check(CLI::Range(1, 1000));
+  fleet->add_option("--samples", fleet_args.samples, "round trips per latency figure")
+      ->check(CLI::Range(10, 10000000));
+  fleet->add_option("--python", fleet_args.python, "the Python interpreter for the Python client")
+      ->capture_default_str();
+  fleet
+      ->add_option("--python-client", fleet_args.python_client,
+                   "the folder holding urlab_client (default: this build's clients/python; "
+                   "\"\": no Python figures)")
+      ->capture_default_str();
+  fleet->callback([&exit_code] {
+    CurrentInput() = fleet_scene;
+    fleet_args.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
+    const std::vector<net::FleetFigure> figures =
+        net::RunFleetBench(world::LoadSceneOrModel(fleet_scene), fleet_args);
+    for (const net::FleetFigure& f : figures) std::printf("%s=%.4g\n", f.key.c_str(), f.value);
+    std::fflush(stdout);
+    exit_code = 0;
+  });
 
   CLI::App* cameras = bench->add_subcommand(
       "cameras",

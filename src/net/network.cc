@@ -39,6 +39,8 @@ using Clock = std::chrono::steady_clock;
 constexpr auto kIdlePeriod = std::chrono::milliseconds(50);
 // How long the I/O thread watches for a parked reply without sleeping.
 constexpr auto kReplySpin = std::chrono::milliseconds(1);
+// While spinning for a shared-memory request, the sockets are polled at most this often.
+constexpr auto kSocketCheck = std::chrono::microseconds(20);
 constexpr auto kPausedRepublish = std::chrono::milliseconds(100);  // at most 10 Hz while paused
 constexpr auto kPausedInfo = std::chrono::seconds(1);
 constexpr auto kDropLogPeriod = std::chrono::seconds(1);
@@ -111,8 +113,9 @@ struct NetworkSubsystem::Impl {
   std::vector<std::vector<char>> joint_wanted, sensor_wanted;  // per articulation, per topic
   std::vector<char> twist_wanted, actions_wanted;              // per articulation
   bool full_wanted = false;
-  SpinWait spin;              // for parked replies (gives up under CPU contention)
-  physics::StateFrame frame;  // the newest frame taken from the ring
+  SpinWait spin;                    // for parked replies (gives up under CPU contention)
+  Clock::time_point quiet_until{};  // SpinQuick: no spinning until then (contention seen)
+  physics::StateFrame frame;        // the newest frame taken from the ring
   bool have_frame = false;
   std::string payload;
   std::optional<ObsLevel> full_state;  // the state/full level, none: not published
@@ -360,15 +363,39 @@ struct NetworkSubsystem::Impl {
 
   // Sleeps until a socket has a message, the physics thread published a frame (or finished a
   // command), or the idle period ends (paused republishing, lease expiry, drop logging).
-  void Sleep() {
-    bell->Arm();
-    // Checked after arming: work that arrived before Arm() is seen here, work after it rings.
-    if (ring->size() > 0 || (server && server->has_ready()) ||
-        stop.load(std::memory_order_acquire)) {
-      bell->Clear();
-      return;
+  // Like SpinWait::Spin (the same give-up under contention), with pause instructions and a yield
+  // every 16 turns only: a request from a client on shared memory lands within a microsecond of
+  // the reply, and a system call on every turn would add its length to every round trip.
+  template <class Done>
+  bool SpinQuick(Clock::duration limit, Done&& done) {
+    auto now = Clock::now();
+    if (now < quiet_until) return done();
+    const auto until = now + limit;
+    for (unsigned turn = 1;; ++turn) {
+      if (done()) return true;
+      if (turn % 16 == 0) {
+        std::this_thread::yield();
+      } else {
+#if defined(__x86_64__) || defined(__i386__)
+        __builtin_ia32_pause();
+#endif
+      }
+      const auto before = now;
+      now = Clock::now();
+      if (now - before > SpinWait::kPreemptedTurn) {
+        quiet_until = now + SpinWait::kBackoff;
+        return done();
+      }
+      if (now >= until) return false;
     }
-    zmq::pollitem_t items[4];
+  }
+
+  void Sleep() {
+    const auto work = [&] {
+      return ring->size() > 0 || (server && (server->has_ready() || server->shm_request_waiting()));
+    };
+    if (work() || stop.load(std::memory_order_acquire)) return;
+    zmq::pollitem_t items[5];
     int n = 0;
     items[n++] = {nullptr, bell->fd(), ZMQ_POLLIN, 0};
     if (pub) items[n++] = {static_cast<void*>(*pub), 0, ZMQ_POLLIN, 0};  // subscriptions
@@ -376,18 +403,47 @@ struct NetworkSubsystem::Impl {
     if (server && server->socket()) {
       items[n++] = {static_cast<void*>(*server->socket()), 0, ZMQ_POLLIN, 0};
     }
-    // A parked reply (a lockstep window under way) is due within a few steps: watch for it
-    // without sleeping for a while, since a wake-up from poll costs more than the round trip.
+    if (server && server->shm_wake_fd() >= 0) {
+      items[n++] = {nullptr, server->shm_wake_fd(), ZMQ_POLLIN, 0};
+    }
+    // A parked reply (a lockstep window under way) is due within a few steps, and a client on
+    // shared memory that just got its reply sends the next request soon: watch for them without
+    // sleeping for a while, since a wake-up from poll costs more than the round trip. The
+    // doorbell is not armed meanwhile (the physics thread then makes no system call to ring it),
+    // and sockets are polled every few turns only (a system call each).
     if (server && server->has_pending()) {
+      unsigned turn = 0;
       if (spin.Spin(kReplySpin, [&] {
-            return ring->size() > 0 || server->has_ready() ||
+            if (work()) return true;
+            if (!server->has_pending() && !server->shm_expecting(Clock::now())) return true;
+            return (++turn & 7) == 0 &&
                    zmq::poll(items, static_cast<std::size_t>(n), std::chrono::milliseconds(0)) > 0;
           })) {
-        bell->Clear();
+        return;
+      }
+    } else if (server && server->shm_expecting(Clock::now())) {
+      auto polled = Clock::now();
+      if (SpinQuick(kReplySpin, [&] {
+            if (work()) return true;
+            const auto now = Clock::now();
+            if (!server->shm_expecting(now)) return true;
+            if (now - polled < kSocketCheck) return false;
+            polled = now;
+            return zmq::poll(items, static_cast<std::size_t>(n), std::chrono::milliseconds(0)) > 0;
+          })) {
         return;
       }
     }
+    bell->Arm();
+    // Checked after arming: work that arrived before Arm() is seen here, work after it rings.
+    // Clients on shared memory send a wake-up while the server sleeps (checked once more after
+    // telling them).
+    if (work() || stop.load(std::memory_order_acquire) || (server && server->ShmPrepareSleep())) {
+      bell->Clear();
+      return;
+    }
     zmq::poll(items, static_cast<std::size_t>(n), kIdlePeriod);
+    if (server) server->ShmAwake();
     bell->Clear();
   }
 
@@ -499,6 +555,8 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
     so.mode = options_.step_mode;
     so.lease_timeout = options_.lease_timeout;
     so.limits.max_queued_steps = options_.max_queued_steps;
+    so.shared_memory = options_.shared_memory;
+    so.shm.folder = options_.shm_dir;
     if (!options_.files_dir.empty()) so.files_dir = options_.files_dir;
     so.inputs = world::SceneInputFiles(session.scene_config());
     impl_->server = std::make_unique<StepServer>(

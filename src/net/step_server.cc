@@ -50,6 +50,16 @@ std::vector<physics::cmd::SetState::Run> Runs(const std::vector<int>& adrs,
   return runs;
 }
 
+// A request from this host: the server listens on loopback or ipc only, or the peer's address is
+// a loopback one.
+bool IsLocalPeer(const std::string& endpoint, const zmq::message_t& payload) {
+  if (IsLoopbackEndpoint(endpoint)) return true;
+  const char* peer = zmq_msg_gets(payload.handle(), "Peer-Address");
+  if (!peer) return false;
+  const std::string_view a = peer;
+  return a.starts_with("127.") || a == "::1" || a.starts_with("::ffff:127.");
+}
+
 void Append(std::vector<physics::cmd::SetState::Run>* to,
             std::vector<physics::cmd::SetState::Run> runs) {
   for (auto& run : runs) to->push_back(std::move(run));
@@ -191,6 +201,13 @@ std::string StepServer::Bind(zmq::context_t& context) {
         options_.endpoint, files_.dir());
   }
   socket_ = std::move(s);
+  if (options_.shared_memory) {
+    try {
+      shm_ = std::make_unique<ShmTransport>(options_.shm);
+    } catch (const std::exception& e) {
+      spdlog::warn("step server: no shared-memory channels ({}); clients use ZeroMQ", e.what());
+    }
+  }
   return bound;
 }
 
@@ -200,6 +217,7 @@ void StepServer::Close() {
   }
   pending_.clear();
   socket_.reset();
+  shm_.reset();  // clients waiting on a channel see it closed; the files are removed
   if (playback_) playback_->Set(nullptr);  // the viewer's timeline lets go first
   shown_.reset();
   player_.reset();  // removes the custom step handler while the engine still runs
@@ -211,32 +229,49 @@ void StepServer::Close() {
 // ---------------------------------------------------------------------------------------------
 // Transport
 
-void StepServer::Send(const std::vector<zmq::message_t>& envelope, Json& reply, bool json,
+void StepServer::Send(const Route& envelope, Json& reply, bool json,
                       const std::optional<ObsSpec>& observation) {
-  if (!socket_) return;
-  for (const zmq::message_t& f : envelope) {
-    socket_->send(zmq::buffer(f.data(), f.size()), zmq::send_flags::sndmore);
-  }
+  if (envelope.shm != 0 ? !shm_ : !socket_) return;
   const physics::StateFrame* frame = observation ? state_->Latest() : nullptr;
   if (frame && !observation->cameras.empty()) AddCameras(reply, *observation, *frame);
+  std::string text;
+  std::span<const std::uint8_t> bytes;
   if (json) {
     if (frame) AddObservation(&reply, tables_, *frame, observation->level, observation->binary);
     BinaryToBase64(reply);  // bytes travel as <field>_base64 in JSON text
-    const std::string text = reply.dump(-1, ' ', false, Json::error_handler_t::replace);
-    socket_->send(zmq::buffer(text), zmq::send_flags::dontwait);
+    text = reply.dump(-1, ' ', false, Json::error_handler_t::replace);
+    bytes = {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()};
+  } else {
+    // msgpack: the reply's own fields, then the observation written straight from the frame.
+    writer_.Clear();
+    writer_.Map(reply.size() + (frame ? kObservationEntries : 0));
+    for (const auto& [k, v] : reply.items()) {
+      writer_.Key(k);
+      writer_.Value(v);
+    }
+    if (frame) {
+      WriteObservationEntries(writer_, tables_, *frame, observation->level, observation->binary);
+    }
+    bytes = {reinterpret_cast<const std::uint8_t*>(writer_.data()), writer_.size()};
+  }
+  if (envelope.shm != 0) {
+    if (!shm_->Has(envelope.shm)) return;  // its client went away
+    if (shm_->Reply(envelope.shm, bytes, Clock::now()) || reply.value("op", "") == "error") return;
+    // Larger than the channel's reply capacity (the operation took effect): say so instead.
+    Json error{{"op", "error"},
+               {"code", "reply_too_large"},
+               {"message", "a reply of " + std::to_string(bytes.size()) +
+                               " bytes does not fit the shared-memory channel; use ZeroMQ for "
+                               "this request"}};
+    if (reply.contains("seq")) error["seq"] = reply["seq"];
+    ++errors_["reply_too_large"];
+    Send(envelope, error, json);
     return;
   }
-  // msgpack: the reply's own fields, then the observation written straight from the frame.
-  writer_.Clear();
-  writer_.Map(reply.size() + (frame ? kObservationEntries : 0));
-  for (const auto& [k, v] : reply.items()) {
-    writer_.Key(k);
-    writer_.Value(v);
+  for (const zmq::message_t& f : envelope.frames) {
+    socket_->send(zmq::buffer(f.data(), f.size()), zmq::send_flags::sndmore);
   }
-  if (frame) {
-    WriteObservationEntries(writer_, tables_, *frame, observation->level, observation->binary);
-  }
-  socket_->send(zmq::buffer(writer_.data(), writer_.size()), zmq::send_flags::dontwait);
+  socket_->send(zmq::buffer(bytes.data(), bytes.size()), zmq::send_flags::dontwait);
 }
 
 std::optional<StepServer::ObsSpec> StepServer::ObservationFor(const Request& r) const {
@@ -306,7 +341,7 @@ void StepServer::AddCameras(Json& reply, const ObsSpec& spec, const physics::Sta
   reply["cameras"] = std::move(cameras);
 }
 
-void StepServer::SendError(const std::vector<zmq::message_t>& envelope, const Json& seq, bool json,
+void StepServer::SendError(const Route& envelope, const Json& seq, bool json,
                            const std::string& code, const std::string& message) {
   ++errors_[code];
   Json reply{{"op", "error"}, {"code", code}, {"message", message}};
@@ -315,6 +350,7 @@ void StepServer::SendError(const std::vector<zmq::message_t>& envelope, const Js
 }
 
 void StepServer::HandleIncoming() {
+  HandleShm();
   if (!socket_) return;
   std::vector<zmq::message_t> parts;
   while (true) {
@@ -327,32 +363,59 @@ void StepServer::HandleIncoming() {
     r.now = Clock::now();
     zmq::message_t payload = std::move(parts.back());
     parts.pop_back();
-    r.envelope = std::move(parts);  // identity (and the REQ delimiter) echoed back
-    const auto* bytes = static_cast<const std::uint8_t*>(payload.data());
-    r.json = payload.size() > 0 && (bytes[0] == '{' || bytes[0] == ' ' || bytes[0] == '\n');
-    if (payload.size() > options_.limits.max_request_bytes) {
-      SendError(r.envelope, nullptr, r.json, "bad_request",
-                "request of " + std::to_string(payload.size()) + " bytes (limit " +
-                    std::to_string(options_.limits.max_request_bytes) + ")");
-      continue;
-    }
-    std::string why;
-    if (r.json) {
-      if (std::optional<Json> body = wire::DecodeJsonRequest(
-              std::string_view(static_cast<const char*>(payload.data()), payload.size()), &why)) {
-        r.body = std::move(*body);
-      }
-    } else if (std::optional<Json> body = DecodeMsgpack(bytes, payload.size(), &why)) {
+    r.envelope.frames = std::move(parts);  // identity (and the REQ delimiter) echoed back
+    r.local = IsLocalPeer(options_.endpoint, payload);
+    DecodeAndDispatch(r, {static_cast<const std::uint8_t*>(payload.data()), payload.size()});
+  }
+}
+
+void StepServer::HandleShm() {
+  if (!shm_) return;
+  for (const std::string& id : shm_->Sweep(Clock::now())) {
+    if (clients_.count(id) == 0) continue;  // said bye already
+    CancelQueuedSteps(id, "its shared-memory client went away");
+    ForgetClient(id, "its shared-memory client went away");
+  }
+  shm_->Poll(
+      [&](std::uint64_t channel, const std::string&, std::span<const std::uint8_t> bytes) {
+        Request r;
+        r.now = Clock::now();
+        r.envelope.shm = channel;
+        r.local = true;
+        DecodeAndDispatch(r, bytes);
+      },
+      [&](std::uint64_t channel) {
+        Route route;
+        route.shm = channel;
+        SendError(route, nullptr, false, "bad_request", "a request length beyond the channel");
+      });
+}
+
+void StepServer::DecodeAndDispatch(Request& r, std::span<const std::uint8_t> payload) {
+  const std::uint8_t* bytes = payload.data();
+  r.json = !payload.empty() && (bytes[0] == '{' || bytes[0] == ' ' || bytes[0] == '\n');
+  if (payload.size() > options_.limits.max_request_bytes) {
+    SendError(r.envelope, nullptr, r.json, "bad_request",
+              "request of " + std::to_string(payload.size()) + " bytes (limit " +
+                  std::to_string(options_.limits.max_request_bytes) + ")");
+    return;
+  }
+  std::string why;
+  if (r.json) {
+    if (std::optional<Json> body = wire::DecodeJsonRequest(
+            std::string_view(reinterpret_cast<const char*>(bytes), payload.size()), &why)) {
       r.body = std::move(*body);
     }
-    if (why.empty() && !r.body.is_object()) why = "the request is not a map";
-    if (!why.empty()) {
-      SendError(r.envelope, nullptr, r.json, "bad_request",
-                std::string(r.json ? "JSON" : "msgpack") + " request refused: " + why);
-      continue;
-    }
-    Dispatch(r);
+  } else if (std::optional<Json> body = DecodeMsgpack(bytes, payload.size(), &why)) {
+    r.body = std::move(*body);
   }
+  if (why.empty() && !r.body.is_object()) why = "the request is not a map";
+  if (!why.empty()) {
+    SendError(r.envelope, nullptr, r.json, "bad_request",
+              std::string(r.json ? "JSON" : "msgpack") + " request refused: " + why);
+    return;
+  }
+  Dispatch(r);
 }
 
 void StepServer::Dispatch(Request& r) {
@@ -655,6 +718,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
                             "mode:puppet", "include_assets"}) {
     capabilities.push_back(extra);
   }
+  if (shm_) capabilities.push_back("shm");
   Outcome out;
   out.reply = Json{{"op", "hello_ok"},
                    {"session_id", c.id},
@@ -687,6 +751,18 @@ StepServer::Outcome StepServer::Hello(Request& r) {
       files[name] = Json::binary(std::vector<std::uint8_t>(bytes.begin(), bytes.end()));
     }
     out.reply["vfs_assets"] = std::move(files);
+  }
+  // A client on this host that asks gets a shared-memory channel for this session (not over a
+  // channel already, and at most one per possible session).
+  if (const auto it = r.body.find("shm"); it != r.body.end() && Bool(*it, "shm") && shm_ &&
+                                          r.local && r.envelope.shm == 0 &&
+                                          shm_->channels() < options_.limits.max_clients) {
+    try {
+      out.reply["shm"] = shm_->Offer(c.id, r.now);
+    } catch (const std::exception& e) {
+      LogRemote(spdlog::level::warn, "shm offer",
+                fmt::format("step server: no shared-memory channel for a client: {}", e.what()));
+    }
   }
   clients_[c.id] = c;
   return out;

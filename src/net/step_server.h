@@ -9,7 +9,8 @@
 // server hold is bounded (StepServerLimits: queued steps, waiting requests, loaded recordings);
 // queued lockstep steps are cancelled by `cancel`, set_mode and a forced takeover. Files are
 // names under one folder (network_files.h); numbers are checked against value_ranges.h; lines a
-// client causes are rate-limited.
+// client causes are rate-limited. A client on this host may move its session onto a shared-memory
+// channel (shm_transport.h), offered in `hello`; its requests and replies are the same bytes.
 //
 // Threading: the network subsystem's I/O thread only (it owns the socket); built on the main
 // thread in BeginPlay.
@@ -23,6 +24,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -33,6 +35,7 @@
 #include "net/msgpack_codec.h"
 #include "net/network_files.h"
 #include "net/observation.h"
+#include "net/shm_transport.h"
 #include "net/topic_table.h"
 #include "urlab/physics/state_frame.h"
 #include "urlab/replay/playback.h"
@@ -67,6 +70,10 @@ struct StepServerOptions {
   // relative: to the working folder. And the files the running process read, never written.
   std::string files_dir = kDefaultFilesDir;
   std::vector<std::string> inputs;
+  // Shared-memory channels offered to local clients that ask in hello (false: never), in
+  // `shm.folder` ("": /dev/shm).
+  bool shared_memory = true;
+  ShmOptions shm;
 };
 
 class StepServer {
@@ -89,6 +96,17 @@ class StepServer {
   bool has_ready() const;
   // Closes the socket (pending replies get `shutting_down`) and ends a replay.
   void Close();
+
+  // The shared-memory side, for the I/O thread's wait: a request waiting on a channel; a
+  // client expected to send its next request soon (spin rather than sleep); the wake socket to
+  // poll (-1: none); arming before a sleep (true: a request came, do not sleep) and after it.
+  bool shm_request_waiting() const { return shm_ && shm_->RequestWaiting(); }
+  bool shm_expecting(Clock::time_point now) const { return shm_ && shm_->Expecting(now); }
+  int shm_wake_fd() const { return shm_ && shm_->channels() > 0 ? shm_->wake_fd() : -1; }
+  bool ShmPrepareSleep() { return shm_ && shm_->PrepareSleep(); }
+  void ShmAwake() {
+    if (shm_) shm_->Awake();
+  }
   // The recorder the recording operations use (nullptr: none; they answer not_ready). Main
   // thread, before the I/O thread starts.
   void SetRecorder(replay::RecorderSubsystem* recorder) { recorder_ = recorder; }
@@ -111,8 +129,14 @@ class StepServer {
     bool binary_arrays = false;
     Clock::time_point last_seen;
   };
+  // Where a reply goes: the ZeroMQ routing frames to echo, or a shared-memory channel.
+  struct Route {
+    std::vector<zmq::message_t> frames;
+    std::uint64_t shm = 0;  // the channel (0: ZeroMQ)
+  };
   struct Request {
-    std::vector<zmq::message_t> envelope;  // routing frames to echo
+    Route envelope;
+    bool local = false;  // from this host (loopback or ipc): may be offered shared memory
     Json body;
     bool json = false;  // answer in JSON text
     Client* client = nullptr;
@@ -135,7 +159,7 @@ class StepServer {
     std::uint64_t steps = 0;                // wait_for is a lockstep step command of n steps
   };
   struct Pending {
-    std::vector<zmq::message_t> envelope;
+    Route envelope;
     std::string client;  // session id (a driver waiting for its reply keeps its lease)
     Json seq;
     bool json = false;
@@ -166,15 +190,18 @@ class StepServer {
   static const std::vector<OpSpec>& Ops();
 
   void Dispatch(Request& r);
-  void Send(const std::vector<zmq::message_t>& envelope, Json& reply, bool json,
+  // Decodes a request's bytes (msgpack or JSON text, within the limits) and dispatches it, or
+  // answers bad_request.
+  void DecodeAndDispatch(Request& r, std::span<const std::uint8_t> payload);
+  void Send(const Route& envelope, Json& reply, bool json,
             const std::optional<ObsSpec>& observation = std::nullopt);
   // The reply's `cameras` map ({art: {stream: frame}}) for the streams `spec` names, showing
   // `frame` (sync) or the newest rendered (latest).
   void AddCameras(Json& reply, const ObsSpec& spec, const physics::StateFrame& frame);
   // The observation of a request's client (its level unless the request names one).
   std::optional<ObsSpec> ObservationFor(const Request& r) const;
-  void SendError(const std::vector<zmq::message_t>& envelope, const Json& seq, bool json,
-                 const std::string& code, const std::string& message);
+  void SendError(const Route& envelope, const Json& seq, bool json, const std::string& code,
+                 const std::string& message);
   // The lease: throws not_driver unless `c` may drive. An expired lease is released here; taking
   // it (CommitLease) waits until the request succeeded.
   LeaseTake CheckDriver(const Client& c, bool force, Clock::time_point now);
@@ -258,6 +285,9 @@ class StepServer {
   std::shared_ptr<physics::StateSubscription> state_;
   StepServerOptions options_;
   std::optional<zmq::socket_t> socket_;
+  std::unique_ptr<ShmTransport> shm_;  // shared-memory channels (null: not offered)
+  // Reads the requests waiting on the shared-memory channels; closes those of clients gone.
+  void HandleShm();
   std::map<std::string, Client> clients_;
   std::string driver_;  // session id holding the lease, "" when free
   std::string mode_;

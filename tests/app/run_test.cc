@@ -124,8 +124,28 @@ TEST(RunTest, BenchLoopPrintsTheRatioLast) {
   EXPECT_NE(out.find("trajectories identical"), std::string::npos) << out;
 }
 
+// One key=value line per figure, ZeroMQ and shared memory, C++ and Python (tiny runs: the values
+// are not judged here).
+TEST(RunTest, BenchFleetPrintsEveryFigure) {
+  std::string out;
+  ASSERT_EQ(
+      RunCommand(UrlabBinary() + " bench fleet " + SourcePath("examples/scenes/humanoid_pd.yaml") +
+                     " --steps 200 --rounds 1 --samples 20",
+                 &out),
+      0)
+      << out;
+  for (const char* key : {"bare_steps_per_s", "raw_zmq_rtt_p50_us", "raw_shm_rtt_p50_us", "zmq_n1",
+                          "zmq_n10", "zmq_rtt_p50_us", "shm_n1", "shm_n10", "shm_step_rtt_p50_us",
+                          "shm_rtt_p50_us", "zmq_python_n1", "shm_python_n1"}) {
+    EXPECT_TRUE(
+        std::regex_search(out, std::regex(std::string("(^|\\n)") + key + "=[0-9][0-9.e+]*\\n")))
+        << key << "\n"
+        << out;
+  }
+}
+
 TEST(RunTest, RunAndBenchHaveHelp) {
-  for (const char* sub : {"run", "bench", "bench loop"}) {
+  for (const char* sub : {"run", "bench", "bench loop", "bench fleet"}) {
     std::string out;
     EXPECT_EQ(RunCommand(UrlabBinary() + " " + sub + " --help", &out), 0) << sub << out;
     EXPECT_NE(out.find("Usage:"), std::string::npos) << sub;

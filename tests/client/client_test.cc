@@ -88,6 +88,30 @@ TEST_F(ClientTest, LockstepThroughTheStepServer) {
   EXPECT_THROW(c.Call("set_mode", R"({"mode": "warp"})"), StepError);
 }
 
+// The same lockstep rollout over a shared-memory channel and over ZeroMQ: the same states; the
+// channel's file is gone once the client attached; a server that stops is an error for a client
+// on the channel, not a hang.
+TEST_F(ClientTest, LockstepOverSharedMemoryMatchesZeroMQ) {
+  std::vector<std::vector<double>> runs[2];
+  for (const bool shm : {true, false}) {
+    StepClient c(endpoints_.rpc, "standard", 10000ms, shm);
+    EXPECT_EQ(c.transport(), shm ? "shm" : "zmq");
+    c.SetMode("direct");
+    c.Reset();
+    for (int i = 0; i < 100; ++i) {
+      const Observation o = c.Step(2, {{"arm", {0.3 * std::sin(0.1 * i), -0.2}}});
+      runs[shm ? 0 : 1].push_back(o.per_articulation.at("arm").qpos);
+    }
+  }
+  EXPECT_EQ(runs[0], runs[1]);
+  StepClient c(endpoints_.rpc);
+  ASSERT_EQ(c.transport(), "shm");
+  c.SetMode("direct");
+  c.Step(1);
+  manager_.EndPlay();
+  EXPECT_THROW(c.Step(1), std::runtime_error);
+}
+
 TEST_F(ClientTest, PuppetAndContacts) {
   StepClient c(endpoints_.rpc, "full");
   c.SetMode("puppet");

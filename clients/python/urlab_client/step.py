@@ -1,4 +1,6 @@
-"""The step server (protocol.md): request/reply over ZeroMQ REQ, msgpack.
+"""The step server (protocol.md): request/reply over ZeroMQ REQ, msgpack; on the same host over
+a shared-memory channel the server offers in hello (urlab_client.shm), with ZeroMQ as the
+fallback.
 
     from urlab_client import StepClient
     with StepClient("tcp://127.0.0.1:5559") as sim:
@@ -7,11 +9,13 @@
         print(obs["per_articulation"]["arm"]["qpos"])
 """
 import itertools
+import warnings
 
 import msgpack
 import numpy as np
 import zmq
 
+from urlab_client import shm as _shm
 from urlab_client.camera import decode_frame
 
 
@@ -24,23 +28,37 @@ class UrlabError(RuntimeError):
         self.message = message
 
 
+_F8 = np.dtype("<f8")
+
+
 def _arrays(value):
-    """Lists of numbers become numpy arrays, recursively (packed f64 bytes too)."""
-    if isinstance(value, dict):
+    """Lists of numbers become numpy arrays, recursively. Packed f64 bytes become read-only
+    views on the decoded bytes (no copy; .copy() one to modify it). Runs once per reply, so
+    exact type tests (cheaper than isinstance) and a prepared dtype."""
+    t = type(value)
+    if t is dict:
         return {k: _arrays(v) for k, v in value.items()}
-    if isinstance(value, (bytes, bytearray)):
-        return np.frombuffer(value, dtype="<f8").copy()
-    if isinstance(value, list) and value and all(isinstance(x, (int, float)) for x in value):
+    if t is bytes or t is bytearray:
+        return np.frombuffer(value, dtype=_F8)
+    if t is list and value and all(isinstance(x, (int, float)) for x in value):
         return np.asarray(value, dtype=float)
     return value
 
 
 class StepClient:
     """One session with the step server. Observers read; the first client that steps (or sends
-    force=True) holds the driver lease until bye() or silence past the lease timeout."""
+    force=True) holds the driver lease until bye() or silence past the lease timeout.
+
+    shared_memory=True (the default): hello asks for a shared-memory channel, which a server on
+    the same host offers; every request after hello then goes over it (self.transport says
+    "shm" or "zmq"). A channel that cannot be attached leaves the client on ZeroMQ (a warning);
+    a server that dies or closes the channel raises urlab_client.shm.ShmError (a
+    ConnectionError) within the timeout."""
 
     def __init__(self, endpoint="tcp://127.0.0.1:5559", observations="standard", timeout=10.0,
-                 context=None, binary_arrays=True):
+                 context=None, binary_arrays=True, shared_memory=True):
+        self._timeout = timeout
+        self._channel = None
         self._ctx = context or zmq.Context.instance()
         self._socket = self._ctx.socket(zmq.REQ)
         self._socket.setsockopt(zmq.LINGER, 0)
@@ -48,16 +66,30 @@ class StepClient:
         self._socket.connect(endpoint)
         self._seq = itertools.count(1)
         self.session_id = None
+        ask = {"shm": True} if shared_memory and _shm.available() else {}
         self.info = self.hello(observations=observations,
-                               arrays="binary" if binary_arrays else "list")
+                               arrays="binary" if binary_arrays else "list", **ask)
+        offer = self.info.get("shm")
+        if offer:
+            try:
+                self._channel = _shm.ShmChannel(offer["path"], offer["generation"])
+            except (OSError, _shm.ShmError) as e:
+                warnings.warn(f"urlab: staying on ZeroMQ, the shared-memory channel failed: {e}")
+
+    @property
+    def transport(self):
+        return "shm" if self._channel is not None else "zmq"
 
     def close(self):
         if self.session_id:
             try:
                 self.call("bye")
-            except (UrlabError, zmq.ZMQError):
+            except (UrlabError, zmq.ZMQError, ConnectionError, TimeoutError):
                 pass
             self.session_id = None
+        if self._channel is not None:
+            self._channel.close()
+            self._channel = None
         self._socket.close(0)
 
     def __enter__(self):
@@ -71,6 +103,15 @@ class StepClient:
         request = {"op": op, "seq": next(self._seq), **fields}
         if self.session_id and op not in ("hello", "meta"):
             request["session_id"] = self.session_id
+        if self._channel is not None and op != "hello":  # hello (and its assets) over ZeroMQ
+            view = self._channel.request(msgpack.packb(request, use_bin_type=True), self._timeout)
+            try:
+                reply = msgpack.unpackb(view, raw=False)
+            finally:
+                view.release()
+            if reply.get("op") == "error":
+                raise UrlabError(reply.get("code"), reply.get("message", ""))
+            return reply
         self._socket.send(msgpack.packb(request, use_bin_type=True))
         try:
             reply = msgpack.unpackb(self._socket.recv(), raw=False)

@@ -108,15 +108,22 @@ struct Contact {
 
 class StepClient {
  public:
-  // Connects and says hello (observation level minimal, standard or full).
+  // Connects and says hello (observation level minimal, standard or full). With
+  // `shared_memory`, hello asks for a shared-memory channel, which a server on the same host
+  // offers: every later request goes over it (the same messages; docs/network.md, "Shared
+  // memory"); a channel that cannot be attached leaves the client on ZeroMQ. A server that dies
+  // or closes the channel is a std::runtime_error within `timeout`.
   explicit StepClient(const std::string& endpoint = "tcp://127.0.0.1:5559",
                       const std::string& observations = "standard",
-                      std::chrono::milliseconds timeout = std::chrono::milliseconds(10000));
+                      std::chrono::milliseconds timeout = std::chrono::milliseconds(10000),
+                      bool shared_memory = true);
   ~StepClient();  // says bye
   StepClient(const StepClient&) = delete;
   StepClient& operator=(const StepClient&) = delete;
 
   const std::string& session_id() const;
+  // "shm" once the session moved to shared memory, else "zmq".
+  std::string transport() const;
   // The hello reply (articulation tables and more) as JSON text.
   const std::string& hello_json() const;
   // Any operation: `fields` is a JSON object text; returns the reply as JSON text. Throws

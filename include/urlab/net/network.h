@@ -53,6 +53,10 @@ struct NetworkOptions {
   std::string files_dir;
   // Lockstep steps one client may have queued (beyond: queue_full).
   std::size_t max_queued_steps = 100000;
+  // Shared-memory channels for step-server clients on this host that ask in hello (false:
+  // ZeroMQ only), made in `shm_dir` ("": /dev/shm, else the temporary folder).
+  bool shared_memory = true;
+  std::string shm_dir;
 };
 
 // The endpoints a scene file's `network:` section names (protocol.md's defaults otherwise).

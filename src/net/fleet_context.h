@@ -1,0 +1,50 @@
+#pragma once
+// What a figure producer of `urlab bench fleet` (urlab/net/fleet_bench.h) may use: the options,
+// the served simulation's step-server endpoint and articulation, a bare mj_step rate on a copy of
+// its model, and per-round ratio bookkeeping.
+//
+// Thread: main (the bench's), like the producers.
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "urlab/net/fleet_bench.h"
+
+namespace urlab::net {
+
+class FleetContext {
+ public:
+  FleetContext(const FleetBenchOptions& options, std::string rpc, std::string articulation,
+               const mjModel* bare_model, mjData* bare_data)
+      : options_(options),
+        rpc_(std::move(rpc)),
+        articulation_(std::move(articulation)),
+        m_(bare_model),
+        d_(bare_data) {}
+
+  const FleetBenchOptions& options() const { return options_; }
+  const std::string& rpc() const { return rpc_; }
+  const std::string& articulation() const { return articulation_; }
+  int steps_per_round() const { return std::max(10, options_.steps / options_.rounds); }
+
+  // Steps per second of `steps` bare mj_step calls (continuing from the bare copy's state).
+  double BareRate(int steps);
+  // Median over rounds of measure() / BareRate measured just before it (each round).
+  double MedianRatio(const std::function<double()>& measure);
+  void Report(const std::string& line) const {
+    if (options_.report) options_.report(line);
+  }
+
+ private:
+  const FleetBenchOptions& options_;
+  std::string rpc_, articulation_;
+  const mjModel* m_;
+  mjData* d_;
+};
+
+}  // namespace urlab::net

@@ -1,0 +1,181 @@
+#!/usr/bin/python3
+"""End to end: the step server's shared-memory channel with real processes (`urlab run` on
+ephemeral ports, Python clients in their own processes), killed with SIGKILL on either side.
+
+0. The same lockstep rollout over the channel and over ZeroMQ gives the same observations.
+1. A Python client on the channel drives in lockstep, then is killed: the server notices within
+   its sweep (the log says so), frees the lease (another client drives without force) and no
+   file of the server's is left in /dev/shm.
+2. A client waits for a long step when the server is killed: it gets ShmError (the server died),
+   not a timeout, and nothing is left in /dev/shm.
+3. A server stopped with SIGINT removes the file of an offer not taken; one killed with SIGKILL
+   leaves it, and the next server removes it when it starts.
+Usage: shm_e2e.py URLAB_BINARY SOURCE_DIR
+"""
+import glob
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
+sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
+sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
+import msgpack  # noqa: E402
+import zmq  # noqa: E402
+from urlab_client import StepClient  # noqa: E402
+from urlab_client.shm import ShmError, available  # noqa: E402
+from urlab_process import fail, start_urlab  # noqa: E402
+
+CLIENT = r"""
+import sys, time
+sys.path.insert(0, sys.argv[1])
+from urlab_client import StepClient
+c = StepClient(sys.argv[2])
+assert c.transport == "shm", c.transport
+c.set_mode("direct")
+for i in range(50):
+    c.step(2)
+print("ready", flush=True)
+time.sleep(600)
+"""
+
+
+def files_of(proc):
+    return glob.glob(f"/dev/shm/urlab-shm-{proc.pid}-*")
+
+
+def wait_for(what, condition, proc, seconds=20):
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        if condition():
+            return
+        time.sleep(0.05)
+    fail(what, proc)
+
+
+def main():
+    if not available() or not os.path.isdir("/dev/shm"):
+        print("SKIP: shared memory needs Linux x86_64 and /dev/shm")
+        return
+    tmp = tempfile.mkdtemp(prefix="urlab_shm_")
+    scene = os.path.join(tmp, "scene.yaml")
+    model = os.path.join(SOURCE, "examples", "models", "servo_arm.xml")
+    with open(scene, "w") as f:
+        f.write(f"""control_source: network
+network:
+  state: "tcp://127.0.0.1:*"
+  control: "tcp://127.0.0.1:*"
+  info: "tcp://127.0.0.1:*"
+  rpc: "tcp://127.0.0.1:*"
+articulations:
+  - name: arm
+    mjcf: {model}
+    controller: {{type: pd, kp: 400, kv: 20}}
+""")
+
+    # 0. The same rollout over shared memory and over ZeroMQ: the same observations.
+    proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
+    rpc = endpoints[3]
+    runs = {}
+    for shm in (True, False):
+        with StepClient(rpc, shared_memory=shm) as c:
+            if c.transport != ("shm" if shm else "zmq"):
+                fail(f"transport {c.transport} with shared_memory={shm}", proc)
+            c.set_mode("direct")
+            c.reset()
+            runs[shm] = [c.step(2, controls={"arm": [0.3 * (i % 7) / 7, -0.2]})["per_articulation"]
+                         ["arm"]["qpos"].tolist() for i in range(200)]
+    if runs[True] != runs[False]:
+        fail("the rollouts over shared memory and ZeroMQ differ", proc)
+    print("the same 200-request rollout over shared memory and over ZeroMQ")
+
+    # 1. A killed client.
+    client = subprocess.Popen([sys.executable, "-c", CLIENT, os.path.join(SOURCE, "clients",
+                                                                          "python"), rpc],
+                              stdout=subprocess.PIPE, text=True)
+    if client.stdout.readline().strip() != "ready":
+        fail("the shared-memory client did not start", proc)
+    with StepClient(rpc, shared_memory=False) as observer:
+        if observer.call("get_counters")["driver"] is None:
+            fail("the client on shared memory does not hold the lease", proc)
+        client.kill()
+        client.wait()
+        wait_for("the server kept the dead client's lease",
+                 lambda: observer.call("get_counters")["driver"] is None, proc)
+        observer.set_mode("direct")  # drives now, without force
+        observer.step()
+    wait_for("a file of the server's is left in /dev/shm", lambda: not files_of(proc), proc)
+    proc.send_signal(signal.SIGINT)
+    log = proc.communicate(timeout=30)[1]
+    if "shared-memory client of session" not in log or "closed or died" not in log:
+        fail("the log does not say the shared-memory client went away:\n" + log)
+    print("killed client: noticed, lease freed, no files left")
+
+    # 2. A killed server while a client waits on the channel.
+    proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
+    c = StepClient(endpoints[3], timeout=120.0)
+    if c.transport != "shm":
+        fail(f"transport {c.transport}", proc)
+    c.set_mode("direct")
+    threading.Timer(0.5, lambda: proc.send_signal(signal.SIGKILL)).start()
+    t0 = time.monotonic()
+    try:
+        while time.monotonic() - t0 < 60:
+            c.step(n_steps=100000)
+        fail("the client never noticed the server's death")
+    except ShmError as e:
+        print(f"killed server: the client got '{e}' after {time.monotonic() - t0:.2f} s "
+              "(timeout 120 s)")
+    except TimeoutError as e:
+        fail(f"a timeout instead of the server's death: {e}")
+    proc.wait()
+    c.close()
+    if files_of(proc):
+        fail(f"files left: {files_of(proc)}")
+
+    # 3. An offer never taken: removed by SIGINT; left by SIGKILL and reclaimed by the next server.
+    proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
+    ctx = zmq.Context.instance()
+    s = ctx.socket(zmq.REQ)
+    s.setsockopt(zmq.LINGER, 0)
+    s.setsockopt(zmq.RCVTIMEO, 10000)
+    s.connect(endpoints[3])
+    s.send(msgpack.packb({"op": "hello", "shm": True}))
+    offer = msgpack.unpackb(s.recv(), raw=False).get("shm")
+    s.close(0)
+    if not offer or not os.path.exists(offer["path"]):
+        fail(f"no offer file: {offer}", proc)
+    # A server stopped with SIGINT withdraws its offers: the file goes with it.
+    proc.send_signal(signal.SIGINT)
+    proc.communicate(timeout=30)
+    if os.path.exists(offer["path"]):
+        fail(f"SIGINT left {offer['path']}")
+    proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
+    s = ctx.socket(zmq.REQ)
+    s.setsockopt(zmq.LINGER, 0)
+    s.setsockopt(zmq.RCVTIMEO, 10000)
+    s.connect(endpoints[3])
+    s.send(msgpack.packb({"op": "hello", "shm": True}))
+    offer = msgpack.unpackb(s.recv(), raw=False).get("shm")
+    s.close(0)
+    proc.kill()
+    proc.wait()
+    if not offer or not os.path.exists(offer["path"]):
+        fail("the killed server's file is gone already (nothing to reclaim)")
+    proc2, _ = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
+    try:
+        if os.path.exists(offer["path"]):
+            fail(f"the stale file {offer['path']} was not reclaimed", proc2)
+    finally:
+        proc2.send_signal(signal.SIGINT)
+        proc2.communicate(timeout=30)
+    print("stale file of a killed server reclaimed by the next one")
+    print("1 passed, 0 failed")
+
+
+if __name__ == "__main__":
+    main()
