@@ -67,6 +67,8 @@ struct StepServerOptions {
   // relative: to the working folder. And the files the running process read, never written.
   std::string files_dir = kDefaultFilesDir;
   std::vector<std::string> inputs;
+  // Who this server is, in hello_ok; a client's `hello {require: {...}}` must match them.
+  std::string scene_name, instance, server_session;
 };
 
 class StepServer {
@@ -77,8 +79,9 @@ class StepServer {
   StepServer(world::Session& session, const std::vector<ArticulationTopics>& tables,
              std::shared_ptr<physics::StateSubscription> state, StepServerOptions options);
 
-  // Creates and binds the ROUTER socket; returns the bound endpoint, "" on failure (logged).
-  std::string Bind(zmq::context_t& context);
+  // Creates and binds the ROUTER socket; returns the bound endpoint, "" on failure (why in
+  // `failure`; logged when that is null).
+  std::string Bind(zmq::context_t& context, std::string* failure = nullptr);
   zmq::socket_t* socket() { return socket_ ? &*socket_ : nullptr; }
   // Reads and answers (or parks) every waiting request.
   void HandleIncoming();

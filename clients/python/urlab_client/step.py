@@ -40,7 +40,9 @@ class StepClient:
     force=True) holds the driver lease until bye() or silence past the lease timeout."""
 
     def __init__(self, endpoint="tcp://127.0.0.1:5559", observations="standard", timeout=10.0,
-                 context=None, binary_arrays=True):
+                 context=None, binary_arrays=True, require=None):
+        """require: {"scene", "instance", "server_session"} the server must have (an announce
+        file's values): another simulator on the port answers UrlabError "wrong_server"."""
         self._ctx = context or zmq.Context.instance()
         self._socket = self._ctx.socket(zmq.REQ)
         self._socket.setsockopt(zmq.LINGER, 0)
@@ -48,8 +50,9 @@ class StepClient:
         self._socket.connect(endpoint)
         self._seq = itertools.count(1)
         self.session_id = None
+        fields = {"require": dict(require)} if require else {}
         self.info = self.hello(observations=observations,
-                               arrays="binary" if binary_arrays else "list")
+                               arrays="binary" if binary_arrays else "list", **fields)
 
     def close(self):
         if self.session_id:
