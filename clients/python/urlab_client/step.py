@@ -35,6 +35,20 @@ def _arrays(value):
     return value
 
 
+def decode_observation(reply):
+    """A step/reset/forward reply with numpy arrays, and camera frames as numpy images."""
+    cameras = reply.pop("cameras", None)
+    reply = _arrays(reply)
+    if cameras is not None:
+        for streams in cameras.values():
+            for frame in streams.values():
+                if "data" in frame:
+                    frame["image"] = decode_frame(frame.pop("data"), frame["mode"],
+                                                  frame["width"], frame["height"])
+        reply["cameras"] = cameras
+    return reply
+
+
 class StepClient:
     """One session with the step server. Observers read; the first client that steps (or sends
     force=True) holds the driver lease until bye() or silence past the lease timeout."""
@@ -71,10 +85,19 @@ class StepClient:
 
     def call(self, op, **fields):
         """Sends one request and returns the decoded reply (raises UrlabError on an error)."""
+        self.send_request(op, **fields)
+        return self.receive_reply(op)
+
+    def send_request(self, op, **fields):
+        """The first half of call(): sends the request without waiting (one at a time; a vector
+        env sends to every server, then gathers with receive_reply)."""
         request = {"op": op, "seq": next(self._seq), **fields}
         if self.session_id and op not in ("hello", "meta"):
             request["session_id"] = self.session_id
         self._socket.send(msgpack.packb(request, use_bin_type=True))
+
+    def receive_reply(self, op):
+        """The second half of call(): waits for the reply to the request sent."""
         try:
             reply = msgpack.unpackb(self._socket.recv(), raw=False)
         except zmq.Again:
@@ -108,17 +131,7 @@ class StepClient:
             fields["observations"] = observations
         if force:
             fields["force"] = True
-        reply = self.call("step", **fields)
-        cameras = reply.pop("cameras", None)
-        reply = _arrays(reply)
-        if cameras is not None:
-            for streams in cameras.values():
-                for frame in streams.values():
-                    if "data" in frame:
-                        frame["image"] = decode_frame(frame.pop("data"), frame["mode"],
-                                                      frame["width"], frame["height"])
-            reply["cameras"] = cameras
-        return reply
+        return decode_observation(self.call("step", **fields))
 
     def reset(self, keyframe=None, qpos=None):
         """Resets to a keyframe (short name, e.g. "home", when only one articulation has it, or the
@@ -284,35 +297,4 @@ class StepClient:
         return path
 
 
-class UrlabEnv:
-    """A learning-loop environment over the step server in lockstep (direct) mode.
-
-    reset() returns the observation of one articulation; step(action) applies the action (one
-    value per actuator, in discovery order) for `frame_skip` physics steps and returns
-    (observation, info). Observations are {"qpos", "qvel", "ctrl", "sensors"...} numpy arrays.
-    """
-
-    def __init__(self, articulation, endpoint="tcp://127.0.0.1:5559", frame_skip=1,
-                 keyframe=None):
-        self.client = StepClient(endpoint)
-        self.articulation = articulation
-        self.frame_skip = frame_skip
-        self.keyframe = keyframe
-        arts = {a["name"]: a for a in self.client.info["articulations"]}
-        if articulation not in arts:
-            raise KeyError(f"no articulation '{articulation}' (have {sorted(arts)})")
-        self.actuators = [a["name"] for a in arts[articulation]["actuators"]]
-        self.client.set_mode("direct")
-
-    def reset(self):
-        return self._obs(self.client.reset(keyframe=self.keyframe))
-
-    def step(self, action):
-        reply = self.client.step(self.frame_skip, controls={self.articulation: list(action)})
-        return self._obs(reply), {"time": reply["time"], "step": reply["step"]}
-
-    def close(self):
-        self.client.close()
-
-    def _obs(self, reply):
-        return reply["per_articulation"][self.articulation]
+# UrlabEnv (gymnasium-shaped) lives in urlab_client/env.py, UrlabVectorEnv in vector.py.
