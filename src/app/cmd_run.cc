@@ -57,6 +57,7 @@ struct RunArgs {
   std::string announce;         // --announce FILE: the bound endpoints as JSON
   std::string instance;         // --instance ID ("" : host:pid)
   bool allow_no_network = false;
+  std::string step_mode;  // --step-mode: replaces the scene's network.step_mode
   bool no_cameras = false;
   std::vector<std::string> video;  // --video CAM OUT: a camera's frames to MP4/WebM
   // `urlab record` (and `run --record`): the file to record to, and how.
@@ -113,6 +114,7 @@ int Run(const RunArgs& args) {
     scene.network.files_dir = std::filesystem::absolute(args.files_dir).lexically_normal().string();
   }
   ChooseNetworkPorts(scene.network, args.ports, args.port_base);
+  if (!args.step_mode.empty()) scene.network.step_mode = args.step_mode;
   if (args.no_network || !scene.network.enabled) NetworkSourcesToUi(scene);
   if (!args.announce.empty()) {
     CheckOutputs({{args.announce, "--announce"}}, world::SceneInputFiles(scene));
@@ -436,6 +438,11 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
   cmd->add_option("--instance", args.instance,
                   "this run's instance id, in the step server's hello_ok and the announce file "
                   "(clients may require it; default HOST:PID)");
+  cmd->add_option("--step-mode", args.step_mode,
+                  "the step server's initial mode, which it returns to when its driver leaves: "
+                  "live (the physics runs by itself) or direct (lockstep: it steps only when a "
+                  "client asks); replaces the scene's network.step_mode")
+      ->check(CLI::IsMember({"live", "direct"}));
   cmd->add_flag("--allow-no-network", args.allow_no_network,
                 "go on without a socket that cannot bind (by default a run without a window "
                 "whose port is taken exits 1 before simulating, naming the process holding it)");

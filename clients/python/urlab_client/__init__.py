@@ -21,7 +21,8 @@ and the step server (lockstep learning loops), shaped like gymnasium (without re
         obs, info = env.reset(seed=0)
         obs, reward, terminated, truncated, info = env.step([0.1, -0.2])
 
-UrlabVectorEnv steps many servers together (urlab_client.vector).
+UrlabVectorEnv steps many servers together (urlab_client.vector); urlab_client.cluster starts
+servers on a Dask cluster and returns one.
 """
 from urlab_client.camera import CameraClient, decode_frame
 from urlab_client.step import StepClient, UrlabError
