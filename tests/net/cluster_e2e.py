@@ -54,11 +54,14 @@ def steps_per_second(workers, per_worker, seconds=5.0):
             return n / (time.monotonic() - t0)
 
 
-def measure(k):
-    one = steps_per_second(1, k)
-    two = steps_per_second(2, k)
-    print(f"1 worker x {k} servers: {one:.0f} env steps/s; 2 workers x {k}: {two:.0f} env "
-          f"steps/s; ratio {two / one:.2f} (cores here: {os.cpu_count()})")
+def measure(k, rounds=2):
+    """Alternates the two configurations (the machine is shared and noisy); per-round ratios."""
+    for r in range(rounds):
+        one = steps_per_second(1, k)
+        two = steps_per_second(2, k)
+        print(f"round {r}: 1 worker x {k} servers: {one:.0f} env steps/s; 2 workers x {k}: "
+              f"{two:.0f} env steps/s; ratio {two / one:.2f} (cores here: {os.cpu_count()})",
+              flush=True)
 
 
 def main():

@@ -12,7 +12,7 @@
 The same code runs on any Dask cluster: an SSH cluster, Slurm or PBS through dask-jobqueue,
 Kubernetes through dask-kubernetes (docs/cluster.md). Each server is one long-running task: it
 starts `urlab run SCENE --ports auto --announce FILE` on its worker, publishes the announced
-endpoints under the slot's name (a distributed.Variable), leaves the worker's thread pool
+endpoints under the slot's name (the scheduler's metadata), leaves the worker's thread pool
 (secede) and watches the process until the pool closes. The process dies with its worker
 (PR_SET_PDEATHSIG). When a worker dies, the scheduler runs its tasks again on a live worker (or
 the restarted one); the vector env sees those servers stop answering, ends their episodes as
@@ -93,7 +93,7 @@ def _serve(slot, variable, stop, urlab, scene, args):
     info["endpoints"] = {k: _reachable(v, host) for k, v in info["endpoints"].items()}
     info["worker"] = worker.address
     info["slot"] = slot
-    distributed.Variable(variable).set(info)
+    distributed.get_client().set_metadata(variable, info)
     distributed.secede()  # a server is not a computation: free the worker's thread
     event = distributed.Event(stop)
     try:
@@ -143,21 +143,15 @@ class ServerPool:
     def announced(self, i, timeout=180.0, not_session=None):
         """Slot i's announce (endpoints, session, worker), waiting for it; with not_session,
         waits for a server other than that one (the slot's replacement)."""
-        import distributed
-        variable = distributed.Variable(self._variables[i], client=self.client)
         deadline = time.monotonic() + timeout
         while True:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                raise TimeoutError(f"slot {i}: no server announced in {timeout} s")
-            try:
-                info = variable.get(timeout=min(left, 2.0))
-            except Exception:  # noqa: BLE001 - distributed's timeout type varies by version
-                info = None
-            if self.futures[i].status == "error":
-                raise RuntimeError(f"slot {i}: {self.futures[i].exception()}")
+            info = self.client.get_metadata(self._variables[i], default=None)
             if info and info.get("session") != not_session:
                 return info
+            if self.futures[i].status == "error":
+                raise RuntimeError(f"slot {i}: {self.futures[i].exception()}")
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"slot {i}: no server announced in {timeout} s")
             time.sleep(0.1)
 
     def endpoints(self):
@@ -203,9 +197,9 @@ class ServerPool:
             distributed.wait(self.futures, timeout=timeout)
         except Exception:  # noqa: BLE001 - a cluster already gone, or tasks still running
             pass
-        for name in self._variables:
+        for name in self._variables:  # the announces of servers that are gone
             try:
-                distributed.Variable(name, client=self.client).delete()
+                self.client.set_metadata(name, None)
             except Exception:  # noqa: BLE001
                 pass
         self.client.cancel([f for f in self.futures if not f.done()])
