@@ -10,7 +10,9 @@ gymnasium's documented contract (gymnasium itself is not needed):
   lease at once;
 - a vector env over two servers: batched spaces and observations, next-step autoreset (the step
   after an episode's end resets it, ignores its action, reward 0, no flags), and a server that
-  dies ending its episode as truncated and coming back through the replace callback.
+  dies ending its episode as truncated and coming back through the replace callback;
+- camera images (a stream of the articulation, or "art/stream") and the observation level
+  in the observation space.
 Usage: gym_env_e2e.py URLAB_BINARY SOURCE_DIR
 """
 import os
@@ -36,8 +38,8 @@ def check(cond, message):
         fail(message)
 
 
-def server(scene):
-    proc, a = start_announced(URLAB, scene, "--no-cameras", "--max-speed")
+def server(scene, *extra):
+    proc, a = start_announced(URLAB, scene, *(extra or ("--no-cameras",)), "--max-speed")
     PROCS.append(proc)
     return proc, a["endpoints"]["rpc"]
 
@@ -165,6 +167,21 @@ def main():
     check(envs.observation_space.contains(obs), "after the replacement")
     envs.close()
     print("a killed server: truncated, replaced, reset, stepping again")
+
+    # Cameras in the observation (rendered from the step's own state), observation levels.
+    cams = os.path.join(SOURCE, "tests", "data", "cameras", "two_cameras.yaml")
+    _, rpc3 = server(cams, "--files-dir", tmp)
+    with UrlabEnv("rig", endpoint=rpc3, cameras=["top", "rig/top/depth"],
+                  observations="minimal") as env:
+        space = env.observation_space
+        check(space["cameras"]["top"].shape == (48, 64, 3) and
+              space["cameras"]["rig/top/depth"].shape == (48, 64), f"camera spaces {space}")
+        check(set(space) == {"qpos", "qvel", "cameras"}, f"minimal level: {list(space)}")
+        obs, _ = env.reset(seed=0)
+        check(space.contains(obs), "reset obs with cameras outside the space")
+        obs, *_ = env.step(env.action_space.sample())
+        check(space.contains(obs), "step obs with cameras outside the space")
+    print("cameras: rgb and depth images in the observation space")
     for p in PROCS:
         p.terminate()
         p.wait(timeout=30)

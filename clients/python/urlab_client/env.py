@@ -193,9 +193,12 @@ class UrlabEnv(EnvBase):
             frames = OrderedDict()
             got = reply.get("cameras", {})
             for name in self.cameras:
-                art, _, stream = name.rpartition("/")
-                art = art or self.articulation
-                frames[name] = got.get(art, {}).get(stream, {}).get("image")
+                # "stream" of this articulation ("top", "top/depth"), or "art/stream".
+                frame = got.get(self.articulation, {}).get(name)
+                if frame is None and "/" in name:
+                    art, stream = name.split("/", 1)
+                    frame = got.get(art, {}).get(stream)
+                frames[name] = (frame or {}).get("image")
                 if frames[name] is None:
                     raise RuntimeError(f"camera stream '{name}' sent no image")
             obs["cameras"] = frames
