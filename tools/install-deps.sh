@@ -12,6 +12,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev ccache
   python3 python3-zmq python3-msgpack python3-numpy
+  # urlab_client.cluster and `urlab sweep`: Dask distributed, YAML
+  python3-distributed python3-yaml
   libglfw3-dev libimgui-dev libstb-dev libgl1-mesa-dri xvfb xauth ffmpeg
   libassimp-dev libembree-dev libbullet-extras-dev libbullet-dev
   # cameras: off-screen rendering (EGL surfaceless on Mesa, OSMesa fallback)

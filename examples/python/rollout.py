@@ -7,8 +7,9 @@ Then:                        /usr/bin/python3 examples/python/rollout.py [--out 
 The simulator switches to direct (lockstep) mode: its physics advances only when this script asks,
 so no step is lost and the data do not depend on this machine's speed. Each step sends one action
 (joint position targets: the standing pose plus a slow sinusoid per leg) and receives the
-observation that shows it. Every `--episode` steps the robot is reset to its keyframe. Prints the
-rate and, with --out, saves qpos, qvel, actions and times with numpy.
+observation that shows it. Every `--episode` steps the episode is truncated and the robot is reset
+to its keyframe. Prints the rate and, with --out, saves qpos, qvel, actions and times with numpy.
+Leaving the `with` block releases the simulator, which goes back to running on its own.
 """
 import argparse
 import os
@@ -33,19 +34,19 @@ def main():
     p.add_argument("--out", help="save the rollout to this .npz file")
     args = p.parse_args()
 
-    env = UrlabEnv(args.robot, endpoint=args.endpoint, keyframe=args.keyframe)
-    try:
+    with UrlabEnv(args.robot, endpoint=args.endpoint, keyframe=args.keyframe,
+                  max_episode_steps=args.episode) as env:
         names = [n[len(args.robot) + 1:] for n in env.actuators]
         stand = np.array([STAND.get(n.rsplit("_", 1)[-1], 0.0) for n in names])
         phase = np.arange(len(names)) * 0.5
-        obs = env.reset()
+        obs, info = env.reset(seed=0)
         qpos, qvel, actions, times = [], [], [], []
         t0 = time.monotonic()
         for i in range(args.steps):
-            if i > 0 and i % args.episode == 0:
-                obs = env.reset()
             action = stand + 0.2 * np.sin(2 * np.pi * 0.5 * (i % args.episode) * 0.002 + phase)
-            obs, info = env.step(action)
+            obs, reward, terminated, truncated, info = env.step(action)
+            if terminated or truncated:
+                env.reset()
             qpos.append(obs["qpos"])
             qvel.append(obs["qvel"])
             actions.append(action)
@@ -60,9 +61,6 @@ def main():
                      time=np.array(times))
             print(f"saved {args.out}")
         return 0 if len(qpos) == args.steps else 1
-    finally:
-        env.client.set_mode("live")  # let the simulation run on its own again
-        env.close()
 
 
 if __name__ == "__main__":

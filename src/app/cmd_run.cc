@@ -19,10 +19,12 @@
 #include <vector>
 
 #include "app/commands.h"
+#include "app/run_network.h"
 #include "app/signals.h"
 #include "app/validators.h"
 #include "urlab/camera/camera_subsystem.h"
 #include "urlab/camera/video_recorder.h"
+#include "urlab/core/files.h"
 #include "urlab/core/mujoco_handlers.h"
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/net/network.h"
@@ -49,7 +51,13 @@ struct RunArgs {
   bool paused = false;
   bool reset_on_divergence = false;
   bool no_network = false;
-  std::string files_dir;  // --files-dir: replaces the scene's network.files_dir
+  std::string files_dir;        // --files-dir: replaces the scene's network.files_dir
+  std::string ports = "scene";  // --ports: scene | auto
+  int port_base = 0;            // --port-base N (0: the scene's ports)
+  std::string announce;         // --announce FILE: the bound endpoints as JSON
+  std::string instance;         // --instance ID ("" : host:pid)
+  bool allow_no_network = false;
+  std::string step_mode;  // --step-mode: replaces the scene's network.step_mode
   bool no_cameras = false;
   std::vector<std::string> video;  // --video CAM OUT: a camera's frames to MP4/WebM
   // `urlab record` (and `run --record`): the file to record to, and how.
@@ -105,7 +113,12 @@ int Run(const RunArgs& args) {
   if (!args.files_dir.empty()) {
     scene.network.files_dir = std::filesystem::absolute(args.files_dir).lexically_normal().string();
   }
+  ChooseNetworkPorts(scene.network, args.ports, args.port_base);
+  if (!args.step_mode.empty()) scene.network.step_mode = args.step_mode;
   if (args.no_network || !scene.network.enabled) NetworkSourcesToUi(scene);
+  if (!args.announce.empty()) {
+    CheckOutputs({{args.announce, "--announce"}}, world::SceneInputFiles(scene));
+  }
   if (!args.video.empty()) {
     CheckOutputs({{args.video[1], "--video"}}, world::SceneInputFiles(scene));
     camera::RequestVideoCamera(scene, args.video[0]);
@@ -130,10 +143,13 @@ int Run(const RunArgs& args) {
     // Added before the network, whose discovery and step server read its streams.
     auto cam_options = camera::CameraOptionsFromScene(scene);
     cam_options.publish = !args.no_network && scene.network.enabled;
+    if (args.ports == "auto") cam_options.base_port = 0;  // ephemeral ports
     auto sub = std::make_unique<camera::CameraSubsystem>(std::move(cam_options));
     cameras = sub.get();
     manager.AddSubsystem(std::move(sub));
   }
+  net::NetworkSubsystem* network_sub = nullptr;
+  net::NetworkOptions network_options;
   if (!args.no_network && scene.network.enabled) {
     // An idle recorder costs the physics thread nothing; the step server's recording operations
     // use it (added first: it begins before the network and ends after it).
@@ -141,8 +157,21 @@ int Run(const RunArgs& args) {
       recorder = &static_cast<replay::RecorderSubsystem&>(
           manager.AddSubsystem(std::make_unique<replay::RecorderSubsystem>()));
     }
-    auto network =
-        std::make_unique<net::NetworkSubsystem>(net::NetworkOptionsFromScene(scene.network));
+    net::NetworkOptions net_options = net::NetworkOptionsFromScene(scene.network);
+    // A headless run whose port is taken stops before simulating: a client would otherwise
+    // drive whichever simulator holds the port. A window's user sees the log line instead.
+    net_options.require_bind = !args.view && !args.allow_no_network;
+    net_options.scene_name = SceneName(args.scene);
+    net_options.instance = args.instance;
+    if (net_options.instance.empty()) {
+      char host[256] = {};
+      ::gethostname(host, sizeof host - 1);
+      net_options.instance = fmt::format("{}:{}", host, ::getpid());
+    }
+    net_options.server_session = NewServerSession();
+    auto network = std::make_unique<net::NetworkSubsystem>(net_options);
+    network_sub = network.get();
+    network_options = net_options;
     network->SetRecorder(recorder);
     network->SetCameras(cameras);
     if (args.view) network->SetPlayback(playback);  // the step server's replays on the timeline
@@ -157,6 +186,17 @@ int Run(const RunArgs& args) {
     manager.AddSubsystem(std::move(view));
   }
   manager.BeginPlay(scene);
+  if (!args.announce.empty()) {  // the rendezvous: written once every socket is bound
+    if (!network_sub) {
+      network_options.scene_name = SceneName(args.scene);
+      network_options.instance = args.instance;
+    }
+    WriteFileAtomic(args.announce, AnnounceJson(network_options,
+                                                network_sub ? network_sub->endpoints()
+                                                            : net::NetworkSubsystem::Endpoints{},
+                                                cameras));
+    spdlog::info("announced the endpoints in {}", args.announce);
+  }
   std::unique_ptr<camera::CameraVideo> video;
   if (!args.video.empty()) {
     video = std::make_unique<camera::CameraVideo>(*cameras, args.video[0], args.video[1]);
@@ -262,6 +302,11 @@ int Run(const RunArgs& args) {
   if (video) video->Poll();
   manager.EndPlay();
   FlushMujocoWarningCounts();
+  if (!args.announce.empty()) {  // nothing is served any more: no launcher may find it
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(args.announce, ec))
+      std::filesystem::remove(args.announce, ec);
+  }
   // The run's products: each failure is reported with what was kept, and makes the exit code 1.
   std::vector<std::string> failures;
   if (video) {
@@ -372,6 +417,35 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
   cmd->add_flag("--no-network", args.no_network,
                 "no ZeroMQ sockets (by default the streaming topics and the step server of "
                 "protocol.md are served on the scene's endpoints or the defaults 5555-5557, 5559)");
+  CLI::Option* ports =
+      cmd->add_option("--ports", args.ports,
+                      "auto: the system chooses a free port for every TCP socket (state, "
+                      "control, info, cameras, step server; see --announce), so any number of "
+                      "runs share a machine; scene (default): the scene's network: section")
+          ->check(CLI::IsMember({"auto", "scene"}));
+  cmd->add_option("--port-base", args.port_base,
+                  "N: state on port N, control N+1, info N+2, cameras from N+3 upward, step "
+                  "server N+4 (the defaults are N = 5555); the scene's hosts are kept")
+      ->check(kInteger)
+      ->check(CLI::Range(1, 65531))
+      ->excludes(ports);
+  cmd->add_option("--announce", args.announce,
+                  "write the bound endpoints, the step server's transports, the scene name, the "
+                  "instance id and this run's session id to FILE as JSON once every socket is "
+                  "bound (written whole: a launcher waits for the file); removed when the run "
+                  "ends (docs/network.md, \"Ports, the announce file and the server's identity\")")
+      ->check(OutputPath());
+  cmd->add_option("--instance", args.instance,
+                  "this run's instance id, in the step server's hello_ok and the announce file "
+                  "(clients may require it; default HOST:PID)");
+  cmd->add_option("--step-mode", args.step_mode,
+                  "the step server's initial mode, which it returns to when its driver leaves: "
+                  "live (the physics runs by itself) or direct (lockstep: it steps only when a "
+                  "client asks); replaces the scene's network.step_mode")
+      ->check(CLI::IsMember({"live", "direct"}));
+  cmd->add_flag("--allow-no-network", args.allow_no_network,
+                "go on without a socket that cannot bind (by default a run without a window "
+                "whose port is taken exits 1 before simulating, naming the process holding it)");
   cmd->add_option("--files-dir", args.files_dir,
                   "the folder whose files step-server clients may write and read by name "
                   "(snapshots, recordings, replays; never a path, never over an existing file "

@@ -21,6 +21,7 @@ void RegisterReplayCommand(CLI::App& app, int& exit_code);
 void RegisterRenderCommand(CLI::App& app, int& exit_code);
 void RegisterBenchCommand(CLI::App& app, int& exit_code);
 void RegisterConvertCommand(CLI::App& app, int& exit_code);
+void RegisterSweepCommand(CLI::App& app, int& exit_code);
 
 // The file the running command works on: main() names it when an error arrives without a
 // location of its own. Main thread.

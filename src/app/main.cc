@@ -78,6 +78,7 @@ int main(int argc, char** argv) {
   urlab::app::RegisterRenderCommand(app, exit_code);
   urlab::app::RegisterBenchCommand(app, exit_code);
   urlab::app::RegisterConvertCommand(app, exit_code);
+  urlab::app::RegisterSweepCommand(app, exit_code);
 
   // Every error names a place: its own location, else the path it concerns, else the input the
   // command was working on.

@@ -26,6 +26,7 @@
 #include "net/topic_table.h"
 #include "urlab/control/controllers.h"
 #include "urlab/core/doorbell.h"
+#include "urlab/core/error.h"
 #include "urlab/world/scene.h"
 #include "urlab/world/session.h"
 
@@ -132,7 +133,7 @@ struct NetworkSubsystem::Impl {
   // Creates and binds a socket; on failure logs the endpoint (and who holds the port) and
   // returns nothing. Returns the bound endpoint (a wildcard port resolved).
   std::string Bind(std::optional<zmq::socket_t>* slot, zmq::socket_type type, const char* what,
-                   const std::string& endpoint) {
+                   const std::string& endpoint, std::vector<std::string>* failures) {
     if (endpoint.empty()) return "";
     zmq::socket_t s(*context, type);
     s.set(zmq::sockopt::linger, 0);
@@ -142,10 +143,9 @@ struct NetworkSubsystem::Impl {
     try {
       s.bind(endpoint);
     } catch (const zmq::error_t& e) {
-      const std::string owner =
-          e.num() == EADDRINUSE ? DescribePortOwner(EndpointPort(endpoint)) : std::string();
-      spdlog::error("network: cannot bind the {} socket to {}: {}{}; running without it", what,
-                    endpoint, e.what(), owner.empty() ? "" : " (held by " + owner + ")");
+      const std::string why = DescribeBindFailure(what, endpoint, e.num(), e.what());
+      failures->push_back(why);
+      if (!options.require_bind) spdlog::error("network: {}; running without it", why);
       return "";
     }
     const std::string bound = s.get(zmq::sockopt::last_endpoint);
@@ -458,12 +458,21 @@ struct NetworkSubsystem::Impl {
     }
     try {
       context.emplace(1);
-      bound.state = Bind(&pub, zmq::socket_type::xpub, "state", options.state);
-      bound.control = Bind(&sub, zmq::socket_type::sub, "control", options.control);
-      bound.info = Bind(&info, zmq::socket_type::pub, "info", options.info);
+      bound.state = Bind(&pub, zmq::socket_type::xpub, "state", options.state, &bound.failures);
+      bound.control =
+          Bind(&sub, zmq::socket_type::sub, "control", options.control, &bound.failures);
+      bound.info = Bind(&info, zmq::socket_type::pub, "info", options.info, &bound.failures);
       if (sub) sub->set(zmq::sockopt::subscribe, "");
-      if (server) bound.rpc = server->Bind(*context);
+      if (server) {
+        std::string why;
+        bound.rpc = server->Bind(*context, &why);
+        if (!why.empty()) {
+          bound.failures.push_back(why);
+          if (!options.require_bind) spdlog::error("step server: {}; running without it", why);
+        }
+      }
     } catch (const std::exception& e) {
+      bound.failures.push_back(e.what());
       spdlog::error("network: {}", e.what());
     }
     ready->set_value(bound);
@@ -559,6 +568,9 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
     so.shm.folder = options_.shm_dir;
     if (!options_.files_dir.empty()) so.files_dir = options_.files_dir;
     so.inputs = world::SceneInputFiles(session.scene_config());
+    so.scene_name = options_.scene_name;
+    so.instance = options_.instance;
+    so.server_session = options_.server_session;
     impl_->server = std::make_unique<StepServer>(
         session, impl_->tables, session.engine().SubscribeState("step_server"), so);
     impl_->server->SetRecorder(recorder_);
@@ -572,6 +584,17 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
     impl_->Run(&ready);
   });
   bound_ = bound.get();
+  if (options_.require_bind && !bound_.failures.empty()) {
+    // Before the simulation starts: a client must never drive someone else's simulator.
+    impl_->stop.store(true, std::memory_order_release);
+    impl_->bell->Ring();
+    impl_->thread.join();
+    std::string what = bound_.failures.front();
+    for (std::size_t i = 1; i < bound_.failures.size(); ++i) what += "; " + bound_.failures[i];
+    throw Error(what +
+                "; choose free ports (--ports auto, --port-base N, or the scene's network: "
+                "section), or run without them (--allow-no-network)");
+  }
   const auto shown = [](const std::string& e) { return e.empty() ? std::string("(none)") : e; };
   spdlog::info("network: state {} | control {} | info {} | rpc {}", shown(bound_.state),
                shown(bound_.control), shown(bound_.info), shown(bound_.rpc));

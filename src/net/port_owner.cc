@@ -1,7 +1,9 @@
 #include "net/port_owner.h"
 
+#include <cerrno>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 namespace urlab::net {
@@ -29,7 +31,44 @@ std::string ListeningInode(const char* table, int port) {
   return "";
 }
 
+// " (urlab run scene.yaml)": the program's file name and its arguments, shortened; the short
+// name from `comm` when the command line cannot be read.
+std::string CommandLine(const fs::path& proc) {
+  std::ifstream in(proc / "cmdline", std::ios::binary);
+  const std::string raw((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string text;
+  std::size_t start = 0;
+  while (start < raw.size()) {
+    std::size_t end = raw.find('\0', start);
+    if (end == std::string::npos) end = raw.size();
+    std::string arg = raw.substr(start, end - start);
+    if (text.empty()) arg = fs::path(arg).filename().string();  // the program: its name
+    if (!arg.empty()) text += (text.empty() ? "" : " ") + arg;
+    start = end + 1;
+  }
+  if (text.empty()) {
+    std::ifstream comm(proc / "comm");
+    std::getline(comm, text);
+  }
+  constexpr std::size_t kMax = 120;
+  if (text.size() > kMax) text = text.substr(0, kMax - 3) + "...";
+  return text.empty() ? "" : " (" + text + ")";
+}
+
 }  // namespace
+
+std::string DescribeBindFailure(const std::string& what, const std::string& endpoint, int err,
+                                const std::string& reason) {
+  const int port = EndpointPort(endpoint);
+  if (err == EADDRINUSE && port > 0) {
+    const std::string owner = DescribePortOwner(port);
+    return "port " + std::to_string(port) + " (" + what + ") is in use by " +
+           (owner.empty() ? "a process this user cannot see (another user's, or outside this "
+                            "process namespace)"
+                          : owner);
+  }
+  return "cannot bind the " + what + " socket to " + endpoint + ": " + reason;
+}
 
 std::string DescribePortOwner(int port) {
   if (port <= 0) return "";
@@ -44,10 +83,7 @@ std::string DescribePortOwner(int port) {
     for (const auto& fd : fs::directory_iterator(proc.path() / "fd", ec)) {
       std::error_code lec;
       if (fs::read_symlink(fd.path(), lec).string() != target) continue;
-      std::ifstream comm(proc.path() / "comm");
-      std::string name;
-      std::getline(comm, name);
-      return "process " + pid + (name.empty() ? "" : " (" + name + ")");
+      return "pid " + pid + CommandLine(proc.path());
     }
     ec.clear();
   }

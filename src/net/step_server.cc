@@ -12,6 +12,7 @@
 #include "net/loopback.h"
 #include "net/model_assets.h"
 #include "net/observation.h"
+#include "net/port_owner.h"
 #include "net/request_fields.h"
 #include "net/value_ranges.h"
 #include "urlab/control/controller.h"
@@ -182,15 +183,20 @@ StepServer::StepServer(world::Session& session, const std::vector<ArticulationTo
   if (mode_ == "direct") session_.engine().SetPaused(true);
 }
 
-std::string StepServer::Bind(zmq::context_t& context) {
+std::string StepServer::Bind(zmq::context_t& context, std::string* failure) {
   zmq::socket_t s(context, zmq::socket_type::router);
   s.set(zmq::sockopt::linger, 0);
   s.set(zmq::sockopt::router_mandatory, 0);
   try {
     s.bind(options_.endpoint);
   } catch (const zmq::error_t& e) {
-    spdlog::error("step server: cannot bind {}: {}; running without it", options_.endpoint,
-                  e.what());
+    const std::string why =
+        DescribeBindFailure("step server", options_.endpoint, e.num(), e.what());
+    if (failure) {
+      *failure = why;
+    } else {
+      spdlog::error("step server: {}; running without it", why);
+    }
     return "";
   }
   std::string bound = s.get(zmq::sockopt::last_endpoint);
@@ -640,6 +646,29 @@ const ArticulationTopics& StepServer::Articulation(const Json& name) const {
 // Operations
 
 StepServer::Outcome StepServer::Hello(Request& r) {
+  // `require {scene, instance, server_session}`: a client that reached another simulator than
+  // the one it was launched for (a port reused by another run) is refused before anything else.
+  if (const auto it = r.body.find("require"); it != r.body.end() && !it->is_null()) {
+    if (!it->is_object())
+      Fail("bad_value", "require must be a map of scene, instance, server_session");
+    const std::map<std::string, const std::string*> mine = {
+        {"scene", &options_.scene_name},
+        {"instance", &options_.instance},
+        {"server_session", &options_.server_session}};
+    for (const auto& [key, value] : it->items()) {
+      const auto m = mine.find(key);
+      if (m == mine.end()) {
+        Fail("bad_value", "require." + key + ": only scene, instance and server_session");
+      }
+      const std::string field = "require." + key;
+      const std::string wanted = String(value, field.c_str());
+      if (wanted != *m->second) {
+        Fail("wrong_server", "this server's " + key + " is '" + *m->second + "', not '" + wanted +
+                                 "' (scene '" + options_.scene_name + "', instance '" +
+                                 options_.instance + "')");
+      }
+    }
+  }
   Client c;
   c.id = NewSessionId(next_client_++);
   c.last_seen = r.now;
@@ -728,6 +757,9 @@ StepServer::Outcome StepServer::Hello(Request& r) {
                    {"mujoco_version", mj_versionString()},
                    {"mujoco_version_int", mj_version()},
                    {"mode", mode_},
+                   {"scene", options_.scene_name},
+                   {"instance", options_.instance},
+                   {"server_session", options_.server_session},
                    {"articulations", std::move(arts)},
                    {"entities", Json::object()},
                    {"mjb", Json::binary(mjb_)}};

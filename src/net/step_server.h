@@ -74,6 +74,8 @@ struct StepServerOptions {
   // `shm.folder` ("": /dev/shm).
   bool shared_memory = true;
   ShmOptions shm;
+  // Who this server is, in hello_ok; a client's `hello {require: {...}}` must match them.
+  std::string scene_name, instance, server_session;
 };
 
 class StepServer {
@@ -84,8 +86,9 @@ class StepServer {
   StepServer(world::Session& session, const std::vector<ArticulationTopics>& tables,
              std::shared_ptr<physics::StateSubscription> state, StepServerOptions options);
 
-  // Creates and binds the ROUTER socket; returns the bound endpoint, "" on failure (logged).
-  std::string Bind(zmq::context_t& context);
+  // Creates and binds the ROUTER socket; returns the bound endpoint, "" on failure (why in
+  // `failure`; logged when that is null).
+  std::string Bind(zmq::context_t& context, std::string* failure = nullptr);
   zmq::socket_t* socket() { return socket_ ? &*socket_ : nullptr; }
   // Reads and answers (or parks) every waiting request.
   void HandleIncoming();

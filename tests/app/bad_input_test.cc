@@ -107,7 +107,7 @@ TEST_F(CliBadInputTest, ValidateRunsEveryBeginPlayCheckAndRunAgrees) {
     EXPECT_TRUE(Has(out, want)) << want << " missing in:\n" << out;
   }
   std::string run_out, compile_out;
-  EXPECT_EQ(Urlab("run " + scene + " --duration 0.2", &run_out), 1) << run_out;
+  EXPECT_EQ(Urlab("run --ports auto " + scene + " --duration 0.2", &run_out), 1) << run_out;
   EXPECT_TRUE(Has(run_out, "overlap")) << run_out;
   EXPECT_TRUE(Has(run_out, "(and 1 more problem(s))")) << run_out;
   EXPECT_FALSE(Has(run_out, "playing")) << run_out;
@@ -127,7 +127,7 @@ TEST_F(CliBadInputTest, ValidateRunsEveryBeginPlayCheckAndRunAgrees) {
   EXPECT_TRUE(Has(out, "s2.yaml:4: a: controller gains: no actuated joint or actuator 'wrist'"))
       << out;
   EXPECT_TRUE(Has(out, "s2.yaml:5: b: keyframe 'nowhere' is not in")) << out;
-  EXPECT_EQ(Urlab("run " + dir_ + "/s2.yaml --duration 0.2", &run_out), 1) << run_out;
+  EXPECT_EQ(Urlab("run --ports auto " + dir_ + "/s2.yaml --duration 0.2", &run_out), 1) << run_out;
   EXPECT_TRUE(Has(run_out, "'wrist'")) << run_out;
 }
 
@@ -161,7 +161,7 @@ TEST_F(CliBadInputTest, ShortFromToUnderAPlacementIsAnErrorNotGarbageGeometry) {
   const std::string scene =
       Write("s.yaml", "articulations:\n  - {name: s, mjcf: stick.xml, pos: [0, 0, 1]}\n");
   std::string out;
-  EXPECT_EQ(Urlab("run " + scene + " --duration 0.3", &out), 1) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + scene + " --duration 0.3", &out), 1) << out;
   EXPECT_TRUE(Has(out, dir_ + "/stick.xml:5:")) << out;
   EXPECT_TRUE(Has(out, "fromto': expected at least 6 numbers, got 5")) << out;
   EXPECT_EQ(Urlab("validate " + scene, &out), 1) << out;
@@ -177,7 +177,7 @@ TEST_F(CliBadInputTest, ValidateWritesNothing) {
 
 TEST_F(CliBadInputTest, NumbersOnTheCommandLineAreChecked) {
   std::string out;
-  const std::string run = "run " + kArm;
+  const std::string run = "run --ports auto " + kArm;
   EXPECT_NE(Urlab(run + " --duration nan", &out), 0);
   EXPECT_TRUE(Has(out, "--duration: must be a finite number > 0, not nan")) << out;
   EXPECT_NE(Urlab(run + " --duration inf", &out), 0);
@@ -249,7 +249,7 @@ TEST_F(CliBadInputTest, ErrorsAlwaysHaveALocation) {
   const std::string scene =
       Write("s.yaml", "articulations:\n  - {name: a, mjcf: " + kArm + "}\n[1, 2]: x\n");
   std::string out;
-  EXPECT_EQ(Urlab("run " + scene, &out), 1) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + scene, &out), 1) << out;
   EXPECT_TRUE(Has(out, "urlab: error: " + scene + ":3: keys in the scene must be names")) << out;
   EXPECT_FALSE(Has(out, "unexpected")) << out;
   const std::string future = Write(
@@ -276,7 +276,7 @@ TEST_F(CliBadInputTest, SignalsDuringALongCompileStopAtOnce) {
 TEST_F(CliBadInputTest, AnInterruptedRunExitsWith128PlusTheSignal) {
   for (const auto& [sig, code, name] :
        {std::tuple{SIGINT, 130, "SIGINT"}, {SIGHUP, 129, "SIGHUP"}}) {
-    Process p("run " + SourcePath("examples/scenes/two_arms.yaml"),
+    Process p("run --ports auto " + SourcePath("examples/scenes/two_arms.yaml"),
               dir_ + "/r" + std::to_string(sig) + ".txt");
     ASSERT_TRUE(p.WaitFor("playing")) << p.output();
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
@@ -286,11 +286,11 @@ TEST_F(CliBadInputTest, AnInterruptedRunExitsWith128PlusTheSignal) {
   }
   // A run that reaches --duration is a finished run.
   std::string out;
-  EXPECT_EQ(Urlab("run " + kArm + " --duration 0.2", &out), 0) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + kArm + " --duration 0.2", &out), 0) << out;
 }
 
 TEST_F(CliBadInputTest, APausedRunSaysHowToResumeAndSigusr1Resumes) {
-  Process p("run " + kArm + " --paused --max-speed", dir_ + "/p.txt");
+  Process p("run --ports auto " + kArm + " --paused --max-speed", dir_ + "/p.txt");
   ASSERT_TRUE(p.WaitFor("paused: send SIGUSR1 to resume")) << p.output();
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   p.Signal(SIGUSR1);
@@ -315,14 +315,14 @@ TEST_F(CliBadInputTest, AMujocoErrorStopsTheRunWithItsMessageAndAHint) {
                                   "    <geom type=\"plane\" size=\"5 5 0.1\"/>\n" +
                                       bodies + "  </worldbody>\n</mujoco>\n");
   std::string out;
-  EXPECT_EQ(Urlab("run " + model + " --max-speed --duration 5", &out), 1) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + model + " --max-speed --duration 5", &out), 1) << out;
   EXPECT_TRUE(Has(out, "urlab: error: " + model + ": at t=")) << out;
   EXPECT_TRUE(Has(out, "Stack overflow")) << out;
   EXPECT_TRUE(Has(out, "hint: ")) << out;
   EXPECT_TRUE(Has(out, "nstack")) << out;
   EXPECT_TRUE(Has(out, "(stopped by a MuJoCo error)")) << out;
   // With auto-reset it goes on until --duration and finishes normally.
-  EXPECT_EQ(Urlab("--log-level warn run " + model +
+  EXPECT_EQ(Urlab("--log-level warn run --ports auto " + model +
                       " --max-speed --duration 0.5 "
                       "--reset-on-divergence",
                   &out),
@@ -341,7 +341,7 @@ TEST_F(CliBadInputTest, RepeatedMujocoWarningsAreRateLimited) {
 </mujoco>
 )");
   std::string out;
-  ASSERT_EQ(Urlab("run " + model +
+  ASSERT_EQ(Urlab("run --ports auto " + model +
                       " --max-speed --duration 2 --reset-on-divergence 2>&1 | "
                       "grep -c 'MuJoCo:'",
                   &out),

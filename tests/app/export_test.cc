@@ -86,7 +86,7 @@ TEST(ExportTest, NpzAndCsvCarryNamesAndSensorDataAndCountsMatchTheRun) {
   const std::string scene = testing::WriteTextFile(dir, "scene.yaml", kScene);
   const std::string file = dir + "/arm.urrec";
   std::string out;
-  ASSERT_EQ(RunCommand(UrlabBinary() + " record " + scene + " -o " + file +
+  ASSERT_EQ(RunCommand(UrlabBinary() + " record --ports auto " + scene + " -o " + file +
                            " --duration 1 --no-network --sensordata",
                        &out),
             0)

@@ -49,7 +49,7 @@ Outcome RecordAndCheck(const std::string& model, const std::string& file) {
   Outcome o;
   o.model = model;
   std::string out;
-  o.record = RunCommand(UrlabBinary() + " record '" + model + "' -o '" + file +
+  o.record = RunCommand(UrlabBinary() + " record --ports auto '" + model + "' -o '" + file +
                             "' --duration 1 --no-network --no-cameras",
                         &out);
   o.output = out;

@@ -59,7 +59,7 @@ TEST(RecordReplayTest, RecordsReSimulatesAndRoundTripsThroughCsv) {
   const std::string dir = testing::MakeTempDir("record_replay");
   const std::string file = dir + "/h.urrec";
   std::string out;
-  ASSERT_EQ(RunCommand(UrlabBinary() + " record " + SourcePath("examples/scenes/humanoid_pd.yaml") +
+  ASSERT_EQ(RunCommand(UrlabBinary() + " record --ports auto " + SourcePath("examples/scenes/humanoid_pd.yaml") +
                            " -o " + file + " --duration 1.5 --no-network",
                        &out),
             0)
@@ -120,7 +120,7 @@ TEST(RecordReplayTest, KilledRecorderLeavesAFileWithAllButTheLastSecond) {
   const std::string dir = testing::MakeTempDir("record_kill");
   const std::string file = dir + "/k.urrec";
   const std::string log = dir + "/log.txt";
-  const std::string cmd = "exec " + UrlabBinary() + " record " +
+  const std::string cmd = "exec " + UrlabBinary() + " record --ports auto " +
                           SourcePath("examples/scenes/humanoid_pd.yaml") + " -o " + file +
                           " --no-network > " + log + " 2>&1";
   const char* argv[] = {"/bin/sh", "-c", cmd.c_str(), nullptr};

@@ -95,7 +95,7 @@ TEST_F(ValidateRunAgreeTest, TheNewerKeysAreRefusedByValidateAndRunAtTheirLines)
     EXPECT_TRUE(Has(out, want)) << want << " missing in:\n" << out;
     EXPECT_FALSE(Has(out, ": OK")) << out;
     std::string run;
-    EXPECT_EQ(Urlab("run " + scene + " --duration 0.5 --no-network", &run), 1) << c.yaml << run;
+    EXPECT_EQ(Urlab("run --ports auto " + scene + " --duration 0.5 --no-network", &run), 1) << c.yaml << run;
     EXPECT_TRUE(Has(run, want)) << want << " missing in:\n" << run;
     EXPECT_FALSE(Has(run, "summary:")) << run;
   }
@@ -110,7 +110,7 @@ TEST_F(ValidateRunAgreeTest, TheNewerKeysAreRefusedByValidateAndRunAtTheirLines)
             "network: {enabled: false, camera_base_port: 6000}\n");
   std::string out;
   EXPECT_EQ(Urlab("validate " + good, &out), 0) << out;
-  EXPECT_EQ(Urlab("run " + good + " --duration 0.3 --no-network", &out), 0) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + good + " --duration 0.3 --no-network", &out), 0) << out;
 }
 
 TEST_F(ValidateRunAgreeTest, InfinityIsRefusedLikeNaN) {
@@ -122,7 +122,7 @@ TEST_F(ValidateRunAgreeTest, InfinityIsRefusedLikeNaN) {
     std::string out;
     EXPECT_EQ(Urlab("validate " + model, &out), 1) << attributes << out;
     EXPECT_TRUE(Has(out, model + ":3:")) << attributes << out;
-    EXPECT_EQ(Urlab("run " + model + " --duration 0.3 --no-network", &out), 1) << attributes << out;
+    EXPECT_EQ(Urlab("run --ports auto " + model + " --duration 0.3 --no-network", &out), 1) << attributes << out;
   }
 }
 
@@ -138,7 +138,7 @@ TEST_F(ValidateRunAgreeTest, AMeshFileThatIsNotAFileSaysWhatItIs) {
     EXPECT_EQ(Urlab("validate " + model, &out), 1) << out;
     EXPECT_TRUE(Has(out, model + ":3: <mesh> file '" + file + "' " + what)) << out;
     EXPECT_FALSE(Has(out, "not found")) << out;
-    EXPECT_EQ(Urlab("run " + model + " --duration 0.3 --no-network", &out), 1) << out;
+    EXPECT_EQ(Urlab("run --ports auto " + model + " --duration 0.3 --no-network", &out), 1) << out;
     EXPECT_TRUE(Has(out, what)) << out;
   }
 }
@@ -154,7 +154,7 @@ TEST_F(ValidateRunAgreeTest, PropAndTerrainErrorsNameTheSceneLine) {
   std::string out;
   EXPECT_EQ(Urlab("validate " + prop, &out), 1) << out;
   EXPECT_TRUE(Has(out, prop + ":4: box: " + dir_ + "/empty.stl")) << out;
-  EXPECT_EQ(Urlab("run " + prop + " --duration 0.3 --no-network", &out), 1) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + prop + " --duration 0.3 --no-network", &out), 1) << out;
   EXPECT_TRUE(Has(out, prop + ":4: box: ")) << out;
   const std::string terrain =
       Write("t.yaml", "articulations:\n  - {name: a, mjcf: " + arm +
@@ -191,7 +191,7 @@ TEST_F(ValidateRunAgreeTest, ValidateWritesNothingNotEvenIntoTheCache) {
   ASSERT_EQ(Urlab("validate --bridge-report " + scene, &out), 0) << out;
   EXPECT_FALSE(fs::exists(dir_ + "/cache")) << out;
   // A run does use the cache (so the check above could fail).
-  ASSERT_EQ(Urlab("run " + scene + " --duration 0.3 --no-network", &out), 0) << out;
+  ASSERT_EQ(Urlab("run --ports auto " + scene + " --duration 0.3 --no-network", &out), 0) << out;
   EXPECT_TRUE(fs::exists(dir_ + "/cache")) << out;
 }
 
@@ -207,7 +207,7 @@ TEST_F(ValidateRunAgreeTest, ValidateOfAnEngineErrorNamesTheFileAndGivesTheHint)
 </mujoco>
 )");
   std::string run, out;
-  const int run_code = Urlab("run " + model + " --duration 0.3 --no-network", &run);
+  const int run_code = Urlab("run --ports auto " + model + " --duration 0.3 --no-network", &run);
   EXPECT_EQ(Urlab("validate " + model, &out), 1) << out;
   EXPECT_TRUE(Has(out, "error: " + model + ": ")) << out;
   EXPECT_TRUE(Has(out, "Stack overflow")) << out;
@@ -226,13 +226,13 @@ TEST_F(ValidateRunAgreeTest, ADivergedRunStopsWithExit1AsTheHelpSays) {
 </mujoco>
 )");
   std::string out;
-  EXPECT_EQ(Urlab("run " + model + " --max-speed --duration 5 --no-network", &out), 1) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + model + " --max-speed --duration 5 --no-network", &out), 1) << out;
   EXPECT_TRUE(Has(out, "urlab: error: " + model + ": at t=")) << out;
   EXPECT_TRUE(Has(out, "simulation diverged")) << out;
   EXPECT_TRUE(Has(out, "(stopped: the simulation diverged)")) << out;
   EXPECT_TRUE(Has(out, "--reset-on-divergence")) << out;
   // With auto-reset it goes on to --duration and exits 0.
-  EXPECT_EQ(Urlab("--log-level error run " + model +
+  EXPECT_EQ(Urlab("--log-level error run --ports auto " + model +
                       " --max-speed --duration 0.5 --no-network --reset-on-divergence",
                   &out),
             0)
@@ -248,11 +248,11 @@ TEST_F(ValidateRunAgreeTest, APacedRunThatCannotKeepUpSaysSoOnce) {
   const std::string scene = Write(
       "slow.yaml", "articulations:\n  - {name: a, mjcf: " + arm + "}\noptions: {timestep: 1e-6}\n");
   std::string out;
-  EXPECT_EQ(Urlab("run " + scene + " --duration 6 --no-network --no-cameras", &out), 0) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + scene + " --duration 6 --no-network --no-cameras", &out), 0) << out;
   // Once (3 s behind), not once a second: the next reminder would come 30 s later.
   EXPECT_EQ(Count(out, "cannot keep up"), 1) << out;
   // As fast as possible is never "behind".
-  EXPECT_EQ(Urlab("run " + scene + " --duration 4 --max-speed --no-network", &out), 0) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + scene + " --duration 4 --max-speed --no-network", &out), 0) << out;
   EXPECT_EQ(Count(out, "cannot keep up"), 0) << out;
 }
 

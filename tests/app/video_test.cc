@@ -28,7 +28,7 @@ TEST(RecordVideo, WritesTheCameraToAnMp4) {
   const std::string dir = testing::MakeTempDir("video");
   const std::string out = dir + "/wrist.mp4";
   std::string log;
-  ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " record " +
+  ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " record --ports auto " +
                                     testing::TestData("cameras/two_cameras.yaml") +
                                     " --no-network --duration 1 --video rig/wrist " + out,
                                 &log),
@@ -50,13 +50,13 @@ TEST(RecordVideo, WritesTheCameraToAnMp4) {
 TEST(RecordVideo, BadCameraOrExtensionIsAClearError) {
   const std::string dir = testing::MakeTempDir("video_bad");
   std::string log;
-  EXPECT_NE(testing::RunCommand(testing::UrlabBinary() + " record " +
+  EXPECT_NE(testing::RunCommand(testing::UrlabBinary() + " record --ports auto " +
                                     testing::TestData("cameras/two_cameras.yaml") +
                                     " --no-network --duration 1 --video rig/nose " + dir + "/a.mp4",
                                 &log),
             0);
   EXPECT_NE(log.find("no camera 'nose'"), std::string::npos) << log;
-  EXPECT_NE(testing::RunCommand(testing::UrlabBinary() + " record " +
+  EXPECT_NE(testing::RunCommand(testing::UrlabBinary() + " record --ports auto " +
                                     testing::TestData("cameras/two_cameras.yaml") +
                                     " --no-network --duration 1 --video rig/top " + dir + "/a.avi",
                                 &log),
@@ -316,7 +316,7 @@ TEST(ReplayView, WatchesARecordingWithTheTimelineAtAnExactTime) {
   const std::string xml = testing::WriteTextFile(dir, "pendulum.xml", kPendulumXml);
   const std::string rec = dir + "/fall.urrec";
   std::string log;
-  ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " record " + xml + " -o " + rec +
+  ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " record --ports auto " + xml + " -o " + rec +
                                     " --no-network --no-cameras --max-speed --duration 0.3",
                                 &log),
             0)

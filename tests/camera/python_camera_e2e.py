@@ -22,14 +22,12 @@ def main():
     tmp = tempfile.mkdtemp(prefix="urlab_cam_")
     scene = os.path.join(tmp, "scene.yaml")
     model = os.path.join(SOURCE, "tests", "data", "cameras", "rig.xml")
-    base = 20000 + os.getpid() % 20000  # camera ports: away from other tests' fixed ones
     with open(scene, "w") as f:
         f.write(f"""network:
   state: "tcp://127.0.0.1:*"
   control: "tcp://127.0.0.1:*"
   info: "tcp://127.0.0.1:*"
   rpc: "tcp://127.0.0.1:*"
-  camera_base_port: "{base}"
 articulations:
   - name: rig
     mjcf: {model}
@@ -41,7 +39,7 @@ cameras:
   streams:
     rig/top: {{modes: [rgb, depth, segmentation]}}
 """)
-    proc, endpoints = start_urlab(URLAB, scene)
+    proc, endpoints = start_urlab(URLAB, scene, "--ports", "auto")  # cameras' ports too
     try:
         with StreamClient(state=endpoints[0], control=endpoints[1], info=endpoints[2]) as client:
             robots = client.discover(timeout=10, expect=["rig"])

@@ -4,6 +4,7 @@
 #include "urlab/net/network.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -16,6 +17,7 @@
 #include "support/mujoco_test.h"
 #include "support/wait.h"
 #include "urlab/control/controllers.h"
+#include "urlab/core/error.h"
 #include "urlab/wire/wire.h"
 #include "urlab/world/manager.h"
 
@@ -295,6 +297,35 @@ TEST_F(NetworkTest, PortInUseIsReportedAndTheSimulationRuns) {
   const std::uint64_t before = m.session().engine().step_count();
   ASSERT_TRUE(WaitFor([&] { return m.session().engine().step_count() > before + 50; }));
   m.EndPlay();
+}
+
+// require_bind (a headless `urlab run`): BeginPlay throws before the physics starts, naming the
+// port, the socket and the process holding it (this one); nothing is left playing.
+TEST_F(NetworkTest, ATakenPortStopsBeginPlayWhenTheNetworkIsRequired) {
+  zmq::context_t ctx(1);
+  zmq::socket_t squatter(ctx, zmq::socket_type::router);
+  squatter.bind("tcp://127.0.0.1:*");
+  const std::string taken = squatter.get(zmq::sockopt::last_endpoint);
+  const std::string port = taken.substr(taken.rfind(':') + 1);
+  NetworkOptions o;
+  o.state = o.control = o.info = "tcp://127.0.0.1:*";
+  o.rpc = taken;
+  o.require_bind = true;
+  world::Manager m;
+  m.AddSubsystem(std::make_unique<NetworkSubsystem>(o));
+  try {
+    m.BeginPlay(world::ParseScene("articulations:\n  - {name: a, mjcf: robot.xml}\n",
+                                  dir_ + "/scene.yaml"));
+    FAIL() << "BeginPlay went on with port " << port << " taken";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("port " + port + " (step server) is in use by pid " +
+                        std::to_string(::getpid()) + " ("),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("--allow-no-network"), std::string::npos) << what;
+  }
+  EXPECT_FALSE(m.playing());
 }
 
 }  // namespace

@@ -61,11 +61,11 @@ launchers:
             print(f"shoulder reached {q:.3f}, elbow {e:.3f}; sensors {sorted(sensors)}")
         # Lockstep through the step server: exact step counts, the PD target reached.
         env = UrlabEnv("arm", endpoint=endpoints[3], frame_skip=5)
-        obs = env.reset()
+        obs, _ = env.reset()
         assert set(obs) >= {"qpos", "qvel", "ctrl", "act", "sensors"}, obs.keys()
         step0 = None
         for i in range(300):
-            obs, info = env.step([-0.4, 0.6])
+            obs, _, _, _, info = env.step([-0.4, 0.6])
             if step0 is None:
                 step0 = info["step"]
             elif info["step"] != step0 + 5 * i:

@@ -29,3 +29,27 @@ def start_urlab(urlab, scene, *extra, timeout=30):
         if m:
             return proc, m.groups()
     fail("no network line in urlab's log", proc)
+
+
+def start_announced(urlab, scene, *extra, timeout=60, announce=None):
+    """Runs `urlab run SCENE --ports auto --announce FILE --duration 120 EXTRA...`; returns
+    (process, announce dict) once the file appears (the system chose every port)."""
+    import json
+    import os
+    import tempfile
+    if announce is None:
+        fd, announce = tempfile.mkstemp(prefix="urlab_announce_", suffix=".json")
+        os.close(fd)
+        os.unlink(announce)
+    proc = subprocess.Popen([urlab, "run", scene, "--ports", "auto", "--announce", announce,
+                             "--duration", "120", *extra],
+                            stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if os.path.exists(announce):
+            with open(announce) as f:
+                return proc, json.load(f)
+        if proc.poll() is not None:
+            fail(f"urlab exited ({proc.returncode}) before announcing", proc)
+        time.sleep(0.05)
+    fail(f"no announce file after {timeout} s", proc)

@@ -14,17 +14,23 @@ camera streams (numpy images from discovery's camera_list):
     from urlab_client import CameraClient
     image, meta = CameraClient(robots["arm"].cameras[0]).receive()
 
-and the step server (lockstep learning loops):
+and the step server (lockstep learning loops), shaped like gymnasium (without requiring it):
 
     from urlab_client import UrlabEnv
-    env = UrlabEnv("arm")                    # tcp://127.0.0.1:5559, direct mode
-    obs = env.reset()
-    obs, info = env.step([0.1, -0.2])
+    with UrlabEnv("arm", max_episode_steps=100) as env:   # tcp://127.0.0.1:5559, direct mode
+        obs, info = env.reset(seed=0)
+        obs, reward, terminated, truncated, info = env.step([0.1, -0.2])
+
+UrlabVectorEnv steps many servers together (urlab_client.vector); urlab_client.cluster starts
+servers on a Dask cluster and returns one.
 """
 from urlab_client.camera import CameraClient, decode_frame
-from urlab_client.step import StepClient, UrlabEnv, UrlabError
+from urlab_client.step import StepClient, UrlabError
+from urlab_client.env import UrlabEnv
+from urlab_client.vector import UrlabVectorEnv
 from urlab_client.stream import Robot, StreamClient
 from urlab_client import wire
 
-__all__ = ["CameraClient", "decode_frame", "Robot", "StepClient", "StreamClient", "UrlabEnv", "UrlabError", "wire"]
+__all__ = ["CameraClient", "decode_frame", "Robot", "StepClient", "StreamClient", "UrlabEnv", "UrlabError",
+           "UrlabVectorEnv", "wire"]
 __version__ = "0.1.0"

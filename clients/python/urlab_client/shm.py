@@ -142,6 +142,11 @@ class ShmChannel:
     def request(self, payload, timeout):
         """Sends `payload` (bytes) and returns a memoryview of the reply's bytes in the mapping,
         valid until the next request (release it before close())."""
+        return self.wait(self.post(payload), timeout)
+
+    def post(self, payload):
+        """The first half of request(): writes the request and wakes the server; returns the
+        request's sequence number for wait() (one request in flight at a time)."""
         n = len(payload)
         if n > self._req_cap:
             raise ShmError(f"shared memory {self.path}: a request of {n} bytes "
@@ -159,8 +164,13 @@ class ShmChannel:
             try:
                 self._wake.send(b"\1")
             except OSError:
-                pass  # a wake-up is pending already, or the server is gone (seen below)
-        start = time.perf_counter()
+                pass  # a wake-up is pending already, or the server is gone (seen in wait)
+        self._posted = time.perf_counter()
+        return seq
+
+    def wait(self, seq, timeout):
+        """The second half of request(): the reply to request `seq` as a memoryview."""
+        start = self._posted
         rep_seq = self._rep_seq
         if rep_seq.value != seq:
             # Spin about as long as the server took recently, then sleep on the word.

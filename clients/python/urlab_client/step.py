@@ -45,6 +45,20 @@ def _arrays(value):
     return value
 
 
+def decode_observation(reply):
+    """A step/reset/forward reply with numpy arrays, and camera frames as numpy images."""
+    cameras = reply.pop("cameras", None)
+    reply = _arrays(reply)
+    if cameras is not None:
+        for streams in cameras.values():
+            for frame in streams.values():
+                if "data" in frame:
+                    frame["image"] = decode_frame(frame.pop("data"), frame["mode"],
+                                                  frame["width"], frame["height"])
+        reply["cameras"] = cameras
+    return reply
+
+
 class StepClient:
     """One session with the step server. Observers read; the first client that steps (or sends
     force=True) holds the driver lease until bye() or silence past the lease timeout.
@@ -56,9 +70,12 @@ class StepClient:
     ConnectionError) within the timeout."""
 
     def __init__(self, endpoint="tcp://127.0.0.1:5559", observations="standard", timeout=10.0,
-                 context=None, binary_arrays=True, shared_memory=True):
+                 context=None, binary_arrays=True, shared_memory=True, require=None):
+        """require: {"scene", "instance", "server_session"} the server must have (an announce
+        file's values): another simulator on the port answers UrlabError "wrong_server"."""
         self._timeout = timeout
         self._channel = None
+        self._posted = None  # the shared-memory request awaiting receive_reply
         self._ctx = context or zmq.Context.instance()
         self._socket = self._ctx.socket(zmq.REQ)
         self._socket.setsockopt(zmq.LINGER, 0)
@@ -67,6 +84,8 @@ class StepClient:
         self._seq = itertools.count(1)
         self.session_id = None
         ask = {"shm": True} if shared_memory and _shm.available() else {}
+        if require:
+            ask["require"] = dict(require)
         self.info = self.hello(observations=observations,
                                arrays="binary" if binary_arrays else "list", **ask)
         offer = self.info.get("shm")
@@ -100,23 +119,35 @@ class StepClient:
 
     def call(self, op, **fields):
         """Sends one request and returns the decoded reply (raises UrlabError on an error)."""
+        self.send_request(op, **fields)
+        return self.receive_reply(op)
+
+    def send_request(self, op, **fields):
+        """The first half of call(): sends the request without waiting (one at a time; a vector
+        env sends to every server, then gathers with receive_reply)."""
         request = {"op": op, "seq": next(self._seq), **fields}
         if self.session_id and op not in ("hello", "meta"):
             request["session_id"] = self.session_id
         if self._channel is not None and op != "hello":  # hello (and its assets) over ZeroMQ
-            view = self._channel.request(msgpack.packb(request, use_bin_type=True), self._timeout)
+            self._posted = self._channel.post(msgpack.packb(request, use_bin_type=True))
+            return
+        self._posted = None
+        self._socket.send(msgpack.packb(request, use_bin_type=True))
+
+    def receive_reply(self, op):
+        """The second half of call(): waits for the reply to the request sent."""
+        if self._posted is not None:
+            view = self._channel.wait(self._posted, self._timeout)
+            self._posted = None
             try:
                 reply = msgpack.unpackb(view, raw=False)
             finally:
                 view.release()
-            if reply.get("op") == "error":
-                raise UrlabError(reply.get("code"), reply.get("message", ""))
-            return reply
-        self._socket.send(msgpack.packb(request, use_bin_type=True))
-        try:
-            reply = msgpack.unpackb(self._socket.recv(), raw=False)
-        except zmq.Again:
-            raise TimeoutError(f"no reply to '{op}' from the step server") from None
+        else:
+            try:
+                reply = msgpack.unpackb(self._socket.recv(), raw=False)
+            except zmq.Again:
+                raise TimeoutError(f"no reply to '{op}' from the step server") from None
         if reply.get("op") == "error":
             raise UrlabError(reply.get("code"), reply.get("message", ""))
         return reply
@@ -146,17 +177,7 @@ class StepClient:
             fields["observations"] = observations
         if force:
             fields["force"] = True
-        reply = self.call("step", **fields)
-        cameras = reply.pop("cameras", None)
-        reply = _arrays(reply)
-        if cameras is not None:
-            for streams in cameras.values():
-                for frame in streams.values():
-                    if "data" in frame:
-                        frame["image"] = decode_frame(frame.pop("data"), frame["mode"],
-                                                      frame["width"], frame["height"])
-            reply["cameras"] = cameras
-        return reply
+        return decode_observation(self.call("step", **fields))
 
     def reset(self, keyframe=None, qpos=None):
         """Resets to a keyframe (short name, e.g. "home", when only one articulation has it, or the
@@ -322,35 +343,4 @@ class StepClient:
         return path
 
 
-class UrlabEnv:
-    """A learning-loop environment over the step server in lockstep (direct) mode.
-
-    reset() returns the observation of one articulation; step(action) applies the action (one
-    value per actuator, in discovery order) for `frame_skip` physics steps and returns
-    (observation, info). Observations are {"qpos", "qvel", "ctrl", "sensors"...} numpy arrays.
-    """
-
-    def __init__(self, articulation, endpoint="tcp://127.0.0.1:5559", frame_skip=1,
-                 keyframe=None):
-        self.client = StepClient(endpoint)
-        self.articulation = articulation
-        self.frame_skip = frame_skip
-        self.keyframe = keyframe
-        arts = {a["name"]: a for a in self.client.info["articulations"]}
-        if articulation not in arts:
-            raise KeyError(f"no articulation '{articulation}' (have {sorted(arts)})")
-        self.actuators = [a["name"] for a in arts[articulation]["actuators"]]
-        self.client.set_mode("direct")
-
-    def reset(self):
-        return self._obs(self.client.reset(keyframe=self.keyframe))
-
-    def step(self, action):
-        reply = self.client.step(self.frame_skip, controls={self.articulation: list(action)})
-        return self._obs(reply), {"time": reply["time"], "step": reply["step"]}
-
-    def close(self):
-        self.client.close()
-
-    def _obs(self, reply):
-        return reply["per_articulation"][self.articulation]
+# UrlabEnv (gymnasium-shaped) lives in urlab_client/env.py, UrlabVectorEnv in vector.py.

@@ -57,6 +57,14 @@ struct NetworkOptions {
   // ZeroMQ only), made in `shm_dir` ("": /dev/shm, else the temporary folder).
   bool shared_memory = true;
   std::string shm_dir;
+  // A socket that cannot bind makes BeginPlay throw (before the simulation starts), naming the
+  // port and the process holding it; false: logged, and the run goes on without that socket.
+  bool require_bind = false;
+  // Who this server is, for the step server's hello_ok (clients may require them): the scene's
+  // name, an instance id, and the id of this run (unique per start; "" : none given).
+  std::string scene_name;
+  std::string instance;
+  std::string server_session;
 };
 
 // The endpoints a scene file's `network:` section names (protocol.md's defaults otherwise).
@@ -90,6 +98,7 @@ class NetworkSubsystem : public world::Subsystem {
   // Main thread, after BeginPlay.
   struct Endpoints {
     std::string state, control, info, rpc;
+    std::vector<std::string> failures;  // why a configured socket did not bind, one line each
   };
   const Endpoints& endpoints() const { return bound_; }
   // Any thread.

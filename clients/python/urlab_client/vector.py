@@ -1,0 +1,262 @@
+"""UrlabVectorEnv: many environments stepped together, numpy-batched, shaped like gymnasium's
+vector envs (a gymnasium.vector.VectorEnv when gymnasium is importable).
+
+    from urlab_client import UrlabVectorEnv
+    envs = UrlabVectorEnv.over_servers(["tcp://127.0.0.1:41001", "tcp://127.0.0.1:41002"], "arm")
+    obs, infos = envs.reset(seed=0)                  # obs["qpos"].shape == (2, nq)
+    obs, rewards, terminated, truncated, infos = envs.step(envs.action_space.sample())
+    envs.close()
+
+- step() sends every sub-environment's request first, then gathers the replies, so N servers
+  (N processes, on one machine or many) step in parallel.
+- Autoreset is gymnasium's default, next-step (metadata["autoreset_mode"]): the step after a
+  sub-environment's episode ended ignores its action, resets it (unseeded, no options) and
+  returns its first observation with reward 0 and terminated = truncated = False.
+- infos: {key: array over envs, "_key": bool mask of the envs that gave it}.
+- A server that stops answering (its process or machine died) ends its episode as truncated
+  (infos["server_lost"]); with a `replace(i)` callback (urlab_client.cluster gives one) the
+  sub-environment comes back, connected to a replacement server, at its autoreset.
+
+Backends: `_ServerBackend` drives one UrlabEnv per server. A batched server (many
+environments in one URLab process) plugs in as another backend with the same four methods
+(send_reset/receive_reset/send_step/receive_step per index), so this class and its autoreset
+and batching stay as they are.
+"""
+from collections import OrderedDict
+
+import numpy as np
+import zmq
+
+from urlab_client import spaces
+from urlab_client.env import UrlabEnv
+from urlab_client.step import UrlabError
+
+try:  # pragma: no cover - depends on the machine
+    import gymnasium as _gym
+    from gymnasium.vector import VectorEnv as _VectorBase
+    try:
+        from gymnasium.vector import AutoresetMode as _AutoresetMode
+        NEXT_STEP = _AutoresetMode.NEXT_STEP
+    except ImportError:
+        NEXT_STEP = "NextStep"
+except ImportError:
+    _gym = None
+    _VectorBase = object
+    NEXT_STEP = "NextStep"
+
+# What a lost server looks like to a client: no reply in time, or a socket that cannot go on.
+LOST = (TimeoutError, zmq.ZMQError)
+
+
+def _stack(values):
+    """A list of observations (dicts of arrays) as one dict of arrays with a leading env axis."""
+    first = values[0]
+    if isinstance(first, dict):
+        return OrderedDict((k, _stack([v[k] for v in values])) for k in first)
+    return np.stack([np.asarray(v) for v in values])
+
+
+def _batch_infos(infos):
+    out = {}
+    n = len(infos)
+    for i, info in enumerate(infos):
+        for key, value in info.items():
+            if key not in out:
+                dtype = type(value) if isinstance(value, (bool, int, float)) else object
+                out[key] = np.zeros(n, dtype=dtype)
+                out["_" + key] = np.zeros(n, dtype=bool)
+            out[key][i] = value
+            out["_" + key][i] = True
+    return out
+
+
+class _ServerBackend:
+    """One UrlabEnv (one step server) per sub-environment."""
+
+    def __init__(self, envs, replace=None):
+        self.envs = list(envs)
+        self.replace = replace
+
+    def __len__(self):
+        return len(self.envs)
+
+    def renew(self, i):
+        """Connects sub-environment i to a replacement server (replace(i) makes its env)."""
+        old = self.envs[i]
+        try:
+            old.client._socket.close(0)  # no bye: the server is gone
+        except Exception:  # noqa: BLE001
+            pass
+        old.client = None
+        self.envs[i] = self.replace(i)
+
+    def close(self):
+        for env in self.envs:
+            env.close()
+
+
+class UrlabVectorEnv(_VectorBase):
+    """num_envs sub-environments with identical spaces (see the module's docstring)."""
+
+    metadata = {"autoreset_mode": NEXT_STEP, "render_modes": []}
+    render_mode = None
+    spec = None
+
+    def __init__(self, envs, replace=None, on_close=None):
+        """envs: UrlabEnv instances (one per server). replace(i): a new UrlabEnv for
+        sub-environment i when its server was lost (None: a lost server raises). on_close: called
+        once by close() after the envs (a cluster's shutdown)."""
+        self._backend = _ServerBackend(envs, replace)
+        self._on_close = on_close
+        self.num_envs = len(self._backend)
+        if self.num_envs == 0:
+            raise ValueError("UrlabVectorEnv needs at least one environment")
+        first = self._backend.envs[0]
+        for i, env in enumerate(self._backend.envs[1:], 1):
+            if env.action_space.shape != first.action_space.shape or \
+                    env.observation_space != first.observation_space:
+                raise ValueError(f"environment {i} has other spaces than environment 0")
+        self.single_observation_space = first.observation_space
+        self.single_action_space = first.action_space
+        self.observation_space = spaces.batch_space(first.observation_space, self.num_envs)
+        self.action_space = spaces.batch_space(first.action_space, self.num_envs)
+        self._autoreset = np.zeros(self.num_envs, dtype=bool)
+        self._last_obs = [None] * self.num_envs
+        self._closed = False
+
+    @classmethod
+    def over_servers(cls, endpoints, articulation, replace=None, on_close=None, **env_options):
+        """A vector env of one UrlabEnv per step-server endpoint (UrlabEnv's options apply to
+        each; `require` may be a list, one per endpoint)."""
+        require = env_options.pop("require", None)
+        envs = []
+        try:
+            for i, endpoint in enumerate(endpoints):
+                r = require[i] if isinstance(require, (list, tuple)) else require
+                envs.append(UrlabEnv(articulation, endpoint=endpoint, require=r, **env_options))
+        except BaseException:
+            for env in envs:
+                env.close()
+            raise
+        return cls(envs, replace=replace, on_close=on_close)
+
+    @property
+    def envs(self):
+        return self._backend.envs
+
+    @property
+    def unwrapped(self):
+        return self
+
+    @property
+    def np_random(self):
+        return self._backend.envs[0].np_random
+
+    # ---- gymnasium's vector API
+    def reset(self, *, seed=None, options=None):
+        """seed: None, an int (env i gets seed + i) or a list; options: UrlabEnv.reset's, plus
+        "reset_mask" (reset only those envs; the others keep their observation)."""
+        if seed is None:
+            seeds = [None] * self.num_envs
+        elif isinstance(seed, (int, np.integer)):
+            seeds = [int(seed) + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"{len(seeds)} seeds for {self.num_envs} environments")
+        options = dict(options or {})
+        mask = np.asarray(options.pop("reset_mask", np.ones(self.num_envs, dtype=bool)), bool)
+        infos = [{} for _ in range(self.num_envs)]
+        which = [i for i in range(self.num_envs) if mask[i]]
+        for i in which:
+            self._backend.envs[i].send_reset(options, seed=seeds[i])
+        for i in which:
+            self._last_obs[i], infos[i] = self._backend.envs[i].receive_reset()
+            self._autoreset[i] = False
+        return _stack(self._last_obs), _batch_infos(infos)
+
+    def step(self, actions):
+        actions = np.asarray(actions, dtype=np.float64)
+        if actions.shape != self.action_space.shape:
+            raise ValueError(f"actions of shape {actions.shape}, expected "
+                             f"{self.action_space.shape}")
+        n = self.num_envs
+        rewards = np.zeros(n, dtype=np.float64)
+        terminated = np.zeros(n, dtype=bool)
+        truncated = np.zeros(n, dtype=bool)
+        infos = [{} for _ in range(n)]
+        resetting = self._autoreset.copy()
+        sent = np.zeros(n, dtype=bool)
+        # 1. Send: a reset where the last step ended an episode, else the action.
+        for i in range(n):
+            try:
+                if resetting[i]:
+                    if self._backend.envs[i].client is None:  # its server was lost
+                        self._backend.renew(i)
+                    self._backend.envs[i].send_reset()
+                else:
+                    self._backend.envs[i].send_step(actions[i])
+                sent[i] = True
+            except LOST:
+                self._lose(i, truncated, infos)
+        # 2. Gather.
+        for i in range(n):
+            if not sent[i]:
+                continue
+            env = self._backend.envs[i]
+            try:
+                if resetting[i]:
+                    self._last_obs[i], infos[i] = env.receive_reset()
+                else:
+                    (self._last_obs[i], rewards[i], terminated[i], truncated[i],
+                     infos[i]) = env.receive_step()
+            except LOST:
+                self._lose(i, truncated, infos)
+            except UrlabError as e:
+                if e.code not in ("session_expired", "shutting_down"):
+                    raise
+                self._lose(i, truncated, infos)
+        self._autoreset = terminated | truncated
+        return _stack(self._last_obs), rewards, terminated, truncated, _batch_infos(infos)
+
+    def _lose(self, i, truncated, infos):
+        """Sub-environment i's server is gone: its episode ends as truncated, with its last
+        observation; it comes back (a replacement server) at its autoreset."""
+        if self._backend.replace is None:
+            raise RuntimeError(f"environment {i}: its server ({self._backend.envs[i].endpoint}) "
+                               "stopped answering, and this vector env has no replace callback")
+        env = self._backend.envs[i]
+        try:
+            env.client._socket.close(0)
+        except Exception:  # noqa: BLE001
+            pass
+        env.client = None
+        truncated[i] = True
+        infos[i] = {"server_lost": True}
+        if self._last_obs[i] is None:
+            self._last_obs[i] = env.observation_space.sample()
+
+    def close(self, **kwargs):
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            for env in self._backend.envs:
+                if env.client is not None:
+                    env.close()
+        finally:
+            if self._on_close:
+                self._on_close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:  # noqa: BLE001
+            pass
