@@ -14,6 +14,8 @@ PACKAGES=(
   python3 python3-zmq python3-msgpack python3-numpy
   # urlab_client.cluster and `urlab sweep`: Dask distributed, YAML
   python3-distributed python3-yaml
+  # examples/python/learn_reach.py (PPO through the vector env; CI runs a short smoke of it)
+  python3-torch
   libglfw3-dev libimgui-dev libstb-dev libgl1-mesa-dri xvfb xauth ffmpeg
   libassimp-dev libembree-dev libbullet-extras-dev libbullet-dev
   # cameras: off-screen rendering (EGL surfaceless on Mesa, OSMesa fallback)
