@@ -92,7 +92,8 @@ void NetworkSourcesToUi(world::SceneConfig& scene) {
   if (changed) spdlog::info("no network: the network control source is replaced by ui");
 }
 
-int Run(const RunArgs& args) {
+// `reopen`: the file the viewer asked to play next (its reload, a dropped scene), "" when none.
+int Run(const RunArgs& args, std::string* reopen = nullptr) {
   CurrentInput() = args.scene;
   world::ManagerOptions options;
   options.speed_percent = args.speed;
@@ -261,6 +262,7 @@ int Run(const RunArgs& args) {
   }
   if (video) video->Poll();
   manager.EndPlay();
+  if (reopen && viewer_sub) *reopen = viewer_sub->reload_request();
   FlushMujocoWarningCounts();
   // The run's products: each failure is reported with what was kept, and makes the exit code 1.
   std::vector<std::string> failures;
@@ -410,6 +412,50 @@ void AddViewOptions(CLI::App* cmd, RunArgs& args) {
       ->check(CLI::Range(1, 240));
   cmd->add_flag_callback(
       "--no-panel", [&v] { v.panel = false; }, "no simulate panel");
+  // Render quality: these win over the scene's `viewer:` section; by default all are on (with
+  // a 2048 shadow map under a software renderer).
+  const auto on_off = [cmd](const char* name, std::optional<bool>& value, const char* what) {
+    cmd->add_flag_callback(
+        std::string("--") + name, [&value] { value = true; }, std::string("draw ") + what);
+    cmd->add_flag_callback(
+        std::string("--no-") + name, [&value] { value = false; },
+        std::string("do not draw ") + what);
+  };
+  on_off("shadows", v.shadows, "shadows (default on; scene: viewer.shadows)");
+  on_off("reflections", v.reflections,
+         "reflections on reflective floors (default on; scene: viewer.reflections)");
+  on_off("skybox", v.skybox,
+         "the sky: the model's skybox texture, else a gradient (default on; scene: "
+         "viewer.skybox)");
+  cmd->add_option("--render-scale", v.render_scale,
+                  "3D view resolution per window pixel, 0.25 to 2 (below 1: faster under software "
+                  "rendering; above 1: smoother edges; default 1; scene: viewer.render_scale)")
+      ->check(CLI::Range(0.25, 2.0));
+}
+
+// Runs, and again on the file the viewer asks for (Reload, a scene dropped on the window); a
+// file that fails to load is reported and the previous one plays again.
+int RunViewing(const RunArgs& args) {
+  RunArgs a = args;
+  std::string previous;
+  for (;;) {
+    std::string reopen;
+    int code = 0;
+    try {
+      code = Run(a, &reopen);
+    } catch (const std::exception& e) {
+      if (previous.empty()) throw;
+      spdlog::error("cannot open {}: {}; back to {}", a.scene, e.what(), previous);
+      a.scene = previous;
+      previous.clear();
+      continue;
+    }
+    if (reopen.empty() || StopSignal() != 0) return code;
+    previous = a.scene;
+    a.scene = reopen;
+    spdlog::info("viewer: opening {}", reopen);
+    SetImmediateExit(true);  // loading again: a signal ends the process at once
+  }
 }
 
 void AddRecordOptions(CLI::App* cmd, RunArgs& args) {
@@ -469,7 +515,7 @@ void RegisterViewCommand(CLI::App& app, int& exit_code) {
   args.view = true;
   AddRunOptions(cmd, args);
   AddViewOptions(cmd, args);
-  cmd->callback([&exit_code] { exit_code = Run(args); });
+  cmd->callback([&exit_code] { exit_code = RunViewing(args); });
 }
 
 void RegisterRunCommand(CLI::App& app, int& exit_code) {
@@ -490,7 +536,7 @@ void RegisterRunCommand(CLI::App& app, int& exit_code) {
   AddRecordOptions(cmd, args);
   cmd->add_flag("--view", args.view, "open the viewer window (see `urlab view --help`)");
   AddViewOptions(cmd, args);
-  cmd->callback([&exit_code] { exit_code = Run(args); });
+  cmd->callback([&exit_code] { exit_code = args.view ? RunViewing(args) : Run(args); });
 }
 
 }  // namespace urlab::app
