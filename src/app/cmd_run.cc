@@ -427,6 +427,11 @@ void AddViewOptions(CLI::App* cmd, RunArgs& args) {
   on_off("skybox", v.skybox,
          "the sky: the model's skybox texture, else a gradient (default on; scene: "
          "viewer.skybox)");
+  cmd->add_option("--plot", v.plots,
+                  "plot this signal over time from the start (repeatable, at most 8): a joint "
+                  "(left_shoulder), a sensor value (left_tip_pos[2]) or an actuator force "
+                  "(\"left_shoulder_motor force\"), as the panel's Plots section lists them; F4 "
+                  "shows or hides the plots");
   cmd->add_option("--render-scale", v.render_scale,
                   "3D view resolution per window pixel, 0.25 to 2 (below 1: faster under software "
                   "rendering; above 1: smoother edges; default 1; scene: viewer.render_scale)")
@@ -506,11 +511,17 @@ void RegisterRecordCommand(CLI::App& app, int& exit_code) {
 void RegisterViewCommand(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "view",
-      "Play a scene like `urlab run`, in a window: MuJoCo's renderer with the simulate panel, "
-      "debug drawing (keys 1-5), pause (P), reset (R), cinematic cameras (O), launchers (F), "
-      "possession (Tab, then WASD/QE or a gamepad), mouse camera (left drag rotate, right drag "
-      "move, wheel zoom, double-click select, Ctrl+right double-click track) and Ctrl+drag "
-      "perturbation. Closing the window stops it (exit 0). Needs a display (xvfb-run works).");
+      "Play a scene like `urlab run`, in a window: MuJoCo's renderer beside the simulate panel "
+      "(docked at the left; drag its edge to resize, H hides it; a menu bar with File, "
+      "Simulation, View, Render and Physics), the default camera framing the whole scene "
+      "(Ctrl+A), debug drawing (keys 1-5), pause (P), single step (Right, while paused), reset "
+      "(R), the model's cameras ([ ]), help (F1), info (F2), profiler (F3), plots (F4, --plot), "
+      "save XML / MJB (Ctrl+S, Ctrl+Shift+S), print model / data (Ctrl+M, Ctrl+D), load / save "
+      "key and copy pose (Ctrl+K, Ctrl+Shift+K, Ctrl+C), reload (Ctrl+L; or drop a scene or "
+      "MJCF file on the window), cinematic cameras (O), launchers (F), possession (Tab, then "
+      "WASD/QE or a gamepad), mouse camera (left drag rotate, right drag move, wheel zoom, "
+      "double-click select, Ctrl+right double-click track) and Ctrl+drag perturbation. Closing "
+      "the window stops it (exit 0). Needs a display (xvfb-run works).");
   static RunArgs args;
   args.view = true;
   AddRunOptions(cmd, args);

@@ -328,8 +328,10 @@ void Panel::DrawArticulation(ViewerCore& core) {
                      arts[static_cast<std::size_t>(possession.articulation())].name(), t.vx, t.vy,
                      t.yaw_rate, possession.actions()));
     if (ImGui::Button("Release (Tab)")) core.Perform(Action::kTogglePossess);
-  } else if (!ctl.twist()) {
-    ImGui::TextDisabled("no free base: nothing to possess");  // a fixed or static articulation
+  } else if (const std::string why =
+                 WhyNotPossessable(core.view().model(), ctl.twist(), ctl.num_actuators());
+             !why.empty()) {
+    ImGui::TextDisabled("%s", why.c_str());  // a fixed articulation, a static prop
   } else if (ImGui::Button("Possess (Tab)")) {
     core.Perform(Action::kTogglePossess);
   }

@@ -83,6 +83,23 @@ void ViewerCore::Begin(world::Session& session) {
                : "");
   BuildTables();
   plots_.Configure(view_->model());
+  for (const std::string& name : options_.plots) {
+    const auto& all = plots_.available();
+    const auto it =
+        std::find_if(all.begin(), all.end(), [&](const Signal& s) { return s.name == name; });
+    if (it == all.end()) {
+      std::string known;
+      for (std::size_t i = 0; i < all.size() && i < 12; ++i) {
+        known += (i ? ", " : "") + all[i].name;
+      }
+      throw Error(fmt::format("viewer: --plot: no signal '{}' (signals: {}{})", name, known,
+                              all.size() > 12 ? ", ..." : ""));
+    }
+    if (!plots_.Choose(static_cast<int>(it - all.begin()), true)) {
+      throw Error(fmt::format("viewer: --plot: at most {} signals", Plots::kMaxChosen));
+    }
+    overlays_.plots = true;
+  }
   if (options_.debug_all) {
     for (DebugLayer l :
          {DebugLayer::kContacts, DebugLayer::kCollision, DebugLayer::kJoints, DebugLayer::kSites}) {
@@ -428,8 +445,9 @@ void ViewerCore::TogglePossess() {
   const world::Articulation& art =
       session_->articulations()[static_cast<std::size_t>(selected_articulation_)];
   control::TwistController* twist = art.control->twist();
-  if (!twist) {
-    spdlog::warn("viewer: '{}' has no free base to drive: nothing to possess", art.name());
+  const std::string why = WhyNotPossessable(view_->model(), twist, art.control->num_actuators());
+  if (!twist || !why.empty()) {
+    SetStatus(fmt::format("'{}': {}", art.name(), why));
     return;
   }
   possession_.Possess(selected_articulation_, twist);

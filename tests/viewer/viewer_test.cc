@@ -869,6 +869,23 @@ std::string BotWithCameraAndKey() {
   return xml;
 }
 
+TEST_F(ViewerTest, PossessIsNotOfferedForAPropWithoutActuators) {
+  // A free box without actuators: it has a twist controller (a free base) but nothing drives
+  // it unless hover pushes the base.
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  Play(kFloatXml, vo);
+  ASSERT_NE(manager_->session().articulations()[0].control->twist(), nullptr);
+  Key(GLFW_KEY_TAB);
+  EXPECT_FALSE(core().possession().active());
+  EXPECT_NE(core().status().find("nothing to possess"), std::string::npos) << core().status();
+  manager_.reset();
+  Play(kFloatXml, vo, true, "    twist: {mode: hover}\n");
+  Key(GLFW_KEY_TAB);
+  EXPECT_TRUE(core().possession().active()) << core().status();
+  Key(GLFW_KEY_TAB);
+}
+
 TEST_F(ViewerTest, RightStepsExactlyOneStepWhilePaused) {
   Play(kBotXml);
   ASSERT_TRUE(engine().paused());

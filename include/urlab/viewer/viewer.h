@@ -52,6 +52,9 @@ struct ViewerOptions {
   // reflections and the sky on, scale 1).
   std::optional<bool> shadows, reflections, skybox;
   std::optional<double> render_scale;  // 0.25 to 2: 3D view pixels per window pixel
+  // Signals plotted from the start (F4 shows them): joint names, "SENSOR" or "SENSOR[k]", and
+  // "ACTUATOR force", as the panel's Plots section lists them; an unknown name is an error.
+  std::vector<std::string> plots;
   // Folder for the files the viewer writes (save XML/MJB, print model/data); "" : the working
   // folder.
   std::string files_dir;
