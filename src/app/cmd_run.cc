@@ -386,6 +386,31 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                 "stops the run with its message and exit 1)");
 }
 
+}  // namespace
+
+void AddRenderQualityOptions(CLI::App* cmd, viewer::ViewerOptions& v) {
+  // These win over the scene's `viewer:` section; by default all are on (with a 1024 shadow map
+  // under a software renderer).
+  const auto on_off = [cmd](const char* name, std::optional<bool>& value, const char* what,
+                            const char* scene_key) {
+    cmd->add_flag_callback(
+        std::string("--") + name, [&value] { value = true; },
+        fmt::format("draw {} (the default; scene: viewer.{})", what, scene_key));
+    cmd->add_flag_callback(
+        std::string("--no-") + name, [&value] { value = false; },
+        fmt::format("no {} (faster under software rendering)", what));
+  };
+  on_off("shadows", v.shadows, "shadows", "shadows");
+  on_off("reflections", v.reflections, "reflections on reflective floors", "reflections");
+  on_off("skybox", v.skybox, "the sky (the model's skybox texture, else a gradient)", "skybox");
+  cmd->add_option("--render-scale", v.render_scale,
+                  "3D view resolution per window pixel, 0.25 to 2 (below 1: faster under software "
+                  "rendering; above 1: smoother edges; default 1; scene: viewer.render_scale)")
+      ->check(CLI::Range(0.25, 2.0));
+}
+
+namespace {
+
 void AddViewOptions(CLI::App* cmd, RunArgs& args) {
   viewer::ViewerOptions& v = args.viewer;
   cmd->add_option("--width", v.width, "window width in pixels (default 1280)")
@@ -412,30 +437,12 @@ void AddViewOptions(CLI::App* cmd, RunArgs& args) {
       ->check(CLI::Range(1, 240));
   cmd->add_flag_callback(
       "--no-panel", [&v] { v.panel = false; }, "no simulate panel");
-  // Render quality: these win over the scene's `viewer:` section; by default all are on (with
-  // a 2048 shadow map under a software renderer).
-  const auto on_off = [cmd](const char* name, std::optional<bool>& value, const char* what) {
-    cmd->add_flag_callback(
-        std::string("--") + name, [&value] { value = true; }, std::string("draw ") + what);
-    cmd->add_flag_callback(
-        std::string("--no-") + name, [&value] { value = false; },
-        std::string("do not draw ") + what);
-  };
-  on_off("shadows", v.shadows, "shadows (default on; scene: viewer.shadows)");
-  on_off("reflections", v.reflections,
-         "reflections on reflective floors (default on; scene: viewer.reflections)");
-  on_off("skybox", v.skybox,
-         "the sky: the model's skybox texture, else a gradient (default on; scene: "
-         "viewer.skybox)");
+  AddRenderQualityOptions(cmd, v);
   cmd->add_option("--plot", v.plots,
                   "plot this signal over time from the start (repeatable, at most 8): a joint "
                   "(left_shoulder), a sensor value (left_tip_pos[2]) or an actuator force "
                   "(\"left_shoulder_motor force\"), as the panel's Plots section lists them; F4 "
                   "shows or hides the plots");
-  cmd->add_option("--render-scale", v.render_scale,
-                  "3D view resolution per window pixel, 0.25 to 2 (below 1: faster under software "
-                  "rendering; above 1: smoother edges; default 1; scene: viewer.render_scale)")
-      ->check(CLI::Range(0.25, 2.0));
 }
 
 // Runs, and again on the file the viewer asks for (Reload, a scene dropped on the window); a
