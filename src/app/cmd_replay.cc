@@ -470,6 +470,7 @@ void RegisterReplayCommand(CLI::App& app, int& exit_code) {
       ->check(CLI::NonNegativeNumber)
       ->needs(shot);
   shot->needs(view);
+  AddRenderQualityOptions(cmd, args.viewer);
   info->excludes(view);
   check->excludes(view);
   csv->excludes(view);

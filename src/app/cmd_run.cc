@@ -100,7 +100,8 @@ void NetworkSourcesToUi(world::SceneConfig& scene) {
   if (changed) spdlog::info("no network: the network control source is replaced by ui");
 }
 
-int Run(const RunArgs& args) {
+// `reopen`: the file the viewer asked to play next (its reload, a dropped scene), "" when none.
+int Run(const RunArgs& args, std::string* reopen = nullptr) {
   CurrentInput() = args.scene;
   world::ManagerOptions options;
   options.speed_percent = args.speed;
@@ -301,6 +302,7 @@ int Run(const RunArgs& args) {
   }
   if (video) video->Poll();
   manager.EndPlay();
+  if (reopen && viewer_sub) *reopen = viewer_sub->reload_request();
   FlushMujocoWarningCounts();
   if (!args.announce.empty()) {  // nothing is served any more: no launcher may find it
     std::error_code ec;
@@ -458,6 +460,31 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                 "stops the run with its message and exit 1)");
 }
 
+}  // namespace
+
+void AddRenderQualityOptions(CLI::App* cmd, viewer::ViewerOptions& v) {
+  // These win over the scene's `viewer:` section; by default all are on (with a 1024 shadow map
+  // under a software renderer).
+  const auto on_off = [cmd](const char* name, std::optional<bool>& value, const char* what,
+                            const char* scene_key) {
+    cmd->add_flag_callback(
+        std::string("--") + name, [&value] { value = true; },
+        fmt::format("draw {} (the default; scene: viewer.{})", what, scene_key));
+    cmd->add_flag_callback(
+        std::string("--no-") + name, [&value] { value = false; },
+        fmt::format("no {} (faster under software rendering)", what));
+  };
+  on_off("shadows", v.shadows, "shadows", "shadows");
+  on_off("reflections", v.reflections, "reflections on reflective floors", "reflections");
+  on_off("skybox", v.skybox, "the sky (the model's skybox texture, else a gradient)", "skybox");
+  cmd->add_option("--render-scale", v.render_scale,
+                  "3D view resolution per window pixel, 0.25 to 2 (below 1: faster under software "
+                  "rendering; above 1: smoother edges; default 1; scene: viewer.render_scale)")
+      ->check(CLI::Range(0.25, 2.0));
+}
+
+namespace {
+
 void AddViewOptions(CLI::App* cmd, RunArgs& args) {
   viewer::ViewerOptions& v = args.viewer;
   cmd->add_option("--width", v.width, "window width in pixels (default 1280)")
@@ -484,6 +511,37 @@ void AddViewOptions(CLI::App* cmd, RunArgs& args) {
       ->check(CLI::Range(1, 240));
   cmd->add_flag_callback(
       "--no-panel", [&v] { v.panel = false; }, "no simulate panel");
+  AddRenderQualityOptions(cmd, v);
+  cmd->add_option("--plot", v.plots,
+                  "plot this signal over time from the start (repeatable, at most 8): a joint "
+                  "(left_shoulder), a sensor value (left_tip_pos[2]) or an actuator force "
+                  "(\"left_shoulder_motor force\"), as the panel's Plots section lists them; F4 "
+                  "shows or hides the plots");
+}
+
+// Runs, and again on the file the viewer asks for (Reload, a scene dropped on the window); a
+// file that fails to load is reported and the previous one plays again.
+int RunViewing(const RunArgs& args) {
+  RunArgs a = args;
+  std::string previous;
+  for (;;) {
+    std::string reopen;
+    int code = 0;
+    try {
+      code = Run(a, &reopen);
+    } catch (const std::exception& e) {
+      if (previous.empty()) throw;
+      spdlog::error("cannot open {}: {}; back to {}", a.scene, e.what(), previous);
+      a.scene = previous;
+      previous.clear();
+      continue;
+    }
+    if (reopen.empty() || StopSignal() != 0) return code;
+    previous = a.scene;
+    a.scene = reopen;
+    spdlog::info("viewer: opening {}", reopen);
+    SetImmediateExit(true);  // loading again: a signal ends the process at once
+  }
 }
 
 void AddRecordOptions(CLI::App* cmd, RunArgs& args) {
@@ -534,16 +592,22 @@ void RegisterRecordCommand(CLI::App& app, int& exit_code) {
 void RegisterViewCommand(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "view",
-      "Play a scene like `urlab run`, in a window: MuJoCo's renderer with the simulate panel, "
-      "debug drawing (keys 1-5), pause (P), reset (R), cinematic cameras (O), launchers (F), "
-      "possession (Tab, then WASD/QE or a gamepad), mouse camera (left drag rotate, right drag "
-      "move, wheel zoom, double-click select, Ctrl+right double-click track) and Ctrl+drag "
-      "perturbation. Closing the window stops it (exit 0). Needs a display (xvfb-run works).");
+      "Play a scene like `urlab run`, in a window: MuJoCo's renderer beside the simulate panel "
+      "(docked at the left; drag its edge to resize, H hides it; a menu bar with File, "
+      "Simulation, View, Render and Physics), the default camera framing the whole scene "
+      "(Ctrl+A), debug drawing (keys 1-5), pause (P), single step (Right, while paused), reset "
+      "(R), the model's cameras ([ ]), help (F1), info (F2), profiler (F3), plots (F4, --plot), "
+      "save XML / MJB (Ctrl+S, Ctrl+Shift+S), print model / data (Ctrl+M, Ctrl+D), load / save "
+      "key and copy pose (Ctrl+K, Ctrl+Shift+K, Ctrl+C), reload (Ctrl+L; or drop a scene or "
+      "MJCF file on the window), cinematic cameras (O), launchers (F), possession (Tab, then "
+      "WASD/QE or a gamepad), mouse camera (left drag rotate, right drag move, wheel zoom, "
+      "double-click select, Ctrl+right double-click track) and Ctrl+drag perturbation. Closing "
+      "the window stops it (exit 0). Needs a display (xvfb-run works).");
   static RunArgs args;
   args.view = true;
   AddRunOptions(cmd, args);
   AddViewOptions(cmd, args);
-  cmd->callback([&exit_code] { exit_code = Run(args); });
+  cmd->callback([&exit_code] { exit_code = RunViewing(args); });
 }
 
 void RegisterRunCommand(CLI::App& app, int& exit_code) {
@@ -564,7 +628,7 @@ void RegisterRunCommand(CLI::App& app, int& exit_code) {
   AddRecordOptions(cmd, args);
   cmd->add_flag("--view", args.view, "open the viewer window (see `urlab view --help`)");
   AddViewOptions(cmd, args);
-  cmd->callback([&exit_code] { exit_code = Run(args); });
+  cmd->callback([&exit_code] { exit_code = args.view ? RunViewing(args) : Run(args); });
 }
 
 }  // namespace urlab::app

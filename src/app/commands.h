@@ -9,6 +9,9 @@ namespace CLI {
 class App;
 class Validator;
 }  // namespace CLI
+namespace urlab::viewer {
+struct ViewerOptions;
+}  // namespace urlab::viewer
 
 namespace urlab::app {
 
@@ -34,5 +37,9 @@ const CLI::Validator& OutputPath();
 // Refuses (InputError) an output path that is one of `inputs`; "" outputs are ignored.
 void CheckOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,
                   const std::vector<std::string>& inputs);
+
+// The viewer's render quality options (--shadows/--no-shadows, --reflections, --skybox,
+// --render-scale), for `view`, `run --view` and `replay --view`.
+void AddRenderQualityOptions(CLI::App* cmd, viewer::ViewerOptions& options);
 
 }  // namespace urlab::app

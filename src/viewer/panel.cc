@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "urlab/replay/recorder.h"
 #include "urlab/world/manager.h"
@@ -28,23 +29,75 @@ void Text(const std::string& s) { ImGui::TextUnformatted(s.c_str()); }
 }  // namespace
 
 void Panel::Draw(ViewerCore& core) {
-  int w = 0, h = 0;
-  core.WindowSize(&w, &h);
-  ImGui::SetNextWindowPos(ImVec2(0, 0), ImGuiCond_Always);
-  ImGui::SetNextWindowSize(ImVec2(kWidth, static_cast<float>(h)), ImGuiCond_Always);
-  ImGui::SetNextWindowBgAlpha(0.85f);
+  int iw = 0, ih = 0;
+  core.WindowSize(&iw, &ih);
+  const auto w = static_cast<float>(iw), h = static_cast<float>(ih);
+  Layout& layout = core.layout();
+  const WindowRect r = layout.Panel(w, h);
+  constexpr ImGuiWindowFlags kFixed = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
+                                      ImGuiWindowFlags_NoCollapse |
+                                      ImGuiWindowFlags_NoBringToFrontOnFocus;
+  ImGui::SetNextWindowPos(ImVec2(r.x, r.y), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(r.w, r.h), ImGuiCond_Always);
+  ImGui::SetNextWindowBgAlpha(1.0f);  // docked beside the viewport, not over it
+  if (layout.collapsed()) {
+    ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(2, 6));
+    ImGui::Begin("##collapsed", nullptr, kFixed | ImGuiWindowFlags_NoDecoration);
+    if (ImGui::Button(">", ImVec2(r.w - 4, 0))) layout.SetCollapsed(false);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("show the panel (H)");
+    ImGui::End();
+    ImGui::PopStyleVar();
+    return;
+  }
   ImGui::Begin("URLab simulate", nullptr,
-               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+               kFixed | ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_MenuBar);
+  DrawMenuBar(core);
+  if (!core.status().empty()) ImGui::TextWrapped("%s", core.status().c_str());
   DrawSimulation(core);
+  DrawFileAndKeys(core);
   DrawLaunchers(core);
   DrawOptions(core);
   DrawArticulation(core);
   DrawDebug(core);
   DrawRendering(core);
+  DrawCameras(core);
+  DrawVisualisation(core);
+  DrawGroups(core);
+  DrawPhysicsFlags(core);
+  DrawPlotChoice(core);
   DrawRecording(core);
   DrawSubsystems(core);
   DrawHelp(core);
   ImGui::End();
+  DrawSplitter(core, w, h);
+}
+
+void Panel::DrawSplitter(ViewerCore& core, float w, float h) {
+  Layout& layout = core.layout();
+  const WindowRect s = layout.Splitter(w, h);
+  if (s.w <= 0) return;
+  ImGui::SetNextWindowPos(ImVec2(s.x, s.y), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(s.w, s.h), ImGuiCond_Always);
+  ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(0, 0));
+  ImGui::PushStyleVar(ImGuiStyleVar_WindowBorderSize, 0);
+  ImGui::PushStyleVar(ImGuiStyleVar_WindowMinSize, ImVec2(1, 1));
+  ImGui::Begin("##splitter", nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove |
+                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoBringToFrontOnFocus);
+  ImGui::InvisibleButton("##split", ImVec2(s.w, s.h));
+  const bool hot = ImGui::IsItemHovered() || ImGui::IsItemActive();
+  if (hot) ImGui::SetMouseCursor(ImGuiMouseCursor_ResizeEW);
+  if (ImGui::IsItemActive()) {
+    // Follows the mouse: the panel's right edge where the pointer is.
+    const float x = ImGui::GetIO().MousePos.x - s.w / 2;
+    layout.SetWidth(x);
+    layout.SetWidth(layout.Panel(w, h).w);  // clamped
+  }
+  ImGui::GetWindowDrawList()->AddRectFilled(
+      ImVec2(s.x, s.y), ImVec2(s.x + s.w, s.y + s.h),
+      ImGui::GetColorU32(hot ? ImGuiCol_SeparatorActive : ImGuiCol_Separator));
+  ImGui::End();
+  ImGui::PopStyleVar(3);
 }
 
 void Panel::DrawSimulation(ViewerCore& core) {
@@ -55,6 +108,10 @@ void Panel::DrawSimulation(ViewerCore& core) {
   Text(fmt::format("RTF {:.3f}   {:.0f} steps/s   {:.0f} fps{}", engine.real_time_factor(),
                    engine.step_rate(), core.fps(), engine.paused() ? "   PAUSED" : ""));
   if (ImGui::Button(engine.paused() ? "Run (P)" : "Pause (P)")) core.Perform(Action::kTogglePause);
+  ImGui::SameLine();
+  ImGui::BeginDisabled(!engine.paused());
+  if (ImGui::Button("Step (Right)")) core.Perform(Action::kStep);
+  ImGui::EndDisabled();
   ImGui::SameLine();
   if (ImGui::Button("Reset (R)")) core.Perform(Action::kReset);
   int speed = engine.speed_percent();
@@ -104,6 +161,52 @@ void Panel::DrawOptions(ViewerCore& core) {
   if (ImGui::SliderInt("iterations", &iterations, 1, 200)) {
     core.SetOptions([iterations](mjOption& o) { o.iterations = iterations; }, "iterations");
   }
+  int cone = std::clamp(opt.cone, 0, 1);
+  constexpr std::array<const char*, 2> kCones = {"pyramidal", "elliptic"};
+  if (ImGui::Combo("cone", &cone, kCones.data(), static_cast<int>(kCones.size()))) {
+    core.SetOptions([cone](mjOption& o) { o.cone = cone; }, "cone");
+  }
+  int jacobian = std::clamp(opt.jacobian, 0, 2);
+  constexpr std::array<const char*, 3> kJacobians = {"dense", "sparse", "auto"};
+  if (ImGui::Combo("jacobian", &jacobian, kJacobians.data(), static_cast<int>(kJacobians.size()))) {
+    core.SetOptions([jacobian](mjOption& o) { o.jacobian = jacobian; }, "jacobian");
+  }
+  int noslip = opt.noslip_iterations;
+  if (ImGui::SliderInt("noslip iterations", &noslip, 0, 100)) {
+    core.SetOptions([noslip](mjOption& o) { o.noslip_iterations = noslip; }, "noslip_iterations");
+  }
+  // Numbers take effect on Enter (a half-typed value never reaches the simulation).
+  const auto number = [&](const char* label, double value, const char* format,
+                          void (*set)(mjOption&, double), bool positive) {
+    if (ImGui::InputDouble(label, &value, 0, 0, format, ImGuiInputTextFlags_EnterReturnsTrue) &&
+        std::isfinite(value) && (!positive || value > 0)) {
+      core.SetOptions([set, value](mjOption& o) { set(o, value); }, label);
+    }
+  };
+  number(
+      "tolerance", opt.tolerance, "%.3g", [](mjOption& o, double v) { o.tolerance = v; }, false);
+  number(
+      "impratio", opt.impratio, "%.3g", [](mjOption& o, double v) { o.impratio = v; }, true);
+  number(
+      "density", opt.density, "%.4g", [](mjOption& o, double v) { o.density = v; }, false);
+  number(
+      "viscosity", opt.viscosity, "%.4g", [](mjOption& o, double v) { o.viscosity = v; }, false);
+  const auto vector = [&](const char* label, const mjtNum* v, mjtNum* (*field)(mjOption&)) {
+    double xyz[3] = {v[0], v[1], v[2]};
+    if (ImGui::InputScalarN(label, ImGuiDataType_Double, xyz, 3, nullptr, nullptr, "%.3g",
+                            ImGuiInputTextFlags_EnterReturnsTrue) &&
+        std::isfinite(xyz[0]) && std::isfinite(xyz[1]) && std::isfinite(xyz[2])) {
+      core.SetOptions(
+          [field, x = xyz[0], y = xyz[1], z = xyz[2]](mjOption& o) {
+            mjtNum* f = field(o);
+            f[0] = x, f[1] = y, f[2] = z;
+          },
+          label);
+    }
+  };
+  vector("gravity", opt.gravity, [](mjOption& o) -> mjtNum* { return o.gravity; });
+  vector("wind", opt.wind, [](mjOption& o) -> mjtNum* { return o.wind; });
+  vector("magnetic", opt.magnetic, [](mjOption& o) -> mjtNum* { return o.magnetic; });
 }
 
 void Panel::DrawArticulation(ViewerCore& core) {
@@ -225,8 +328,10 @@ void Panel::DrawArticulation(ViewerCore& core) {
                      arts[static_cast<std::size_t>(possession.articulation())].name(), t.vx, t.vy,
                      t.yaw_rate, possession.actions()));
     if (ImGui::Button("Release (Tab)")) core.Perform(Action::kTogglePossess);
-  } else if (!ctl.twist()) {
-    ImGui::TextDisabled("no free base: nothing to possess");  // a fixed or static articulation
+  } else if (const std::string why =
+                 WhyNotPossessable(core.view().model(), ctl.twist(), ctl.num_actuators());
+             !why.empty()) {
+    ImGui::TextDisabled("%s", why.c_str());  // a fixed articulation, a static prop
   } else if (ImGui::Button("Possess (Tab)")) {
     core.Perform(Action::kTogglePossess);
   }

@@ -20,8 +20,8 @@ class ViewerCore;
 
 class Panel {
  public:
-  static constexpr float kWidth = 360;  // screen pixels, at the window's left edge
-
+  // Draws the panel docked at the window's left edge (ViewerCore::layout()), the splitter right
+  // of it (drag: the panel's width) or, collapsed, a strip with a button that opens it again.
   void Draw(ViewerCore& core);
   // Where each actuator slider of the selected articulation was last drawn (window
   // coordinates: the slider's frame from x0 to x1, without its label, at height y), for tests
@@ -37,6 +37,7 @@ class Panel {
   const std::vector<Point>& fire_buttons() const { return fire_buttons_; }
 
  private:
+  void DrawSplitter(ViewerCore& core, float window_w, float window_h);
   void DrawSimulation(ViewerCore& core);
   void DrawLaunchers(ViewerCore& core);
   void DrawOptions(ViewerCore& core);
@@ -46,6 +47,14 @@ class Panel {
   void DrawRecording(ViewerCore& core);
   void DrawSubsystems(ViewerCore& core);
   void DrawHelp(ViewerCore& core);
+  // simulate's sections (panel_simulate.cc).
+  void DrawMenuBar(ViewerCore& core);
+  void DrawFileAndKeys(ViewerCore& core);
+  void DrawCameras(ViewerCore& core);
+  void DrawVisualisation(ViewerCore& core);
+  void DrawGroups(ViewerCore& core);
+  void DrawPhysicsFlags(ViewerCore& core);
+  void DrawPlotChoice(ViewerCore& core);
 
   int keyframe_ = 0;
   std::optional<physics::PhysicsState> snapshot_;

@@ -8,6 +8,19 @@
 
 namespace urlab::viewer::internal {
 
+std::string WhyNotPossessable(const mjModel* m, const control::TwistController* twist,
+                              int num_actuators) {
+  if (!twist) return "no free base: nothing to possess";
+  const int root = twist->root_body();
+  if (root <= 0 || root >= m->nbody || m->body_parentid[root] != 0) {
+    return "its free body is not its root: nothing to possess";
+  }
+  if (num_actuators == 0 && twist->settings().mode != control::TwistMode::kHover) {
+    return "no actuators (and twist mode is not hover): nothing to possess";
+  }
+  return "";
+}
+
 namespace {
 
 constexpr DriveKey kDriveKeys[] = {

@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 
 #include "urlab/control/twist.h"
 
@@ -23,6 +24,13 @@ struct DriveKey {
   int axis;  // 0 vx, 1 vy, 2 yaw rate
   double sign;
 };
+
+// Why `twist` (an articulation's twist controller, null when it has none) cannot be possessed,
+// "" when it can: it needs a free base that is the articulation's root (a child of the world)
+// and something to move it: actuators, or the hover mode that pushes the base itself. A static
+// prop, or a loose free body without actuators in a fixed scene, is not offered.
+std::string WhyNotPossessable(const mjModel* m, const control::TwistController* twist,
+                              int num_actuators);
 
 class Possession {
  public:

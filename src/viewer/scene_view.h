@@ -20,15 +20,19 @@ class SceneView {
   SceneView(const SceneView&) = delete;
   SceneView& operator=(const SceneView&) = delete;
 
-  // Uploads the model to the GPU; a GL context must be current.
-  void MakeContext();
+  // Uploads the model to the GPU; a GL context must be current. `shadow_size` (0: the model's)
+  // and an offscreen buffer of at least `off_w` x `off_h` pixels (for a render scale) are set
+  // in the viewer's copy first. Called again, it makes a new context.
+  void MakeContext(int shadow_size = 0, int off_w = 0, int off_h = 0);
   // Copies the frame's state (time, qpos, qvel, act, ctrl, mocap poses, applied forces) into the
   // viewer's mjData and recomputes positions (kinematics, camera and light poses, tendons).
   void Update(const physics::StateFrame& frame);
   // mjv_updateScene from the viewer's data.
   void UpdateScene();
-  // Draws the scene into the window's back buffer.
-  void Render(int width, int height);
+  // Draws the scene into `viewport` of the window's back buffer (framebuffer pixels, bottom-left
+  // origin). With `scale` != 1 it is drawn at scale times the resolution offscreen and scaled
+  // into the viewport. `sky`: a gradient where nothing was drawn (render_quality.h).
+  void Render(const mjrRect& viewport, double scale = 1.0, bool sky = false);
   // Reads the window's back buffer (bottom-up RGB rows).
   void ReadPixels(int width, int height, unsigned char* rgb);
 
@@ -52,6 +56,7 @@ class SceneView {
   mjvPerturb perturb_;
   mjrContext context_;
   bool has_context_ = false;
+  int shadow_size_ = 0;
   std::uint64_t frame_ = 0;
   bool paused_ = false;
 };

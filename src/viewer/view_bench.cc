@@ -86,7 +86,7 @@ ViewBenchResult RunLoopBenchWithView(const physics::Model& model, world::LoopBen
     internal::AddDebugGeoms(scene.model(), scene.data(), debug, tables, contacts, &scene.scene());
     int w = 0, h = 0;
     window.FramebufferSize(&w, &h);
-    scene.Render(w, h);
+    scene.Render(mjrRect{0, 0, w, h});
     window.SwapBuffers();
     ++result.frames;
     drawing_seconds += std::chrono::duration<double>(Clock::now() - start).count();

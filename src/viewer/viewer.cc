@@ -27,6 +27,7 @@ void ViewerSubsystem::EndPlay(world::Session& /*session*/) {
   if (!core_) return;
   core_->End();
   video_error_ = core_->video_error();
+  reload_request_ = core_->reload_request();
   core_.reset();
 }
 

@@ -9,6 +9,7 @@
 #include <ctime>
 
 #include "urlab/core/error.h"
+#include "viewer/framing.h"
 #include "viewer/panel.h"
 
 namespace urlab::viewer::internal {
@@ -45,7 +46,10 @@ std::optional<DebugLayer> LayerOf(Action a) {
 
 ViewerCore::ViewerCore(ViewerOptions options, const world::Manager* manager,
                        std::shared_ptr<replay::PlaybackSlot> playback)
-    : options_(std::move(options)), manager_(manager), playback_(std::move(playback)) {}
+    : options_(std::move(options)),
+      layout_(options_.panel),
+      manager_(manager),
+      playback_(std::move(playback)) {}
 
 ViewerCore::~ViewerCore() { End(); }
 
@@ -58,17 +62,44 @@ void ViewerCore::Begin(world::Session& session) {
   window_ = std::make_unique<Window>(options_.width, options_.height, options_.title, this,
                                      options_.panel);
   view_ = std::make_unique<SceneView>(engine.model(), kMaxGeom);  // engine not running yet
-  view_->MakeContext();
-  spdlog::info("viewer: {}x{} window, OpenGL {}", options_.width, options_.height,
-               window_->GlVersion());
-  if (window_->software_renderer()) {
-    // Shadows and reflections cost most of a software-rendered frame (platform notes: a 4096
-    // shadow map gives ~9 fps at 640x480); the panel turns them back on.
-    view_->scene().flags[mjRND_SHADOW] = 0;
-    view_->scene().flags[mjRND_REFLECTION] = 0;
-    spdlog::info("viewer: software renderer: shadows and reflections off (panel: Rendering)");
+  SeparateCoplanarPlanes(view_->model());
+  const bool software = window_->software_renderer();
+  quality_ = ResolveQuality(options_, session.scene_config().viewer, software);
+  {
+    int fw = 0, fh = 0;
+    window_->FramebufferSize(&fw, &fh);
+    const bool scaled = quality_.scale != 1.0;
+    view_->MakeContext(quality_.shadow_size,
+                       scaled ? static_cast<int>(std::ceil(fw * quality_.scale)) : 0,
+                       scaled ? static_cast<int>(std::ceil(fh * quality_.scale)) : 0);
   }
+  ApplyQuality(quality_, &view_->scene());
+  spdlog::info(
+      "viewer: {}x{} window, OpenGL {}; shadows {}, reflections {}, sky {}, render scale {}{}",
+      options_.width, options_.height, window_->GlVersion(), quality_.shadows ? "on" : "off",
+      quality_.reflections ? "on" : "off", quality_.skybox ? "on" : "off", quality_.scale,
+      software ? fmt::format(" (software renderer: {} shadow map)",
+                             view_->model()->vis.quality.shadowsize)
+               : "");
   BuildTables();
+  plots_.Configure(view_->model());
+  for (const std::string& name : options_.plots) {
+    const auto& all = plots_.available();
+    const auto it =
+        std::find_if(all.begin(), all.end(), [&](const Signal& s) { return s.name == name; });
+    if (it == all.end()) {
+      std::string known;
+      for (std::size_t i = 0; i < all.size() && i < 12; ++i) {
+        known += (i ? ", " : "") + all[i].name;
+      }
+      throw Error(fmt::format("viewer: --plot: no signal '{}' (signals: {}{})", name, known,
+                              all.size() > 12 ? ", ..." : ""));
+    }
+    if (!plots_.Choose(static_cast<int>(it - all.begin()), true)) {
+      throw Error(fmt::format("viewer: --plot: at most {} signals", Plots::kMaxChosen));
+    }
+    overlays_.plots = true;
+  }
   if (options_.debug_all) {
     for (DebugLayer l :
          {DebugLayer::kContacts, DebugLayer::kCollision, DebugLayer::kJoints, DebugLayer::kSites}) {
@@ -92,6 +123,7 @@ void ViewerCore::Begin(world::Session& session) {
   });
   frame_ = &initial_frame_;
   view_->Update(initial_frame_);
+  FrameAll();
   if (video_ || !options_.screenshot.empty()) {
     // The simulation waits for each video frame and the screenshot (frame_gate.h).
     gate_ = std::make_shared<FrameGate>();
@@ -189,8 +221,19 @@ double ViewerCore::Now() const {
 
 void ViewerCore::WindowSize(int* w, int* h) const { window_->WindowSize(w, h); }
 
+WindowRect ViewerCore::ViewportRect() const {
+  int w = 0, h = 0;
+  window_->WindowSize(&w, &h);
+  return layout_.Viewport(static_cast<float>(w), static_cast<float>(h));
+}
+
+void ViewerCore::FrameAll() {
+  const WindowRect vp = ViewportRect();
+  FrameScene(view_->model(), view_->data(), vp.h > 0 ? vp.w / vp.h : 1.0, &view_->camera());
+}
+
 bool ViewerCore::stop_requested() const {
-  return (window_ && window_->should_close()) || screenshot_done_;
+  return (window_ && window_->should_close()) || screenshot_done_ || !reload_request_.empty();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -203,18 +246,46 @@ void ViewerCore::Input() {
   input_.Update();
 }
 
-void ViewerCore::OnKey(int key, int action, int /*mods*/) {
+void ViewerCore::OnKey(int key, int action, int mods) {
   // Releases always reach the possessed robot (a key let go over the panel must not stick).
   if (action == GLFW_RELEASE && (possession_.OnKey(key, action) || input_.OnKey(key, action))) {
     return;
   }
   if (action != GLFW_PRESS) return;
   if (window_ && window_->imgui_wants_keyboard()) return;
-  if (possession_.OnKey(key, action) || input_.OnKey(key, action)) return;
-  if (const std::optional<TimelineAction> t = TimelineActionOfKey(key)) {
+  // With Ctrl or Alt held a key is a command (Ctrl+S, Alt+0), never a driving key.
+  const bool command = (mods & (kCtrl | kAlt)) != 0;
+  if (!command && (possession_.OnKey(key, action) || input_.OnKey(key, action))) return;
+  if (const std::optional<TimelineAction> t = TimelineActionOfKey(key); t && !command) {
     if (PerformTimeline(*t)) return;
   }
-  if (const Hotkey* h = FindHotkey(key)) Perform(h->action);
+  if (const Hotkey* h = FindHotkey(key, mods)) {
+    Perform(h->action);
+    return;
+  }
+  const int held = mods & (kShift | kCtrl | kAlt);
+  // Alt + 0-5: geom group; Alt + Shift + 0-5: site group (simulate's 0-5 and Shift + 0-5).
+  if ((held == kAlt || held == (kAlt | kShift)) && key >= GLFW_KEY_0 &&
+      key < GLFW_KEY_0 + mjNGROUP) {
+    mjtByte* groups = held == kAlt ? view_->option().geomgroup : view_->option().sitegroup;
+    const int g = key - GLFW_KEY_0;
+    groups[g] = !groups[g];
+    SetStatus(fmt::format("{} group {} {}", held == kAlt ? "geom" : "site", g,
+                          groups[g] ? "shown" : "hidden"));
+    return;
+  }
+  // Shift + a letter: the visualisation flag with that shortcut in MuJoCo's mjVISSTRING.
+  if (held == kShift && key >= GLFW_KEY_A && key <= GLFW_KEY_Z) {
+    const char letter = static_cast<char>('A' + (key - GLFW_KEY_A));
+    for (int i = 0; i < mjNVISFLAG; ++i) {
+      if (mjVISSTRING[i][2][0] == letter && mjVISSTRING[i][2][1] == 0) {
+        mjtByte& f = view_->option().flags[i];
+        f = !f;
+        SetStatus(fmt::format("{} {}", mjVISSTRING[i][0], f ? "on" : "off"));
+        return;
+      }
+    }
+  }
 }
 
 bool ViewerCore::replay_mode() const {
@@ -232,18 +303,21 @@ bool ViewerCore::PerformTimeline(TimelineAction action) {
 }
 
 void ViewerCore::OnMouseButton(int button, int action, int mods) {
-  if (action == GLFW_PRESS && window_ && window_->imgui_wants_mouse()) return;
-  int w = 0, h = 0;
-  WindowSize(&w, &h);
-  mouse_.Button(*view_, button, action, mods, cursor_x_, cursor_y_, w, h, Now());
+  const WindowRect vp = ViewportRect();
+  if (action == GLFW_PRESS &&
+      ((window_ && window_->imgui_wants_mouse()) || !vp.Contains(cursor_x_, cursor_y_))) {
+    return;
+  }
+  // Viewport coordinates: the camera and selection see the viewport, not the window.
+  mouse_.Button(*view_, button, action, mods, cursor_x_ - vp.x, cursor_y_ - vp.y,
+                static_cast<int>(vp.w), static_cast<int>(vp.h), Now());
 }
 
 void ViewerCore::OnCursor(double x, double y) {
   cursor_x_ = x;
   cursor_y_ = y;
-  int w = 0, h = 0;
-  WindowSize(&w, &h);
-  mouse_.Move(*view_, x, y, w, h);
+  const WindowRect vp = ViewportRect();
+  mouse_.Move(*view_, x - vp.x, y - vp.y, static_cast<int>(vp.w), static_cast<int>(vp.h));
 }
 
 void ViewerCore::OnScroll(double /*dx*/, double dy) {
@@ -276,10 +350,69 @@ void ViewerCore::Perform(Action action) {
     case Action::kFreeCamera:
       if (possession_.active()) TogglePossess();
       cinematic_.Stop();
+      camera_ = -1;
       view_->camera().type = mjCAMERA_FREE;
       break;
     case Action::kTogglePossess:
       TogglePossess();
+      break;
+    case Action::kTogglePanel:
+      layout_.SetCollapsed(!layout_.collapsed());
+      break;
+    case Action::kStep:
+      Step();
+      break;
+    case Action::kNextCamera:
+    case Action::kPrevCamera: {
+      const int n = view_->model()->ncam + 1;  // the free camera, then the model's
+      const int delta = action == Action::kNextCamera ? 1 : n - 1;
+      SetCamera((camera_ + 1 + delta) % n - 1);
+      const char* name = camera_ >= 0 ? mj_id2name(view_->model(), mjOBJ_CAMERA, camera_) : nullptr;
+      SetStatus(camera_ < 0 ? std::string("free camera")
+                            : fmt::format("camera {} ({})", camera_, name ? name : "unnamed"));
+      break;
+    }
+    case Action::kToggleHelp:
+      overlays_.help = !overlays_.help;
+      break;
+    case Action::kToggleInfo:
+      overlays_.info = !overlays_.info;
+      break;
+    case Action::kToggleProfiler:
+      overlays_.profiler = !overlays_.profiler;
+      break;
+    case Action::kTogglePlots:
+      overlays_.plots = !overlays_.plots;
+      break;
+    case Action::kSaveXml:
+    case Action::kSaveMjb:
+    case Action::kPrintModel:
+    case Action::kPrintData:
+      try {
+        if (action == Action::kSaveXml) SaveXml();
+        if (action == Action::kSaveMjb) SaveMjb();
+        if (action == Action::kPrintModel) PrintModel();
+        if (action == Action::kPrintData) PrintData();
+      } catch (const Error& e) {
+        SetStatus(e.what());
+      }
+      break;
+    case Action::kReload:
+      RequestReload("");
+      break;
+    case Action::kLoadKey:
+      LoadKey();
+      break;
+    case Action::kSaveKey:
+      SaveKey();
+      break;
+    case Action::kCopyPose:
+      CopyPose();
+      break;
+    case Action::kFrameScene:
+      if (possession_.active()) TogglePossess();
+      cinematic_.Stop();
+      FrameAll();
       break;
     case Action::kToggleCinematic: {
       const CinematicMode mode = cinematic_.Next();
@@ -312,8 +445,9 @@ void ViewerCore::TogglePossess() {
   const world::Articulation& art =
       session_->articulations()[static_cast<std::size_t>(selected_articulation_)];
   control::TwistController* twist = art.control->twist();
-  if (!twist) {
-    spdlog::warn("viewer: '{}' has no free base to drive: nothing to possess", art.name());
+  const std::string why = WhyNotPossessable(view_->model(), twist, art.control->num_actuators());
+  if (!twist || !why.empty()) {
+    SetStatus(fmt::format("'{}': {}", art.name(), why));
     return;
   }
   possession_.Possess(selected_articulation_, twist);
@@ -370,6 +504,7 @@ void ViewerCore::Present() {
     frame_ = state_->Latest();
     if (frame_) view_->Update(*frame_);
   }
+  if (frame_) plots_.Sample(*frame_);
   capture_->Take(&contacts_);
   bool want_contacts = debug_.Global(DebugLayer::kContacts);
   for (const auto& own : debug_.articulation) {
@@ -380,31 +515,39 @@ void ViewerCore::Present() {
   if (want_contacts) capture_->Request();
   // Contact points and forces lie inside the bodies touching: moving bodies turn translucent
   // while they are drawn (MuJoCo's own transparency flag).
-  view_->option().flags[mjVIS_TRANSPARENT] = want_contacts;
+  if (want_contacts != transparent_for_contacts_) {  // the flag stays the user's otherwise
+    view_->option().flags[mjVIS_TRANSPARENT] = want_contacts;
+    transparent_for_contacts_ = want_contacts;
+  }
   ApplyPerturbation();
   possession_.UpdateCamera(view_->data(), &view_->camera());
   cinematic_.Apply(view_->model(), view_->data(), frame_ ? frame_->time : 0.0, &view_->camera());
   view_->UpdateScene();
   HideVisualGeoms(view_->model(), debug_, tables_, &view_->scene());
   AddDebugGeoms(view_->model(), view_->data(), debug_, tables_, contacts_, &view_->scene());
-  int w = 0, h = 0;
+  int w = 0, h = 0, ww = 0, wh = 0;
   window_->FramebufferSize(&w, &h);
-  view_->Render(w, h);
-  if (window_->has_imgui()) {
+  window_->WindowSize(&ww, &wh);
+  const bool imgui = window_->has_imgui();
+  if (imgui) {
+    // The panel first: a splitter dragged this frame moves the viewport drawn this frame.
     window_->BeginImGui();
     panel_->Draw(*this);
     if (playback_) {
-      int ww = 0, wh = 0;
-      window_->WindowSize(&ww, &wh);
+      const WindowRect vp = ViewportRect();
       playback_->With([&](const replay::Playback* p) {
         if (!p) return;
-        const float x = Panel::kWidth;
-        timeline_.Draw(*p, x, static_cast<float>(wh) - Timeline::kHeight,
-                       std::max(200.0f, static_cast<float>(ww) - x));
+        timeline_.Draw(*p, vp.x, static_cast<float>(wh) - Timeline::kHeight,
+                       std::max(200.0f, vp.w));
       });
     }
-    window_->EndImGui();
   }
+  window_->Clear(0.11f, 0.12f, 0.14f);
+  last_viewport_ = ToFramebuffer(ViewportRect(), ww, wh, w, h);
+  view_->Render(last_viewport_, quality_.scale,
+                view_->scene().flags[mjRND_SKYBOX] && !HasSkyboxTexture(view_->model()));
+  DrawOverlays(last_viewport_);
+  if (imgui) window_->EndImGui();
   if (gate_ && !screenshot_done_ && frame_ && gate_->ShotDue(frame_->time) &&
       pending_screenshot_.empty()) {
     pending_screenshot_ = options_.screenshot;

@@ -28,8 +28,12 @@
 #include "viewer/hotkeys.h"
 #include "viewer/image_io.h"
 #include "viewer/input_mapping.h"
+#include "viewer/layout.h"
 #include "viewer/mouse.h"
+#include "viewer/plots.h"
 #include "viewer/possess.h"
+#include "viewer/profiler.h"
+#include "viewer/render_quality.h"
 #include "viewer/scene_view.h"
 #include "viewer/timeline.h"
 #include "viewer/window.h"
@@ -104,13 +108,68 @@ class ViewerCore : public InputHandler {
   // Seconds since Begin (the clock double-clicks use).
   double Now() const;
 
+  // Where the panel and the 3D viewport are (layout.h); the panel's splitter changes it.
+  Layout& layout() { return layout_; }
+  // The 3D viewport in window coordinates, and in framebuffer pixels as last drawn.
+  WindowRect ViewportRect() const;
+  const mjrRect& last_viewport() const { return last_viewport_; }
+  // Render quality in effect (the panel's Rendering section changes the scene's flags).
+  RenderQuality& quality() { return quality_; }
+  // Points the free camera at the whole scene (the default camera).
+  void FrameAll();
+
+  // ---- What MuJoCo's simulate offers (viewer_tools.cc) ----
+  struct Overlays {
+    bool help = false, info = false, profiler = false, plots = false;
+  };
+  Overlays& overlays() { return overlays_; }
+  Plots& plots() { return plots_; }
+  Profiler& profiler() { return profiler_; }
+  // The model camera in use (-1: the free camera); [ and ] cycle through them.
+  int camera() const { return camera_; }
+  void SetCamera(int id);
+  // The model keyframe that Load key, Save key act on.
+  int key() const { return key_; }
+  void SetKey(int k);
+  // What the last file or tool action did (the panel's status line).
+  const std::string& status() const { return status_; }
+  // Turns one of MuJoCo's physics flags on or off (mjtDisableBit / mjtEnableBit index `i`): a
+  // SetOptions command, as the panel and the Physics menu do it.
+  void SetDisableFlag(int i, bool disabled);
+  void SetEnableFlag(int i, bool enabled);
+  // One physics step, while paused (a queued Step command).
+  void Step();
+  // Files, written by the output rule into ViewerOptions::files_dir; each returns the path and
+  // says so in the status line (throws Error when it cannot write).
+  std::string SaveXml();     // the composed scene's MJCF as compiled
+  std::string SaveMjb();     // the running model (options changed at run time included)
+  std::string PrintModel();  // mj_printModel of the running model
+  std::string PrintData();   // mj_printData of the viewer's copy of the newest state
+  // The current state as a <key> element: on the clipboard and returned.
+  std::string CopyPose();
+  // Puts keyframe key() into the simulation (qpos, qvel, ctrl, time, mocap poses: queued
+  // commands) / stores the current state into it (the viewer's copy of the model, which Save
+  // XML/MJB do not write: they save the compiled scene).
+  void LoadKey();
+  void SaveKey();
+  // Ends play so that the host plays `path` (reload: the scene's own file).
+  void RequestReload(std::string path);
+  const std::string& reload_request() const { return reload_request_; }
+  void OnDrop(const std::vector<std::string>& paths) override;
+
  private:
   void BuildTables();
   void ApplyPerturbation();
   void TogglePossess();
   void Capture();  // screenshots and video frames of the frame just drawn
+  void DrawOverlays(const mjrRect& viewport);  // help, info, profiler, plots (viewer_tools.cc)
+  std::string OutputPath(const std::string& name) const;
+  void SetStatus(std::string text);
 
   ViewerOptions options_;
+  Layout layout_;
+  RenderQuality quality_;
+  mjrRect last_viewport_ = {0, 0, 0, 0};
   const world::Manager* manager_;
   std::shared_ptr<world::Session> session_;
   std::unique_ptr<Window> window_;
@@ -150,6 +209,14 @@ class ViewerCore : public InputHandler {
   std::vector<std::uint8_t> pixels_;   // scratch for read-backs
   bool keep_frame_ = false;            // ReadPixels: keep the frame being drawn in kept_
   Image kept_;
+  Overlays overlays_;
+  Plots plots_;
+  Profiler profiler_;
+  int camera_ = -1;
+  int key_ = 0;
+  std::string status_;
+  std::string reload_request_;
+  bool transparent_for_contacts_ = false;  // mjVIS_TRANSPARENT set for the contact layer
 };
 
 }  // namespace urlab::viewer::internal

@@ -114,6 +114,10 @@ Window::Window(int width, int height, const std::string& title, InputHandler* ha
   glfwSetScrollCallback(window_, [](GLFWwindow* w, double dx, double dy) {
     if (InputHandler* h = HandlerOf(w)) h->OnScroll(dx, dy);
   });
+  glfwSetDropCallback(window_, [](GLFWwindow* w, int count, const char** paths) {
+    std::vector<std::string> files(paths, paths + std::max(0, count));
+    if (InputHandler* h = HandlerOf(w)) h->OnDrop(files);
+  });
   if (imgui) {
     IMGUI_CHECKVERSION();
     imgui_ = ImGui::CreateContext();
@@ -181,6 +185,16 @@ bool Window::imgui_wants_keyboard() const { return imgui_ && ImGui::GetIO().Want
 
 void Window::SwapBuffers() { glfwSwapBuffers(window_); }
 
+void Window::Clear(float r, float g, float b) {
+  int w = 0, h = 0;
+  glfwGetFramebufferSize(window_, &w, &h);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+  glDisable(GL_SCISSOR_TEST);
+  glViewport(0, 0, w, h);
+  glClearColor(r, g, b, 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+}
+
 void Window::FramebufferSize(int* width, int* height) const {
   glfwGetFramebufferSize(window_, width, height);
 }
@@ -194,6 +208,15 @@ bool Window::software_renderer() const {
   const std::string renderer = r ? r : "";
   return renderer.find("llvmpipe") != std::string::npos ||
          renderer.find("softpipe") != std::string::npos;
+}
+
+void Window::SetClipboard(const std::string& text) {
+  glfwSetClipboardString(window_, text.c_str());
+}
+
+std::string Window::Clipboard() const {
+  const char* t = glfwGetClipboardString(window_);
+  return t ? t : "";
 }
 
 std::string Window::GlVersion() const {

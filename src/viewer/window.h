@@ -6,6 +6,7 @@
 // Threading contract: main thread only (GLFW requires it for windows and events).
 #include <optional>
 #include <string>
+#include <vector>
 
 struct GLFWwindow;
 struct ImGuiContext;
@@ -20,6 +21,8 @@ class InputHandler {
   virtual void OnMouseButton(int button, int action, int mods) = 0;
   virtual void OnCursor(double x, double y) = 0;
   virtual void OnScroll(double dx, double dy) = 0;
+  // Files dropped on the window (paths as the system gives them).
+  virtual void OnDrop(const std::vector<std::string>& /*paths*/) {}
 };
 
 // Lowers the calling thread's priority (nice + 5) for good: the thread that draws, once the
@@ -54,10 +57,15 @@ class Window {
   };
   void InjectImGuiMouse(std::optional<InjectedMouse> mouse) { injected_mouse_ = mouse; }
   void SwapBuffers();
+  // Clears the whole back buffer to a colour (the viewport and the panel draw over it).
+  void Clear(float r, float g, float b);
   void FramebufferSize(int* width, int* height) const;
   void WindowSize(int* width, int* height) const;
   // Cursor position in window coordinates.
   void CursorPos(double* x, double* y) const;
+  // The clipboard's text (copy pose writes it).
+  void SetClipboard(const std::string& text);
+  std::string Clipboard() const;
   // The GL version string of the context ("4.5 (Compatibility Profile) Mesa ...").
   std::string GlVersion() const;
   // True on Mesa's software rasterisers (llvmpipe, softpipe).

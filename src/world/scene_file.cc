@@ -34,7 +34,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::pair<const char*, const char*> kNotYetSupported[] = {
     {"recording", "recordings are made with `urlab record` or `urlab run --record`"},
     {"replay", "recordings are played with `urlab replay`"},
-    {"viewer", "the viewer is set up on the command line (`urlab view --help`)"},
     {"input", "input bindings go in an articulation's `input:` list"},
     {"debug", "debug drawing is toggled in the viewer (keys 1-5, `--debug-all`)"},
     {"lights", "scene lights are not supported; put <light> elements in an articulation's MJCF"},
@@ -667,6 +666,21 @@ class Parser {
     return c;
   }
 
+  // viewer: {shadows, reflections, skybox, render_scale}.
+  ViewerConfig Viewer(const YAML::Node& n) const {
+    if (!n.IsMap()) Fail(n, "viewer must be a map {shadows, reflections, skybox, render_scale}");
+    CheckKeys(n, "viewer", {"shadows", "reflections", "skybox", "render_scale"});
+    ViewerConfig v;
+    v.where = At(n);
+    if (n["shadows"]) v.shadows = Bool(n["shadows"], "viewer.shadows");
+    if (n["reflections"]) v.reflections = Bool(n["reflections"], "viewer.reflections");
+    if (n["skybox"]) v.skybox = Bool(n["skybox"], "viewer.skybox");
+    if (n["render_scale"]) {
+      v.render_scale = Number(n["render_scale"], "viewer.render_scale", Range{0.25, 2});
+    }
+    return v;
+  }
+
   ArticulationConfig Articulation(const YAML::Node& n) const {
     CheckKeys(
         n, "articulation",
@@ -825,7 +839,7 @@ class Parser {
     }
     CheckKeys(root, "the scene",
               {"articulations", "props", "terrain", "launchers", "options", "size",
-               "control_source", "network", "save_debug_xml", "cameras", "cinematic"});
+               "control_source", "network", "save_debug_xml", "cameras", "cinematic", "viewer"});
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {
       Fail(arts ? arts : root, "the scene needs a non-empty list 'articulations'");
@@ -853,6 +867,7 @@ class Parser {
     }
     if (root["control_source"]) s.control_source = Source(root["control_source"]);
     if (const auto n = root["cinematic"]) s.cinematic = Cinematic(n);
+    if (const auto n = root["viewer"]) s.viewer = Viewer(n);
     if (root["cameras"]) s.cameras = Cameras(root["cameras"]);
     for (const auto& [key, settings] : s.cameras.cameras) {
       const std::string art = key.substr(0, key.find('/'));

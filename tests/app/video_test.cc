@@ -18,6 +18,8 @@
 #include "urlab/physics/model.h"
 #include "urlab/physics/state.h"
 #include "urlab/replay/recording.h"
+#include "viewer/framing.h"
+#include "viewer/layout.h"
 
 namespace urlab {
 namespace {
@@ -153,6 +155,17 @@ double Difference(const std::uint8_t* a, const std::uint8_t* b, std::size_t n) {
   return count;
 }
 
+// The viewer's default camera: the whole scene framed at its first state (qpos0) for a viewport
+// of `aspect` (viewer/framing.h).
+mjvCamera ViewerCamera(const mjModel* m, double aspect) {
+  physics::DataPtr d = physics::MakeData(m);
+  mj_forward(m, d.get());
+  mjvCamera cam;
+  mjv_defaultFreeCamera(m, &cam);
+  viewer::internal::FrameScene(m, d.get(), aspect, &cam);
+  return cam;
+}
+
 // Renders the pendulum at `qpos` through `camera` (an MJCF camera id, or -1 for the free camera
 // framing the scene), as an independent reference.
 class Reference {
@@ -166,7 +179,9 @@ class Reference {
         data_(physics::MakeData(m)) {
     renderer_.MakeContext();
   }
-  std::vector<std::uint8_t> At(const std::vector<double>& qpos, int camera) {
+  // `free_camera`: the free camera to look through (null: MuJoCo's default free camera).
+  std::vector<std::uint8_t> At(const std::vector<double>& qpos, int camera,
+                               const mjvCamera* free_camera = nullptr) {
     std::copy(qpos.begin(), qpos.end(), data_->qpos);
     mj_forward(model_, data_.get());
     physics::StateFrame f = physics::StateFrame::SizedFor(model_);
@@ -179,6 +194,7 @@ class Reference {
     } else {
       mjvCamera free;
       mjv_defaultFreeCamera(model_, &free);
+      if (free_camera) free = *free_camera;
       renderer_.RenderView(free, width_, height_, rgb, image_);
     }
     return image_.rgb;
@@ -276,7 +292,8 @@ TEST(ViewScreenshot, AtTimeShowsTheStateAtThatTime) {
   ASSERT_EQ(
       testing::RunCommand(testing::XvfbRun("640x480x24") + testing::UrlabBinary() + " view " + xml +
                               " --no-network --no-cameras --no-panel --width 320 "
-                              "--height 240 --screenshot " +
+                              "--height 240 --no-shadows --no-reflections --no-skybox "
+                              "--screenshot " +
                               shot + " --at 0.3",
                           &log),
       0)
@@ -292,12 +309,13 @@ TEST(ViewScreenshot, AtTimeShowsTheStateAtThatTime) {
     mj_step(m, data.get());
     qpos.push_back({data->qpos[0]});
   }
-  // The shot against the free camera's view of the states 0.3 s +- 1/30 s and +- 1/15 s: the
-  // state at 0.3 s (step 90) is the nearest.
+  // The shot against the viewer's default camera (framing the scene at its first state) on the
+  // states 0.3 s +- 1/30 s and +- 1/15 s: the state at 0.3 s (step 90) is the nearest.
   Reference reference(m, w, h);
+  const mjvCamera framed = ViewerCamera(m, static_cast<double>(w) / h);
   std::vector<std::pair<double, int>> diffs;
   for (int step : {70, 80, 90, 100, 110}) {
-    const auto expected = reference.At(qpos[static_cast<std::size_t>(step)], -1);
+    const auto expected = reference.At(qpos[static_cast<std::size_t>(step)], -1, &framed);
     diffs.emplace_back(Difference(image.data(), expected.data(), image.size()), step);
   }
   std::sort(diffs.begin(), diffs.end());
@@ -324,7 +342,9 @@ TEST(ReplayView, WatchesARecordingWithTheTimelineAtAnExactTime) {
   const std::string shot = dir + "/timeline.png";
   ASSERT_EQ(testing::RunCommand(
                 testing::XvfbRun("1024x768x24") + testing::UrlabBinary() + " replay " + rec +
-                    " --view --width 1200 --height 500 --screenshot " + shot + " --at 0.5",
+                    " --view --width 1200 --height 500 --no-shadows --no-reflections "
+                    "--no-skybox --screenshot " +
+                    shot + " --at 0.5",
                 &log),
             0)
       << log;
@@ -343,19 +363,25 @@ TEST(ReplayView, WatchesARecordingWithTheTimelineAtAnExactTime) {
     mj_step(m, data.get());
     qpos.push_back({data->qpos[0]});
   }
-  Reference reference(m, w, h);
+  // The 3D viewport right of the docked panel (its default width and the splitter).
+  const int vx = static_cast<int>(viewer::internal::Layout::kDefaultWidth +
+                                  viewer::internal::Layout::kSplitter);
+  const int vw = w - vx;
+  Reference reference(m, vw, h);
+  const mjvCamera framed = ViewerCamera(m, static_cast<double>(vw) / h);
   auto region_difference = [&](const std::vector<std::uint8_t>& expected) {
     double count = 0;
     for (int y = 0; y < h - 110; ++y) {
-      const std::size_t i = 3 * (static_cast<std::size_t>(y) * w + 370);
-      count += Difference(image.data() + i, expected.data() + i, 3 * (w - 370));
+      const std::size_t i = 3 * (static_cast<std::size_t>(y) * w + static_cast<std::size_t>(vx));
+      const std::size_t e = 3 * (static_cast<std::size_t>(y) * vw);
+      count += Difference(image.data() + i, expected.data() + e, 3 * static_cast<std::size_t>(vw));
     }
     return count;
   };
   std::vector<std::pair<double, int>> diffs;
   for (int step : {140, 150, 160}) {
-    diffs.emplace_back(region_difference(reference.At(qpos[static_cast<std::size_t>(step)], -1)),
-                       step);
+    diffs.emplace_back(
+        region_difference(reference.At(qpos[static_cast<std::size_t>(step)], -1, &framed)), step);
   }
   std::sort(diffs.begin(), diffs.end());
   std::string table;

@@ -71,13 +71,15 @@ struct Pixel {
 };
 
 // Where a world point lands in the window's framebuffer (pixels, origin top-left), from the
-// scene's camera as mjr_render sets up its frustum.
+// scene's camera as mjr_render sets up its frustum in the 3D viewport last drawn.
 Pixel Project(ViewerCore& core, const mjtNum p[3]) {
   const mjvScene& scn = core.view().scene();
   const mjvGLCamera cam = mjv_averageCamera(&scn.camera[0], &scn.camera[1]);
   int w = 0, h = 0;
   core.window().FramebufferSize(&w, &h);
-  const double aspect = static_cast<double>(w) / h;
+  mjrRect vp = core.last_viewport();
+  if (vp.width <= 0) vp = {0, 0, w, h};  // nothing drawn yet: the whole window
+  const double aspect = static_cast<double>(vp.width) / vp.height;
   const double half_w = 0.5 * aspect * (cam.frustum_top - cam.frustum_bottom);
   mjtNum v[3], right[3], fwd[3], up[3];
   mju_f2n(fwd, cam.forward, 3);
@@ -90,8 +92,9 @@ Pixel Project(ViewerCore& core, const mjtNum p[3]) {
   const double xn = mju_dot3(v, right) * cam.frustum_near / z;
   const double yn = mju_dot3(v, up) * cam.frustum_near / z;
   Pixel px;
-  px.x = (xn - (cam.frustum_center - half_w)) / (2 * half_w) * w;
-  px.y = (1 - (yn - cam.frustum_bottom) / (cam.frustum_top - cam.frustum_bottom)) * h;
+  px.x = vp.left + (xn - (cam.frustum_center - half_w)) / (2 * half_w) * vp.width;
+  px.y = (h - vp.bottom - vp.height) +
+         (1 - (yn - cam.frustum_bottom) / (cam.frustum_top - cam.frustum_bottom)) * vp.height;
   return px;
 }
 
@@ -211,37 +214,150 @@ TEST_F(ViewerTest, DrawsTheRobotWhereItsProjectionSays) {
   }
 }
 
-TEST_F(ViewerTest, DrawsThePanel) {
+TEST_F(ViewerTest, DrawsThePanelDockedBesideTheViewport) {
   Play(kBotXml);
   const Image with = viewer_->ReadPixels();
-  viewer::ViewerOptions vo;
-  // The panel's region (the left kWidth pixels) against the same frame with the panel off: a
-  // second play in the same process.
+  // The 3D viewport is the window right of the panel and its splitter: the camera is centred
+  // there, and the robot is drawn there (not behind the panel).
+  const viewer::internal::WindowRect vp = core().ViewportRect();
+  const float panel_w = core().layout().Panel(640, 480).w;
+  EXPECT_EQ(panel_w, viewer::internal::Layout::kDefaultWidth);
+  EXPECT_EQ(vp.x, panel_w + viewer::internal::Layout::kSplitter);
+  EXPECT_EQ(vp.w, 640 - vp.x);
+  EXPECT_EQ(core().last_viewport().left, static_cast<int>(vp.x));
+  EXPECT_EQ(core().last_viewport().width, static_cast<int>(vp.w));
+  const Pixel ball = Project(core(), BodyPos("base"));
+  EXPECT_GT(ball.x, vp.x + 10) << "the robot stands right of the panel";
+  EXPECT_LT(ball.x, 630);
+  const std::uint8_t* c = with.at(static_cast<int>(ball.x), static_cast<int>(ball.y));
+  EXPECT_GT(c[0], 120) << "red ball expected at " << ball.x << "," << ball.y;
+  EXPECT_LT(c[2], 80);
+  // The panel is opaque: against the same frame without a panel, its region changed.
   manager_.reset();
+  viewer::ViewerOptions vo;
   vo.panel = false;
   Play(kBotXml, vo);
   const Image without = viewer_->ReadPixels();
-  const int panel_w = static_cast<int>(viewer::internal::Panel::kWidth);
   int changed = 0, total = 0;
   for (int y = 0; y < with.height; y += 2) {
-    for (int x = 0; x < panel_w; x += 2) {
+    for (int x = 0; x < static_cast<int>(panel_w); x += 2) {
       ++total;
       int sum = 0;
-      for (int c = 0; c < 3; ++c) sum += std::abs(int(with.at(x, y)[c]) - int(without.at(x, y)[c]));
+      for (int k = 0; k < 3; ++k) sum += std::abs(int(with.at(x, y)[k]) - int(without.at(x, y)[k]));
       if (sum > 30) ++changed;
     }
   }
   EXPECT_GT(changed, total / 2) << "the panel covers the left " << panel_w << " pixels";
-  // Right of the panel the frames agree.
-  int right_changed = 0;
-  for (int y = 0; y < with.height; y += 2) {
-    for (int x = panel_w + 20; x < with.width; x += 2) {
-      int sum = 0;
-      for (int c = 0; c < 3; ++c) sum += std::abs(int(with.at(x, y)[c]) - int(without.at(x, y)[c]));
-      if (sum > 30) ++right_changed;
-    }
+  EXPECT_EQ(core().ViewportRect().x, 0) << "without a panel the viewport is the whole window";
+}
+
+TEST_F(ViewerTest, SplitterResizesAndHCollapsesThePanel) {
+  Play(kBotXml);
+  using Mouse = viewer::internal::Window::InjectedMouse;
+  viewer::internal::Layout& layout = core().layout();
+  const viewer::internal::WindowRect s = layout.Splitter(640, 480);
+  ASSERT_GT(s.w, 0);
+  const float x0 = s.x + s.w / 2, y = 200;
+  const float vp0 = core().ViewportRect().x;
+  // Drag the splitter 80 pixels to the right through ImGui's own input.
+  core().window().InjectImGuiMouse(Mouse{x0, y, false});
+  manager_->Tick();
+  core().window().InjectImGuiMouse(Mouse{x0, y, true});
+  manager_->Tick();
+  for (int dx = 20; dx <= 80; dx += 20) {
+    core().window().InjectImGuiMouse(Mouse{x0 + dx, y, true});
+    manager_->Tick();
   }
-  EXPECT_LT(right_changed, total / 50);
+  core().window().InjectImGuiMouse(Mouse{x0 + 80, y, false});
+  manager_->Tick();
+  core().window().InjectImGuiMouse(std::nullopt);
+  EXPECT_NEAR(core().ViewportRect().x, vp0 + 80, 1.5);
+  viewer_->ReadPixels();
+  EXPECT_NEAR(core().last_viewport().left, vp0 + 80, 1.5) << "MuJoCo renders into the new rect";
+  EXPECT_NEAR(core().last_viewport().width, 640 - (vp0 + 80), 1.5);
+  // H collapses the panel to a strip and opens it again at the same width.
+  Key(GLFW_KEY_H);
+  viewer_->ReadPixels();
+  EXPECT_EQ(core().last_viewport().left,
+            static_cast<int>(viewer::internal::Layout::kCollapsedWidth));
+  Key(GLFW_KEY_H);
+  viewer_->ReadPixels();
+  EXPECT_NEAR(core().last_viewport().left, vp0 + 80, 1.5);
+}
+
+TEST_F(ViewerTest, DefaultCameraFramesEveryRobotOfTheScene) {
+  // Two robots 6 m apart (and a third far above): every body of each is in the view frustum,
+  // inside the viewport right of the panel.
+  Play(kBotXml, {}, true,
+       "    pos: [0, -3, 0]\n  - name: other\n    mjcf: bot.xml\n    pos: [0, 3, 0]\n"
+       "    controller: {type: passthrough}\n  - name: high\n    mjcf: bot.xml\n"
+       "    pos: [1, 0, 2]\n    controller: {type: passthrough}\n");
+  viewer_->ReadPixels();
+  const viewer::internal::WindowRect vp = core().ViewportRect();
+  const mjModel* m = core().view().model();
+  const mjData* d = core().view().data();
+  ASSERT_EQ(manager_->session().articulations().size(), 3u);
+  int checked = 0;
+  double min_x = 1e9, max_x = -1e9;
+  for (int b = 1; b < m->nbody; ++b) {
+    const Pixel p = Project(core(), d->xpos + 3 * b);
+    EXPECT_GT(p.x, vp.x) << mj_id2name(m, mjOBJ_BODY, b);
+    EXPECT_LT(p.x, vp.x + vp.w) << mj_id2name(m, mjOBJ_BODY, b);
+    EXPECT_GT(p.y, 0) << mj_id2name(m, mjOBJ_BODY, b);
+    EXPECT_LT(p.y, 480) << mj_id2name(m, mjOBJ_BODY, b);
+    min_x = std::min(min_x, p.x);
+    max_x = std::max(max_x, p.x);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 6);
+  EXPECT_GT(max_x - min_x, vp.w / 4) << "the scene fills the view, not a corner of it";
+  // Ctrl+A frames it again after the camera moved away.
+  core().view().camera().distance *= 10;
+  core().view().camera().lookat[0] += 20;
+  Key(GLFW_KEY_A, GLFW_MOD_CONTROL);
+  viewer_->ReadPixels();
+  for (int b = 1; b < m->nbody; ++b) {
+    const Pixel p = Project(core(), d->xpos + 3 * b);
+    EXPECT_GT(p.x, vp.x);
+    EXPECT_LT(p.x, vp.x + vp.w);
+  }
+}
+
+TEST_F(ViewerTest, RenderQualityFromTheSceneAndTheCommandLine) {
+  // Defaults: shadows, reflections and the sky on; a gradient sky where nothing is drawn.
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  Play(kBotXml, vo);
+  const mjvScene& scn = core().view().scene();
+  EXPECT_TRUE(scn.flags[mjRND_SHADOW]);
+  EXPECT_TRUE(scn.flags[mjRND_REFLECTION]);
+  EXPECT_TRUE(scn.flags[mjRND_SKYBOX]);
+  core().view().camera().elevation = 10;  // looking a little up: sky in the top rows
+  const Image sky = viewer_->ReadPixels();
+  const std::uint8_t* top = sky.at(320, 3);
+  EXPECT_GT(top[2], 120) << "a blue sky at the top";
+  EXPECT_GT(top[2], top[0]);
+  // The scene's viewer: section, and the command line winning over it.
+  manager_.reset();
+  vo.shadows = false;
+  vo.skybox = false;
+  Play(kBotXml, vo, true, "viewer: {shadows: true, reflections: false, render_scale: 0.5}\n");
+  const mjvScene& scn2 = core().view().scene();
+  EXPECT_FALSE(scn2.flags[mjRND_SHADOW]) << "--no-shadows wins over the scene";
+  EXPECT_FALSE(scn2.flags[mjRND_REFLECTION]) << "the scene's reflections: false";
+  EXPECT_FALSE(scn2.flags[mjRND_SKYBOX]);
+  EXPECT_EQ(core().quality().scale, 0.5);
+  core().view().camera().elevation = 10;
+  const Image half = viewer_->ReadPixels();
+  const std::uint8_t* dark = half.at(320, 3);
+  EXPECT_LT(dark[0] + dark[1] + dark[2], 40) << "no sky: the background stays dark";
+  // At half resolution the robot is still drawn where it is.
+  core().view().camera().elevation = -30;
+  const Image img = viewer_->ReadPixels();
+  const Pixel ball = Project(core(), BodyPos("base"));
+  const std::uint8_t* c = img.at(static_cast<int>(ball.x), static_cast<int>(ball.y));
+  EXPECT_GT(c[0], 120);
+  EXPECT_LT(c[2], 80);
 }
 
 TEST_F(ViewerTest, DebugTogglesChangeTheExpectedRegion) {
@@ -740,6 +856,275 @@ TEST_F(ViewerTest, MouseRotatesSelectsAndPerturbs) {
   EXPECT_EQ(core().view().perturb().active, 0);
 }
 
+// ---- What MuJoCo's simulate offers ----
+
+// The bot with a model camera looking down at it and a keyframe.
+std::string BotWithCameraAndKey() {
+  std::string xml = kBotXml;
+  xml.replace(xml.find("  <worldbody>\n"), 14,
+              "  <worldbody>\n    <camera name=\"top\" pos=\"0.5 0.4 4\"/>\n");
+  xml.replace(
+      xml.find("</mujoco>"), 9,
+      "<keyframe><key name=\"up\" qpos=\"0.5 0.4 0.5 1 0 0 0 0.3\"/></keyframe>\n</mujoco>");
+  return xml;
+}
+
+TEST_F(ViewerTest, PossessIsNotOfferedForAPropWithoutActuators) {
+  // A free box without actuators: it has a twist controller (a free base) but nothing drives
+  // it unless hover pushes the base.
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  Play(kFloatXml, vo);
+  ASSERT_NE(manager_->session().articulations()[0].control->twist(), nullptr);
+  Key(GLFW_KEY_TAB);
+  EXPECT_FALSE(core().possession().active());
+  EXPECT_NE(core().status().find("nothing to possess"), std::string::npos) << core().status();
+  manager_.reset();
+  Play(kFloatXml, vo, true, "    twist: {mode: hover}\n");
+  Key(GLFW_KEY_TAB);
+  EXPECT_TRUE(core().possession().active()) << core().status();
+  Key(GLFW_KEY_TAB);
+}
+
+TEST_F(ViewerTest, RightStepsExactlyOneStepWhilePaused) {
+  Play(kBotXml);
+  ASSERT_TRUE(engine().paused());
+  const std::uint64_t s0 = engine().step_count();
+  Key(GLFW_KEY_RIGHT);
+  ASSERT_TRUE(TickUntil([&] { return core().frame()->step == s0 + 1; }));
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  manager_->Tick();
+  EXPECT_EQ(engine().step_count(), s0 + 1) << "exactly one step";
+  Key(GLFW_KEY_RIGHT);
+  Key(GLFW_KEY_RIGHT);
+  ASSERT_TRUE(TickUntil([&] { return core().frame()->step == s0 + 3; }));
+  EXPECT_EQ(engine().step_count(), s0 + 3);
+  // While running, Right does not step (and says so).
+  Key(GLFW_KEY_P);
+  ASSERT_FALSE(engine().paused());
+  Key(GLFW_KEY_RIGHT);
+  EXPECT_NE(core().status().find("while paused"), std::string::npos) << core().status();
+}
+
+TEST_F(ViewerTest, CameraListSwitchesToTheModelsCameras) {
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  const std::string xml = BotWithCameraAndKey();
+  Play(xml.c_str(), vo);
+  EXPECT_EQ(core().camera(), -1);
+  const Image free_view = viewer_->ReadPixels();
+  Key(GLFW_KEY_RIGHT_BRACKET);
+  EXPECT_EQ(core().camera(), 0);
+  EXPECT_EQ(core().view().camera().type, mjCAMERA_FIXED);
+  EXPECT_EQ(core().view().camera().fixedcamid, 0);
+  const Image top = viewer_->ReadPixels();
+  // Looking straight down on the bot: the ball (or its stick, pointing up) at the centre.
+  const std::uint8_t* c = top.at(top.width / 2, top.height / 2);
+  const bool red_ball = c[0] > 120 && c[2]<80, blue_stick = c[2]> 120 && c[0] < 80;
+  EXPECT_TRUE(red_ball || blue_stick)
+      << "the bot at the image centre: " << int(c[0]) << " " << int(c[1]) << " " << int(c[2]);
+  EXPECT_GT(Compare(free_view, top, {0, 0}, 0).outside, 1000) << "a different view";
+  Key(GLFW_KEY_RIGHT_BRACKET);  // past the last camera: the free camera again
+  EXPECT_EQ(core().camera(), -1);
+  EXPECT_EQ(core().view().camera().type, mjCAMERA_FREE);
+  Key(GLFW_KEY_LEFT_BRACKET);  // backwards: the last camera
+  EXPECT_EQ(core().camera(), 0);
+  Key(GLFW_KEY_ESCAPE);
+  EXPECT_EQ(core().camera(), -1);
+}
+
+TEST_F(ViewerTest, FlagsAndGroupsReachTheModelAndTheRenderOptions) {
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  Play(kBotXml, vo, /*paused=*/false);
+  // Physics flags: a SetOptions command reaches the engine's model (and the viewer's copy).
+  const mjtNum* ball = BodyPos("base");
+  // (MuJoCo's flag enums are masks; the panel's items are bit indices.)
+  const auto bit = [](int mask) { return __builtin_ctz(static_cast<unsigned>(mask)); };
+  core().SetDisableFlag(bit(mjDSBL_GRAVITY), true);
+  core().SetDisableFlag(bit(mjDSBL_CONTACT), true);
+  int flags = 0;
+  ASSERT_TRUE(TickUntil([&] {
+    engine().WithLockedData([&](mjModel* m, mjData*) { flags = m->opt.disableflags; });
+    return flags == (mjDSBL_GRAVITY | mjDSBL_CONTACT);
+  })) << flags;
+  EXPECT_EQ(core().view().model()->opt.disableflags, mjDSBL_GRAVITY | mjDSBL_CONTACT);
+  // Without gravity and contacts the ball floats where it is.
+  const double z = ball[2];
+  ASSERT_TRUE(TickUntil([&] { return core().frame()->time > 0.3; }));
+  EXPECT_NEAR(ball[2], z, 0.02);
+  core().SetDisableFlag(bit(mjDSBL_GRAVITY), false);
+  core().SetDisableFlag(bit(mjDSBL_CONTACT), false);
+  core().SetEnableFlag(bit(mjENBL_ENERGY), true);
+  ASSERT_TRUE(TickUntil([&] {
+    engine().WithLockedData([&](mjModel* m, mjData*) { flags = m->opt.enableflags; });
+    return flags == mjENBL_ENERGY;
+  }));
+  // Options (tolerance, gravity, wind) the panel sets go the same way.
+  core().SetOptions(
+      [](mjOption& o) {
+        o.tolerance = 1e-6;
+        o.wind[0] = 2;
+        o.gravity[2] = -5;
+      },
+      "test");
+  mjOption opt{};
+  ASSERT_TRUE(TickUntil([&] {
+    engine().WithLockedData([&](mjModel* m, mjData*) { opt = m->opt; });
+    return opt.wind[0] == 2;
+  }));
+  EXPECT_EQ(opt.tolerance, 1e-6);
+  EXPECT_EQ(opt.gravity[2], -5);
+  // Visualisation flags by their simulate letters (Shift+I: inertia boxes), drawn.
+  const Image plain = viewer_->ReadPixels();
+  EXPECT_FALSE(core().view().option().flags[mjVIS_INERTIA]);
+  Key(GLFW_KEY_I, GLFW_MOD_SHIFT);
+  EXPECT_TRUE(core().view().option().flags[mjVIS_INERTIA]);
+  Key(GLFW_KEY_P);
+  ASSERT_TRUE(TickUntil([&] { return core().frame()->paused; }));
+  const Image still = viewer_->ReadPixels();
+  Key(GLFW_KEY_I, GLFW_MOD_SHIFT);
+  const Image without = viewer_->ReadPixels();
+  EXPECT_GT(Compare(without, still, {0, 0}, 0).outside, 50) << "inertia boxes drawn";
+  (void)plain;
+  // Geom groups: Alt+0 hides group 0 (every geom of the bot): the ball is gone.
+  Key(GLFW_KEY_0, GLFW_MOD_ALT);
+  EXPECT_FALSE(core().view().option().geomgroup[0]);
+  const Image hidden = viewer_->ReadPixels();
+  const Pixel p = Project(core(), ball);
+  const std::uint8_t* c = hidden.at(static_cast<int>(p.x), static_cast<int>(p.y));
+  EXPECT_FALSE(c[0] > 120 && c[1] < 80 && c[2] < 80) << "the ball still drawn";
+  Key(GLFW_KEY_0, GLFW_MOD_ALT);
+  EXPECT_TRUE(core().view().option().geomgroup[0]);
+  Key(GLFW_KEY_0, GLFW_MOD_ALT | GLFW_MOD_SHIFT);
+  EXPECT_FALSE(core().view().option().sitegroup[0]);
+}
+
+TEST_F(ViewerTest, PlotsAccumulateSamplesOfChosenSignals) {
+  Play(kBotXml, {}, /*paused=*/false);
+  viewer::internal::Plots& plots = core().plots();
+  int hinge = -1, force = -1, sensor = -1;
+  for (int i = 0; i < static_cast<int>(plots.available().size()); ++i) {
+    const auto& sig = plots.available()[static_cast<std::size_t>(i)];
+    if (sig.name == "bot_hinge") hinge = i;
+    if (sig.name == "bot_servo force") force = i;
+    if (sig.kind == viewer::internal::SignalKind::kSensor) sensor = i;
+  }
+  ASSERT_GE(hinge, 0);
+  ASSERT_GE(force, 0);
+  EXPECT_EQ(sensor, -1) << "the bot has no sensors";
+  EXPECT_TRUE(plots.Choose(hinge, true));
+  EXPECT_TRUE(plots.Choose(force, true));
+  Key(GLFW_KEY_F4);
+  EXPECT_TRUE(core().overlays().plots);
+  ASSERT_TRUE(TickUntil([&] { return plots.points() >= 10; })) << plots.points();
+  // The newest sample is the newest frame's value.
+  const int adr = core().view().model()->jnt_qposadr[mj_name2id(core().view().model(), mjOBJ_JOINT,
+                                                                "bot_hinge")];
+  EXPECT_FLOAT_EQ(plots.last(0), static_cast<float>(core().frame()->qpos[adr]));
+  EXPECT_FLOAT_EQ(plots.last(1), static_cast<float>(core().frame()->actuator_force[0]));
+  // Drawn: the plot's corner of the viewport changes.
+  const Image with = viewer_->ReadPixels();
+  Key(GLFW_KEY_F4);
+  const Image without = viewer_->ReadPixels();
+  EXPECT_GT(Compare(with, without, {620, 460}, 100).inside, 500);
+  // A reset starts the plot again.
+  const int before = plots.points();
+  Key(GLFW_KEY_R);
+  EXPECT_TRUE(TickUntil([&] { return plots.points() < before; }));
+}
+
+TEST_F(ViewerTest, SavesMjbXmlAndPrintsModelAndData) {
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  vo.files_dir = dir_;
+  Play(kBotXml, vo);
+  Key(GLFW_KEY_S, GLFW_MOD_CONTROL | GLFW_MOD_SHIFT);
+  const std::string mjb = dir_ + "/urlab_scene.mjb";
+  ASSERT_TRUE(std::filesystem::exists(mjb)) << core().status();
+  const physics::Model running = engine().CopyModel();
+  const std::string bytes = testing::ReadTextFile(mjb);
+  const physics::ModelPtr loaded = physics::LoadMjbBytes(bytes);
+  ASSERT_TRUE(loaded);
+  EXPECT_EQ(physics::ContentHash(physics::MjbBytes(loaded.get()), running.extension_text()),
+            running.Hash())
+      << "the saved MJB loads as the same model";
+  Key(GLFW_KEY_S, GLFW_MOD_CONTROL);
+  const std::string xml = dir_ + "/urlab_scene.xml";
+  ASSERT_TRUE(std::filesystem::exists(xml));
+  char error[500] = "";
+  mjModel* m = mj_loadXML(xml.c_str(), nullptr, error, sizeof error);
+  ASSERT_NE(m, nullptr) << error;
+  EXPECT_EQ(m->nq, running->nq);
+  EXPECT_EQ(m->nbody, running->nbody);
+  mj_deleteModel(m);
+  Key(GLFW_KEY_M, GLFW_MOD_CONTROL);
+  Key(GLFW_KEY_D, GLFW_MOD_CONTROL);
+  const std::string model_txt = testing::ReadTextFile(dir_ + "/urlab_model.txt");
+  const std::string data_txt = testing::ReadTextFile(dir_ + "/urlab_data.txt");
+  EXPECT_NE(model_txt.find("nq"), std::string::npos);
+  EXPECT_NE(data_txt.find("QPOS"), std::string::npos);
+  EXPECT_NE(core().status().find("urlab_data.txt"), std::string::npos) << core().status();
+}
+
+TEST_F(ViewerTest, KeysCopyPoseAndReload) {
+  viewer::ViewerOptions vo;
+  vo.panel = false;
+  const std::string xml = BotWithCameraAndKey();
+  Play(xml.c_str(), vo);
+  const mjModel* m = core().view().model();
+  ASSERT_EQ(m->nkey, 1);
+  // Load key: the keyframe's pose reaches the simulation (the stick at 0.3 rad).
+  const int hinge = m->jnt_qposadr[mj_name2id(m, mjOBJ_JOINT, "bot_hinge")];
+  Key(GLFW_KEY_K, GLFW_MOD_CONTROL);
+  ASSERT_TRUE(TickUntil([&] { return std::abs(core().frame()->qpos[hinge] - 0.3) < 1e-12; }));
+  EXPECT_NEAR(core().frame()->qpos[2], 0.5, 1e-12);
+  // Save key stores the current state; after a reset Load key brings it back.
+  Key(GLFW_KEY_K, GLFW_MOD_CONTROL | GLFW_MOD_SHIFT);
+  Key(GLFW_KEY_R);
+  ASSERT_TRUE(TickUntil([&] { return std::abs(core().frame()->qpos[hinge] - 0.3) > 0.1; }));
+  Key(GLFW_KEY_K, GLFW_MOD_CONTROL);
+  EXPECT_TRUE(TickUntil([&] { return std::abs(core().frame()->qpos[hinge] - 0.3) < 1e-12; }));
+  // Copy pose: a <key> with every qpos value, on the clipboard.
+  Key(GLFW_KEY_C, GLFW_MOD_CONTROL);
+  const std::string clip = core().window().Clipboard();
+  EXPECT_EQ(clip.rfind("<key time=", 0), 0u) << clip;
+  EXPECT_NE(clip.find("qpos=\"0.5 0.4 0.5 1 0 0 0 0.3\""), std::string::npos) << clip;
+  // Reload (Ctrl+L) ends play for the host to open the scene again; a dropped file likewise.
+  EXPECT_FALSE(core().stop_requested());
+  core().OnDrop({dir_ + "/notes.txt"});
+  EXPECT_FALSE(core().stop_requested());
+  EXPECT_NE(core().status().find("cannot open"), std::string::npos);
+  Key(GLFW_KEY_L, GLFW_MOD_CONTROL);
+  EXPECT_EQ(core().reload_request(), dir_ + "/scene.yaml");
+  EXPECT_TRUE(core().stop_requested());
+  EXPECT_TRUE(manager_->StopRequested());
+}
+
+TEST_F(ViewerTest, HelpInfoAndProfilerOverlays) {
+  Play(kBotXml, {}, /*paused=*/false);
+  const Image plain = viewer_->ReadPixels();
+  Key(GLFW_KEY_F1);
+  EXPECT_TRUE(core().overlays().help);
+  const Image help = viewer_->ReadPixels();
+  const viewer::internal::WindowRect vp = core().ViewportRect();
+  // The help's key column at the viewport's top left.
+  EXPECT_GT(Compare(plain, help, {vp.x + 60, 60}, 60).inside, 300);
+  Key(GLFW_KEY_F1);
+  EXPECT_FALSE(core().overlays().help);
+  // F2 and F3: the physics thread's timings and sizes arrive (Inspect commands).
+  Key(GLFW_KEY_F2);
+  Key(GLFW_KEY_F3);
+  EXPECT_TRUE(TickUntil([&] { return core().profiler().samples() >= 3; }));
+  const std::optional<viewer::internal::ProfileSample> p = core().profiler().Latest();
+  ASSERT_TRUE(p.has_value());
+  EXPECT_GE(p->ncon, 1) << "the ball rests on the floor";
+  EXPECT_TRUE(TickUntil([&] {
+    const auto q = core().profiler().Latest();
+    return q && q->step_ms > 0;
+  })) << "MuJoCo's timers run";
+}
+
 }  // namespace
 }  // namespace urlab
 
@@ -880,7 +1265,7 @@ TEST_F(ViewerTest, ReplayTimelineDrivesThePlayerAndShowsItsFrames) {
   slot->Set(nullptr);
   EXPECT_FALSE(core().replay_mode());
   const Image without = viewer_->ReadPixels();
-  const int panel_w = static_cast<int>(viewer::internal::Panel::kWidth);
+  const int panel_w = static_cast<int>(core().ViewportRect().x);
   const int strip = static_cast<int>(viewer::internal::Timeline::kHeight);
   int changed = 0;
   for (int y = with.height - strip + 4; y < with.height - 4; ++y) {

@@ -15,6 +15,7 @@
 //   EndPlay), which copies contacts into the viewer's own buffer under its own mutex.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,16 @@ struct ViewerOptions {
   // Record the window to this video file (.mp4 or .webm) through ffmpeg. "" : none.
   std::string video;
   int video_fps = 30;
+  // Render quality; unset: the scene's `viewer:` section, else the viewer's defaults (shadows,
+  // reflections and the sky on, scale 1).
+  std::optional<bool> shadows, reflections, skybox;
+  std::optional<double> render_scale;  // 0.25 to 2: 3D view pixels per window pixel
+  // Signals plotted from the start (F4 shows them): joint names, "SENSOR" or "SENSOR[k]", and
+  // "ACTUATOR force", as the panel's Plots section lists them; an unknown name is an error.
+  std::vector<std::string> plots;
+  // Folder for the files the viewer writes (save XML/MJB, print model/data); "" : the working
+  // folder.
+  std::string files_dir;
 };
 
 // RGB pixels, rows top-down.
@@ -71,6 +82,10 @@ class ViewerSubsystem : public world::Subsystem {
   // The window was closed, or the screenshot was taken.
   bool RequestsStop() const override;
 
+  // A scene the user asked to open instead (reload, or a file dropped on the window): the
+  // host ends play and plays this file ("" when none). Main thread.
+  const std::string& reload_request() const { return reload_request_; }
+
   // After EndPlay: why the --video file is not complete ("" when it is, or there is none), for the
   // command's exit code. Main thread.
   const std::string& video_error() const { return video_error_; }
@@ -94,6 +109,7 @@ class ViewerSubsystem : public world::Subsystem {
   std::shared_ptr<replay::PlaybackSlot> playback_;
   std::unique_ptr<internal::ViewerCore> core_;
   std::string video_error_;
+  std::string reload_request_;
 };
 
 }  // namespace urlab::viewer

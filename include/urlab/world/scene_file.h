@@ -166,6 +166,14 @@ struct CinematicConfig {
   SourceLocation where;
 };
 
+// viewer: the desktop viewer's render quality (the command line's --shadows, --reflections,
+// --skybox and --render-scale win over it); unset fields take the viewer's defaults.
+struct ViewerConfig {
+  std::optional<bool> shadows, reflections, skybox;
+  std::optional<double> render_scale;  // 0.25 to 2: the 3D view's resolution per window pixel
+  SourceLocation where;
+};
+
 struct NetworkConfig {
   bool enabled = true;
   std::string state = "tcp://*:5555";
@@ -193,6 +201,7 @@ struct SceneConfig {
   NetworkConfig network;
   CamerasConfig cameras;
   CinematicConfig cinematic;
+  ViewerConfig viewer;
   std::string save_debug_xml;  // folder for scene_compiled.xml/.mjb ("" = off)
 };
 
