@@ -42,6 +42,6 @@ function(urlab_pch target)
     # it no longer counts as a system header. They stay on in builds without precompiled headers
     # and in clang builds (CI's asan stage: clang, no precompiled headers, ASan at run time).
     target_compile_options(${target} PRIVATE -Wno-array-bounds -Wno-stringop-overflow
-                                             -Wno-restrict)
+                                             -Wno-stringop-overread -Wno-restrict)
   endif()
 endfunction()
