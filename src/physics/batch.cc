@@ -1,6 +1,7 @@
 #include "urlab/physics/batch.h"
 
 #include <algorithm>
+#include <atomic>
 #include <string>
 #include <thread>
 
@@ -180,12 +181,12 @@ void Batch::Step(std::span<const double> actions, std::span<double> observations
     throw Error("batch: done holds " + std::to_string(done.size()) + " flags, expected " +
                 std::to_string(n));
   }
-  const int parts = pool_->threads();
-  pool_->Run([&](int part) {
-    const std::size_t begin = n * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
-    const std::size_t end =
-        n * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
-    for (std::size_t i = begin; i < end; ++i) {
+  // Each thread claims the next environment from a shared counter: a thread the machine
+  // preempts holds back only the environment it is stepping, the others take the rest.
+  std::atomic<std::size_t> next{0};
+  pool_->Run([&](int) {
+    for (std::size_t i = next.fetch_add(1, std::memory_order_relaxed); i < n;
+         i = next.fetch_add(1, std::memory_order_relaxed)) {
       StepEnv(*envs_[i], actions.data() + nu * i,
               observations.empty() ? nullptr : observations.data() + row * i,
               done.empty() ? nullptr : done.data() + i);

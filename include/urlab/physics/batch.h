@@ -14,8 +14,10 @@
 //
 // Threading contract
 // - One owner thread calls everything below. During Step the owner and K-1 persistent workers
-//   (a WorkerPool: no thread is created per step) each advance a contiguous block of
-//   environments; no environment is touched by two threads, and the model is only read.
+//   (a WorkerPool: no thread is created per step) advance the environments, each claiming the
+//   next one from a shared counter (a preempted thread holds back only the one it steps); no
+//   environment is touched by two threads in a step, and the model is only read. Which thread
+//   steps an environment changes none of its bits.
 // - env(i) gives the environment's StepCore for its owner's use between steps (e.g. a state
 //   subscription on environment 0 made before stepping starts); never during Step.
 #include <cstdint>
