@@ -271,6 +271,8 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
     std::fflush(stdout);
     exit_code = 0;
   });
+
+  RegisterBenchBatchCommand(*bench, exit_code);
 }
 
 }  // namespace urlab::app

@@ -23,6 +23,8 @@ void RegisterRecordCommand(CLI::App& app, int& exit_code);
 void RegisterReplayCommand(CLI::App& app, int& exit_code);
 void RegisterRenderCommand(CLI::App& app, int& exit_code);
 void RegisterBenchCommand(CLI::App& app, int& exit_code);
+// `bench batch` (cmd_bench_batch.cc), added by RegisterBenchCommand.
+void RegisterBenchBatchCommand(CLI::App& bench, int& exit_code);
 void RegisterConvertCommand(CLI::App& app, int& exit_code);
 void RegisterSweepCommand(CLI::App& app, int& exit_code);
 

@@ -2,15 +2,6 @@
 
 namespace urlab::physics {
 
-const char* CommandName(const Command& c) {
-  static constexpr const char* kNames[] = {
-      "reset",    "reset_keyframe", "reset_custom", "restore",     "set_qpos",
-      "set_qvel", "set_mocap",      "apply_force",  "set_options", "set_paused",
-      "step",     "forward",        "set_state",    "inspect"};
-  static_assert(std::size(kNames) == std::variant_size_v<Command>);
-  return kNames[c.index()];
-}
-
 std::uint64_t CommandQueue::Push(Command command) {
   std::lock_guard<std::mutex> lock(mutex_);
   const std::uint64_t seq = next_seq_++;

@@ -8,6 +8,8 @@
 #include <cstring>
 #include <mutex>
 
+#include "urlab/physics/step_core.h"
+
 namespace urlab::replay {
 
 namespace {
@@ -149,6 +151,31 @@ void CheckSameModel(const RecordingReader& reader, const physics::Model& m, bool
   }
 }
 
+namespace {
+
+// The recorded inputs of the frame being re-simulated are the controls of a step core's iteration:
+// Resimulate and the Player's re-simulation advance the same StepCore::Advance the engine does.
+struct Resimulator {
+  explicit Resimulator(physics::Model model)
+      : core(std::move(model), physics::StepCore::Options{.reset_on_divergence = false,
+                                                          .log_command_failures = false}) {
+    core.SetApplyControlsHook([this](const mjModel*, mjData* d) { ApplyInputs(*frame, d); });
+  }
+  // Re-runs the step behind recorded frame `f` (its inputs, then one iteration).
+  void Step(const Frame& f) {
+    frame = &f;
+    core.Advance({.force_step = true, .honour_error_latch = false});
+    frame = nullptr;
+  }
+  mjModel* model() { return core.mutable_model(); }
+  mjData* data() { return core.data(); }
+
+  physics::StepCore core;
+  const Frame* frame = nullptr;
+};
+
+}  // namespace
+
 ResimReport Resimulate(const RecordingReader& reader, const physics::Model* given,
                        const ResimOptions& options) {
   physics::Model owned;
@@ -158,9 +185,9 @@ ResimReport Resimulate(const RecordingReader& reader, const physics::Model* give
   } else {
     owned = LoadRecordedModel(reader);
   }
-  mjModel* m = owned.get();
-  physics::DataPtr data = physics::MakeData(m);
-  mjData* d = data.get();
+  Resimulator sim(std::move(owned));
+  mjModel* m = sim.model();
+  mjData* d = sim.data();
   const ModelTables& t = reader.info().tables;
   ResimReport r;
   r.frames = reader.frame_count();
@@ -195,8 +222,7 @@ ResimReport Resimulate(const RecordingReader& reader, const physics::Model* give
         }
       } else if (auto* f = std::get_if<Frame>(&rec)) {
         if (have_state && !need_state) {
-          ApplyInputs(*f, d);
-          mj_step(m, d);
+          sim.Step(*f);
           if (!Matches(t, *f, d, &r)) {
             r.diverged = true;
             r.divergent_step = f->step;
@@ -245,8 +271,10 @@ struct Player::Impl {
   bool jumped = false;  // a marker since the last frame
   std::uint64_t frame_index = 0;
   bool have_state = false;
-  bool options_pending = false;  // NextFrame stopped for an options command to apply
-  bool seeking = false;          // a seek is under way (it waits for recorded options)
+  bool seeking = false;  // a seek is under way
+  // Re-simulation mode: the recorded model re-simulated by its own step core; each iteration
+  // shows its state on the engine.
+  std::unique_ptr<Resimulator> sim;
 
   Impl(physics::PhysicsEngine& e, const RecordingReader& r) : engine(e), reader(r) {}
 
@@ -256,11 +284,15 @@ struct Player::Impl {
     next = 0;
     loaded = true;
   }
-  // The next frame (applying states and options on the way in resimulate mode); nullptr at the
-  // end of the recording.
-  const Frame* NextFrame(const mjModel* m, mjData* d, bool resim);
+  // The next frame (applying states and options to the re-simulation on the way in resimulate
+  // mode); nullptr at the end of the recording.
+  const Frame* NextFrame(bool resim);
   void Rewind(std::size_t c);
   void Step(const mjModel* m, mjData* d);
+  // Re-simulates frame `f` when a state to start from is known.
+  void Resimulate(const Frame& f) {
+    if (have_state) sim->Step(f);
+  }
 };
 
 void Player::Impl::Rewind(std::size_t c) {
@@ -271,7 +303,7 @@ void Player::Impl::Rewind(std::size_t c) {
   for (std::size_t i = 0; i < c; ++i) frame_index += reader.chunks()[i].frames;
 }
 
-const Frame* Player::Impl::NextFrame(const mjModel* m, mjData* d, bool resim) {
+const Frame* Player::Impl::NextFrame(bool resim) {
   while (true) {
     if (!loaded) Load(0);
     if (next >= records.size()) {
@@ -283,19 +315,11 @@ const Frame* Player::Impl::NextFrame(const mjModel* m, mjData* d, bool resim) {
     if (auto* f = std::get_if<Frame>(&rec)) return f;
     if (auto* s = std::get_if<StateRecord>(&rec)) {
       if (resim && (!have_state || s->jump != 0)) {
-        physics::RestoreState(m, d, s->state);
+        physics::RestoreState(sim->model(), sim->data(), s->state);
         have_state = true;
       }
     } else if (auto* o = std::get_if<OptionsRecord>(&rec)) {
-      // Options belong to the engine: queued, applied before the next iteration's step.
-      if (resim && std::memcmp(&m->opt, o->option.data(), sizeof(mjOption)) != 0) {
-        mjOption opt;
-        std::memcpy(&opt, o->option.data(), sizeof(mjOption));
-        engine.Submit(
-            physics::cmd::SetOptions{[opt](mjOption& o2) { o2 = opt; }, "recorded options"});
-        options_pending = true;  // the next step must wait for them
-        return nullptr;
-      }
+      if (resim) ApplyOptions(*o, &sim->model()->opt);
     } else if (std::holds_alternative<Marker>(rec) || std::holds_alternative<Gap>(rec)) {
       jumped = true;
       if (std::holds_alternative<Gap>(rec)) have_state = false;
@@ -333,26 +357,17 @@ void Player::Impl::Step(const mjModel* m, mjData* d) {
         Rewind(from);
         seeking = true;
       }
-      // Skip (re-simulating silently in dynamic mode) to the target frame. A recorded options
-      // change ends this iteration (the engine applies it before the next), and seeking goes on
-      // from here in the next one.
+      // Skip (re-simulating silently in dynamic mode) to the target frame.
       const bool resim = opt.mode == PlayMode::kResimulate;
       while (true) {
-        const Frame* f = NextFrame(m, d, resim);
-        if (!f && options_pending) {
-          options_pending = false;
-          return;
-        }
+        const Frame* f = NextFrame(resim);
         if (!f) break;
         if ((seek_time && f->time >= *seek_time) || (seek_step && f->step >= *seek_step) ||
             (seek_frame && frame_index >= *seek_frame)) {
           --next;  // NextFrame returned records[next - 1]: show it next
           break;
         }
-        if (resim && have_state) {
-          ApplyInputs(*f, d);
-          mj_step(m, d);
-        }
+        if (resim) Resimulate(*f);
         last_frame_time = f->time;
         ++frame_index;
       }
@@ -376,12 +391,7 @@ void Player::Impl::Step(const mjModel* m, mjData* d) {
   clock += opt.speed * m->opt.timestep;
   const Frame* shown = nullptr;
   while (!have_last || shown_pos + dt <= target + 1e-9) {
-    const Frame* f = NextFrame(m, d, resim);
-    if (!f && options_pending) {  // this iteration ends; the options apply before the next
-      options_pending = false;
-      clock = target;
-      break;
-    }
+    const Frame* f = NextFrame(resim);
     if (!f) {
       std::lock_guard<std::mutex> lock(mutex);
       if (opt.loop) {
@@ -405,11 +415,10 @@ void Player::Impl::Step(const mjModel* m, mjData* d) {
     last_frame_time = f->time;
     have_last = true;
     if (resim && have_state) {
-      ApplyInputs(*f, d);
-      mj_step(m, d);
+      Resimulate(*f);
       std::lock_guard<std::mutex> lock(mutex);
       if (!status.resim.diverged) {
-        if (Matches(tables, *f, d, &status.resim)) {
+        if (Matches(tables, *f, sim->data(), &status.resim)) {
           ++status.resim.steps_checked;
         } else {
           status.resim.diverged = true;
@@ -423,7 +432,18 @@ void Player::Impl::Step(const mjModel* m, mjData* d) {
     ++frame_index;
   }
   if (!shown) return;
-  if (!resim) {
+  // Shown kinematically: the recorded frame, or the re-simulated state (bit for bit what the
+  // re-simulation reached) with the frame's inputs.
+  if (resim && have_state) {
+    const mjData* r = sim->data();
+    mju_copy(d->qpos, r->qpos, m->nq);
+    mju_copy(d->qvel, r->qvel, m->nv);
+    mju_copy(d->act, r->act, m->na);
+    ApplyInputs(*shown, d);
+    d->time = r->time;
+    mj_forward(m, d);
+    mju_copy(d->qpos, r->qpos, m->nq);  // mj_forward normalised the quaternions in place
+  } else {
     Copy(shown->qpos, d->qpos);
     Copy(shown->qvel, d->qvel);
     Copy(shown->act, d->act);
@@ -440,9 +460,13 @@ void Player::Impl::Step(const mjModel* m, mjData* d) {
 
 Player::Player(physics::PhysicsEngine& engine, const RecordingReader& reader, PlayerOptions options)
     : impl_(std::make_unique<Impl>(engine, reader)) {
-  CheckSameModel(reader, engine.CopyModel());
+  physics::Model model = engine.CopyModel();
+  CheckSameModel(reader, model);
   if (!(options.speed > 0) || !std::isfinite(options.speed)) {
     throw Error("playback speed must be a finite number > 0");
+  }
+  if (options.mode == PlayMode::kResimulate) {
+    impl_->sim = std::make_unique<Resimulator>(std::move(model));
   }
   impl_->tables = reader.info().tables;
   impl_->options = options;

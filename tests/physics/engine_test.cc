@@ -12,6 +12,7 @@
 #include "physics/test_models.h"
 #include "support/mujoco_test.h"
 #include "support/wait.h"
+#include "urlab/core/clock.h"
 #include "urlab/core/doorbell.h"
 
 namespace urlab::physics {
@@ -30,6 +31,15 @@ double SimTime(PhysicsEngine& e) {
   double t = 0;
   e.WithLockedData([&](mjModel*, mjData* d) { t = d->time; });
   return t;
+}
+
+// Waits until the paused physics loop has run `n` more iterations: each applies a read-only
+// command (an iteration's first work) and releases its waiter.
+void RunPausedIterations(PhysicsEngine& engine, int n) {
+  for (int i = 0; i < n; ++i) {
+    const std::uint64_t seq = engine.Submit(cmd::Inspect{[](const mjModel*, const mjData*) {}, ""});
+    ASSERT_TRUE(engine.WaitForCommand(seq, 5s).ok());
+  }
 }
 
 TEST_F(EngineTest, StepSyncRunsTheIterationInOrder) {
@@ -83,10 +93,10 @@ TEST_F(EngineTest, PauseStopsSteppingButNotCallbacks) {
   engine.TogglePause();
   EXPECT_FALSE(engine.paused());
   ASSERT_TRUE(WaitFor([&] { return engine.step_count() > 20; }));
-  engine.SetPaused(true);
-  std::this_thread::sleep_for(10ms);
+  engine.Submit(cmd::SetPaused{true});
+  RunPausedIterations(engine, 1);  // the pause took effect before this iteration
   const std::uint64_t n = engine.step_count();
-  std::this_thread::sleep_for(30ms);
+  RunPausedIterations(engine, 5);
   EXPECT_EQ(engine.step_count(), n);
   engine.Stop();
   EXPECT_FALSE(engine.running());
@@ -266,7 +276,7 @@ TEST_F(EngineTest, MujocoErrorInLoopPausesAndIsReported) {
   ASSERT_TRUE(WaitFor([&] { return engine.step_count() > 50; }));
   fail = true;
   ASSERT_TRUE(WaitFor([&] { return engine.paused(); }));
-  std::this_thread::sleep_for(20ms);  // the latched loop must not re-run the failing callback
+  RunPausedIterations(engine, 5);  // the latched loop must not re-run the failing callback
   auto events = engine.DrainEvents();
   ASSERT_EQ(events.size(), 1u);
   EXPECT_EQ(events.back().kind, EngineEventKind::kError);
@@ -323,30 +333,70 @@ TEST_F(EngineTest, ResetFromInsideACallbackIsQueued) {
   EXPECT_EQ(engine.DrainEvents().size(), 1u);
 }
 
-// Measures RTF as simulated time over wall time across `wall` seconds.
-double MeasureRtf(PhysicsEngine& engine, std::chrono::milliseconds wall) {
-  const double t0 = SimTime(engine);
-  const auto w0 = std::chrono::steady_clock::now();
-  std::this_thread::sleep_for(wall);
-  const double t1 = SimTime(engine);
-  const double w = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
-  return (t1 - t0) / w;
-}
-
-TEST_F(EngineTest, PacingFollowsSpeed) {
-  PhysicsEngine engine(CompileXmlString(kPendulumXml));  // 500 Hz
+// Pacing on the injected clock: one step per period of the clock, none in between; half speed
+// doubles the period; a short lag is caught up, a long one restarts the schedule. The real-time
+// factor and step rate are measured on the same clock. Exact, whatever the machine's load.
+TEST_F(EngineTest, PacingFollowsSpeedOnTheInjectedClock) {
+  ManualClock clock;
+  PhysicsEngine::Options o;
+  o.clock = &clock;
+  o.measure_window = 0.1;
+  PhysicsEngine engine(CompileXmlString(kPendulumXml), o);  // 2 ms steps
   engine.Start();
-  std::this_thread::sleep_for(300ms);
-  const double full = MeasureRtf(engine, 1000ms);
-  EXPECT_NEAR(full, 1.0, 0.1);
-  EXPECT_NEAR(engine.real_time_factor(), 1.0, 0.15);
-  EXPECT_NEAR(engine.step_rate(), 500, 75);
-  engine.SetSpeedPercent(50);
-  std::this_thread::sleep_for(300ms);
-  const double half = MeasureRtf(engine, 1000ms);
-  EXPECT_NEAR(half, 0.5, 0.05);
+  ASSERT_TRUE(clock.WaitForSleeper());
+  EXPECT_EQ(engine.step_count(), 1u);  // the first iteration steps at once, then waits
+  for (int ms = 1; ms <= 200; ++ms) {
+    clock.Advance(1ms);
+    ASSERT_TRUE(clock.WaitForSleeper());
+    ASSERT_EQ(engine.step_count(), 1u + static_cast<std::uint64_t>(ms / 2)) << "at " << ms << " ms";
+  }
+  EXPECT_NEAR(SimTime(engine), 101 * 0.002, 1e-12);
+  // Two measurement windows of 0.1 s passed; the last one held exactly 50 steps of 2 ms.
+  EXPECT_NEAR(engine.real_time_factor(), 1.0, 1e-9);
+  EXPECT_NEAR(engine.step_rate(), 500.0, 1e-6);
+
+  engine.SetSpeedPercent(50);  // the current deadline stands; the next ones are 4 ms apart
+  clock.Advance(2ms);
+  ASSERT_TRUE(clock.WaitForSleeper());
+  const std::uint64_t half_start = engine.step_count();
+  for (int i = 0; i < 100; ++i) {
+    clock.Advance(2ms);
+    ASSERT_TRUE(clock.WaitForSleeper());
+  }
+  EXPECT_EQ(engine.step_count() - half_start, 50u);  // 200 ms at half speed: 50 steps
+  EXPECT_NEAR(engine.real_time_factor(), 0.5, 1e-9);
+  EXPECT_NEAR(engine.step_rate(), 250.0, 1e-6);
+
+  engine.SetSpeedPercent(100);
+  clock.Advance(4ms);  // the pending 4 ms deadline
+  ASSERT_TRUE(clock.WaitForSleeper());
+  std::uint64_t before = engine.step_count();
+  clock.Advance(10ms);  // behind by 5 periods, within the resync threshold: caught up
+  ASSERT_TRUE(clock.WaitForSleeper());
+  EXPECT_EQ(engine.step_count() - before, 5u);
+  before = engine.step_count();
+  clock.Advance(1s);  // far behind: one step for the deadline, one at the restarted schedule
+  ASSERT_TRUE(clock.WaitForSleeper());
+  EXPECT_EQ(engine.step_count() - before, 2u);
+
   engine.SetSpeedPercent(1);
   EXPECT_EQ(engine.speed_percent(), 5);
+  engine.Stop();
+}
+
+// A paused engine takes no step however far its clock moves; commands still apply.
+TEST_F(EngineTest, PausedEngineTakesNoStepWhateverTheClockDoes) {
+  ManualClock clock;
+  PhysicsEngine::Options o;
+  o.clock = &clock;
+  PhysicsEngine engine(CompileXmlString(kPendulumXml), o);
+  engine.SetPaused(true);
+  engine.Start();
+  RunPausedIterations(engine, 3);
+  clock.Advance(10s);
+  RunPausedIterations(engine, 3);
+  EXPECT_EQ(engine.step_count(), 0u);
+  EXPECT_EQ(engine.real_time_factor(), 0.0);
   engine.Stop();
 }
 
@@ -390,9 +440,9 @@ TEST_F(EngineTest, StressCommandsFromOtherThreads) {
   engine.Start();
   const PhysicsState snap = engine.Snapshot();
   std::atomic<bool> done{false};
+  std::atomic<bool> storm_done{false};
   std::thread storm([&] {
-    int i = 0;
-    while (!done.load()) {
+    for (int i = 0; i < 4000;) {
       switch (i++ % 7) {
         case 0:
           engine.Reset();
@@ -422,16 +472,13 @@ TEST_F(EngineTest, StressCommandsFromOtherThreads) {
       }
       (void)engine.real_time_factor();
     }
+    storm_done = true;
   });
   std::thread render([&] {
     while (!done.load()) (void)frames->Latest();
   });
-  const auto end = std::chrono::steady_clock::now() + 1500ms;
   int events = 0;
-  while (std::chrono::steady_clock::now() < end) {
-    events += engine.PollEvents();
-    std::this_thread::sleep_for(1ms);
-  }
+  while (!storm_done.load()) events += engine.PollEvents();
   done = true;
   storm.join();
   render.join();

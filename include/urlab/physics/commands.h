@@ -112,7 +112,8 @@ using Command =
                  cmd::SetQvel, cmd::SetMocap, cmd::ApplyForce, cmd::SetOptions, cmd::SetPaused,
                  cmd::Step, cmd::Forward, cmd::SetState, cmd::Inspect>;
 
-// Short name of a command's kind ("reset", "restore", "set_qpos", ...).
+// Short name of a command's kind ("reset", "restore", "set_qpos", ...; declared with its
+// validation and application in src/physics/command_kinds.cc).
 const char* CommandName(const Command& c);
 
 // The outcome of one command.

@@ -1,6 +1,6 @@
 #pragma once
-// PhysicsEngine: owns one compiled mjModel and its mjData and steps them on a dedicated physics
-// thread.
+// PhysicsEngine: owns one compiled mjModel and its mjData (in a StepCore, step_core.h) and
+// steps them on a dedicated physics thread, paced on an injectable clock (core/clock.h).
 //
 // Threading contract
 // - The physics thread (started by Start) owns mjModel/mjData while it runs. Each loop iteration
@@ -10,8 +10,9 @@
 //   apply-controls hook, steps (unless paused: the custom step handler if set, else mj_step),
 //   removes the one-shot forces, checks for divergence, runs the post-step callbacks, fires the
 //   OnPostStep listeners (only when a step happened) and publishes a state frame to every
-//   subscriber (after a step, after commands, and when the pause state changed). It then releases
-//   the mutex and waits for the next deadline (pacing).
+//   subscriber (after a step, after commands, and when the pause state changed): one
+//   StepCore::Advance. It then releases the mutex and waits for the next deadline on its clock
+//   (pacing); the real-time factor and step rate are measured on the same clock.
 // - Callbacks, command listeners, the controls hook and the custom step handler run on the
 //   physics thread (or on the StepSync caller's thread) with the step mutex held; they may read
 //   and write mjData freely. From inside a callback, Submit and its wrappers and SetPaused are
@@ -49,54 +50,24 @@
 #include <thread>
 #include <vector>
 
+#include "urlab/core/clock.h"
 #include "urlab/core/doorbell.h"
 #include "urlab/physics/commands.h"
 #include "urlab/physics/model.h"
 #include "urlab/physics/state.h"
 #include "urlab/physics/state_frame.h"
+#include "urlab/physics/step_core.h"
 
 namespace urlab::physics {
-
-// What an EngineEvent reports.
-enum class EngineEventKind {
-  kReset,       // mjData was reset (full, keyframe, custom or after divergence)
-  kRestored,    // a state was restored
-  kDivergence,  // NaN/Inf or a MuJoCo instability warning after a step
-  kError,       // a MuJoCo error or a callback exception; the loop paused itself
-};
-
-// A notification from the physics thread, delivered on the main thread.
-struct EngineEvent {
-  EngineEventKind kind = EngineEventKind::kReset;
-  double sim_time = 0;       // simulation time when it happened (before any reset it caused)
-  std::string message;       // human-readable summary
-  int joint_id = -1;         // kDivergence: offending joint, -1 when unknown
-  std::string joint_name;    // kDivergence: its full (prefixed) name, "" when unnamed/unknown
-  std::string articulation;  // kDivergence: from the articulation resolver, "" when none
-  bool auto_reset = false;   // kDivergence: the engine reset the simulation in response
-};
-
-// A command as the physics thread applied it, for the command listeners.
-struct AppliedCommand {
-  std::uint64_t seq = 0;
-  const char* name = "";            // CommandName
-  std::uint32_t discontinuity = 0;  // Discontinuity flags it caused (0: none)
-  std::string error;                // non-empty when it failed
-};
-
-// The error a step command finishes with when it was cancelled (PhysicsEngine::
-// CancelStepsThrough) instead of running all its iterations.
-inline constexpr std::string_view kStepCancelled = "step: cancelled";
-inline bool IsCancelledStep(std::string_view error) { return error.starts_with(kStepCancelled); }
 
 class PhysicsEngine {
  public:
   // A hook run with the step mutex held. The model is const: change it via WithLockedData.
   using StepCallback = physics::StepCallback;
   // Told on the physics thread (step mutex held) after each command was applied.
-  using CommandListener = std::function<void(const AppliedCommand&, const mjModel*, const mjData*)>;
+  using CommandListener = StepCore::CommandListener;
   // Maps a full element name (e.g. "g1_left_knee") to the articulation owning it ("g1").
-  using ArticulationResolver = std::function<std::string(std::string_view name)>;
+  using ArticulationResolver = StepCore::ArticulationResolver;
   using EventListener = std::function<void(const EngineEvent&)>;
   using CallbackId = std::uint64_t;
 
@@ -110,6 +81,9 @@ class PhysicsEngine {
     // Log divergence and errors from the physics thread as they happen. An owner that logs the
     // events it drains (the Manager) turns this off so each is logged once.
     bool log_events = true;
+    // Pacing, the measurements and the divergence log's rate limit run on this clock (it must
+    // outlive the engine); null: RealClock(). Tests inject a ManualClock.
+    Clock* clock = nullptr;
   };
 
   // Takes ownership of a compiled model with its extensions (model.h) and allocates its data
@@ -123,15 +97,15 @@ class PhysicsEngine {
   // The model. Sizes and names never change; `opt` changes on the physics thread (SetOptions
   // commands), so while the loop runs read it under WithLockedData, or use timestep(). Any
   // thread.
-  const mjModel* model() const { return model_.get(); }
+  const mjModel* model() const { return core_.model(); }
   // The model with its extensions (model.h): the same contract as model(); copy it with
   // CopyModel, or with owned_model().Copy() inside WithLockedData.
-  const Model& owned_model() const { return model_; }
+  const Model& owned_model() const { return core_.owned_model(); }
   // A copy of the model with its extensions and the options in effect now, taken with the step
   // mutex held. Any thread except from inside a step callback.
   Model CopyModel();
   // The model's current timestep (follows SetOptions). Any thread.
-  double timestep() const { return timestep_.load(std::memory_order_relaxed); }
+  double timestep() const { return core_.timestep(); }
 
   // Runs `fn` with the step mutex held (blocks for at most one iteration). Any thread except from
   // inside a step callback.
@@ -157,10 +131,10 @@ class PhysicsEngine {
   // The groups of command frames the apply-controls hook reports (one per controlled
   // articulation). Main thread, before subscriptions are made (their frames are sized for it).
   void SetCommandLayout(std::vector<CommandGroupLayout> layout);
-  const std::vector<CommandGroupLayout>& command_layout() const { return command_layout_; }
+  const std::vector<CommandGroupLayout>& command_layout() const { return core_.command_layout(); }
   // Physics thread, inside the apply-controls hook: where the hook writes the command frames it
   // applied; the frames published after the step carry them.
-  AppliedCommands& applied_commands() { return applied_commands_; }
+  AppliedCommands& applied_commands() { return core_.applied_commands(); }
   // Replaces mj_step while set (replay playback); empty function clears it.
   void SetCustomStepHandler(StepCallback fn);
   // Names the articulation in divergence reports.
@@ -190,7 +164,7 @@ class PhysicsEngine {
   // Waits until command `seq` took effect (or failed). Not from inside a step callback.
   CommandResult WaitForCommand(std::uint64_t seq, std::chrono::steady_clock::duration timeout);
   // Newest command applied (every older one is applied too).
-  std::uint64_t last_applied_command() const { return commands_.last_applied(); }
+  std::uint64_t last_applied_command() const { return core_.commands().last_applied(); }
   // Step commands with a sequence number up to `seq` that have not finished stop: a queued one
   // never runs, a running one stops after its current iteration. Each finishes failed with an
   // error starting kStepCancelled; commands of other kinds are untouched (and no longer wait
@@ -215,7 +189,7 @@ class PhysicsEngine {
   // only commands, until it is unpaused).
   void SetPaused(bool paused);
   void TogglePause();
-  bool paused() const { return paused_.load(std::memory_order_acquire); }
+  bool paused() const { return core_.paused(); }
   // Runs `n` full iterations on the caller's thread, stepping even when paused. Only while the
   // loop is paused or not started (throws Error otherwise). A MuJoCo error is reported as an
   // event, pauses the loop and is rethrown.
@@ -228,8 +202,12 @@ class PhysicsEngine {
   bool as_fast_as_possible() const { return as_fast_.load(std::memory_order_relaxed); }
   // Wall seconds per step at 100 %; <= 0 follows the model timestep (also when it changes).
   void SetTargetInterval(double seconds);
-  double target_interval() const { return target_interval_.load(std::memory_order_relaxed); }
-  void SetResetOnDivergence(bool on) { reset_on_divergence_.store(on, std::memory_order_relaxed); }
+  double target_interval() const {
+    return follow_timestep_.load(std::memory_order_relaxed)
+               ? timestep()
+               : target_interval_.load(std::memory_order_relaxed);
+  }
+  void SetResetOnDivergence(bool on) { core_.SetResetOnDivergence(on); }
 
   // ---- Measurements (any thread) ----
   // Simulated seconds per wall second over the last measurement window (0 while paused).
@@ -237,7 +215,7 @@ class PhysicsEngine {
   // Steps per wall second over the last measurement window.
   double step_rate() const { return step_rate_.load(std::memory_order_relaxed); }
   // Physics steps taken (loop and StepSync).
-  std::uint64_t step_count() const { return step_count_.load(std::memory_order_relaxed); }
+  std::uint64_t step_count() const { return core_.step_count(); }
 
   // ---- Events (main thread) ----
   // Returns and clears the queued events without dispatching them.
@@ -250,88 +228,30 @@ class PhysicsEngine {
   static constexpr std::size_t kMaxQueuedEvents = 1024;
 
  private:
-  struct Hook {
-    CallbackId id;
-    StepCallback fn;
-  };
-
   void Loop();
-  // One iteration, step mutex held by the caller. Throws what the step or callbacks throw.
-  // `from_loop`: the physics thread's own loop, which rings a coalesced frame before it waits
-  // (see PublishFrameLocked); every other caller rings each frame.
-  void IterateLocked(bool force_step, bool from_loop = false);
-  // Applies queued commands in order up to the first step command (which starts a step window);
-  // true when any was taken. Their waiters are released by the next PublishFrameLocked.
-  bool ApplyPendingLocked();
-  void FinishCommandsLocked();
-  // Applies one command; returns the discontinuity it caused. Throws what applying throws.
-  std::uint32_t ApplyCommandLocked(Command& command);
-  void ValidateCommand(const Command& command) const;
-  void CheckDivergenceLocked(double time_before);
-  // Publishes a state frame and rings the doorbells. With `may_coalesce` (a free-running
-  // iteration as fast as possible) the ring is skipped when the last one was less than
-  // kRingCoalesce ago and nothing else is due (finished commands, a pause): the consumers then
-  // take several frames per wake-up, and the loop rings before it would idle.
-  void PublishFrameLocked(bool may_coalesce = false);
+  // One iteration of the core, step mutex held by the caller; rings the doorbells for the frame
+  // it published. `from_loop`: the physics thread's own loop running as fast as possible, which
+  // may coalesce rings (see AddDoorbell). Throws what the core throws.
+  StepCore::Iteration IterateLocked(StepCore::AdvanceOptions options, bool from_loop = false);
+  // After an iteration threw: the core's error latch, then the doorbells.
+  void FailLocked(const std::exception& e);
+  void AfterPublishLocked(const StepCore::Iteration& it, bool may_coalesce);
   void RingDoorbellsLocked();
-  // Takes the one-shot forces out of xfrc_applied; drops those whose steps ran out (all: every
-  // one).
-  void RemoveOneShotForcesLocked(bool all);
-  void HandleErrorLocked(const std::exception& e);
+  void OnEvent(EngineEvent event);  // the core's event sink (physics thread)
   void QueueEvent(EngineEvent event);
   void ThrowIfOnPhysicsThread(const char* what) const;
-  CallbackId AddHook(std::vector<Hook>* hooks, StepCallback fn);
-  // Resolves a qpos (is_qpos) or dof index to a joint id, -1 when out of range.
-  int JointOfIndex(int index, bool is_qpos) const;
 
-  Model model_;
-  DataPtr data_;
+  StepCore core_;
+  Clock* clock_;
 
-  // Serialises every access to model_/data_ once the engine is constructed.
+  // Serialises every access to the core once the engine is constructed.
   std::mutex step_mutex_;
-  std::vector<Hook> pre_step_;
-  std::vector<Hook> post_step_;
-  std::vector<Hook> on_post_step_;
-  std::vector<std::pair<CallbackId, CommandListener>> command_listeners_;
   std::vector<std::shared_ptr<Doorbell>> doorbells_;
-  StepCallback apply_controls_;
-  std::vector<CommandGroupLayout> command_layout_;
-  AppliedCommands applied_commands_;  // physics thread (the apply-controls hook writes it)
-  StepCallback custom_step_;
-  ArticulationResolver resolver_;
-  CallbackId next_id_ = 1;
-  // Physics-thread state (mutex held).
-  bool in_divergence_ = false;
-  std::chrono::steady_clock::time_point last_divergence_log_{};
-  std::vector<int> qpos_joint_;  // qpos index -> joint id
-
-  // Commands from other threads, and the physics thread's working copies.
-  CommandQueue commands_;
-  std::deque<CommandQueue::Entry> backlog_;  // mutex held: taken, not yet applied
-  std::vector<std::pair<std::uint64_t, std::string>> to_finish_;  // mutex held: applied, to
-                                                                  // release after publishing
-  int step_budget_ = 0;         // mutex held: iterations left in a step command's window
-  bool window_ended_ = false;   // mutex held: a step command's window ended this iteration
-  std::uint64_t step_seq_ = 0;  // mutex held: that step command
-  int step_total_ = 0;          // mutex held: its n
-  std::atomic<std::uint64_t> cancel_steps_through_{0};  // CancelStepsThrough's mark
-  std::mutex wake_mutex_;  // with wake_cv_: a paused loop waits for commands
-  std::condition_variable wake_cv_;
-  std::vector<cmd::ApplyForce> one_shot_;  // mutex held: forces for the next step
-  bool one_shot_added_ = false;            // mutex held: one_shot_ is in xfrc_applied now
-  // mutex held: the xfrc_applied rows the one-shot forces changed, as they were before (put back
-  // exactly, not by subtraction), and the whole xfrc_applied the last step used when it had
-  // one-shot forces (the published frame reports it).
-  std::vector<std::pair<int, std::array<mjtNum, 6>>> one_shot_saved_;
-  std::vector<mjtNum> stepped_xfrc_;
-  bool stepped_xfrc_valid_ = false;
-  bool last_iteration_stepped_ = false;                // mutex held: for the frame being published
-  std::uint32_t pending_discontinuity_ = 0;            // mutex held: since the last published frame
-  std::uint64_t epoch_ = 0;                            // mutex held: discontinuities so far
-  std::uint64_t frames_ = 0;                           // mutex held: frames published
   std::chrono::steady_clock::time_point last_ring_{};  // mutex held: last doorbell ring
-  bool unrung_ = false;            // mutex held: a frame was published without a ring
-  bool published_paused_ = false;  // mutex held: pause state of the last frame
+  bool unrung_ = false;                      // mutex held: a frame was published without a ring
+  Clock::time_point last_divergence_log_{};  // mutex held
+  std::mutex wake_mutex_;                    // with wake_cv_: a paused loop waits for commands
+  std::condition_variable wake_cv_;
 
   // Events for the main thread.
   std::mutex events_mutex_;
@@ -341,29 +261,21 @@ class PhysicsEngine {
   CallbackId next_listener_id_ = 1;
 
   // Flags and pacing parameters.
-  std::atomic<bool> paused_{false};
-  std::atomic<bool> error_latched_{false};
   std::atomic<bool> stop_{false};
   std::atomic<bool> running_{false};
   std::atomic<int> speed_percent_{100};
   std::atomic<bool> as_fast_{false};
   std::atomic<double> target_interval_{0};
-  std::atomic<double> timestep_{0};
-  std::atomic<bool> follow_timestep_{true};  // target_interval_ tracks the model timestep
-  std::atomic<bool> reset_on_divergence_{false};
-  bool log_events_ = true;  // see Options::log_events; set at construction
+  std::atomic<bool> follow_timestep_{true};  // the target interval is the model timestep
+  bool log_events_ = true;                   // see Options::log_events; set at construction
   double resync_threshold_ = 0.05;
   double measure_window_ = 0.25;
 
   // Measurements.
   std::atomic<double> rtf_{0};
   std::atomic<double> step_rate_{0};
-  std::atomic<std::uint64_t> step_count_{0};
-  double sim_advanced_ = 0;  // mutex held: simulated seconds stepped in the current window
-  std::uint64_t window_steps_ = 0;
 
   std::thread thread_;
-  StatePublisher publisher_;
 };
 
 }  // namespace urlab::physics

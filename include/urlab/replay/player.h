@@ -5,11 +5,14 @@
 //   so playback needs no other file.
 // - Resimulate: dynamic re-simulation without a physics thread: restore the first state, then
 //   for every recorded step re-apply its inputs (ctrl, mocap poses, applied forces; the states
-//   and options recorded at each jump) and mj_step, comparing time, qpos, qvel and act bit for
+//   and options recorded at each jump) and advance one iteration of a physics::StepCore (the
+//   engine's own stepping function, step_core.h), comparing time, qpos, qvel and act bit for
 //   bit with the recording; the first divergent step is reported with the field and index.
 // - Player: playback through a running engine's custom step handler, kinematic (each iteration
 //   shows the recorded frame due on the recorded time axis: qpos, qvel, act, ctrl, mocap, time,
-//   then mj_forward) or dynamic (each iteration re-simulates recorded steps and checks them).
+//   then mj_forward) or dynamic (each iteration re-simulates recorded steps on a StepCore of its
+//   own over the recorded model, as Resimulate does, checks them and shows the re-simulated
+//   state the same way).
 //   Play, pause, speed, seek by time or step (from the chunk keyframe at or before it), loop.
 //
 // Threading contract

@@ -1,0 +1,97 @@
+#pragma once
+// Batch: N independent copies of one simulation in one process (one model, N mjData, each in a
+// StepCore of its own), stepped in lockstep by K threads through StepCore::Advance. One Step
+// takes N x nu actions and gives N x obs observations as packed arrays; each environment resets
+// to a keyframe (or the model's default state) with noise drawn from its own seed, and may reset
+// itself when its episode ends (auto-reset).
+//
+// Packed layouts (row-major, environment after environment, doubles):
+// - actions: N x nu, in actuator order (written to ctrl before the environment's step);
+// - observations: N x observation_size(), each row qpos (nq), qvel (nv), sensordata
+//   (nsensordata) as they are after the step (after the reset when it auto-reset);
+// - done: N bytes, 1 when the environment's episode ended in this step (divergence, or
+//   max_episode_steps reached).
+//
+// Threading contract
+// - One owner thread calls everything below. During Step the owner and K-1 persistent workers
+//   (a WorkerPool: no thread is created per step) advance the environments, each claiming the
+//   next one from a shared counter (a preempted thread holds back only the one it steps); no
+//   environment is touched by two threads in a step, and the model is only read. Which thread
+//   steps an environment changes none of its bits.
+// - env(i) gives the environment's StepCore for its owner's use between steps (e.g. a state
+//   subscription on environment 0 made before stepping starts); never during Step.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <random>
+#include <span>
+#include <vector>
+
+#include "urlab/physics/model.h"
+#include "urlab/physics/step_core.h"
+
+namespace urlab {
+class WorkerPool;
+}
+
+namespace urlab::physics {
+
+struct BatchOptions {
+  int envs = 1;
+  int threads = 0;  // 0: the machine's cores; at most envs
+  // Reset an environment as soon as its episode ended (its observation then shows the new
+  // episode's first state).
+  bool auto_reset = false;
+  int max_episode_steps = 0;  // 0: an episode ends only when the simulation diverges
+  int keyframe = -1;          // the reset state's keyframe; -1: the model's default state
+  // At each reset, uniform noise in [-reset_noise, reset_noise] on hinge and slide positions,
+  // free-joint positions and every velocity, drawn from the environment's generator.
+  double reset_noise = 0;
+  std::uint64_t seed = 0;  // environment i starts with seed + i
+};
+
+class Batch {
+ public:
+  // Copies `model` (with its extensions) once; every environment shares the copy. Throws Error
+  // for bad options (envs < 1, threads < 0, a keyframe the model lacks, negative noise).
+  Batch(const Model& model, BatchOptions options);
+  ~Batch();
+  Batch(const Batch&) = delete;
+  Batch& operator=(const Batch&) = delete;
+
+  int envs() const { return static_cast<int>(envs_.size()); }
+  int threads() const;
+  const mjModel* model() const { return model_->get(); }
+  int action_size() const { return model()->nu; }
+  int observation_size() const { return model()->nq + model()->nv + model()->nsensordata; }
+
+  // Writes each environment's actions to its ctrl, advances every environment one iteration,
+  // and writes the observations (and done flags when `done` is not empty). Throws Error for
+  // arrays of the wrong size (nothing is stepped then), and after the step for an environment
+  // whose iteration threw (it is reset when auto-reset is on, paused otherwise).
+  void Step(std::span<const double> actions, std::span<double> observations,
+            std::span<std::uint8_t> done = {});
+  // Resets environment `env` (keyframe or default state, then the noise); a seed restarts its
+  // generator first. Throws Error for a bad index.
+  void Reset(int env, std::optional<std::uint64_t> seed = std::nullopt);
+  // Resets every environment; environment i gets seed + i when a seed is given.
+  void ResetAll(std::optional<std::uint64_t> seed = std::nullopt);
+  // The current observations (layout as Step's).
+  void Observe(std::span<double> observations) const;
+  // Steps since environment `env` last reset.
+  std::uint64_t episode_steps(int env) const;
+  StepCore& env(int i);
+
+ private:
+  struct Env;
+  void StepEnv(Env& e, const double* action, double* obs, std::uint8_t* done);
+  void ResetEnv(Env& e);
+  void ObserveEnv(const Env& e, double* out) const;
+
+  BatchOptions options_;
+  std::shared_ptr<Model> model_;
+  std::vector<std::unique_ptr<Env>> envs_;
+  std::unique_ptr<WorkerPool> pool_;
+};
+
+}  // namespace urlab::physics

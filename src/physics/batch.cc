@@ -1,0 +1,204 @@
+#include "urlab/physics/batch.h"
+
+#include <algorithm>
+#include <atomic>
+#include <string>
+#include <thread>
+
+#include "core/worker_pool.h"
+#include "urlab/core/error.h"
+
+namespace urlab::physics {
+
+struct Batch::Env {
+  explicit Env(std::shared_ptr<Model> model)
+      : core(std::move(model),
+             StepCore::Options{.reset_on_divergence = false, .log_command_failures = false}) {
+    core.SetEventSink([this](const EngineEvent& e) {
+      if (e.kind == EngineEventKind::kDivergence) diverged = true;
+    });
+  }
+  StepCore core;
+  std::mt19937_64 rng;
+  std::uint64_t episode_steps = 0;
+  bool diverged = false;  // since the last reset
+  std::string error;      // the last iteration threw (reported by Step)
+};
+
+namespace {
+
+// Uniform in [-scale, scale] from 53 random bits (the same numbers on every platform).
+double Noise(std::mt19937_64& rng, double scale) {
+  const double unit = static_cast<double>(rng() >> 11) * 0x1.0p-53;  // [0, 1)
+  return scale * (2 * unit - 1);
+}
+
+// The keyframe (or default state), then the noise: positions of hinge, slide and free joints
+// (not the free joints' quaternions, nor ball joints), then every velocity.
+void ResetState(const BatchOptions& o, std::mt19937_64& rng, const mjModel* m, mjData* d) {
+  if (o.keyframe >= 0) {
+    mj_resetDataKeyframe(m, d, o.keyframe);
+  } else {
+    mj_resetData(m, d);
+  }
+  if (o.reset_noise <= 0) return;
+  for (int j = 0; j < m->njnt; ++j) {
+    const int type = m->jnt_type[j];
+    const int n = type == mjJNT_FREE ? 3 : type == mjJNT_BALL ? 0 : 1;
+    for (int k = 0; k < n; ++k) d->qpos[m->jnt_qposadr[j] + k] += Noise(rng, o.reset_noise);
+  }
+  for (int v = 0; v < m->nv; ++v) d->qvel[v] += Noise(rng, o.reset_noise);
+}
+
+}  // namespace
+
+Batch::Batch(const Model& model, BatchOptions options) : options_(options) {
+  if (options.envs < 1) {
+    throw Error("batch: envs must be at least 1 (got " + std::to_string(options.envs) + ")");
+  }
+  if (options.threads < 0) {
+    throw Error("batch: threads must be 0 (the cores) or more (got " +
+                std::to_string(options.threads) + ")");
+  }
+  if (!model) throw Error("batch: no model");
+  if (options.keyframe < -1 || options.keyframe >= model->nkey) {
+    throw Error("batch: keyframe " + std::to_string(options.keyframe) +
+                " out of range (model has " + std::to_string(model->nkey) + ")");
+  }
+  if (!(options.reset_noise >= 0)) throw Error("batch: reset_noise must be 0 or more");
+  if (options.max_episode_steps < 0) throw Error("batch: max_episode_steps must be 0 or more");
+  model_ = std::make_shared<Model>(model.Copy());
+  envs_.reserve(static_cast<std::size_t>(options.envs));
+  for (int i = 0; i < options.envs; ++i) envs_.push_back(std::make_unique<Env>(model_));
+  int threads = options.threads;
+  if (threads == 0) threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  pool_ = std::make_unique<WorkerPool>(std::min(threads, options.envs));
+  ResetAll(options.seed);
+}
+
+Batch::~Batch() = default;
+
+int Batch::threads() const { return pool_->threads(); }
+
+StepCore& Batch::env(int i) {
+  if (i < 0 || i >= envs()) throw Error("batch: no environment " + std::to_string(i));
+  return envs_[static_cast<std::size_t>(i)]->core;
+}
+
+std::uint64_t Batch::episode_steps(int env) const {
+  if (env < 0 || env >= envs()) throw Error("batch: no environment " + std::to_string(env));
+  return envs_[static_cast<std::size_t>(env)]->episode_steps;
+}
+
+void Batch::ResetEnv(Env& e) {
+  // Through the command table like any reset: the core's divergence episode ends, its readers
+  // see the discontinuity.
+  e.core.commands().Push(cmd::ResetCustom{
+      [this, &e](const mjModel* m, mjData* d) { ResetState(options_, e.rng, m, d); },
+      "batch reset"});
+  e.core.SetPaused(false);  // clears an error latch
+  e.core.ApplyPending();
+  e.episode_steps = 0;
+  e.diverged = false;
+}
+
+void Batch::Reset(int env, std::optional<std::uint64_t> seed) {
+  if (env < 0 || env >= envs()) throw Error("batch: no environment " + std::to_string(env));
+  Env& e = *envs_[static_cast<std::size_t>(env)];
+  if (seed) e.rng.seed(*seed);
+  ResetEnv(e);
+}
+
+void Batch::ResetAll(std::optional<std::uint64_t> seed) {
+  for (int i = 0; i < envs(); ++i) {
+    Reset(i, seed ? std::optional<std::uint64_t>(*seed + static_cast<std::uint64_t>(i))
+                  : std::nullopt);
+  }
+}
+
+void Batch::ObserveEnv(const Env& e, double* out) const {
+  const mjModel* m = model();
+  const mjData* d = e.core.data();
+  mju_copy(out, d->qpos, m->nq);
+  mju_copy(out + m->nq, d->qvel, m->nv);
+  mju_copy(out + m->nq + m->nv, d->sensordata, m->nsensordata);
+}
+
+void Batch::Observe(std::span<double> observations) const {
+  const std::size_t row = static_cast<std::size_t>(observation_size());
+  if (observations.size() != row * envs_.size()) {
+    throw Error("batch: observations hold " + std::to_string(observations.size()) +
+                " values, expected " + std::to_string(row * envs_.size()) + " (" +
+                std::to_string(envs()) + " x " + std::to_string(row) + ")");
+  }
+  for (std::size_t i = 0; i < envs_.size(); ++i)
+    ObserveEnv(*envs_[i], observations.data() + row * i);
+}
+
+void Batch::StepEnv(Env& e, const double* action, double* obs, std::uint8_t* done) {
+  if (e.core.error_latched() && !options_.auto_reset) {  // failed earlier: waits for a reset
+    if (done) *done = 1;
+    if (obs) ObserveEnv(e, obs);
+    return;
+  }
+  mjData* d = e.core.data();
+  mju_copy(d->ctrl, action, model()->nu);
+  try {
+    e.core.Advance({.force_step = true, .honour_error_latch = false});
+  } catch (const std::exception& ex) {
+    e.core.Fail(ex);
+    e.error = ex.what();
+    e.diverged = true;
+  }
+  ++e.episode_steps;
+  const bool ended =
+      e.diverged || (options_.max_episode_steps > 0 &&
+                     e.episode_steps >= static_cast<std::uint64_t>(options_.max_episode_steps));
+  if (done) *done = ended ? 1 : 0;
+  if (ended && options_.auto_reset) {
+    ResetEnv(e);
+    e.error.clear();
+  }
+  if (obs) ObserveEnv(e, obs);
+}
+
+void Batch::Step(std::span<const double> actions, std::span<double> observations,
+                 std::span<std::uint8_t> done) {
+  const std::size_t n = envs_.size();
+  const std::size_t nu = static_cast<std::size_t>(action_size());
+  const std::size_t row = static_cast<std::size_t>(observation_size());
+  if (actions.size() != nu * n) {
+    throw Error("batch: actions hold " + std::to_string(actions.size()) + " values, expected " +
+                std::to_string(nu * n) + " (" + std::to_string(n) + " x " + std::to_string(nu) +
+                ")");
+  }
+  if (!observations.empty() && observations.size() != row * n) {
+    throw Error("batch: observations hold " + std::to_string(observations.size()) +
+                " values, expected " + std::to_string(row * n) + " (" + std::to_string(n) + " x " +
+                std::to_string(row) + ")");
+  }
+  if (!done.empty() && done.size() != n) {
+    throw Error("batch: done holds " + std::to_string(done.size()) + " flags, expected " +
+                std::to_string(n));
+  }
+  // Each thread claims the next environment from a shared counter: a thread the machine
+  // preempts holds back only the environment it is stepping, the others take the rest.
+  std::atomic<std::size_t> next{0};
+  pool_->Run([&](int) {
+    for (std::size_t i = next.fetch_add(1, std::memory_order_relaxed); i < n;
+         i = next.fetch_add(1, std::memory_order_relaxed)) {
+      StepEnv(*envs_[i], actions.data() + nu * i,
+              observations.empty() ? nullptr : observations.data() + row * i,
+              done.empty() ? nullptr : done.data() + i);
+    }
+  });
+  for (std::size_t i = 0; i < n; ++i) {
+    if (envs_[i]->error.empty()) continue;
+    std::string error = std::move(envs_[i]->error);
+    envs_[i]->error.clear();
+    throw Error("batch: environment " + std::to_string(i) + ": " + error +
+                " (it stays as it is until it is reset)");
+  }
+}
+
+}  // namespace urlab::physics
