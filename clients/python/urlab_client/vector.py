@@ -45,7 +45,7 @@ except ImportError:
     NEXT_STEP = "NextStep"
 
 # What a lost server looks like to a client: no reply in time, or a socket that cannot go on.
-LOST = (TimeoutError, zmq.ZMQError)
+LOST = (TimeoutError, zmq.ZMQError, ConnectionError)  # ConnectionError: shm.ShmError
 
 
 def _stack(values):
