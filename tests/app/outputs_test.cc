@@ -36,8 +36,8 @@ bool IsCharDevice(const std::string& path) {
 
 // `urlab record` of the small pendulum model, headless, for `seconds` of wall time.
 std::string Record(const std::string& output, double seconds = 0.5) {
-  return UrlabBinary() + " record --ports auto " + SourcePath("examples/models/pendulum_arm.xml") + " -o " +
-         output + " --duration " + std::to_string(seconds) + " --no-network --no-cameras";
+  return UrlabBinary() + " record --ports auto " + SourcePath("examples/models/pendulum_arm.xml") +
+         " -o " + output + " --duration " + std::to_string(seconds) + " --no-network --no-cameras";
 }
 
 TEST(OutputsCli, RecordToDevicesWritesInPlaceAndReportsAFullOne) {
@@ -195,7 +195,8 @@ TEST(OutputsCli, AFailedCameraVideoExitsOne) {
   testing::WriteTextFile(dir, "file.txt", "not a folder");
   const std::string video = dir + "/file.txt/wrist.mp4";  // ffmpeg cannot create it
   std::string out;
-  EXPECT_EQ(RunCommand(UrlabBinary() + " record --ports auto " + testing::TestData("cameras/two_cameras.yaml") +
+  EXPECT_EQ(RunCommand(UrlabBinary() + " record --ports auto " +
+                           testing::TestData("cameras/two_cameras.yaml") +
                            " --no-network --duration 1 --video rig/wrist " + video,
                        &out),
             1)

@@ -59,8 +59,9 @@ TEST(RecordReplayTest, RecordsReSimulatesAndRoundTripsThroughCsv) {
   const std::string dir = testing::MakeTempDir("record_replay");
   const std::string file = dir + "/h.urrec";
   std::string out;
-  ASSERT_EQ(RunCommand(UrlabBinary() + " record --ports auto " + SourcePath("examples/scenes/humanoid_pd.yaml") +
-                           " -o " + file + " --duration 1.5 --no-network",
+  ASSERT_EQ(RunCommand(UrlabBinary() + " record --ports auto " +
+                           SourcePath("examples/scenes/humanoid_pd.yaml") + " -o " + file +
+                           " --duration 1.5 --no-network",
                        &out),
             0)
       << out;

@@ -33,8 +33,8 @@ std::string LastLine(const std::string& text) {
 
 TEST(RunTest, RunsASceneAndLogsTheRealTimeFactor) {
   std::string out;
-  ASSERT_EQ(RunCommand(UrlabBinary() + " run --ports auto " + SourcePath("examples/scenes/two_arms.yaml") +
-                           " --duration 1",
+  ASSERT_EQ(RunCommand(UrlabBinary() + " run --ports auto " +
+                           SourcePath("examples/scenes/two_arms.yaml") + " --duration 1",
                        &out),
             0)
       << out;
@@ -45,10 +45,11 @@ TEST(RunTest, RunsASceneAndLogsTheRealTimeFactor) {
 
 TEST(RunTest, RunsAPlainMjcfFileAtMaxSpeed) {
   std::string out;
-  ASSERT_EQ(RunCommand(UrlabBinary() + " run --ports auto " + SourcePath("examples/models/servo_arm.xml") +
-                           " --duration 0.3 --max-speed",
-                       &out),
-            0)
+  ASSERT_EQ(
+      RunCommand(UrlabBinary() + " run --ports auto " +
+                     SourcePath("examples/models/servo_arm.xml") + " --duration 0.3 --max-speed",
+                 &out),
+      0)
       << out;
   EXPECT_NE(out.find("summary:"), std::string::npos) << out;
 }
@@ -94,7 +95,8 @@ TEST(RunTest, BadSceneExitsNonZeroNamingFileAndLine) {
   std::ofstream(scene) << "articulations:\n  - name: a\n    mjcf: "
                        << SourcePath("examples/models/servo_arm.xml") << "\n    colour: red\n";
   std::string out;
-  EXPECT_NE(RunCommand(UrlabBinary() + " run --ports auto " + scene + " --duration 1", &out), 0) << out;
+  EXPECT_NE(RunCommand(UrlabBinary() + " run --ports auto " + scene + " --duration 1", &out), 0)
+      << out;
   EXPECT_NE(out.find(scene + ":4:"), std::string::npos) << out;
   EXPECT_NE(out.find("unknown key 'colour'"), std::string::npos) << out;
 }
@@ -102,12 +104,20 @@ TEST(RunTest, BadSceneExitsNonZeroNamingFileAndLine) {
 TEST(RunTest, SpeedIsValidated) {
   const std::string scene = SourcePath("examples/scenes/two_arms.yaml");
   std::string out;
-  EXPECT_NE(RunCommand(UrlabBinary() + " run --ports auto " + scene + " --speed 3 --duration 0.1", &out), 0)
+  EXPECT_NE(
+      RunCommand(UrlabBinary() + " run --ports auto " + scene + " --speed 3 --duration 0.1", &out),
+      0)
       << out;
   EXPECT_NE(out.find("--speed"), std::string::npos) << out;
-  EXPECT_NE(RunCommand(UrlabBinary() + " run --ports auto " + scene + " --speed 101 --duration 0.1", &out), 0);
-  EXPECT_NE(RunCommand(UrlabBinary() + " run --ports auto " + scene + " --speed 50 --max-speed", &out), 0);
-  ASSERT_EQ(RunCommand(UrlabBinary() + " run --ports auto " + scene + " --speed 5 --duration 0.2", &out), 0)
+  EXPECT_NE(RunCommand(UrlabBinary() + " run --ports auto " + scene + " --speed 101 --duration 0.1",
+                       &out),
+            0);
+  EXPECT_NE(
+      RunCommand(UrlabBinary() + " run --ports auto " + scene + " --speed 50 --max-speed", &out),
+      0);
+  ASSERT_EQ(
+      RunCommand(UrlabBinary() + " run --ports auto " + scene + " --speed 5 --duration 0.2", &out),
+      0)
       << out;
 }
 

@@ -33,9 +33,10 @@ TEST(UnitreeSceneTest, ValidatesRunsAndAgrees) {
   EXPECT_EQ(validated.find("warning"), std::string::npos) << validated;
   // No network: other tests (ctest -j) play scenes on the default ports at the same time, and a
   // port in use is logged as an error.
-  ASSERT_EQ(
-      RunCommand(UrlabBinary() + " run --ports auto " + SourcePath(kScene) + " --duration 3 --no-network", &ran),
-      0)
+  ASSERT_EQ(RunCommand(UrlabBinary() + " run --ports auto " + SourcePath(kScene) +
+                           " --duration 3 --no-network",
+                       &ran),
+            0)
       << ran;
   // The same model: the sizes validate compiled are the ones run plays.
   EXPECT_EQ(SizeAfter(validated, "nq"), 25) << validated;
@@ -76,7 +77,8 @@ TEST(UnitreeSceneTest, ValidateAndRunRefuseTheSameBrokenScene) {
                                                    "    keyframe: home\n");
   std::string validated, ran;
   EXPECT_NE(RunCommand(UrlabBinary() + " validate " + scene, &validated), 0) << validated;
-  EXPECT_NE(RunCommand(UrlabBinary() + " run --ports auto " + scene + " --duration 1", &ran), 0) << ran;
+  EXPECT_NE(RunCommand(UrlabBinary() + " run --ports auto " + scene + " --duration 1", &ran), 0)
+      << ran;
   EXPECT_NE(validated.find("calf.obj"), std::string::npos) << validated;
   EXPECT_NE(ran.find("calf.obj"), std::string::npos) << ran;
   EXPECT_NE(validated.find("go2.xml:"), std::string::npos) << validated;

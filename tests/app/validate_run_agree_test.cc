@@ -95,7 +95,8 @@ TEST_F(ValidateRunAgreeTest, TheNewerKeysAreRefusedByValidateAndRunAtTheirLines)
     EXPECT_TRUE(Has(out, want)) << want << " missing in:\n" << out;
     EXPECT_FALSE(Has(out, ": OK")) << out;
     std::string run;
-    EXPECT_EQ(Urlab("run --ports auto " + scene + " --duration 0.5 --no-network", &run), 1) << c.yaml << run;
+    EXPECT_EQ(Urlab("run --ports auto " + scene + " --duration 0.5 --no-network", &run), 1)
+        << c.yaml << run;
     EXPECT_TRUE(Has(run, want)) << want << " missing in:\n" << run;
     EXPECT_FALSE(Has(run, "summary:")) << run;
   }
@@ -122,7 +123,8 @@ TEST_F(ValidateRunAgreeTest, InfinityIsRefusedLikeNaN) {
     std::string out;
     EXPECT_EQ(Urlab("validate " + model, &out), 1) << attributes << out;
     EXPECT_TRUE(Has(out, model + ":3:")) << attributes << out;
-    EXPECT_EQ(Urlab("run --ports auto " + model + " --duration 0.3 --no-network", &out), 1) << attributes << out;
+    EXPECT_EQ(Urlab("run --ports auto " + model + " --duration 0.3 --no-network", &out), 1)
+        << attributes << out;
   }
 }
 
@@ -226,7 +228,8 @@ TEST_F(ValidateRunAgreeTest, ADivergedRunStopsWithExit1AsTheHelpSays) {
 </mujoco>
 )");
   std::string out;
-  EXPECT_EQ(Urlab("run --ports auto " + model + " --max-speed --duration 5 --no-network", &out), 1) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + model + " --max-speed --duration 5 --no-network", &out), 1)
+      << out;
   EXPECT_TRUE(Has(out, "urlab: error: " + model + ": at t=")) << out;
   EXPECT_TRUE(Has(out, "simulation diverged")) << out;
   EXPECT_TRUE(Has(out, "(stopped: the simulation diverged)")) << out;
@@ -248,11 +251,13 @@ TEST_F(ValidateRunAgreeTest, APacedRunThatCannotKeepUpSaysSoOnce) {
   const std::string scene = Write(
       "slow.yaml", "articulations:\n  - {name: a, mjcf: " + arm + "}\noptions: {timestep: 1e-6}\n");
   std::string out;
-  EXPECT_EQ(Urlab("run --ports auto " + scene + " --duration 6 --no-network --no-cameras", &out), 0) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + scene + " --duration 6 --no-network --no-cameras", &out), 0)
+      << out;
   // Once (3 s behind), not once a second: the next reminder would come 30 s later.
   EXPECT_EQ(Count(out, "cannot keep up"), 1) << out;
   // As fast as possible is never "behind".
-  EXPECT_EQ(Urlab("run --ports auto " + scene + " --duration 4 --max-speed --no-network", &out), 0) << out;
+  EXPECT_EQ(Urlab("run --ports auto " + scene + " --duration 4 --max-speed --no-network", &out), 0)
+      << out;
   EXPECT_EQ(Count(out, "cannot keep up"), 0) << out;
 }
 

@@ -334,8 +334,8 @@ TEST(ReplayView, WatchesARecordingWithTheTimelineAtAnExactTime) {
   const std::string xml = testing::WriteTextFile(dir, "pendulum.xml", kPendulumXml);
   const std::string rec = dir + "/fall.urrec";
   std::string log;
-  ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " record --ports auto " + xml + " -o " + rec +
-                                    " --no-network --no-cameras --max-speed --duration 0.3",
+  ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " record --ports auto " + xml + " -o " +
+                                    rec + " --no-network --no-cameras --max-speed --duration 0.3",
                                 &log),
             0)
       << log;
