@@ -298,13 +298,15 @@ world::SceneConfig SceneForView(const ReplayArgs& args, const RecordingReader& r
 }
 
 // `replay FILE --view`: the scene in the viewer, the recording played through its engine's step
-// handler, the timeline driving the player.
-int View(const ReplayArgs& args, const RecordingReader& r) {
+// handler, the timeline driving the player. `reopen` gets the file the viewer asks to open next
+// (one dropped on its window), "" when none.
+int View(const ReplayArgs& args, const RecordingReader& r, std::string* reopen) {
   std::string temporary;
   const world::SceneConfig scene = SceneForView(args, r, &temporary);
   world::Manager manager;
   const auto slot = std::make_shared<replay::PlaybackSlot>();
   auto view = std::make_unique<viewer::ViewerSubsystem>(args.viewer);
+  viewer::ViewerSubsystem* viewer = view.get();
   view->SetManager(&manager);
   view->SetPlayback(slot);
   manager.AddSubsystem(std::move(view));
@@ -356,6 +358,7 @@ int View(const ReplayArgs& args, const RecordingReader& r) {
   slot->Set(nullptr);
   player.reset();
   manager.EndPlay();
+  *reopen = viewer->reload_request();
   std::printf("viewed: frame %llu of %llu, t=%.6f s\n",
               static_cast<unsigned long long>(st.frame + 1),
               static_cast<unsigned long long>(st.frames), st.time);
@@ -399,11 +402,32 @@ int Replay(const ReplayArgs& args) {
     return 0;
   }
   if (args.check) return Check(args, r);
-  if (args.view) return View(args, r);
+  if (args.view) {
+    std::string reopen;
+    const int code = View(args, r, &reopen);
+    if (reopen.empty() || StopSignal() != 0) return code;
+    spdlog::info("viewer: opening {}", reopen);
+    return ViewFiles(reopen, args.viewer);
+  }
   return Play(args, r);
 }
 
 }  // namespace
+
+bool IsRecordingPath(const std::string& path) {
+  return path.ends_with(".urrec") || path.ends_with(".urrec.part");
+}
+
+int ViewRecording(const std::string& file, const viewer::ViewerOptions& viewer,
+                  std::string* reopen) {
+  ReplayArgs args;
+  args.file = file;
+  args.view = true;
+  args.viewer = viewer;
+  CurrentInput() = file;
+  const RecordingReader r = OpenRecording(file);
+  return View(args, r, reopen);
+}
 
 void RegisterReplayCommand(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(

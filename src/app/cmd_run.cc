@@ -519,8 +519,8 @@ void AddViewOptions(CLI::App* cmd, RunArgs& args) {
                   "shows or hides the plots");
 }
 
-// Runs, and again on the file the viewer asks for (Reload, a scene dropped on the window); a
-// file that fails to load is reported and the previous one plays again.
+// Runs, and again on the file the viewer asks for (Reload, a scene, model or recording dropped
+// on the window); a file that fails to load is reported and the previous one plays again.
 int RunViewing(const RunArgs& args) {
   RunArgs a = args;
   std::string previous;
@@ -528,7 +528,7 @@ int RunViewing(const RunArgs& args) {
     std::string reopen;
     int code = 0;
     try {
-      code = Run(a, &reopen);
+      code = IsRecordingPath(a.scene) ? ViewRecording(a.scene, a.viewer, &reopen) : Run(a, &reopen);
     } catch (const std::exception& e) {
       if (previous.empty()) throw;
       spdlog::error("cannot open {}: {}; back to {}", a.scene, e.what(), previous);
@@ -556,6 +556,14 @@ void AddRecordOptions(CLI::App* cmd, RunArgs& args) {
 }
 
 }  // namespace
+
+int ViewFiles(const std::string& file, const viewer::ViewerOptions& viewer) {
+  RunArgs args;
+  args.scene = file;
+  args.view = true;
+  args.viewer = viewer;
+  return RunViewing(args);
+}
 
 void RegisterRecordCommand(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
@@ -598,14 +606,18 @@ void RegisterViewCommand(CLI::App& app, int& exit_code) {
       "(Ctrl+A), debug drawing (keys 1-5), pause (P), single step (Right, while paused), reset "
       "(R), the model's cameras ([ ]), help (F1), info (F2), profiler (F3), plots (F4, --plot), "
       "save XML / MJB (Ctrl+S, Ctrl+Shift+S), print model / data (Ctrl+M, Ctrl+D), load / save "
-      "key and copy pose (Ctrl+K, Ctrl+Shift+K, Ctrl+C), reload (Ctrl+L; or drop a scene or "
-      "MJCF file on the window), cinematic cameras (O), launchers (F), possession (Tab, then "
+      "key and copy pose (Ctrl+K, Ctrl+Shift+K, Ctrl+C), reload (Ctrl+L; or drop a scene, an "
+      "MJCF file or a recording on the window), cinematic cameras (O), launchers (F), possession "
+      "(Tab, then "
       "WASD/QE or a gamepad), mouse camera (left drag rotate, right drag move, wheel zoom, "
       "double-click select, Ctrl+right double-click track) and Ctrl+drag perturbation. Closing "
       "the window stops it (exit 0). Needs a display (xvfb-run works).");
   static RunArgs args;
   args.view = true;
   AddRunOptions(cmd, args);
+  cmd->get_option("SCENE")->description(
+      "scene file (.yaml), MJCF model (.xml), or a recording (.urrec) to watch with the replay "
+      "timeline as `urlab replay FILE --view` does");
   AddViewOptions(cmd, args);
   cmd->callback([&exit_code] { exit_code = RunViewing(args); });
 }

@@ -40,6 +40,17 @@ const CLI::Validator& OutputPath();
 void CheckOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,
                   const std::vector<std::string>& inputs);
 
+// The viewer's files: `view` opens `file` (a scene, an MJCF model or a recording) and then each
+// file the window asks for (Reload, a file dropped on it); a file that fails to open is reported
+// and the previous one opens again (cmd_run.cc).
+int ViewFiles(const std::string& file, const viewer::ViewerOptions& viewer);
+// Plays the recording `file` in the viewer with its replay timeline, as `replay FILE --view`
+// does; `reopen` gets the file the window asks for next, "" when none (cmd_replay.cc).
+int ViewRecording(const std::string& file, const viewer::ViewerOptions& viewer,
+                  std::string* reopen);
+// True when `path` names a recording (.urrec, or the .urrec.part of an unfinished one).
+bool IsRecordingPath(const std::string& path);
+
 // The viewer's render quality options (--shadows/--no-shadows, --reflections, --skybox,
 // --render-scale), for `view`, `run --view` and `replay --view`.
 void AddRenderQualityOptions(CLI::App* cmd, viewer::ViewerOptions& options);

@@ -232,12 +232,12 @@ void ViewerCore::RequestReload(std::string path) {
 void ViewerCore::OnDrop(const std::vector<std::string>& paths) {
   if (paths.empty()) return;
   const std::string& p = paths.front();
-  if (EndsWith(p, ".yaml") || EndsWith(p, ".yml") || EndsWith(p, ".xml")) {
-    RequestReload(p);
-  } else if (EndsWith(p, ".urrec") || EndsWith(p, ".urrec.part")) {
-    SetStatus("a recording: play it with `urlab replay " + p + " --view`");
+  if (EndsWith(p, ".yaml") || EndsWith(p, ".yml") || EndsWith(p, ".xml") || EndsWith(p, ".urrec") ||
+      EndsWith(p, ".urrec.part")) {
+    RequestReload(p);  // a recording plays with the replay timeline
   } else {
-    SetStatus("cannot open " + p + ": drop a scene (.yaml), an MJCF model (.xml)");
+    SetStatus("cannot open " + p +
+              ": drop a scene (.yaml), an MJCF model (.xml) or a recording (.urrec)");
   }
 }
 

@@ -396,6 +396,21 @@ TEST(ReplayView, WatchesARecordingWithTheTimelineAtAnExactTime) {
     }
   }
   EXPECT_GT(lit, 300) << "no timeline at the bottom of the window";
+  // `urlab view` opens a recording the same way (as it does one dropped on its window).
+  const std::string via_view = dir + "/via_view.png";
+  ASSERT_EQ(testing::RunCommand(testing::XvfbRun("1024x768x24") + testing::UrlabBinary() +
+                                    " view " + rec +
+                                    " --width 1200 --height 500 --no-shadows --no-reflections "
+                                    "--no-skybox --screenshot " +
+                                    via_view + " --at 0.5",
+                                &log),
+            0)
+      << log;
+  EXPECT_NE(log.find("viewing on " + xml), std::string::npos) << log;
+  const std::vector<std::uint8_t> viewed = Decode(via_view, dir + "/via_view.rgb");
+  ASSERT_EQ(viewed.size(), image.size()) << log;
+  EXPECT_LT(Difference(viewed.data(), image.data(), image.size()), 0.01 * w * h)
+      << "`view RECORDING` shows another picture than `replay RECORDING --view`";
   fs::remove_all(dir);
 }
 

@@ -1099,6 +1099,9 @@ TEST_F(ViewerTest, KeysCopyPoseAndReload) {
   EXPECT_EQ(core().reload_request(), dir_ + "/scene.yaml");
   EXPECT_TRUE(core().stop_requested());
   EXPECT_TRUE(manager_->StopRequested());
+  // A dropped recording is opened too (the host plays it with the replay timeline).
+  core().OnDrop({dir_ + "/run.urrec"});
+  EXPECT_EQ(core().reload_request(), dir_ + "/run.urrec");
 }
 
 TEST_F(ViewerTest, HelpInfoAndProfilerOverlays) {
