@@ -6,7 +6,7 @@
   fuzz_net_control    control payloads (first byte 0) and set_gains JSON (first byte 1)
                       for the harness's arm (actuator ids 0..2)
   fuzz_step_request   step-server requests in msgpack and JSON, every operation of
-                      protocol.md; "@"*20 stands for the session id the harness obtains
+                      docs/protocol.md; "@"*20 stands for the session id the harness obtains
 
 Usage: /usr/bin/python3 tools/gen_fuzz_corpus.py   (from anywhere; rewrites the folders)
 Needs python3-msgpack (Debian), as the Python client does.

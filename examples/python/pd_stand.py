@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Makes a legged robot lie down and stand up again over the streaming topics (protocol.md).
+"""Makes a legged robot lie down and stand up again over the streaming topics (docs/protocol.md).
 
 Start the simulator first:   urlab run examples/scenes/go2_network.yaml
 Then:                        /usr/bin/python3 examples/python/pd_stand.py

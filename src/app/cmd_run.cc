@@ -418,7 +418,7 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                 "publish from network.camera_base_port, 5558, upward)");
   cmd->add_flag("--no-network", args.no_network,
                 "no ZeroMQ sockets (by default the streaming topics and the step server of "
-                "protocol.md are served on the scene's endpoints or the defaults 5555-5557, 5559)");
+                "docs/protocol.md are served on the scene's endpoints or the defaults 5555-5557, 5559)");
   CLI::Option* ports =
       cmd->add_option("--ports", args.ports,
                       "auto: the system chooses a free port for every TCP socket (state, "

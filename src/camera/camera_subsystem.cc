@@ -30,7 +30,7 @@ using Clock = std::chrono::steady_clock;
 
 // Frames a stream's socket queues for a slow client before it drops (latest frame wins).
 constexpr int kSendHighWaterMark = 2;
-// Ports tried upward from the first free candidate for each stream (protocol.md: up to 10).
+// Ports tried upward from the first free candidate for each stream (docs/protocol.md: up to 10).
 constexpr int kBindTries = 10;
 // While a step waits for a frame of a state not yet published, the render thread polls this often.
 constexpr auto kSyncPoll = std::chrono::microseconds(200);

@@ -2,7 +2,7 @@
 // Base64 (RFC 4648, with padding) for the step server's JSON sessions, where bytes cannot travel
 // as they are: a field holding bytes, or one of the maps of bytes (vfs_assets; sensors, xpos,
 // xquat with binary arrays), is renamed `<field>_base64` and carries base64 text instead
-// (protocol.md). Thread: any (pure).
+// (docs/protocol.md). Thread: any (pure).
 #include <cstddef>
 #include <string>
 

@@ -1,5 +1,5 @@
 #pragma once
-// The observation map of protocol.md (step_ok, reset_ok, state/full): time, step, sim and wall
+// The observation map of docs/protocol.md (step_ok, reset_ok, state/full): time, step, sim and wall
 // time, paused, and per articulation qpos and qvel (minimal), plus ctrl, act and sensors by name
 // (standard), plus body poses and actuator forces (full). Built from a state frame, never from
 // live mjData. One layout, written either straight into msgpack bytes (the hot path: every

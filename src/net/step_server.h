@@ -1,5 +1,5 @@
 #pragma once
-// The step server of protocol.md: request/reply operations on a ROUTER socket (REQ and DEALER
+// The step server of docs/protocol.md: request/reply operations on a ROUTER socket (REQ and DEALER
 // clients both work), msgpack or JSON (detected per message, under the size and depth limits of
 // request_limits.h; a reply uses the request's encoding), `seq` echoed. Many clients at once:
 // observers read; one driver holds a lease for stepping, mode changes and control (released on

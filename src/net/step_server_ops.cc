@@ -1,5 +1,5 @@
 // The step server's runtime operations: mocap poses, keyframes, physics options, contacts,
-// counters, twist and controller configuration (protocol.md, "Runtime operations"). Sessions,
+// counters, twist and controller configuration (docs/protocol.md, "Runtime operations"). Sessions,
 // leases, stepping, resets and modes are in step_server.cc.
 #include <mujoco/mujoco.h>
 #include <spdlog/spdlog.h>

@@ -1,4 +1,4 @@
-// The step server's recorder operations (protocol.md, "Runtime operations"): recordings through
+// The step server's recorder operations (docs/protocol.md, "Runtime operations"): recordings through
 // the recorder subsystem the network was given, snapshots of the engine's state, and replay of
 // loaded recordings through a Player on the live engine. File operations block the I/O thread
 // for their duration; leases run from their end.

@@ -86,7 +86,7 @@ class CameraRenderer {
   std::vector<float> scratch_depth_;
 };
 
-// ---- Wire conversions (protocol.md: B, G, R, A bytes per pixel) ----
+// ---- Wire conversions (docs/protocol.md: B, G, R, A bytes per pixel) ----
 
 // The colour an id travels as in a segmentation image: id + 1 in the low three bytes (B, G, R),
 // A = 255; id -1 (background) is black. DecodeIdColor inverts it.

@@ -1,6 +1,6 @@
 // The step server's recorder, snapshot and replay operations against a real Manager with a
 // recorder subsystem and real sockets (a REQ client speaking msgpack, written here from
-// protocol.md).
+// docs/protocol.md).
 #include <gtest/gtest.h>
 
 #include <chrono>

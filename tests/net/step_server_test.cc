@@ -1,4 +1,4 @@
-// The step server, driven by a client written only from protocol.md's tables: raw ZeroMQ REQ
+// The step server, driven by a client written only from docs/protocol.md's tables: raw ZeroMQ REQ
 // and DEALER sockets and msgpack/JSON encoded here with nlohmann (none of the project's client
 // code). Real sockets on loopback with ephemeral ports.
 #include <gtest/gtest.h>

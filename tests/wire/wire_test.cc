@@ -1,4 +1,4 @@
-// The streaming topics' byte layouts against bytes computed by hand from protocol.md's tables,
+// The streaming topics' byte layouts against bytes computed by hand from docs/protocol.md's tables,
 // and the decoders' refusals (each with its reason).
 #include "urlab/wire/wire.h"
 

@@ -1,6 +1,6 @@
 """Client for the URLab simulation runtime.
 
-The streaming topics of protocol.md: discovery of every robot's actuators, decoded state as
+The streaming topics of docs/protocol.md: discovery of every robot's actuators, decoded state as
 numpy arrays keyed by name, and control by actuator name or id.
 
     from urlab_client import StreamClient

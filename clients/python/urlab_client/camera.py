@@ -1,4 +1,4 @@
-"""Camera streams (protocol.md "Camera frames out"): one PUB per stream, raw pixels.
+"""Camera streams (docs/protocol.md "Camera frames out"): one PUB per stream, raw pixels.
 
 Each entry of discovery's `camera_list` (Robot.cameras) or hello's `camera_topics` describes a
 stream: name, endpoint, width, height, mode, topic, meta_topic. Frames decode to numpy arrays:

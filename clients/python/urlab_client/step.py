@@ -1,4 +1,4 @@
-"""The step server (protocol.md): request/reply over ZeroMQ REQ, msgpack; on the same host over
+"""The step server (docs/protocol.md): request/reply over ZeroMQ REQ, msgpack; on the same host over
 a shared-memory channel the server offers in hello (urlab_client.shm), with ZeroMQ as the
 fallback.
 
@@ -20,7 +20,7 @@ from urlab_client.camera import decode_frame
 
 
 class UrlabError(RuntimeError):
-    """An error reply: `code` is protocol.md's error code."""
+    """An error reply: `code` is docs/protocol.md's error code."""
 
     def __init__(self, code, message):
         super().__init__(f"{code}: {message}")

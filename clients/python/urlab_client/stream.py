@@ -47,7 +47,7 @@ class Robot:
 class StreamClient:
     """Connects to a running `urlab run` (or `urlab view`).
 
-    host: the simulator's address; the ports default to protocol.md's (5555 state, 5556 control,
+    host: the simulator's address; the ports default to docs/protocol.md's (5555 state, 5556 control,
     5557 info), or give full endpoints.
     """
 

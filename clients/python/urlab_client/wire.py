@@ -1,4 +1,4 @@
-"""Byte layouts of the streaming topics (protocol.md): little-endian, packed, no padding."""
+"""Byte layouts of the streaming topics (docs/protocol.md): little-endian, packed, no padding."""
 import struct
 
 import numpy as np

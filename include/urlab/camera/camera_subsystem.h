@@ -1,6 +1,6 @@
 #pragma once
 // CameraSubsystem: renders the MJCF cameras a scene asks for off-screen, each at its own rate
-// and resolution, and streams them per protocol.md: one ZeroMQ PUB per stream (a camera in one
+// and resolution, and streams them per docs/protocol.md: one ZeroMQ PUB per stream (a camera in one
 // mode) from the scene's camera_base_port upward, topic "{art}/camera/{stream} " with the raw
 // pixels, and "{art}/camera_meta/{stream}" (JSON: frame id, step, sim time, wall times, render
 // time) before each frame. Send high-water marks are small and sends never wait: a slow client
@@ -31,7 +31,7 @@ struct CameraOptions {
   std::string bind_host = "*";               // sockets bind tcp://{bind_host}:{port}
   std::string advertise_host = "127.0.0.1";  // what discovery tells clients to connect to
   bool publish = true;                       // false: render only (video, the step server)
-  // Ports the scene's other sockets use (protocol.md's step server default, 5559, sits inside
+  // Ports the scene's other sockets use (docs/protocol.md's step server default, 5559, sits inside
   // the camera range): cameras skip them.
   std::vector<int> reserved_ports;
   int render_nice = 5;  // added to the render thread's nice value

@@ -21,7 +21,7 @@
 
 namespace urlab::client {
 
-// Where the simulator serves (protocol.md's defaults on `host`).
+// Where the simulator serves (docs/protocol.md's defaults on `host`).
 struct Endpoints {
   std::string state = "tcp://127.0.0.1:5555";
   std::string control = "tcp://127.0.0.1:5556";
@@ -63,7 +63,7 @@ class StreamClient {
   // One control message: {actuator short/full name: value}; throws std::out_of_range for an
   // unknown robot or actuator (call Discover first).
   void SendControl(const std::string& robot, const std::map<std::string, double>& targets);
-  // A set_gains patch, as protocol.md's JSON text ({"knee": {"kp": 50}}).
+  // A set_gains patch, as docs/protocol.md's JSON text ({"knee": {"kp": 50}}).
   void SetGains(const std::string& robot, const std::string& json);
 
  private:
@@ -71,7 +71,7 @@ class StreamClient {
   std::unique_ptr<Impl> impl_;
 };
 
-// An error reply of the step server (code as in protocol.md).
+// An error reply of the step server (code as in docs/protocol.md).
 class StepError : public std::runtime_error {
  public:
   StepError(std::string code, const std::string& message)

@@ -1,5 +1,5 @@
 #pragma once
-// NetworkSubsystem: protocol.md over ZeroMQ. One I/O thread owns every socket: it publishes
+// NetworkSubsystem: docs/protocol.md over ZeroMQ. One I/O thread owns every socket: it publishes
 // each physics step's state (joint, ball joint, base_state and sensor topics) from its own
 // every-step state subscription, drains the control SUB socket (control and set_gains topics,
 // validated, applied as whole command frames or gain changes, or dropped and counted per
@@ -67,7 +67,7 @@ struct NetworkOptions {
   std::string server_session;
 };
 
-// The endpoints a scene file's `network:` section names (protocol.md's defaults otherwise).
+// The endpoints a scene file's `network:` section names (docs/protocol.md's defaults otherwise).
 NetworkOptions NetworkOptionsFromScene(const world::NetworkConfig& config);
 
 // Counts of what the network did, readable from any thread.
