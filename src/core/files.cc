@@ -273,11 +273,6 @@ void OutputFile::Write(std::string_view bytes) {
   }
 }
 
-void OutputFile::Sync() {
-  if (fd_ < 0 || in_place()) return;
-  if (::fdatasync(fd_) != 0) Fail("fdatasync " + writing_, errno);
-}
-
 void OutputFile::Commit(const std::function<void(const std::string&)>& before_rename) {
   if (fd_ < 0) WriteFailed(target_.path, "the file is closed");
   if (!in_place() && ::fsync(fd_) != 0) Fail("fsync " + writing_, errno);

@@ -142,18 +142,6 @@ std::optional<ObsLevel> ParseObservationLevel(std::string_view level) {
   return std::nullopt;
 }
 
-bool IsObservationLevel(const std::string& level) {
-  return ParseObservationLevel(level).has_value();
-}
-
-Json TimeOf(double seconds) {
-  Json j = Json::object();
-  JsonWriter w(&j, 1);
-  w.Key("t");
-  Time(w, seconds);
-  return j["t"];
-}
-
 Json Array(const double* v, std::size_t n, bool binary) {
   if (binary) {
     std::vector<std::uint8_t> bytes(n * sizeof(double));

@@ -22,10 +22,7 @@ enum class ObsLevel { kMinimal, kStandard, kFull };
 
 // "minimal", "standard" or "full"; nothing for anything else.
 std::optional<ObsLevel> ParseObservationLevel(std::string_view level);
-bool IsObservationLevel(const std::string& level);
 
-// {"sec", "nsec"} of a time in seconds.
-Json TimeOf(double seconds);
 // A numeric vector: a list of numbers, or packed little-endian f64 bytes when `binary`.
 Json Array(const double* v, std::size_t n, bool binary);
 

@@ -14,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "render/video_writer.h"
@@ -69,6 +70,8 @@ class ViewerCore : public InputHandler {
   bool PerformTimeline(TimelineAction action);
   // True while a replay plays through the slot the viewer was given.
   bool replay_mode() const;
+  // The help overlay's two columns (keys, what they do); a replay's timeline keys first.
+  std::pair<std::string, std::string> HelpText() const;
   Timeline& timeline() { return timeline_; }
 
   // ---- State (main thread) ----

@@ -244,23 +244,37 @@ void ViewerCore::OnDrop(const std::vector<std::string>& paths) {
 // ---------------------------------------------------------------------------------------------
 // Overlays
 
+std::pair<std::string, std::string> ViewerCore::HelpText() const {
+  std::string keys, what;
+  // While a replay plays, the timeline's keys come first and take over the keys they share.
+  const bool replay = replay_mode();
+  if (replay) {
+    for (const TimelineKey& k : TimelineKeys()) {
+      keys += std::string(k.label) + "\n";
+      what += "replay: " + std::string(k.what) + "\n";
+    }
+  }
+  for (const Hotkey& h : Hotkeys()) {
+    if (replay && h.mods == 0 && TimelineActionOfKey(h.key)) continue;
+    keys += std::string(h.label) + "\n";
+    what += std::string(h.help) + "\n";
+  }
+  keys +=
+      "Shift+letter\nAlt+0-5\nAlt+Shift+0-5\nleft drag\nright drag\nwheel\n"
+      "double-click\nCtrl+drag";
+  what +=
+      "visualisation flag (see the panel)\ngeom group\nsite group\nrotate\nmove\nzoom\n"
+      "select (right: look at)\npush the selected body";
+  return {keys, what};
+}
+
 void ViewerCore::DrawOverlays(const mjrRect& vp) {
   const mjrContext* con = &view_->context();
   const bool want_profile = overlays_.profiler || overlays_.info;
   if (want_profile) profiler_.Request(session_->engine());
   const std::optional<ProfileSample> prof = want_profile ? profiler_.Latest() : std::nullopt;
   if (overlays_.help) {
-    std::string keys, what;
-    for (const Hotkey& h : Hotkeys()) {
-      keys += std::string(h.label) + "\n";
-      what += std::string(h.help) + "\n";
-    }
-    keys +=
-        "Shift+letter\nAlt+0-5\nAlt+Shift+0-5\nleft drag\nright drag\nwheel\n"
-        "double-click\nCtrl+drag";
-    what +=
-        "visualisation flag (see the panel)\ngeom group\nsite group\nrotate\nmove\nzoom\n"
-        "select (right: look at)\npush the selected body";
+    const auto [keys, what] = HelpText();
     mjr_overlay(mjFONT_NORMAL, mjGRID_TOPLEFT, vp, keys.c_str(), what.c_str(), con);
   }
   if (overlays_.info) {

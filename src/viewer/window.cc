@@ -201,7 +201,6 @@ void Window::FramebufferSize(int* width, int* height) const {
 void Window::WindowSize(int* width, int* height) const {
   glfwGetWindowSize(window_, width, height);
 }
-void Window::CursorPos(double* x, double* y) const { glfwGetCursorPos(window_, x, y); }
 
 bool Window::software_renderer() const {
   const auto* r = reinterpret_cast<const char*>(glGetString(GL_RENDERER));

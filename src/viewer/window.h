@@ -61,8 +61,6 @@ class Window {
   void Clear(float r, float g, float b);
   void FramebufferSize(int* width, int* height) const;
   void WindowSize(int* width, int* height) const;
-  // Cursor position in window coordinates.
-  void CursorPos(double* x, double* y) const;
   // The clipboard's text (copy pose writes it).
   void SetClipboard(const std::string& text);
   std::string Clipboard() const;

@@ -1222,8 +1222,13 @@ TEST_F(ViewerTest, ReplayTimelineDrivesThePlayerAndShowsItsFrames) {
   ASSERT_EQ(shown.marks.keyframes.size(), 3u);
   ASSERT_EQ(shown.marks.jumps.size(), 1u);
   EXPECT_EQ(shown.marks.jumps[0].frame, 450u);
+  EXPECT_EQ(core().HelpText().first.find("PgUp"), std::string::npos);
   slot->Set(&shown);
   ASSERT_TRUE(core().replay_mode());
+  // The help overlay (F1) lists the timeline's keys while a replay plays.
+  EXPECT_EQ(core().HelpText().first.rfind("Space\nLeft\nRight\n", 0), 0u)
+      << core().HelpText().first;
+  EXPECT_NE(core().HelpText().first.find("PgUp"), std::string::npos);
 
   using viewer::internal::TimelineAction;
   // The viewer shows the frame the player shows: its qpos, bit for bit (kinematic playback).

@@ -86,8 +86,6 @@ class OutputFile {
   // Appends all of `bytes` (retrying short writes); throws Error with the system's reason
   // ("No space left on device", "Broken pipe", "File too large"), naming the file written.
   void Write(std::string_view bytes);
-  // Hands written bytes to the disk (fdatasync) in replace mode; nothing in place.
-  void Sync();
   // Replace mode: fsync, close, `before_rename(temporary)` when given, rename over the target,
   // fsync its folder. In place: close. Throws Error; the temporary then stays or goes as the
   // destructor says.
