@@ -25,7 +25,7 @@ URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
 sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 from urlab_client import StepClient, UrlabEnv, UrlabVectorEnv  # noqa: E402
-from urlab_process import fail, start_announced  # noqa: E402
+from urlab_process import arm_scene, fail, start_announced  # noqa: E402
 
 PROCS = []
 
@@ -55,14 +55,7 @@ def episode(env, seed, actions):
 
 def main():
     tmp = tempfile.mkdtemp(prefix="urlab_gym_")
-    scene = os.path.join(tmp, "arm.yaml")
-    model = os.path.join(SOURCE, "examples", "models", "servo_arm.xml")
-    with open(scene, "w") as f:
-        f.write(f"""articulations:
-  - name: arm
-    mjcf: {model}
-    controller: {{type: pd, kp: 400, kv: 20}}
-""")
+    scene = arm_scene(tmp, "arm.yaml")
     proc, rpc = server(scene)
 
     # Spaces and the observation.

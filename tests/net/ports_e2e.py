@@ -23,7 +23,9 @@ import time
 
 URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
+sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 from urlab_client import StepClient, UrlabError  # noqa: E402
+from urlab_process import arm_scene  # noqa: E402
 
 DEFAULT_PORTS = {5555, 5556, 5557, 5558, 5559}
 
@@ -54,14 +56,7 @@ def port_of(endpoint):
 
 def main():
     tmp = tempfile.mkdtemp(prefix="urlab_ports_")
-    scene = os.path.join(tmp, "ports_arm.yaml")
-    model = os.path.join(SOURCE, "examples", "models", "servo_arm.xml")
-    with open(scene, "w") as f:
-        f.write(f"""articulations:
-  - name: arm
-    mjcf: {model}
-    controller: {{type: pd, kp: 400, kv: 20}}
-""")
+    scene = arm_scene(tmp, "ports_arm.yaml")
     announce = os.path.join(tmp, "a.json")
     first = subprocess.Popen([URLAB, "run", scene, "--ports", "auto", "--announce", announce,
                               "--instance", "first", "--duration", "60", "--no-cameras"],

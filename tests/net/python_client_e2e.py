@@ -16,26 +16,13 @@ URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
 sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 from urlab_client import StepClient, StreamClient, UrlabEnv, UrlabError  # noqa: E402
-from urlab_process import fail, start_urlab  # noqa: E402
+from urlab_process import arm_scene, fail, start_urlab  # noqa: E402
 
 
 def main():
     tmp = tempfile.mkdtemp(prefix="urlab_py_")
-    scene = os.path.join(tmp, "scene.yaml")
-    model = os.path.join(SOURCE, "examples", "models", "servo_arm.xml")
-    with open(scene, "w") as f:
-        f.write(f"""control_source: network
-network:
-  state: "tcp://127.0.0.1:*"
-  control: "tcp://127.0.0.1:*"
-  info: "tcp://127.0.0.1:*"
-  rpc: "tcp://127.0.0.1:*"
-articulations:
-  - name: arm
-    mjcf: {model}
-    controller: {{type: pd, kp: 400, kv: 20}}
-launchers:
-  - {{name: cannon, pos: [1.5, 1.5, 0.8], speed: 3}}
+    scene = arm_scene(tmp, ephemeral_ports=True, extra="""launchers:
+  - {name: cannon, pos: [1.5, 1.5, 0.8], speed: 3}
 """)
     files = os.path.join(tmp, "files")
     proc, endpoints = start_urlab(URLAB, scene, "--files-dir", files)

@@ -28,7 +28,7 @@ import msgpack  # noqa: E402
 import zmq  # noqa: E402
 from urlab_client import StepClient  # noqa: E402
 from urlab_client.shm import ShmError, available  # noqa: E402
-from urlab_process import fail, start_urlab  # noqa: E402
+from urlab_process import arm_scene, fail, start_urlab  # noqa: E402
 
 CLIENT = r"""
 import sys, time
@@ -62,20 +62,7 @@ def main():
         print("SKIP: shared memory needs Linux x86_64 and /dev/shm")
         return
     tmp = tempfile.mkdtemp(prefix="urlab_shm_")
-    scene = os.path.join(tmp, "scene.yaml")
-    model = os.path.join(SOURCE, "examples", "models", "servo_arm.xml")
-    with open(scene, "w") as f:
-        f.write(f"""control_source: network
-network:
-  state: "tcp://127.0.0.1:*"
-  control: "tcp://127.0.0.1:*"
-  info: "tcp://127.0.0.1:*"
-  rpc: "tcp://127.0.0.1:*"
-articulations:
-  - name: arm
-    mjcf: {model}
-    controller: {{type: pd, kp: 400, kv: 20}}
-""")
+    scene = arm_scene(tmp, ephemeral_ports=True)
 
     # 0. The same rollout over shared memory and over ZeroMQ: the same observations.
     proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))

@@ -1,9 +1,38 @@
 """Starting `urlab run` for the Python end-to-end tests: the process, and the network endpoints
 its log names (ephemeral ports), or a failure with its log."""
+import os
 import re
 import subprocess
 import sys
 import time
+
+SOURCE = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+SERVO_ARM = os.path.join(SOURCE, "examples", "models", "servo_arm.xml")
+
+
+def arm_scene(folder, name="scene.yaml", ephemeral_ports=False, extra=""):
+    """Writes the Python tests' scene into `folder`: the bundled servo arm as articulation `arm`
+    under a PD controller (kp 400, kv 20), with `extra` YAML appended; with `ephemeral_ports`
+    every socket binds a port the system chooses and the network is the control source. Returns
+    the scene's path."""
+    text = ""
+    if ephemeral_ports:
+        text += """control_source: network
+network:
+  state: "tcp://127.0.0.1:*"
+  control: "tcp://127.0.0.1:*"
+  info: "tcp://127.0.0.1:*"
+  rpc: "tcp://127.0.0.1:*"
+"""
+    text += f"""articulations:
+  - name: arm
+    mjcf: {SERVO_ARM}
+    controller: {{type: pd, kp: 400, kv: 20}}
+""" + extra
+    path = os.path.join(folder, name)
+    with open(path, "w") as f:
+        f.write(text)
+    return path
 
 
 def fail(message, proc=None):
