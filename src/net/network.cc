@@ -575,6 +575,7 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
         session, impl_->tables, session.engine().SubscribeState("step_server"), so);
     impl_->server->SetRecorder(recorder_);
     impl_->server->SetCameras(cameras_);
+    impl_->server->SetBatch(batch_);
     impl_->server->SetPlayback(playback_);
   }
   std::promise<Endpoints> ready;
