@@ -91,7 +91,7 @@ void BatchSubsystem::BeginPlay(Session& session) {
     ApplyControls(model, d);
   });
   callbacks_.push_back(
-      engine.AddPostStepCallback([this](const mjModel* model, mjData* d) { PostStep(model, d); }));
+      engine.AddOnPostStep([this](const mjModel* model, mjData* d) { PostStep(model, d); }));
   callbacks_.push_back(engine.AddCommandListener(
       [this](const physics::AppliedCommand& c, const mjModel*, const mjData*) { OnCommand(c); }));
   if (options_.envs > 1) {
@@ -144,18 +144,19 @@ void BatchSubsystem::SyncOptions(const mjModel* m) {
 }
 
 void BatchSubsystem::OnCommand(const physics::AppliedCommand& c) {
+  // A step command tells its listeners when its window ends. armed_ is done (and dropped) by then
+  // when that window was its own; still armed, it belongs to a window that was cancelled before
+  // or while it ran (the steps in it were somebody else's, or cut short): dropped too.
   if (std::string_view(c.name) != "step" || !armed_) return;
-  if (window_ == 0) {
-    window_ = c.seq;  // the window armed_ waits for starts now
-  } else if (c.seq != window_) {
-    // armed_'s window was cancelled before its end; this one is somebody else's.
-    armed_.reset();
-    window_ = 0;
-  }
+  armed_.reset();
+  window_ = 0;
 }
 
 void BatchSubsystem::ApplyControls(const mjModel*, mjData* d) {
-  if (!armed_ || window_ == 0) return;
+  if (!armed_) return;
+  // The first iteration that steps after the job was armed is its window's (the engine is paused
+  // in direct mode: only step windows step), and so are the next n - 1.
+  window_ = 1;
   // Environment 0's actions are raw controls, over what its controllers wrote.
   std::memcpy(d->ctrl, armed_->actions.data(), sizeof(double) * static_cast<std::size_t>(nu_));
 }

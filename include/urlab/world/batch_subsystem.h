@@ -144,7 +144,7 @@ class BatchSubsystem : public Subsystem {
   std::uint32_t env0_steps_ = 0;
   bool env0_diverged_ = false;
   std::shared_ptr<BatchStepJob> armed_;  // a window's job, armed by its Inspect command
-  std::uint64_t window_ = 0;             // the step command running armed_ (0: not started)
+  std::uint64_t window_ = 0;             // 1 once armed_'s window stepped (0: not started)
   int iterations_ = 0;                   // of armed_'s window so far
   std::vector<std::uint8_t> skip_, done_, iteration_done_;  // per other environment
   double started_ = 0;                                      // armed_'s start (steady seconds)
