@@ -230,8 +230,10 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
     BatchServer server(ctx.scene_path, envs, kThreads);
     // About as many environment steps per round as the other figures' steps.
     const int steps = std::clamp(ctx.steps_per_round() / envs * 4, 30, 4000);
-    std::vector<double> server_rates;
-    const double ratio = ctx.MedianRatio([&] {
+    // Round by round: the bare loop, then the Python client; ratios to that round's bare rate.
+    std::vector<double> python_ratios, server_ratios, server_rates, overheads;
+    for (int round = 0; round < o.rounds; ++round) {
+      const double bare = ctx.BareRate(ctx.steps_per_round());
       int status = 0;
       const std::string text = RunCaptured(
           {o.python, "-c", kBatchScript, o.python_client, server.rpc(), std::to_string(steps)},
@@ -239,22 +241,25 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
       if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
         throw Error("bench fleet: the Python batched client failed (" + text + ")");
       }
-      server_rates.push_back(Field(text, "server"));
-      return Field(text, "rate");
-    });
-    const double server_rate = Median(server_rates);
-    const double bare = ctx.BareRate(ctx.steps_per_round());
+      const double rate = Field(text, "rate"), server_rate = Field(text, "server");
+      python_ratios.push_back(rate / bare);
+      server_ratios.push_back(server_rate / bare);
+      server_rates.push_back(server_rate);
+      overheads.push_back(1 - rate / server_rate);
+    }
+    const double ratio = Median(python_ratios);
     const std::string n = std::to_string(envs);
     out->push_back({"batch" + n + "_python_ratio", ratio});
-    out->push_back({"batch" + n + "_server_ratio", server_rate / bare});
-    out->push_back({"batch" + n + "_server_env_steps_per_s", server_rate});
+    out->push_back({"batch" + n + "_server_ratio", Median(server_ratios)});
+    out->push_back({"batch" + n + "_server_env_steps_per_s", Median(server_rates)});
     ctx.Report(
         Format("batched server, %d envs, %d threads: Python vector env %.3f of bare, the "
-               "server's own rate %.0f env steps/s (%.3f of bare)",
-               envs, std::min(kThreads, envs), ratio, server_rate, server_rate / bare));
+               "server's own rate %.0f env steps/s (%.3f of bare), Python's share %.3f",
+               envs, std::min(kThreads, envs), ratio, Median(server_rates), Median(server_ratios),
+               Median(overheads)));
     if (envs == 64) {
       out->push_back({"batch64_ratio", ratio});
-      out->push_back({"python_overhead64", 1 - ratio * bare / server_rate});
+      out->push_back({"python_overhead64", Median(overheads)});
     }
   }
 }

@@ -411,7 +411,7 @@ struct NetworkSubsystem::Impl {
     // sleeping for a while, since a wake-up from poll costs more than the round trip. The
     // doorbell is not armed meanwhile (the physics thread then makes no system call to ring it),
     // and sockets are polled every few turns only (a system call each).
-    if (server && server->has_pending()) {
+    if (server && server->has_pending_soon()) {
       unsigned turn = 0;
       if (spin.Spin(kReplySpin, [&] {
             if (work()) return true;

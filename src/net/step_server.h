@@ -99,6 +99,12 @@ class StepServer {
   // Sends the replies whose commands took effect; expires leases and overdue replies.
   void Service(Clock::time_point now);
   bool has_pending() const { return !pending_.empty(); }
+  // A parked reply worth spinning for: not a batch step, whose window runs for milliseconds
+  // (spinning for it would take a core from the threads stepping it; the doorbell wakes the
+  // I/O thread in time).
+  bool has_pending_soon() const {
+    return !pending_.empty() && !pending_.front().op.starts_with("batch_");
+  }
   // True when the oldest parked reply's command took effect (Service would send it).
   bool has_ready() const;
   // Closes the socket (pending replies get `shutting_down`) and ends a replay.
