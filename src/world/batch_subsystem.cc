@@ -112,6 +112,7 @@ void BatchSubsystem::EndPlay(Session& session) {
 }
 
 std::vector<StatusLine> BatchSubsystem::Status() const {
+  if (options_.envs == 1) return {};  // a plain run: nothing to show
   return {{"environments", std::to_string(options_.envs)},
           {"threads", std::to_string(threads())},
           {"environment steps", std::to_string(env_steps())}};
