@@ -204,7 +204,10 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
       "articulation runs with passthrough control, as fast as possible. Prints one key=value "
       "line per figure last (bare_steps_per_s, raw_zmq_rtt_p50_us, raw_shm_rtt_p50_us, zmq_n1, "
       "zmq_n10, zmq_step_rtt_p50_us, zmq_rtt_p50_us, shm_n1, shm_n10, shm_step_rtt_p50_us, "
-      "shm_rtt_p50_us, zmq_python_n1, shm_python_n1).");
+      "shm_rtt_p50_us, zmq_python_n1, shm_python_n1), then a batched server (urlab run --envs N "
+      "--threads 2, its own process) through the Python vector env at N = 1, 16, 64, 256 "
+      "(batchN_python_ratio, batchN_server_ratio, batchN_server_env_steps_per_s; "
+      "batch64_ratio, python_overhead64 = 1 - Python rate / the server's own batched rate).");
   static net::FleetBenchOptions fleet_args;
   static std::string fleet_scene;
 #ifdef URLAB_PYTHON_CLIENT_DIR

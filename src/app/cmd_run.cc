@@ -31,6 +31,7 @@
 #include "urlab/replay/playback.h"
 #include "urlab/replay/recorder.h"
 #include "urlab/viewer/viewer.h"
+#include "urlab/world/batch_subsystem.h"
 #include "urlab/world/manager.h"
 #include "world/realtime_watch.h"
 
@@ -58,6 +59,13 @@ struct RunArgs {
   std::string instance;         // --instance ID ("" : host:pid)
   bool allow_no_network = false;
   std::string step_mode;  // --step-mode: replaces the scene's network.step_mode
+  // --envs N (0: not given, one environment) and the batch's options (world/batch_subsystem.h).
+  int envs = 0;
+  int threads = 0;
+  bool no_auto_reset = false;
+  int max_episode_steps = 0;
+  double reset_noise = 0;
+  std::uint64_t seed = 0;
   bool no_cameras = false;
   std::vector<std::string> video;  // --video CAM OUT: a camera's frames to MP4/WebM
   // `urlab record` (and `run --record`): the file to record to, and how.
@@ -116,6 +124,13 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   }
   ChooseNetworkPorts(scene.network, args.ports, args.port_base);
   if (!args.step_mode.empty()) scene.network.step_mode = args.step_mode;
+  // Several environments step only together, in lockstep: the run waits for batch steps.
+  if (args.envs > 1) scene.network.step_mode = "direct";
+  if (args.envs > 1 && (args.no_network || !scene.network.enabled)) {
+    throw Error("--envs " + std::to_string(args.envs) +
+                ": several environments are driven through the step server, and the network is "
+                "off here");
+  }
   if (args.no_network || !scene.network.enabled) NetworkSourcesToUi(scene);
   if (!args.announce.empty()) {
     CheckOutputs({{args.announce, "--announce"}}, world::SceneInputFiles(scene));
@@ -170,7 +185,19 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
       net_options.instance = fmt::format("{}:{}", host, ::getpid());
     }
     net_options.server_session = NewServerSession();
+    // The batched environments (environment 0 is the engine's own; --envs N adds N - 1), driven
+    // by the step server's batch operations; added before the network, which uses it.
+    world::BatchSubsystemOptions batch_options;
+    batch_options.envs = std::max(1, args.envs);
+    batch_options.threads = args.threads;
+    batch_options.auto_reset = !args.no_auto_reset;
+    batch_options.max_episode_steps = args.max_episode_steps;
+    batch_options.reset_noise = args.reset_noise;
+    batch_options.seed = args.seed;
+    auto* batch = &static_cast<world::BatchSubsystem&>(
+        manager.AddSubsystem(std::make_unique<world::BatchSubsystem>(batch_options)));
     auto network = std::make_unique<net::NetworkSubsystem>(net_options);
+    network->SetBatch(batch);
     network_sub = network.get();
     network_options = net_options;
     network->SetRecorder(recorder);
@@ -208,8 +235,9 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   std::optional<physics::EngineEvent> error;
   std::uint64_t errors = 0;
   manager.AddEventListener([&](const physics::EngineEvent& e) {
-    const bool fatal_divergence =
-        e.kind == physics::EngineEventKind::kDivergence && !args.reset_on_divergence;
+    // With --envs a divergence ends an episode (the batch's done flag), not the run.
+    const bool fatal_divergence = e.kind == physics::EngineEventKind::kDivergence &&
+                                  !args.reset_on_divergence && args.envs == 0;
     if (e.kind != physics::EngineEventKind::kError && !fatal_divergence) return;
     ++errors;
     if (!error) error = e;
@@ -445,6 +473,41 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                   "live (the physics runs by itself) or direct (lockstep: it steps only when a "
                   "client asks); replaces the scene's network.step_mode")
       ->check(CLI::IsMember({"live", "direct"}));
+  CLI::Option* envs =
+      cmd->add_option("--envs", args.envs,
+                      "N independent copies of the scene (one model, N simulations) stepped "
+                      "together in lockstep by the step server's batch operations (batch_info, "
+                      "batch_step, batch_reset; docs/network.md \"Batched environments\"); the "
+                      "topics, the viewer and a recording follow environment 0; implies "
+                      "--step-mode direct when N > 1, and a divergence ends that environment's "
+                      "episode instead of the run (default 1)")
+          ->check(kInteger)
+          ->check(CLI::Range(1, 65536));
+  cmd->add_option("--threads", args.threads,
+                  "threads stepping the environments of --envs (default: the machine's cores, at "
+                  "most N)")
+      ->check(kInteger)
+      ->check(CLI::Range(1, 1024))
+      ->needs(envs);
+  cmd->add_flag("--no-auto-reset", args.no_auto_reset,
+                "with --envs: an ended episode waits for batch_reset (by default the next "
+                "batch_step resets it, ignoring its action: gymnasium's next-step autoreset)")
+      ->needs(envs);
+  cmd->add_option("--max-episode-steps", args.max_episode_steps,
+                  "with --envs: an episode ends after this many physics steps (default: only a "
+                  "divergence ends it)")
+      ->check(kInteger)
+      ->check(CLI::Range(1, 1000000000))
+      ->needs(envs);
+  cmd->add_option("--reset-noise", args.reset_noise,
+                  "with --envs: uniform noise of this scale added at each reset to hinge, slide "
+                  "and free-joint positions and to every velocity, from each environment's own "
+                  "generator (default 0)")
+      ->check(CLI::Range(0.0, 1e6))
+      ->needs(envs);
+  cmd->add_option("--seed", args.seed,
+                  "with --envs: environment i's generator starts with seed + i (default 0)")
+      ->needs(envs);
   cmd->add_flag("--allow-no-network", args.allow_no_network,
                 "go on without a socket that cannot bind (by default a run without a window "
                 "whose port is taken exits 1 before simulating, naming the process holding it)");

@@ -340,6 +340,8 @@ std::vector<std::pair<std::string, FigureProducer>> FleetFigureProducers() {
       {"shm",
        [](FleetContext& ctx, std::vector<FleetFigure>* out) { LockstepFigures(ctx, true, out); }},
       {"python", PythonFigures},
+      {"batch", BatchFigures},
+      {"dask", DaskFigures},
   };
 }
 
@@ -373,6 +375,7 @@ std::vector<FleetFigure> RunFleetBench(world::SceneConfig scene, const FleetBenc
   mj_forward(bare_model.get(), bare_data.get());
   FleetContext ctx(options, net.endpoints().rpc, manager.session().articulations().front().name(),
                    bare_model.get(), bare_data.get());
+  ctx.scene_path = scene.path;
   ctx.Report(Format("scene %s: articulation '%s', timestep %.4f s; %d rounds of %d steps",
                     scene.path.c_str(), ctx.articulation().c_str(), engine.timestep(),
                     options.rounds, ctx.steps_per_round()));

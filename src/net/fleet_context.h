@@ -39,6 +39,7 @@ class FleetContext {
   void Report(const std::string& line) const {
     if (options_.report) options_.report(line);
   }
+  std::string scene_path;  // the scene file (a producer may start its own `urlab run` of it)
 
  private:
   const FleetBenchOptions& options_;
@@ -46,5 +47,9 @@ class FleetContext {
   const mjModel* m_;
   mjData* d_;
 };
+
+// The batched server's figures (fleet_batch_bench.cc).
+void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out);
+void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out);
 
 }  // namespace urlab::net

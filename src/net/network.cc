@@ -411,7 +411,7 @@ struct NetworkSubsystem::Impl {
     // sleeping for a while, since a wake-up from poll costs more than the round trip. The
     // doorbell is not armed meanwhile (the physics thread then makes no system call to ring it),
     // and sockets are polled every few turns only (a system call each).
-    if (server && server->has_pending()) {
+    if (server && server->has_pending_soon()) {
       unsigned turn = 0;
       if (spin.Spin(kReplySpin, [&] {
             if (work()) return true;
@@ -575,6 +575,7 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
         session, impl_->tables, session.engine().SubscribeState("step_server"), so);
     impl_->server->SetRecorder(recorder_);
     impl_->server->SetCameras(cameras_);
+    impl_->server->SetBatch(batch_);
     impl_->server->SetPlayback(playback_);
   }
   std::promise<Endpoints> ready;

@@ -164,6 +164,25 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
        false,
        {},
        "active, session, mode, playing, finished, time, step, frame, frames, ..."},
+      // Batched environments (step_server_batch_ops.cc).
+      {"batch_info",
+       &StepServer::BatchInfo,
+       true,
+       false,
+       {},
+       "envs, threads, nu, obs_size, obs_layout, action_low, action_high, ..."},
+      {"batch_step",
+       &StepServer::BatchStep,
+       true,
+       true,
+       {"actions"},
+       "obs, done, reset, time, episode_steps, step_seconds"},
+      {"batch_reset",
+       &StepServer::BatchReset,
+       true,
+       true,
+       {},
+       "obs, done, reset, time, episode_steps"},
   };
   return ops;
 }
@@ -748,6 +767,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
     capabilities.push_back(extra);
   }
   if (shm_) capabilities.push_back("shm");
+  if (batch_) capabilities.push_back("batch");
   Outcome out;
   out.reply = Json{{"op", "hello_ok"},
                    {"session_id", c.id},
@@ -761,6 +781,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
                    {"instance", options_.instance},
                    {"server_session", options_.server_session},
                    {"articulations", std::move(arts)},
+                   {"batch", BatchHello()},
                    {"entities", Json::object()},
                    {"mjb", Json::binary(mjb_)}};
   if (const auto it = r.body.find("include_assets");

@@ -46,6 +46,10 @@
 #include "urlab/world/session.h"
 #include "wire/request_limits.h"
 
+namespace urlab::world {
+class BatchSubsystem;
+}
+
 namespace urlab::net {
 
 // The bounds on what clients may make the server hold (docs/network.md, "Limits").
@@ -95,6 +99,12 @@ class StepServer {
   // Sends the replies whose commands took effect; expires leases and overdue replies.
   void Service(Clock::time_point now);
   bool has_pending() const { return !pending_.empty(); }
+  // A parked reply worth spinning for: not a batch step, whose window runs for milliseconds
+  // (spinning for it would take a core from the threads stepping it; the doorbell wakes the
+  // I/O thread in time).
+  bool has_pending_soon() const {
+    return !pending_.empty() && !pending_.front().op.starts_with("batch_");
+  }
   // True when the oldest parked reply's command took effect (Service would send it).
   bool has_ready() const;
   // Closes the socket (pending replies get `shutting_down`) and ends a replay.
@@ -119,6 +129,9 @@ class StepServer {
   // Where the replay replay_start plays is shown (the viewer's timeline); nullptr: nowhere. Main
   // thread, before the I/O thread starts.
   void SetPlayback(std::shared_ptr<replay::PlaybackSlot> slot) { playback_ = std::move(slot); }
+  // The batched environments the batch operations drive (nullptr: none; they answer no_batch).
+  // Main thread, before the I/O thread starts.
+  void SetBatch(world::BatchSubsystem* batch) { batch_ = batch; }
 
   // Requests answered with an error, per code (I/O thread).
   const std::map<std::string, std::uint64_t>& errors() const { return errors_; }
@@ -276,6 +289,12 @@ class StepServer {
   Outcome ReplayStop(Request& r);
   Outcome ReplayStatus(Request& r);
   Outcome ReplayUnload(Request& r);
+  // Batched environments (step_server_batch_ops.cc).
+  world::BatchSubsystem& RequireBatch();
+  Json BatchHello() const;  // hello's `batch` ({envs, threads}; null without a batch)
+  Outcome BatchInfo(Request& r);
+  Outcome BatchStep(Request& r);
+  Outcome BatchReset(Request& r);
   // The path of the request's `path` for writing (NetworkFiles::ForWriting with its
   // `overwrite`), never the file a running recording writes.
   std::string WritablePath(const Request& r);
@@ -320,6 +339,7 @@ class StepServer {
   std::unique_ptr<replay::Player> player_;  // declared after replays_: destroyed first
   std::shared_ptr<replay::PlaybackSlot> playback_;
   std::unique_ptr<replay::Playback> shown_;  // what playback_ points at (player_, its reader)
+  world::BatchSubsystem* batch_ = nullptr;
 };
 
 }  // namespace urlab::net

@@ -31,6 +31,9 @@ constexpr ValueRange kTable[] = {
     {"xfrc_applied", -kHuge, kHuge},
     {"pos", -kBig, kBig},
     {"quaternion norm", 0.9, 1.1},
+    // batch_step, batch_reset (seeds: whole numbers a double holds exactly)
+    {"actions", -kHuge, kHuge},
+    {"seed", 0, 9007199254740991.0, false, true},
     // get_contacts, replay_start
     {"max_contacts", 0, 100000, false, true},
     {"speed", 0, 1000, /*min_open=*/true},

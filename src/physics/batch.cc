@@ -33,10 +33,14 @@ double Noise(std::mt19937_64& rng, double scale) {
   return scale * (2 * unit - 1);
 }
 
-// The keyframe (or default state), then the noise: positions of hinge, slide and free joints
-// (not the free joints' quaternions, nor ball joints), then every velocity.
-void ResetState(const BatchOptions& o, std::mt19937_64& rng, const mjModel* m, mjData* d) {
-  if (o.keyframe >= 0) {
+}  // namespace
+
+// The reset state (custom, keyframe or default), then the noise: positions of hinge, slide and
+// free joints (not the free joints' quaternions, nor ball joints), then every velocity.
+void ResetBatchState(const BatchOptions& o, std::mt19937_64& rng, const mjModel* m, mjData* d) {
+  if (o.reset_state) {
+    o.reset_state(m, d);
+  } else if (o.keyframe >= 0) {
     mj_resetDataKeyframe(m, d, o.keyframe);
   } else {
     mj_resetData(m, d);
@@ -49,8 +53,6 @@ void ResetState(const BatchOptions& o, std::mt19937_64& rng, const mjModel* m, m
   }
   for (int v = 0; v < m->nv; ++v) d->qvel[v] += Noise(rng, o.reset_noise);
 }
-
-}  // namespace
 
 Batch::Batch(const Model& model, BatchOptions options) : options_(options) {
   if (options.envs < 1) {
@@ -94,7 +96,7 @@ void Batch::ResetEnv(Env& e) {
   // Through the command table like any reset: the core's divergence episode ends, its readers
   // see the discontinuity.
   e.core.commands().Push(cmd::ResetCustom{
-      [this, &e](const mjModel* m, mjData* d) { ResetState(options_, e.rng, m, d); },
+      [this, &e](const mjModel* m, mjData* d) { ResetBatchState(options_, e.rng, m, d); },
       "batch reset"});
   e.core.SetPaused(false);  // clears an error latch
   e.core.ApplyPending();
@@ -123,6 +125,19 @@ void Batch::ObserveEnv(const Env& e, double* out) const {
   mju_copy(out + m->nq, d->qvel, m->nv);
   mju_copy(out + m->nq + m->nv, d->sensordata, m->nsensordata);
 }
+
+void Batch::ObserveOne(int env, double* out) const {
+  if (env < 0 || env >= envs()) throw Error("batch: no environment " + std::to_string(env));
+  ObserveEnv(*envs_[static_cast<std::size_t>(env)], out);
+}
+
+bool Batch::diverged(int env) const {
+  if (env < 0 || env >= envs()) throw Error("batch: no environment " + std::to_string(env));
+  const Env& e = *envs_[static_cast<std::size_t>(env)];
+  return e.diverged || e.core.error_latched();
+}
+
+void Batch::SetPhysicsOptions(const mjOption& opt) { model_->get()->opt = opt; }
 
 void Batch::Observe(std::span<double> observations) const {
   const std::size_t row = static_cast<std::size_t>(observation_size());
@@ -163,7 +178,7 @@ void Batch::StepEnv(Env& e, const double* action, double* obs, std::uint8_t* don
 }
 
 void Batch::Step(std::span<const double> actions, std::span<double> observations,
-                 std::span<std::uint8_t> done) {
+                 std::span<std::uint8_t> done, std::span<const std::uint8_t> skip) {
   const std::size_t n = envs_.size();
   const std::size_t nu = static_cast<std::size_t>(action_size());
   const std::size_t row = static_cast<std::size_t>(observation_size());
@@ -181,15 +196,23 @@ void Batch::Step(std::span<const double> actions, std::span<double> observations
     throw Error("batch: done holds " + std::to_string(done.size()) + " flags, expected " +
                 std::to_string(n));
   }
+  if (!skip.empty() && skip.size() != n) {
+    throw Error("batch: skip holds " + std::to_string(skip.size()) + " flags, expected " +
+                std::to_string(n));
+  }
   // Each thread claims the next environment from a shared counter: a thread the machine
   // preempts holds back only the environment it is stepping, the others take the rest.
   std::atomic<std::size_t> next{0};
   pool_->Run([&](int) {
     for (std::size_t i = next.fetch_add(1, std::memory_order_relaxed); i < n;
          i = next.fetch_add(1, std::memory_order_relaxed)) {
-      StepEnv(*envs_[i], actions.data() + nu * i,
-              observations.empty() ? nullptr : observations.data() + row * i,
-              done.empty() ? nullptr : done.data() + i);
+      double* obs = observations.empty() ? nullptr : observations.data() + row * i;
+      if (!skip.empty() && skip[i]) {
+        if (!done.empty()) done[i] = 0;
+        if (obs) ObserveEnv(*envs_[i], obs);
+        continue;
+      }
+      StepEnv(*envs_[i], actions.data() + nu * i, obs, done.empty() ? nullptr : done.data() + i);
     }
   });
   for (std::size_t i = 0; i < n; ++i) {

@@ -119,6 +119,47 @@ TEST_F(BatchTest, SeedsDriveTheResetNoise) {
   EXPECT_NE(first[0], model->qpos0[0]);
 }
 
+// A custom reset state (a running scene's initial state) comes before the noise; skipped
+// environments are not stepped (their actions ignored, done 0); ResetBatchState gives an
+// environment outside the batch the same start for the same seed.
+TEST_F(BatchTest, CustomResetStateSkipMaskAndResetBatchState) {
+  BatchOptions o;
+  o.envs = 2;
+  o.threads = 2;
+  o.reset_noise = 0.01;
+  o.reset_state = [](const mjModel* m, mjData* d) {
+    mj_resetData(m, d);
+    d->qpos[0] = 0.3;
+  };
+  const Model model(CompileXmlString(kArmXml));
+  Batch batch(model, o);
+  const std::size_t row = static_cast<std::size_t>(batch.observation_size());
+  std::vector<double> start(row * 2), obs(row * 2);
+  batch.Reset(0, 5);
+  batch.Reset(1, 6);
+  batch.Observe(start);
+  EXPECT_NEAR(start[0], 0.3, 0.01);
+  EXPECT_NE(start[0], 0.3);  // the noise came after the custom state
+  // An mjData outside the batch reset with the same seed starts with the same bits.
+  DataPtr d = MakeData(model.get());
+  std::mt19937_64 rng(5);
+  ResetBatchState(o, rng, model.get(), d.get());
+  mj_forward(model.get(), d.get());
+  EXPECT_EQ(d->qpos[0], start[0]);
+  // Environment 1 skipped: unchanged, not done; environment 0 stepped.
+  std::vector<std::uint8_t> done(2, 9);
+  const std::vector<std::uint8_t> skip = {0, 1};
+  const std::vector<double> actions(static_cast<std::size_t>(2 * batch.action_size()), 0.5);
+  batch.Step(actions, obs, done, skip);
+  EXPECT_TRUE(SameBits(obs.data() + row, start.data() + row, row));
+  EXPECT_FALSE(SameBits(obs.data(), start.data(), row));
+  EXPECT_EQ(done, (std::vector<std::uint8_t>{0, 0}));
+  EXPECT_EQ(batch.episode_steps(0), 1u);
+  EXPECT_EQ(batch.episode_steps(1), 0u);
+  const std::vector<std::uint8_t> bad(3, 0);
+  EXPECT_THROW(batch.Step(actions, obs, done, bad), Error);
+}
+
 TEST_F(BatchTest, AutoResetStartsANewEpisodeAtTheStepLimit) {
   BatchOptions o;
   o.envs = 2;

@@ -18,6 +18,11 @@ endpoints under the slot's name (the scheduler's metadata), leaves the worker's 
 the restarted one); the vector env sees those servers stop answering, ends their episodes as
 truncated and reconnects each sub-environment to its slot's new server at its autoreset.
 
+Batched servers: `ServerPool(..., envs_per_server=16)` starts each server with `--envs 16`
+(many environments in one process, urlab_client.batch) and `pool.batch_vector_env()` returns a
+vector env over all of them (n servers x 16 environments); a lost server's environments end
+truncated and come back on its slot's replacement at their autoreset.
+
 Reaching the servers: the announced endpoints are the ones bound. A scene binding loopback
 (`tcp://127.0.0.1:*`, the default of `--ports auto` for the step server) is reachable only on the
 worker's machine; for workers on other machines bind the step server to every interface
@@ -117,15 +122,22 @@ class ServerPool:
 
     client: a distributed.Client. urlab: the binary on the workers. args: more `urlab run`
     arguments (default: --no-cameras --max-speed). spread: place the slots round robin over the
-    workers present now (a slot still moves to another worker when its own dies)."""
+    workers present now (a slot still moves to another worker when its own dies).
+    envs_per_server: each server holds that many environments (`urlab run --envs M`, stepped
+    by `threads` threads; see batch_vector_env)."""
 
     def __init__(self, client, scene, n, urlab="urlab", args=("--no-cameras", "--max-speed"),
-                 spread=True, name=None):
+                 spread=True, name=None, envs_per_server=None, threads=None):
         self.client = client
         self.scene = os.path.abspath(scene)
         self.n = int(n)
         self.urlab = urlab
         self.args = list(args)
+        self.envs_per_server = envs_per_server
+        if envs_per_server is not None:
+            self.args += ["--envs", str(int(envs_per_server))]
+            if threads is not None:
+                self.args += ["--threads", str(int(threads))]
         self.name = name or f"urlab-{uuid.uuid4().hex[:8]}"
         self._stop = f"{self.name}-stop"
         self._variables = [f"{self.name}-slot-{i}" for i in range(self.n)]
@@ -186,6 +198,41 @@ class ServerPool:
         vec = UrlabVectorEnv(envs, replace=replace, on_close=self.close if close_pool else None)
         return vec
 
+    def batch_client(self, i, not_session=None, **options):
+        """A urlab_client.batch.BatchClient on slot i's (batched) server, requiring its identity."""
+        from urlab_client.batch import BatchClient
+        info = self.announced(i, not_session=not_session)
+        c = BatchClient(info["endpoints"]["rpc"], require={"server_session": info["session"]},
+                        **options)
+        c.server_session = info["session"]
+        return c
+
+    def batch_vector_env(self, close_pool=True, reward_fn=None, terminated_fn=None,
+                         max_episode_steps=None, **options):
+        """A UrlabVectorEnv over every environment of every slot (start the pool with
+        envs_per_server): environments k*M .. k*M+M-1 are slot k's. options: BatchClient's
+        (n_steps, timeout, shared_memory, ...). A lost server's environments end truncated and
+        come back on its slot's replacement."""
+        from urlab_client.batch import BatchBackend
+        options.setdefault("timeout", 10.0)
+        clients = []
+        try:
+            for i in range(self.n):
+                clients.append(self.batch_client(i, **options))
+        except BaseException:
+            for c in clients:
+                c.close()
+            raise
+
+        def replace(k):
+            old = backend.clients[k]
+            return self.batch_client(k, not_session=getattr(old, "server_session", None),
+                                     **options)
+
+        backend = BatchBackend(clients, replace=replace, reward_fn=reward_fn,
+                               terminated_fn=terminated_fn, max_episode_steps=max_episode_steps)
+        return UrlabVectorEnv(backend=backend, on_close=self.close if close_pool else None)
+
     def close(self, timeout=60.0):
         """Stops every server (their tasks end) and forgets the slots."""
         if self._closed:
@@ -219,6 +266,20 @@ def vector_env(client, scene, articulation, n, urlab="urlab", args=("--no-camera
     pool = ServerPool(client, scene, n, urlab=urlab, args=args)
     try:
         return pool.vector_env(articulation, **env_options)
+    except BaseException:
+        pool.close()
+        raise
+
+
+def batch_vector_env(client, scene, n, envs_per_server=16, threads=None, urlab="urlab",
+                     args=("--no-cameras", "--max-speed"), **options):
+    """n batched servers of `scene` (envs_per_server environments each) on the cluster behind
+    `client` and a UrlabVectorEnv over all n x envs_per_server environments (closing it stops the
+    servers)."""
+    pool = ServerPool(client, scene, n, urlab=urlab, args=args, envs_per_server=envs_per_server,
+                      threads=threads)
+    try:
+        return pool.batch_vector_env(**options)
     except BaseException:
         pool.close()
         raise

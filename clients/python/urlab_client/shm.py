@@ -176,7 +176,11 @@ class ShmChannel:
             # Spin about as long as the server took recently, then sleep on the word.
             # A turn that took long means this process lost its core (a busy machine): then
             # spinning only delays the server, so sleep at once.
-            spin_until = start + min(max(2 * self._rtt, 50e-6), 2e-3)
+            # A server that takes milliseconds (a batch of environments) is not spun for: the
+            # wake-up costs little beside the wait, and a spinning client takes a core from the
+            # threads stepping the batch.
+            spin = min(max(2 * self._rtt, 50e-6), 2e-3) if self._rtt < 1e-3 else 20e-6
+            spin_until = start + spin
             now = start
             turns = 0
             while rep_seq.value != seq:

@@ -17,10 +17,10 @@ vector envs (a gymnasium.vector.VectorEnv when gymnasium is importable).
   (infos["server_lost"]); with a `replace(i)` callback (urlab_client.cluster gives one) the
   sub-environment comes back, connected to a replacement server, at its autoreset.
 
-Backends: `_ServerBackend` drives one UrlabEnv per server. A batched server (many
-environments in one URLab process) plugs in as another backend with the same four methods
-(send_reset/receive_reset/send_step/receive_step per index), so this class and its autoreset
-and batching stay as they are.
+Backends: `_ServerBackend` drives one UrlabEnv per server (`over_servers`).
+`urlab_client.batch.BatchBackend` drives batched servers (`over_batch`: `urlab run --envs N`,
+many environments in one process, one request per server per step, numpy arrays in and out
+without a loop over environments; the same autoreset, done by the server in the same request).
 """
 from collections import OrderedDict
 
@@ -102,12 +102,24 @@ class UrlabVectorEnv(_VectorBase):
     render_mode = None
     spec = None
 
-    def __init__(self, envs, replace=None, on_close=None):
+    def __init__(self, envs=None, replace=None, on_close=None, backend=None):
         """envs: UrlabEnv instances (one per server). replace(i): a new UrlabEnv for
         sub-environment i when its server was lost (None: a lost server raises). on_close: called
-        once by close() after the envs (a cluster's shutdown)."""
-        self._backend = _ServerBackend(envs, replace)
+        once by close() after the envs (a cluster's shutdown). backend: a batched backend
+        instead of envs (see over_batch)."""
         self._on_close = on_close
+        self._closed = False
+        if backend is not None:  # batched servers: the backend does reset and step whole
+            self._backend = backend
+            self.num_envs = len(backend)
+            self.single_observation_space = backend.single_observation_space
+            self.single_action_space = backend.single_action_space
+            self.observation_space = spaces.batch_space(self.single_observation_space,
+                                                        self.num_envs)
+            self.action_space = spaces.batch_space(self.single_action_space, self.num_envs)
+            self._np_random = None
+            return
+        self._backend = _ServerBackend(envs, replace)
         self.num_envs = len(self._backend)
         if self.num_envs == 0:
             raise ValueError("UrlabVectorEnv needs at least one environment")
@@ -140,8 +152,25 @@ class UrlabVectorEnv(_VectorBase):
             raise
         return cls(envs, replace=replace, on_close=on_close)
 
+    @classmethod
+    def over_batch(cls, endpoints, replace=None, on_close=None, **options):
+        """A vector env over every environment of one batched server (`urlab run SCENE --envs
+        N`), or of several (a list of endpoints: N servers x M environments, in order).
+        options: BatchBackend.connect's (require, n_steps, reward_fn, terminated_fn,
+        max_episode_steps; StepClient's timeout, shared_memory, ...); replace(k): a new
+        urlab_client.batch.BatchClient for server k when it was lost."""
+        from urlab_client.batch import BatchBackend
+        backend = BatchBackend.connect(endpoints, replace=replace, **options)
+        return cls(backend=backend, on_close=on_close)
+
+    @property
+    def _batched(self):
+        return getattr(self._backend, "batched", False)
+
     @property
     def envs(self):
+        if self._batched:
+            return self._backend.clients
         return self._backend.envs
 
     @property
@@ -150,12 +179,20 @@ class UrlabVectorEnv(_VectorBase):
 
     @property
     def np_random(self):
+        if self._batched:
+            if self._np_random is None:
+                self._np_random = np.random.default_rng()
+            return self._np_random
         return self._backend.envs[0].np_random
 
     # ---- gymnasium's vector API
     def reset(self, *, seed=None, options=None):
         """seed: None, an int (env i gets seed + i) or a list; options: UrlabEnv.reset's, plus
         "reset_mask" (reset only those envs; the others keep their observation)."""
+        if self._batched:
+            if isinstance(seed, (int, np.integer)):
+                self._np_random = np.random.default_rng(int(seed))
+            return self._backend.reset(seed, options)
         if seed is None:
             seeds = [None] * self.num_envs
         elif isinstance(seed, (int, np.integer)):
@@ -176,6 +213,8 @@ class UrlabVectorEnv(_VectorBase):
         return _stack(self._last_obs), _batch_infos(infos)
 
     def step(self, actions):
+        if self._batched:
+            return self._backend.step(actions)
         actions = np.asarray(actions, dtype=np.float64)
         if actions.shape != self.action_space.shape:
             raise ValueError(f"actions of shape {actions.shape}, expected "
@@ -241,6 +280,9 @@ class UrlabVectorEnv(_VectorBase):
             return
         self._closed = True
         try:
+            if self._batched:
+                self._backend.close()
+                return
             for env in self._backend.envs:
                 if env.client is not None:
                     env.close()

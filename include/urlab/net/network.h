@@ -29,8 +29,9 @@ class PlaybackSlot;
 class RecorderSubsystem;
 }  // namespace urlab::replay
 namespace urlab::world {
+class BatchSubsystem;
 class CameraStreams;
-}
+}  // namespace urlab::world
 
 namespace urlab::net {
 
@@ -114,6 +115,9 @@ class NetworkSubsystem : public world::Subsystem {
   // Where the step server shows the replay replay_start plays (the viewer's timeline: give the
   // viewer the same slot). nullptr: nowhere. Main thread, before BeginPlay.
   void SetPlayback(std::shared_ptr<replay::PlaybackSlot> slot) { playback_ = std::move(slot); }
+  // The batched environments the step server's batch operations drive (add it to the Manager
+  // before this subsystem). nullptr: none (they answer no_batch). Main thread, before BeginPlay.
+  void SetBatch(world::BatchSubsystem* batch) { batch_ = batch; }
 
  private:
   struct Impl;
@@ -122,6 +126,7 @@ class NetworkSubsystem : public world::Subsystem {
   replay::RecorderSubsystem* recorder_ = nullptr;
   world::CameraStreams* cameras_ = nullptr;
   std::shared_ptr<replay::PlaybackSlot> playback_;
+  world::BatchSubsystem* batch_ = nullptr;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -21,6 +21,7 @@
 // - env(i) gives the environment's StepCore for its owner's use between steps (e.g. a state
 //   subscription on environment 0 made before stepping starts); never during Step.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <random>
@@ -48,7 +49,17 @@ struct BatchOptions {
   // free-joint positions and every velocity, drawn from the environment's generator.
   double reset_noise = 0;
   std::uint64_t seed = 0;  // environment i starts with seed + i
+  // The reset state before the noise (null: `keyframe`, or the model's default state), e.g. a
+  // session's initial state (every articulation in its initial keyframe). Called on the thread
+  // that resets.
+  std::function<void(const mjModel*, mjData*)> reset_state;
 };
+
+// The state an environment resets to: options.reset_state (or the keyframe, or the default
+// state), then the noise drawn from `rng`. The batch resets its environments with it; an
+// environment kept outside the batch (a running engine's own) resets with it to the same state.
+void ResetBatchState(const BatchOptions& options, std::mt19937_64& rng, const mjModel* m,
+                     mjData* d);
 
 class Batch {
  public:
@@ -68,9 +79,11 @@ class Batch {
   // Writes each environment's actions to its ctrl, advances every environment one iteration,
   // and writes the observations (and done flags when `done` is not empty). Throws Error for
   // arrays of the wrong size (nothing is stepped then), and after the step for an environment
-  // whose iteration threw (it is reset when auto-reset is on, paused otherwise).
+  // whose iteration threw (it is reset when auto-reset is on, paused otherwise). `skip`
+  // (empty, or one flag per environment): environments not stepped this time (their done is 0,
+  // their observation the current one, their actions ignored).
   void Step(std::span<const double> actions, std::span<double> observations,
-            std::span<std::uint8_t> done = {});
+            std::span<std::uint8_t> done = {}, std::span<const std::uint8_t> skip = {});
   // Resets environment `env` (keyframe or default state, then the noise); a seed restarts its
   // generator first. Throws Error for a bad index.
   void Reset(int env, std::optional<std::uint64_t> seed = std::nullopt);
@@ -78,6 +91,13 @@ class Batch {
   void ResetAll(std::optional<std::uint64_t> seed = std::nullopt);
   // The current observations (layout as Step's).
   void Observe(std::span<double> observations) const;
+  // One environment's observation (observation_size() values at `out`).
+  void ObserveOne(int env, double* out) const;
+  // True when environment `env` diverged (or its iteration threw) since its last reset.
+  bool diverged(int env) const;
+  // Copies `opt` into the model the environments share (physics options changed elsewhere, e.g.
+  // on the simulation these environments mirror). Not during Step.
+  void SetPhysicsOptions(const mjOption& opt);
   // Steps since environment `env` last reset.
   std::uint64_t episode_steps(int env) const;
   StepCore& env(int i);

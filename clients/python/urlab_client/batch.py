@@ -1,0 +1,319 @@
+"""Batched step servers: many environments in one URLab process (`urlab run SCENE --envs N`),
+stepped together by one request (the step server's batch_info, batch_step, batch_reset;
+docs/network.md, "Batched environments").
+
+    from urlab_client import UrlabVectorEnv
+    envs = UrlabVectorEnv.over_batch("tcp://127.0.0.1:5559")   # every environment of that run
+    obs, infos = envs.reset(seed=0)                  # obs["qpos"].shape == (N, nq)
+    obs, rewards, terminated, truncated, infos = envs.step(envs.action_space.sample())
+
+BatchClient speaks the operations to one server; BatchBackend is UrlabVectorEnv's backend over
+one or more batched servers (N servers x M environments): one request per server per step, sent
+to every server before the replies are gathered, with numpy arrays in and out and no loop over
+environments in Python. Actions are the model's controls (ctrl, actuator order) bounded by each
+actuator's ctrlrange; the observation is {"qpos", "qvel", "sensordata"} of the whole model, views
+on the reply's packed array (read-only; .copy() one to modify it).
+"""
+from collections import OrderedDict
+
+import numpy as np
+import zmq
+
+from urlab_client import spaces
+from urlab_client.step import StepClient, UrlabError
+
+_F8 = np.dtype("<f8")
+_U4 = np.dtype("<u4")
+LOST = (TimeoutError, zmq.ZMQError, ConnectionError)  # ConnectionError: shm.ShmError
+
+
+class BatchClient:
+    """One batched step server: batch_info at connection, direct mode, then batch requests
+    (send_*/receive_* halves so a backend sends to every server before gathering)."""
+
+    def __init__(self, endpoint, require=None, n_steps=1, **client_options):
+        self.endpoint = endpoint
+        self.n_steps = int(n_steps)
+        self.client = StepClient(endpoint, require=require, **client_options)
+        try:
+            info = self.info = self.client.call("batch_info")
+            self.envs = int(info["envs"])
+            self.nu = int(info["nu"])
+            self.obs_size = int(info["obs_size"])
+            self.layout = [(part["name"], int(part["offset"]), int(part["size"]))
+                           for part in info["obs_layout"]]
+            self.action_low = np.frombuffer(info["action_low"], _F8).copy()
+            self.action_high = np.frombuffer(info["action_high"], _F8).copy()
+            self.client.set_mode("direct")
+        except BaseException:
+            self.client.close()
+            raise
+
+    def _result(self, reply):
+        n = self.envs
+        return {"obs": np.frombuffer(reply["obs"], _F8).reshape(n, self.obs_size),
+                "done": np.frombuffer(reply["done"], np.uint8).astype(bool),
+                "reset": np.frombuffer(reply["reset"], np.uint8).astype(bool),
+                "time": np.frombuffer(reply["time"], _F8),
+                "episode_steps": np.frombuffer(reply["episode_steps"], _U4),
+                "step_seconds": float(reply.get("step_seconds", 0.0))}
+
+    def send_step(self, actions, reset=None):
+        """actions: (envs, nu) float64; reset: (envs,) bool, those environments reset instead of
+        stepping (their actions ignored)."""
+        fields = {"actions": np.ascontiguousarray(actions, dtype=_F8).tobytes()}
+        if self.n_steps != 1:
+            fields["n_steps"] = self.n_steps
+        if reset is not None and reset.any():
+            fields["reset"] = np.ascontiguousarray(reset, dtype=np.uint8).tobytes()
+        self.client.send_request("batch_step", **fields)
+
+    def receive_step(self):
+        return self._result(self.client.receive_reply("batch_step"))
+
+    def send_reset(self, envs=None, seeds=None, auto_reset=None):
+        """envs: indices (None: all); seeds: one int or None per listed environment."""
+        fields = {}
+        if envs is not None:
+            fields["envs"] = [int(e) for e in envs]
+        if seeds is not None:
+            fields["seeds"] = [None if s is None else int(s) for s in seeds]
+        if auto_reset is not None:
+            fields["auto_reset"] = bool(auto_reset)
+        self.client.send_request("batch_reset", **fields)
+
+    def receive_reset(self):
+        return self._result(self.client.receive_reply("batch_reset"))
+
+    def step(self, actions, reset=None):
+        self.send_step(actions, reset)
+        return self.receive_step()
+
+    def reset(self, envs=None, seeds=None, auto_reset=None):
+        self.send_reset(envs, seeds, auto_reset)
+        return self.receive_reset()
+
+    def drop(self):
+        """Forgets a server that stopped answering (no bye)."""
+        try:
+            self.client._socket.close(0)
+        except Exception:  # noqa: BLE001
+            pass
+        self.client = None
+
+    def close(self):
+        client, self.client = self.client, None
+        if client is not None:
+            client.close()
+
+
+def _infos(n, **columns):
+    out = {}
+    for key, values in columns.items():
+        out[key] = values
+        out["_" + key] = np.ones(n, dtype=bool)
+    return out
+
+
+class BatchBackend:
+    """UrlabVectorEnv's backend over batched servers: environment i of the vector env is
+    environment i - offset(k) of server k (servers in the order given).
+
+    reward_fn(obs, actions, infos) -> (N,) and terminated_fn(obs, infos) -> (N,) bool are
+    vectorised over the environments; max_episode_steps (env steps) truncates; an episode the
+    server ended (divergence, or its --max-episode-steps) is truncated. replace(k): a new
+    BatchClient for server k when it stopped answering (None: a lost server raises); its
+    environments end truncated (infos["server_lost"]) and come back at their autoreset."""
+
+    batched = True
+
+    def __init__(self, clients, replace=None, reward_fn=None, terminated_fn=None,
+                 max_episode_steps=None):
+        self.clients = list(clients)
+        if not self.clients:
+            raise ValueError("a batched vector env needs at least one server")
+        first = self.clients[0]
+        for k, c in enumerate(self.clients[1:], 1):
+            if c.nu != first.nu or c.layout != first.layout:
+                raise ValueError(f"server {k} ({c.endpoint}) runs another model than server 0")
+        self.replace = replace
+        self.reward_fn = reward_fn
+        self.terminated_fn = terminated_fn
+        self.max_episode_steps = max_episode_steps
+        self.counts = [c.envs for c in self.clients]
+        self.offsets = np.cumsum([0] + self.counts)
+        self.num_envs = int(self.offsets[-1])
+        self.nu = first.nu
+        self.obs_size = first.obs_size
+        self.single_action_space = spaces.Box(first.action_low, first.action_high,
+                                              shape=(self.nu,), dtype=np.float64)
+        self.single_observation_space = spaces.Dict(OrderedDict(
+            (name, spaces.Box(-np.inf, np.inf, shape=(size,), dtype=np.float64))
+            for name, _, size in first.layout))
+        self._obs = np.zeros((self.num_envs, self.obs_size))
+        self._autoreset = np.zeros(self.num_envs, dtype=bool)
+        self._elapsed = np.zeros(self.num_envs, dtype=np.int64)
+        self._lost = [False] * len(self.clients)
+
+    @classmethod
+    def connect(cls, endpoints, require=None, n_steps=1, replace=None, reward_fn=None,
+                terminated_fn=None, max_episode_steps=None, **client_options):
+        if isinstance(endpoints, str):
+            endpoints = [endpoints]
+        clients = []
+        try:
+            for k, endpoint in enumerate(endpoints):
+                r = require[k] if isinstance(require, (list, tuple)) else require
+                clients.append(BatchClient(endpoint, require=r, n_steps=n_steps,
+                                           **client_options))
+        except BaseException:
+            for c in clients:
+                c.close()
+            raise
+        return cls(clients, replace=replace, reward_fn=reward_fn, terminated_fn=terminated_fn,
+                   max_episode_steps=max_episode_steps)
+
+    def __len__(self):
+        return self.num_envs
+
+    # ---- observations
+    def _view(self, obs):
+        """{"qpos", "qvel", "sensordata"} as views on the (N, obs_size) array."""
+        return OrderedDict((name, obs[:, off:off + size])
+                           for name, off, size in self.clients[0].layout)
+
+    def _slice(self, k):
+        return slice(int(self.offsets[k]), int(self.offsets[k + 1]))
+
+    def _renew(self, k):
+        old = self.clients[k]
+        if old.client is not None:
+            old.drop()
+        self.clients[k] = self.replace(k)
+        if self.clients[k].envs != self.counts[k] or self.clients[k].nu != self.nu:
+            raise RuntimeError(f"the replacement of server {k} runs another batch")
+        self._lost[k] = False
+
+    def _lose(self, k, truncated, lost):
+        if self.replace is None:
+            raise RuntimeError(f"server {k} ({self.clients[k].endpoint}) stopped answering, "
+                               "and this vector env has no replace callback")
+        self.clients[k].drop()
+        self._lost[k] = True
+        truncated[self._slice(k)] = True
+        lost[self._slice(k)] = True
+
+    # ---- gymnasium's vector API (UrlabVectorEnv calls these)
+    def reset(self, seed=None, options=None):
+        n = self.num_envs
+        if seed is None:
+            seeds = [None] * n
+        elif isinstance(seed, (int, np.integer)):
+            seeds = [int(seed) + i for i in range(n)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != n:
+                raise ValueError(f"{len(seeds)} seeds for {n} environments")
+        options = dict(options or {})
+        mask = np.asarray(options.pop("reset_mask", np.ones(n, dtype=bool)), bool)
+        if options:
+            raise ValueError(f"unknown reset option(s) {sorted(options)}: reset_mask")
+        sent = []
+        for k, c in enumerate(self.clients):
+            s = self._slice(k)
+            which = np.flatnonzero(mask[s])
+            if which.size == 0:
+                continue
+            if self._lost[k]:
+                self._renew(k)
+                c = self.clients[k]
+            envs = None if which.size == c.envs else which
+            c.send_reset(envs, [seeds[s.start + int(j)] for j in which])
+            sent.append(k)
+        time = np.zeros(n)
+        new = self._obs.copy()  # the environments not reset keep their observation
+        for k in sent:
+            r = self.clients[k].receive_reset()
+            s = self._slice(k)
+            m = mask[s]
+            new[s][m] = r["obs"][m]
+            time[s] = r["time"]
+        self._obs = new
+        self._autoreset[mask] = False
+        self._elapsed[mask] = 0
+        return self._view(self._obs), _infos(n, time=time)
+
+    def step(self, actions):
+        n = self.num_envs
+        actions = np.asarray(actions, dtype=np.float64)
+        if actions.shape != (n, self.nu):
+            raise ValueError(f"actions of shape {actions.shape}, expected {(n, self.nu)}")
+        resetting = self._autoreset.copy()
+        terminated = np.zeros(n, dtype=bool)
+        truncated = np.zeros(n, dtype=bool)
+        lost = np.zeros(n, dtype=bool)
+        done = np.zeros(n, dtype=bool)
+        time = np.zeros(n)
+        replies = {}
+        sent = []
+        for k in range(len(self.clients)):
+            s = self._slice(k)
+            try:
+                if self._lost[k]:  # its environments were truncated: back at their autoreset
+                    self._renew(k)
+                    self.clients[k].send_reset()
+                    sent.append((k, True))
+                else:
+                    self.clients[k].send_step(actions[s], resetting[s])
+                    sent.append((k, False))
+            except LOST:
+                self._lose(k, truncated, lost)
+        for k, renewed in sent:
+            s = self._slice(k)
+            try:
+                r = self.clients[k].receive_reset() if renewed else self.clients[k].receive_step()
+            except LOST:
+                self._lose(k, truncated, lost)
+                continue
+            except UrlabError as e:
+                if e.code not in ("session_expired", "shutting_down"):
+                    raise
+                self._lose(k, truncated, lost)
+                continue
+            replies[k] = r["obs"]
+            done[s] = r["done"]
+            time[s] = r["time"]
+            if renewed:
+                resetting[s] = True
+        if len(self.clients) == 1 and 0 in replies:
+            self._obs = replies[0]  # the reply's own array (read-only), no copy
+        else:
+            new = np.empty((n, self.obs_size))
+            for k in range(len(self.clients)):
+                new[self._slice(k)] = replies[k] if k in replies else self._obs[self._slice(k)]
+            self._obs = new
+        self._elapsed[resetting] = 0
+        self._elapsed[~resetting] += 1
+        obs = self._view(self._obs)
+        infos = _infos(n, time=time)
+        rewards = np.zeros(n)
+        if self.reward_fn is not None:
+            rewards = np.asarray(self.reward_fn(obs, actions, infos), dtype=np.float64)
+        if self.terminated_fn is not None:
+            terminated = np.asarray(self.terminated_fn(obs, infos), dtype=bool).copy()
+        truncated |= done
+        if self.max_episode_steps is not None:
+            truncated |= self._elapsed >= self.max_episode_steps
+        # The environments that reset in this step: reward 0, not ended (gymnasium's next-step).
+        rewards[resetting] = 0
+        terminated[resetting] = False
+        truncated[resetting & ~lost] = False
+        if lost.any():
+            infos["server_lost"] = lost
+            infos["_server_lost"] = lost.copy()
+        self._autoreset = terminated | truncated
+        return obs, rewards, terminated, truncated, infos
+
+    def close(self):
+        for c in self.clients:
+            c.close()

@@ -1,0 +1,153 @@
+#pragma once
+// BatchSubsystem: N independent copies of the running scene (`urlab run --envs N`), stepped in
+// lockstep. Environment 0 is the engine's own simulation, so the streaming topics, the viewer and
+// the recorder follow it unchanged; environments 1..N-1 live in a physics::Batch (one copy of the
+// model, one mjData each, K threads) that only the physics thread touches, in the same iteration
+// as environment 0. Every environment resets to the session's initial state (each articulation in
+// its initial keyframe) plus noise from its own generator (physics::ResetBatchState), so
+// environment i with seed s runs the same episode as environment 0 of another run with seed s.
+//
+// A batch step (SubmitStep) is, for the engine, one lockstep window: an Inspect command arms the
+// job (the other environments' resets, the options environment 0 runs with), then a Step{n}
+// command. While that window runs, the apply-controls hook writes environment 0's actions over
+// what its controllers wrote (actions are raw controls, in actuator order), and a post-step hook
+// steps environments 1..N-1 once per iteration. When environment 0 resets in a batch step
+// (gymnasium's next-step autoreset: the step after an episode ended resets that environment and
+// ignores its action), its reset is a ResetCustom command (the recorder sees the discontinuity)
+// and the other environments step inside an Inspect command instead of a window.
+//
+// Episodes end (done) when an environment diverges (NaN/Inf, MuJoCo's instability warnings) or
+// reaches max_episode_steps physics steps; with auto_reset the next batch step resets it.
+//
+// Threading contract
+// - Main thread: construction, BeginPlay (hooks installed before the physics thread starts),
+//   EndPlay (hooks removed).
+// - One requesting thread (the step server's I/O thread): SubmitStep, SubmitReset and the
+//   getters; one batch request at a time (the next one after the previous job completed). A job's
+//   outputs are written on the physics thread before the command the requester waits for
+//   finishes (PhysicsEngine::last_applied_command / WaitForCommand order them).
+// - Physics thread: the hooks, the command functions and every environment's state.
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "urlab/physics/batch.h"
+#include "urlab/world/subsystem.h"
+
+namespace urlab::world {
+
+struct BatchSubsystemOptions {
+  int envs = 1;
+  int threads = 0;            // 0: the machine's cores (at most envs)
+  bool auto_reset = true;     // reset an ended episode at the next batch step (next-step)
+  int max_episode_steps = 0;  // physics steps; 0: episodes end only by divergence
+  double reset_noise = 0;     // uniform noise at each reset (physics::BatchOptions)
+  std::uint64_t seed = 0;     // environment i starts with seed + i
+};
+
+// The outputs every batch job fills (one entry or row per environment).
+struct BatchResult {
+  std::vector<double> obs;                   // envs x observation_size: qpos, qvel, sensordata
+  std::vector<std::uint8_t> done;            // the episode ended in this request
+  std::vector<std::uint8_t> reset;           // the environment was reset in this request
+  std::vector<double> time;                  // each environment's simulation time
+  std::vector<std::uint32_t> episode_steps;  // physics steps since its last reset
+  double seconds = 0;                        // wall time the physics thread spent on the job
+  bool complete = false;
+};
+
+struct BatchStepJob {
+  std::vector<double> actions;      // envs x action_size
+  std::vector<std::uint8_t> reset;  // envs flags (empty: none): reset instead of stepping
+  int n = 1;                        // physics steps (the actions held)
+  BatchResult out;
+};
+
+struct BatchResetJob {
+  std::vector<int> envs;                            // empty: every environment
+  std::vector<std::optional<std::uint64_t>> seeds;  // per entry of envs (or per environment)
+  BatchResult out;
+};
+
+class BatchSubsystem : public Subsystem {
+ public:
+  explicit BatchSubsystem(BatchSubsystemOptions options);
+  ~BatchSubsystem() override;
+
+  std::string_view name() const override { return "batch"; }
+  void BeginPlay(Session& session) override;
+  void EndPlay(Session& session) override;
+  std::vector<StatusLine> Status() const override;
+
+  // ---- Sizes (fixed once playing) ----
+  int envs() const { return options_.envs; }
+  int threads() const;
+  int action_size() const { return nu_; }
+  int observation_size() const { return nq_ + nv_ + nsensordata_; }
+  int nq() const { return nq_; }
+  int nv() const { return nv_; }
+  int nsensordata() const { return nsensordata_; }
+  int max_episode_steps() const { return options_.max_episode_steps; }
+  double reset_noise() const { return options_.reset_noise; }
+  bool auto_reset() const { return auto_reset_.load(std::memory_order_relaxed); }
+  void SetAutoReset(bool on) { auto_reset_.store(on, std::memory_order_relaxed); }
+  // Environment steps taken (sum over environments) and the physics thread's wall seconds on
+  // batch jobs, since play began.
+  std::uint64_t env_steps() const { return env_steps_.load(std::memory_order_relaxed); }
+  double busy_seconds() const { return busy_seconds_.load(std::memory_order_relaxed); }
+
+  // ---- Requests (the requesting thread) ----
+  // Queues the commands of one batch step and returns the one to wait for; its steps (n when
+  // it is a lockstep window the server may cancel, 0 otherwise) in *steps. Throws Error for
+  // arrays of the wrong size.
+  std::uint64_t SubmitStep(std::shared_ptr<BatchStepJob> job, std::uint64_t* steps);
+  // Queues the resets (environment 0's as a ResetCustom command) and returns the command to wait
+  // for. Throws Error for a bad environment index.
+  std::uint64_t SubmitReset(std::shared_ptr<BatchResetJob> job);
+  // The episodes that ended in the last completed step (read by the requester after the job
+  // completed; auto-reset resets them at the next step).
+  void NoteCompleted(const BatchResult& out);
+
+ private:
+  struct Job;
+  void ApplyControls(const mjModel* m, mjData* d);
+  void PostStep(const mjModel* m, mjData* d);
+  void OnCommand(const physics::AppliedCommand& c);
+  void ResetEnv0(const mjModel* m, mjData* d, std::optional<std::uint64_t> seed);
+  void SyncOptions(const mjModel* m);
+  // Steps environments 1..N-1 once (not those in `skip`), or-ing their done flags into `done`.
+  void StepOthers(const std::vector<double>& actions, std::vector<std::uint8_t>& done,
+                  const std::vector<std::uint8_t>& skip);
+  // Fills out's rows: environment 0 from `d`, the others from the batch.
+  void Gather(const mjModel* m, const mjData* d, BatchResult& out);
+  static bool Diverged(const mjModel* m, const mjData* d);
+
+  BatchSubsystemOptions options_;
+  physics::BatchOptions batch_options_;  // the reset state, noise, max steps (all environments)
+  Session* session_ = nullptr;
+  std::unique_ptr<physics::Batch> others_;  // environments 1..N-1 (null when N == 1)
+  int nu_ = 0, nq_ = 0, nv_ = 0, nsensordata_ = 0;
+  std::vector<std::uint64_t> callbacks_;
+  std::atomic<bool> auto_reset_{true};
+  std::atomic<std::uint64_t> env_steps_{0};
+  std::atomic<double> busy_seconds_{0};
+
+  // Requesting thread: the episodes that ended in the last completed step.
+  std::vector<std::uint8_t> ended_;
+
+  // Physics thread only.
+  std::mt19937_64 env0_rng_;
+  std::uint32_t env0_steps_ = 0;
+  bool env0_diverged_ = false;
+  std::shared_ptr<BatchStepJob> armed_;  // a window's job, armed by its Inspect command
+  std::uint64_t window_ = 0;             // 1 once armed_'s window stepped (0: not started)
+  int iterations_ = 0;                   // of armed_'s window so far
+  std::vector<std::uint8_t> skip_, done_, iteration_done_;  // per other environment
+  double started_ = 0;                                      // armed_'s start (steady seconds)
+};
+
+}  // namespace urlab::world

@@ -1,0 +1,267 @@
+// `urlab bench fleet`'s batched figures: a batched server (`urlab run SCENE --envs N --threads 2`,
+// its own process, announced on free ports) driven through the Python vector env
+// (UrlabVectorEnv.over_batch, shared memory) at N = 1, 16, 64, 256: aggregate environment steps
+// per second through Python, the server's own rate (its physics thread's time on batch steps,
+// batch_info's busy_seconds), and their ratios to the bare single-thread loop of the same run.
+// batch64_ratio is the Python rate at N = 64 over the bare loop; python_overhead64 is
+// 1 - Python rate / server rate at N = 64.
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "net/bench_util.h"
+#include "net/fleet_context.h"
+#include "urlab/core/error.h"
+
+namespace urlab::net {
+
+namespace {
+
+using bench::Format;
+using bench::Median;
+
+constexpr const char* kBatchScript = R"PY(
+import sys, time
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+from urlab_client import UrlabVectorEnv
+endpoint, steps = sys.argv[2], int(sys.argv[3])
+env = UrlabVectorEnv.over_batch(endpoint)
+client = env.envs[0].client
+n, nu = env.num_envs, env.single_action_space.shape[0]
+low = np.where(np.isfinite(env.single_action_space.low), env.single_action_space.low, -1.0)
+high = np.where(np.isfinite(env.single_action_space.high), env.single_action_space.high, 1.0)
+actions = np.random.default_rng(0).uniform(low, high, size=(8, n, nu))
+env.reset(seed=0)
+for i in range(10):
+    env.step(actions[i % 8])
+before = client.call("batch_info")
+t0 = time.perf_counter()
+for i in range(steps):
+    env.step(actions[i % 8])
+elapsed = time.perf_counter() - t0
+after = client.call("batch_info")
+server = (after["env_steps"] - before["env_steps"]) / (after["busy_seconds"] - before["busy_seconds"])
+print("rate=%f server=%f transport=%s" % (steps * n / elapsed, server, client.transport))
+env.close()
+)PY";
+
+// Dask LocalCluster: 1 worker, then 2, each running one batched server of 16 environments (one
+// stepping thread each), driven as one vector env (urlab_client.cluster).
+constexpr const char* kDaskScript = R"PY(
+import sys, time
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+from distributed import Client, LocalCluster
+from urlab_client.cluster import ServerPool
+urlab, scene, seconds = sys.argv[2], sys.argv[3], float(sys.argv[4])
+def rate(workers):
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                      dashboard_address=None, silence_logs=40) as c, Client(c) as client:
+        pool = ServerPool(client, scene, workers, urlab=urlab, envs_per_server=16, threads=1)
+        with pool.batch_vector_env() as envs:
+            envs.reset(seed=0)
+            a = np.zeros(envs.action_space.shape)
+            for _ in range(20):
+                envs.step(a)
+            n, t0 = 0, time.perf_counter()
+            while time.perf_counter() - t0 < seconds:
+                envs.step(a)
+                n += envs.num_envs
+            return n / (time.perf_counter() - t0)
+one = rate(1)
+two = rate(2)
+print("one=%f two=%f" % (one, two))
+)PY";
+
+// The figure after `key=` in `text`.
+double Field(const std::string& text, const std::string& key) {
+  const auto at = text.find(key + "=");
+  if (at == std::string::npos) throw Error("bench fleet: no " + key + " in '" + text + "'");
+  return std::stod(text.substr(at + key.size() + 1));
+}
+
+// Runs `argv` with its stdout captured (stderr kept); returns the output and the exit status.
+std::string RunCaptured(const std::vector<std::string>& argv, int* status) {
+  int out[2];
+  if (pipe(out) != 0) throw Error("bench fleet: no pipe");
+  const pid_t child = fork();
+  if (child < 0) throw Error("bench fleet: cannot fork");
+  if (child == 0) {
+    dup2(out[1], 1);
+    close(out[0]);
+    close(out[1]);
+    std::vector<char*> args;
+    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    execv(args[0], args.data());
+    _exit(127);
+  }
+  close(out[1]);
+  std::string text;
+  char buf[256];
+  ssize_t got = 0;
+  while ((got = read(out[0], buf, sizeof(buf))) > 0)
+    text.append(buf, static_cast<std::size_t>(got));
+  close(out[0]);
+  waitpid(child, status, 0);
+  return text;
+}
+
+std::string SelfPath() {
+  char self[4096] = {};
+  const ssize_t len = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  if (len <= 0) throw Error("bench fleet: cannot find the urlab binary");
+  return self;
+}
+
+// A batched server process: started announced on free ports, stopped (SIGTERM) on destruction.
+class BatchServer {
+ public:
+  BatchServer(const std::string& scene, int envs, int threads) {
+    const std::string self = SelfPath();
+    announce_ =
+        (std::filesystem::temp_directory_path() /
+         ("urlab-bench-batch-" + std::to_string(getpid()) + "-" + std::to_string(envs) + ".json"))
+            .string();
+    std::filesystem::remove(announce_);
+    const std::vector<std::string> argv = {self,
+                                           "run",
+                                           scene,
+                                           "--envs",
+                                           std::to_string(envs),
+                                           "--threads",
+                                           std::to_string(threads),
+                                           "--ports",
+                                           "auto",
+                                           "--announce",
+                                           announce_,
+                                           "--no-cameras",
+                                           "--max-speed",
+                                           "--duration",
+                                           "900"};
+    pid_ = fork();
+    if (pid_ < 0) throw Error("bench fleet: cannot fork");
+    if (pid_ == 0) {
+      const int null = open("/dev/null", O_WRONLY);
+      if (null >= 0) {
+        dup2(null, 1);
+        dup2(null, 2);
+      }
+      std::vector<char*> args;
+      for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+      args.push_back(nullptr);
+      execv(args[0], args.data());
+      _exit(127);
+    }
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (!std::filesystem::exists(announce_)) {
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        throw Error("bench fleet: the batched server (--envs " + std::to_string(envs) +
+                    ") exited before announcing");
+      }
+      if (std::chrono::steady_clock::now() > deadline) {
+        throw Error("bench fleet: the batched server did not announce within 120 s");
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    std::ifstream in(announce_);
+    rpc_ = nlohmann::json::parse(in).at("endpoints").at("rpc").get<std::string>();
+  }
+  ~BatchServer() {
+    if (pid_ > 0) {
+      kill(pid_, SIGTERM);
+      int status = 0;
+      waitpid(pid_, &status, 0);
+    }
+    std::error_code ec;
+    std::filesystem::remove(announce_, ec);
+  }
+  const std::string& rpc() const { return rpc_; }
+
+ private:
+  pid_t pid_ = -1;
+  std::string announce_, rpc_;
+};
+
+}  // namespace
+
+void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
+  const FleetBenchOptions& o = ctx.options();
+  if (o.python_client.empty() || access(o.python.c_str(), X_OK) != 0) return;
+  int status = 0;
+  const std::string text = RunCaptured(
+      {o.python, "-c", kDaskScript, o.python_client, SelfPath(), ctx.scene_path, "5"}, &status);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    ctx.Report("no Dask figures (python3-distributed missing, or the cluster failed): " + text);
+    return;
+  }
+  const double one = Field(text, "one"), two = Field(text, "two");
+  out->push_back({"dask1x16_env_steps_per_s", one});
+  out->push_back({"dask2x16_env_steps_per_s", two});
+  out->push_back({"dask_scaling", two / one});
+  ctx.Report(
+      Format("Dask LocalCluster, batched servers of 16 environments: 1 worker %.0f, 2 "
+             "workers %.0f env steps/s (%.2f)",
+             one, two, two / one));
+}
+
+void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
+  const FleetBenchOptions& o = ctx.options();
+  if (o.python_client.empty() || access(o.python.c_str(), X_OK) != 0) {
+    ctx.Report("no Python client (--python-client): batched figures left out");
+    return;
+  }
+  constexpr int kThreads = 2;
+  for (const int envs : {1, 16, 64, 256}) {
+    BatchServer server(ctx.scene_path, envs, kThreads);
+    // About as many environment steps per round as the other figures' steps.
+    const int steps = std::clamp(ctx.steps_per_round() / envs * 4, 30, 4000);
+    // Round by round: the bare loop, then the Python client; ratios to that round's bare rate.
+    std::vector<double> python_ratios, server_ratios, server_rates, overheads;
+    for (int round = 0; round < o.rounds; ++round) {
+      const double bare = ctx.BareRate(ctx.steps_per_round());
+      int status = 0;
+      const std::string text = RunCaptured(
+          {o.python, "-c", kBatchScript, o.python_client, server.rpc(), std::to_string(steps)},
+          &status);
+      if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        throw Error("bench fleet: the Python batched client failed (" + text + ")");
+      }
+      const double rate = Field(text, "rate"), server_rate = Field(text, "server");
+      python_ratios.push_back(rate / bare);
+      server_ratios.push_back(server_rate / bare);
+      server_rates.push_back(server_rate);
+      overheads.push_back(1 - rate / server_rate);
+    }
+    const double ratio = Median(python_ratios);
+    const std::string n = std::to_string(envs);
+    out->push_back({"batch" + n + "_python_ratio", ratio});
+    out->push_back({"batch" + n + "_server_ratio", Median(server_ratios)});
+    out->push_back({"batch" + n + "_server_env_steps_per_s", Median(server_rates)});
+    ctx.Report(
+        Format("batched server, %d envs, %d threads: Python vector env %.3f of bare, the "
+               "server's own rate %.0f env steps/s (%.3f of bare), Python's share %.3f",
+               envs, std::min(kThreads, envs), ratio, Median(server_rates), Median(server_ratios),
+               Median(overheads)));
+    if (envs == 64) {
+      out->push_back({"batch64_ratio", ratio});
+      out->push_back({"python_overhead64", Median(overheads)});
+    }
+  }
+}
+
+}  // namespace urlab::net

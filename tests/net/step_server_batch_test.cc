@@ -1,0 +1,246 @@
+// The step server's batch operations (batch_info, batch_step, batch_reset) over a run of N
+// environments (world::BatchSubsystem: environment 0 is the engine's own simulation, 1..N-1 a
+// physics::Batch stepped with it). Real sockets on loopback with ephemeral ports, real MuJoCo; the
+// client encodes msgpack itself from the protocol's description.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <zmq.hpp>
+
+#include "net/step_test_client.h"
+#include "support/mujoco_test.h"
+#include "urlab/net/network.h"
+#include "urlab/world/batch_subsystem.h"
+#include "urlab/world/manager.h"
+
+namespace urlab::net {
+namespace {
+
+using namespace std::chrono_literals;
+using Json = nlohmann::json;
+using test_client::Client;
+
+// A pendulum under gravity (its path depends on the reset noise) with a motor and a sensor.
+constexpr const char* kPendulumXml = R"(<mujoco model="pendulum">
+  <option timestep="0.002"/>
+  <worldbody>
+    <body name="link" pos="0 0 1">
+      <joint name="hinge" type="hinge" axis="0 1 0" damping="0.05"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="1"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor name="motor" joint="hinge" ctrlrange="-5 5" ctrllimited="true"/>
+  </actuator>
+  <sensor>
+    <jointvel name="speed" joint="hinge"/>
+  </sensor>
+</mujoco>
+)";
+
+Json Packed(const std::vector<double>& v) {
+  const auto* p = reinterpret_cast<const std::uint8_t*>(v.data());
+  return Json::binary(std::vector<std::uint8_t>(p, p + v.size() * sizeof(double)));
+}
+
+template <typename T>
+std::vector<T> Unpack(const Json& v) {
+  const auto& bytes = v.get_binary();
+  std::vector<T> out(bytes.size() / sizeof(T));
+  std::memcpy(out.data(), bytes.data(), out.size() * sizeof(T));
+  return out;
+}
+
+class StepServerBatchTest : public urlab::testing::MujocoTest {
+ protected:
+  void SetUp() override {
+    dir_ = urlab::testing::MakeTempDir("step_server_batch");
+    urlab::testing::WriteTextFile(dir_, "pendulum.xml", kPendulumXml);
+  }
+  void Play(world::BatchSubsystemOptions b, const std::string& mode = "direct") {
+    batch_ = &static_cast<world::BatchSubsystem&>(
+        manager_.AddSubsystem(std::make_unique<world::BatchSubsystem>(b)));
+    NetworkOptions o;
+    o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
+    o.step_mode = mode;
+    auto net = std::make_unique<NetworkSubsystem>(o);
+    net->SetBatch(batch_);
+    net_ = &static_cast<NetworkSubsystem&>(manager_.AddSubsystem(std::move(net)));
+    manager_.BeginPlay(world::ParseScene("articulations:\n  - {name: pend, mjcf: pendulum.xml}\n",
+                                         dir_ + "/scene.yaml"));
+    ASSERT_FALSE(net_->endpoints().rpc.empty());
+  }
+  std::string rpc() const { return net_->endpoints().rpc; }
+  // Steps with `actions` (one per environment: one actuator).
+  Json Step(Client& c, const std::vector<double>& actions, Json extra = Json::object()) {
+    extra["actions"] = Packed(actions);
+    return c.Op("batch_step", extra);
+  }
+
+  std::string dir_;
+  world::Manager manager_;
+  world::BatchSubsystem* batch_ = nullptr;
+  NetworkSubsystem* net_ = nullptr;
+  zmq::context_t ctx_{1};
+};
+
+TEST_F(StepServerBatchTest, InfoDescribesTheBatchAndAStepStepsEveryEnvironment) {
+  Play({.envs = 4, .threads = 2});
+  Client c(ctx_, rpc());
+  const Json hello = c.Hello();
+  EXPECT_EQ(hello["batch"]["envs"], 4);
+  const Json info = c.Op("batch_info");
+  ASSERT_EQ(info["op"], "batch_info_ok") << info.dump();
+  EXPECT_EQ(info["envs"], 4);
+  EXPECT_EQ(info["threads"], 2);
+  EXPECT_EQ(info["nu"], 1);
+  EXPECT_EQ(info["obs_size"], 3);  // qpos, qvel, the sensor
+  EXPECT_EQ(info["obs_layout"][2]["name"], "sensordata");
+  EXPECT_EQ(Unpack<double>(info["action_low"]), std::vector<double>{-5});
+  EXPECT_EQ(Unpack<double>(info["action_high"]), std::vector<double>{5});
+  const std::uint64_t engine_steps = manager_.session().engine().step_count();
+  // Two environments with one action, two with another: equal actions, equal states.
+  Json r;
+  for (int i = 0; i < 10; ++i) {
+    r = Step(c, {1.0, -1.0, 1.0, -1.0}, {{"n_steps", 2}});
+    ASSERT_EQ(r["op"], "batch_step_ok") << r.dump();
+  }
+  const auto obs = Unpack<double>(r["obs"]);
+  ASSERT_EQ(obs.size(), 12u);
+  EXPECT_EQ(Unpack<std::uint8_t>(r["done"]), std::vector<std::uint8_t>(4, 0));
+  for (double t : Unpack<double>(r["time"])) EXPECT_NEAR(t, 20 * 0.002, 1e-12);
+  EXPECT_EQ(Unpack<std::uint32_t>(r["episode_steps"]), std::vector<std::uint32_t>(4, 20));
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(obs[k], obs[6 + k]);      // environment 0 (the engine's) and 2 (the batch's)
+    EXPECT_EQ(obs[3 + k], obs[9 + k]);  // 1 and 3
+  }
+  EXPECT_GT(obs[1], obs[4]);  // the positive torque turned its pendulum faster
+  EXPECT_NE(obs[2], 0.0);     // the sensor reads the joint speed
+  // Environment 0 is the engine's simulation: its steps are the engine's.
+  EXPECT_EQ(manager_.session().engine().step_count(), engine_steps + 20);
+}
+
+TEST_F(StepServerBatchTest, BadRequestsAreRefusedBeforeAnythingSteps) {
+  Play({.envs = 3, .threads = 2});
+  Client c(ctx_, rpc()), other(ctx_, rpc());
+  c.Hello();
+  other.Hello();
+  const std::uint64_t before = manager_.session().engine().step_count();
+  EXPECT_EQ(Step(c, {1, 2})["code"], "dim_mismatch");
+  EXPECT_EQ(Step(c, {1, 2, 3, 4})["code"], "dim_mismatch");
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const Json bad = Step(c, {0, nan, 0});
+  EXPECT_EQ(bad["code"], "bad_value");
+  EXPECT_NE(bad["message"].get<std::string>().find("environment 1"), std::string::npos);
+  EXPECT_EQ(Step(c, {0, std::numeric_limits<double>::infinity(), 0})["code"], "bad_value");
+  EXPECT_EQ(Step(c, {0, 1e12, 0})["code"], "bad_value");  // outside the range of actions
+  EXPECT_EQ(c.Op("batch_step", {{"actions", "many"}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("batch_step")["code"], "missing_field");
+  EXPECT_EQ(Step(c, {0, 0, 0}, {{"reset", {true}}})["code"], "dim_mismatch");
+  EXPECT_EQ(Step(c, {0, 0, 0}, {{"n_steps", 0}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("batch_reset", {{"envs", {3}}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("batch_reset", {{"seeds", {1, 2}}})["code"], "dim_mismatch");
+  EXPECT_EQ(c.Op("batch_reset", {{"seed", -1}})["code"], "bad_value");
+  EXPECT_EQ(c.Op("batch_reset", {{"seed", 1}, {"seeds", {1, 2, 3}}})["code"], "bad_value");
+  EXPECT_EQ(manager_.session().engine().step_count(), before);  // nothing stepped
+  // The lease: the first driver's steps take it; another client is refused.
+  ASSERT_EQ(Step(c, {0, 0, 0})["op"], "batch_step_ok");
+  EXPECT_EQ(Step(other, {0, 0, 0})["code"], "not_driver");
+  EXPECT_EQ(other.Op("batch_reset")["code"], "not_driver");
+  EXPECT_EQ(other.Op("batch_info")["op"], "batch_info_ok");  // observers read
+  // Live mode does not step in lockstep.
+  ASSERT_EQ(c.Op("set_mode", {{"mode", "live"}})["op"], "set_mode_ok");
+  EXPECT_EQ(Step(c, {0, 0, 0})["code"], "bad_mode");
+}
+
+TEST_F(StepServerBatchTest, TheSameSeedGivesTheSameEpisodeInEveryEnvironment) {
+  Play({.envs = 4, .threads = 2, .reset_noise = 0.3});
+  Client c(ctx_, rpc());
+  c.Hello();
+  const auto run = [&](const Json& seeds) {
+    const Json reset = c.Op("batch_reset", {{"seeds", seeds}});
+    EXPECT_EQ(reset["op"], "batch_reset_ok") << reset.dump();
+    std::vector<std::vector<double>> path{Unpack<double>(reset["obs"])};
+    EXPECT_EQ(Unpack<double>(reset["time"]), std::vector<double>(4, 0.0));
+    for (int i = 0; i < 25; ++i) {
+      const double a = std::sin(0.3 * i);
+      const Json r = Step(c, {a, a, a, a}, {{"n_steps", 2}});
+      EXPECT_EQ(r["op"], "batch_step_ok") << r.dump();
+      path.push_back(Unpack<double>(r["obs"]));
+    }
+    return path;
+  };
+  const auto first = run(Json{7, 8, 7, 9});
+  for (const auto& obs : first) {
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(obs[k], obs[6 + k]);  // 0 and 2: seed 7
+  }
+  EXPECT_NE(first[0][0], first[0][3]);  // seeds 7 and 8 start apart
+  EXPECT_NE(first[0][3], first[0][9]);  // 8 and 9 too
+  EXPECT_NE(first[0][0], first[0][9]);
+  // Again with the seeds moved: the episode follows its seed, whichever environment runs it.
+  const auto second = run(Json{9, 7, 8, 7});
+  for (std::size_t s = 0; s < first.size(); ++s) {
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(second[s][3 + k], first[s][k]);      // seed 7: env 1 now, env 0 before
+      EXPECT_EQ(second[s][9 + k], first[s][k]);      // seed 7: env 3
+      EXPECT_EQ(second[s][6 + k], first[s][3 + k]);  // seed 8
+      EXPECT_EQ(second[s][k], first[s][9 + k]);      // seed 9: env 0 (the engine's) now
+    }
+  }
+  // `seed`: environment i gets seed + i.
+  const Json reset = c.Op("batch_reset", {{"seed", 7}, {"envs", {0}}});
+  EXPECT_EQ(Unpack<double>(reset["obs"])[0], first[0][0]);
+}
+
+TEST_F(StepServerBatchTest, EndedEpisodesResetAtTheNextStepUnlessAutoResetIsOff) {
+  Play({.envs = 3, .threads = 2, .max_episode_steps = 6, .reset_noise = 0.1});
+  Client c(ctx_, rpc());
+  c.Hello();
+  Json r = c.Op("batch_reset", {{"seed", 1}});
+  const auto start = Unpack<double>(r["obs"]);
+  for (int i = 1; i <= 3; ++i) {
+    r = Step(c, {1, 1, 1}, {{"n_steps", 2}});
+    ASSERT_EQ(r["op"], "batch_step_ok") << r.dump();
+    EXPECT_EQ(Unpack<std::uint8_t>(r["done"]), std::vector<std::uint8_t>(3, i == 3 ? 1 : 0));
+  }
+  // The next step resets them (their actions ignored) and shows the first state of the next
+  // episode (the generators went on: not the first episode's start).
+  r = Step(c, {1, 1, 1});
+  EXPECT_EQ(Unpack<std::uint8_t>(r["reset"]), std::vector<std::uint8_t>(3, 1));
+  EXPECT_EQ(Unpack<std::uint8_t>(r["done"]), std::vector<std::uint8_t>(3, 0));
+  EXPECT_EQ(Unpack<double>(r["time"]), std::vector<double>(3, 0.0));
+  EXPECT_EQ(Unpack<std::uint32_t>(r["episode_steps"]), std::vector<std::uint32_t>(3, 0));
+  EXPECT_NE(Unpack<double>(r["obs"])[0], start[0]);
+  // A client's reset flags reset only those environments.
+  r = Step(c, {1, 1, 1}, {{"reset", {false, true, false}}});
+  EXPECT_EQ(Unpack<std::uint8_t>(r["reset"]), (std::vector<std::uint8_t>{0, 1, 0}));
+  EXPECT_EQ(Unpack<std::uint32_t>(r["episode_steps"]), (std::vector<std::uint32_t>{1, 0, 1}));
+  // Auto-reset off: an ended episode goes on (and stays done) until batch_reset.
+  r = c.Op("batch_reset", {{"auto_reset", false}});
+  ASSERT_EQ(r["auto_reset"], false);
+  for (int i = 0; i < 4; ++i) r = Step(c, {0, 0, 0}, {{"n_steps", 2}});
+  EXPECT_EQ(Unpack<std::uint8_t>(r["done"]), std::vector<std::uint8_t>(3, 1));
+  r = Step(c, {0, 0, 0});
+  EXPECT_EQ(Unpack<std::uint8_t>(r["reset"]), std::vector<std::uint8_t>(3, 0));
+  EXPECT_EQ(Unpack<std::uint32_t>(r["episode_steps"]), std::vector<std::uint32_t>(3, 9));
+}
+
+TEST_F(StepServerBatchTest, OneEnvironmentIsTheEngineAlone) {
+  Play({.envs = 1});
+  Client c(ctx_, rpc());
+  c.Hello();
+  const Json info = c.Op("batch_info");
+  EXPECT_EQ(info["envs"], 1);
+  const Json r = Step(c, {2.0}, {{"n_steps", 5}});
+  ASSERT_EQ(r["op"], "batch_step_ok") << r.dump();
+  EXPECT_EQ(Unpack<double>(r["obs"]).size(), 3u);
+  EXPECT_NEAR(Unpack<double>(r["time"])[0], 0.01, 1e-12);
+  EXPECT_EQ(manager_.session().engine().step_count(), 5u);
+}
+
+}  // namespace
+}  // namespace urlab::net
