@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Checks that every Markdown document the repository names exists in the repository: each
-`NAME.md` or `folder/NAME.md` written in a tracked source, script, test or document resolves
-from the repository root or from the naming file's folder. A fresh clone has nothing else, so a
+Markdown file name (such as docs/network.md) written in a tracked source, script, test or
+document resolves from the repository root or from the naming file's folder. A fresh clone has nothing else, so a
 reference to a document outside the repository (or to one renamed) fails, naming file and line.
 
     /usr/bin/python3 tools/check-doc-links.py [--root DIR]
