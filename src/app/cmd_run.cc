@@ -238,7 +238,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
     if (video) video->Poll();
     if (TakePauseToggle()) {
       const bool pause = !engine.paused();
-      ops::SetPaused(manager.session(), pause);
+      ops::SetPaused(manager.session(), pause, ops::When::kNow);
       spdlog::info("{} by SIGUSR1", pause ? "paused" : "resumed");
     }
     const auto now = Clock::now();
@@ -263,7 +263,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
       }
       error.reset();
       ops::Reset(manager.session(), {});
-      ops::SetPaused(manager.session(), false);
+      ops::SetPaused(manager.session(), false, ops::When::kNow);
     }
     if (now >= next_log) {
       const std::uint64_t steps = engine.step_count();

@@ -81,7 +81,11 @@ std::uint64_t ResetArticulation(world::Session& session, std::string_view articu
   }
 }
 
-std::uint64_t SetPaused(world::Session& session, bool paused) {
+std::uint64_t SetPaused(world::Session& session, bool paused, When when) {
+  if (when == When::kNow) {
+    session.SetPaused(paused);
+    return 0;
+  }
   return session.engine().Submit(physics::cmd::SetPaused{paused});
 }
 

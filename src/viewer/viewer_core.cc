@@ -338,7 +338,8 @@ void ViewerCore::Perform(Action action) {
   physics::PhysicsEngine& engine = session_->engine();
   switch (action) {
     case Action::kTogglePause:  // in replay mode the replay pauses (the engine runs the player)
-      if (!PerformTimeline(TimelineAction::kPlayPause)) ops::SetPaused(*session_, !engine.paused());
+      if (!PerformTimeline(TimelineAction::kPlayPause))
+        ops::SetPaused(*session_, !engine.paused(), ops::When::kNow);
       break;
     case Action::kReset:
       ops::Reset(*session_, {});

@@ -85,6 +85,11 @@ TEST_F(OpsTest, PauseSpeedAndStepsAreOneOperationEach) {
   EXPECT_FALSE(engine.paused());
   Wait(SetPaused(session(), true));
   EXPECT_TRUE(engine.paused());
+  // At once (the viewer's P, urlab run's SIGUSR1): no command to wait for.
+  EXPECT_EQ(SetPaused(session(), false, When::kNow), 0u);
+  EXPECT_FALSE(engine.paused());
+  EXPECT_EQ(SetPaused(session(), true, When::kNow), 0u);
+  EXPECT_TRUE(engine.paused());
 
   // Speed: clamped to 5..100 whoever asks; a non-finite one refused alike.
   EXPECT_EQ(c.Op("set_sim_speed", {{"percent", 500}})["percent"], 100);

@@ -46,8 +46,10 @@ std::uint64_t Reset(world::Session& session, const ResetRequest& request);
 std::uint64_t ResetArticulation(world::Session& session, std::string_view articulation,
                                 std::string_view keyframe = {});
 
-// Pauses or resumes, in order with the other commands.
-std::uint64_t SetPaused(world::Session& session, bool paused);
+// Pauses or resumes: in order with the other commands (a command; its sequence number), or at
+// once (the engine's atomic, as a user's key or signal expects; returns 0).
+enum class When { kInOrder, kNow };
+std::uint64_t SetPaused(world::Session& session, bool paused, When when = When::kInOrder);
 
 // The pacing speed in percent of real time: a finite number (bad_value), clamped to 5..100 and
 // rounded. Returns the speed now in effect.
