@@ -28,6 +28,7 @@
 #include "urlab/core/mujoco_handlers.h"
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/net/network.h"
+#include "urlab/ops/simulation.h"
 #include "urlab/replay/playback.h"
 #include "urlab/replay/recorder.h"
 #include "urlab/viewer/viewer.h"
@@ -209,6 +210,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   if (args.view) {
     auto view = std::make_unique<viewer::ViewerSubsystem>(args.viewer);
     view->SetManager(&manager);
+    view->SetRecorder(recorder);  // the panel's Record (none without --record or the network)
     view->SetPlayback(playback);
     viewer_sub = view.get();
     manager.AddSubsystem(std::move(view));
@@ -263,8 +265,9 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
     manager.Tick();
     if (video) video->Poll();
     if (TakePauseToggle()) {
-      manager.session().SetPaused(!engine.paused());
-      spdlog::info("{} by SIGUSR1", engine.paused() ? "paused" : "resumed");
+      const bool pause = !engine.paused();
+      ops::SetPaused(manager.session(), pause, ops::When::kNow);
+      spdlog::info("{} by SIGUSR1", pause ? "paused" : "resumed");
     }
     const auto now = Clock::now();
     if (auto behind =
@@ -287,8 +290,8 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
         last_error_log = now;
       }
       error.reset();
-      manager.session().ResetToInitialState();
-      manager.session().SetPaused(false);
+      ops::Reset(manager.session(), {});
+      ops::SetPaused(manager.session(), false, ops::When::kNow);
     }
     if (now >= next_log) {
       const std::uint64_t steps = engine.step_count();

@@ -72,6 +72,25 @@ double FrameChannel::Get(int index) const {
   return last_.targets[static_cast<std::size_t>(index)];
 }
 
+bool FrameChannel::PatchGains(std::span<const double> kp, std::span<const double> kv) {
+  if ((!kp.empty() && kp.size() != n_) || (!kv.empty() && kv.size() != n_)) return false;
+  std::lock_guard<std::mutex> lock(writer_mutex_);
+  for (std::size_t i = 0; i < kp.size(); ++i) {
+    if (!std::isnan(kp[i])) last_.kp[i] = kp[i];
+  }
+  for (std::size_t i = 0; i < kv.size(); ++i) {
+    if (!std::isnan(kv[i])) last_.kv[i] = kv[i];
+  }
+  PublishLocked();
+  return true;
+}
+
+std::pair<double, double> FrameChannel::Gains(int index) const {
+  if (index < 0 || static_cast<std::size_t>(index) >= n_) return {kKeepGain, kKeepGain};
+  std::lock_guard<std::mutex> lock(writer_mutex_);
+  return {last_.kp[static_cast<std::size_t>(index)], last_.kv[static_cast<std::size_t>(index)]};
+}
+
 std::vector<double> FrameChannel::Targets() const {
   std::lock_guard<std::mutex> lock(writer_mutex_);
   return last_.targets;

@@ -24,9 +24,10 @@
 #include "net/port_owner.h"
 #include "net/step_server.h"
 #include "net/topic_table.h"
-#include "urlab/control/controllers.h"
 #include "urlab/core/doorbell.h"
 #include "urlab/core/error.h"
+#include "urlab/ops/controllers.h"
+#include "urlab/ops/error.h"
 #include "urlab/world/scene.h"
 #include "urlab/world/session.h"
 
@@ -97,6 +98,7 @@ struct NetworkSubsystem::Impl {
   std::unique_ptr<StepServer> server;  // built on the main thread, then used by the I/O thread
   std::vector<std::string> info_messages;
   const mjModel* model = nullptr;
+  world::Session* session = nullptr;  // set_gains goes through ops::SetGains
 
   std::thread thread;
   std::atomic<bool> stop{false};
@@ -303,19 +305,17 @@ struct NetworkSubsystem::Impl {
 
   void HandleSetGains(ArticulationTopics& t, std::string_view body) {
     if (auto d = wire::DecodeSetGains(body, &gains_scratch)) return Drop(*d);
-    auto* pd = dynamic_cast<control::PdController*>(t.control->controller());
-    if (!pd) return Drop(wire::Drop::kNoController);
-    std::vector<std::pair<int, control::PdGains>> updates;
+    // The operation configure_controller uses: names resolved, all or nothing, into the
+    // command frames (so the recorder records them).
+    ops::GainsRequest request;
     for (const wire::GainPatch& p : gains_scratch) {
-      const auto it = t.gain_index.find(p.name);
-      if (it == t.gain_index.end()) return Drop(wire::Drop::kUnknownName);
-      control::PdGains g = pd->gains(it->second);
-      if (p.kp) g.kp = *p.kp;
-      if (p.kv) g.kv = *p.kv;
-      if (p.torque_limit) g.torque_limit = *p.torque_limit;
-      updates.emplace_back(it->second, g);
+      request.named.push_back({p.name, {p.kp, p.kv, p.torque_limit}});
     }
-    for (const auto& [i, g] : updates) pd->SetGains(i, g);  // all names resolved: apply all
+    try {
+      ops::SetGains(*session, t.name, request);
+    } catch (const ops::OpError& e) {
+      return Drop(e.code == "no_controller" ? wire::Drop::kNoController : wire::Drop::kUnknownName);
+    }
     gains_applied.fetch_add(1);
   }
 
@@ -542,6 +542,7 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
   impl_ = std::make_unique<Impl>();
   impl_->options = options_;
   impl_->model = session.engine().model();
+  impl_->session = &session;
   impl_->tables = BuildTopicTables(session);
   for (std::size_t i = 0; i < impl_->tables.size(); ++i) {
     impl_->routes[impl_->tables[i].control_topic] = {i, Impl::Kind::kControl};

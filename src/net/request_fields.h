@@ -8,17 +8,14 @@
 #include <vector>
 
 #include "net/msgpack_codec.h"
+#include "urlab/ops/error.h"
 
 namespace urlab::net::request {
 
-// A request refused with a protocol error code.
-struct Failure {
-  std::string code, message;
-};
-
-[[noreturn]] inline void Fail(std::string code, std::string message) {
-  throw Failure{std::move(code), std::move(message)};
-}
+// A request refused with a protocol error code: the operations' own error (urlab/ops/error.h), so
+// a field this file refuses and a value an operation refuses reach the client alike.
+using Failure = ops::OpError;
+using ops::Fail;
 
 inline const Json& Require(const Json& body, const char* field) {
   const auto it = body.find(field);

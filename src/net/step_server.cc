@@ -17,6 +17,9 @@
 #include "net/value_ranges.h"
 #include "urlab/control/controller.h"
 #include "urlab/core/version.h"
+#include "urlab/ops/controllers.h"
+#include "urlab/ops/simulation.h"
+#include "urlab/ops/state.h"
 #include "urlab/replay/tables.h"
 #include "urlab/world/names.h"
 #include "wire/request_limits.h"
@@ -199,7 +202,7 @@ StepServer::StepServer(world::Session& session, const std::vector<ArticulationTo
   const mjModel* m = session_.engine().model();
   mjb_.resize(static_cast<std::size_t>(mj_sizeModel(m)));
   mj_saveModel(m, nullptr, mjb_.data(), static_cast<int>(mjb_.size()));
-  if (mode_ == "direct") session_.engine().SetPaused(true);
+  if (mode_ == "direct") ops::SetPaused(session_, true);
 }
 
 std::string StepServer::Bind(zmq::context_t& context, std::string* failure) {
@@ -562,7 +565,7 @@ void StepServer::ReleaseLease(const std::string& why) {
   if (mode_ != initial) {
     // Nobody drives the lockstep any more: back to the scene's mode (a paused simulation left
     // behind by a crashed learning loop would look hung).
-    session_.engine().Submit(physics::cmd::SetPaused{initial != "live"});
+    ops::SetPaused(session_, initial != "live");
     LogRemote(spdlog::level::info, "lease released, mode",
               fmt::format("step server: driver {} left ({}); {} mode -> {} mode", driver, why,
                           mode_, initial));
@@ -938,72 +941,41 @@ StepServer::Outcome StepServer::Step(Request& r) {
   out.reply = Json{{"op", "step_ok"}};
   out.observation = observation;
   if (mode_ == "direct") {
-    out.wait_for = session_.engine().Submit(physics::cmd::Step{n});
+    out.wait_for = ops::Step(session_, n);
     out.steps = static_cast<std::uint64_t>(n);
   }
   return out;
 }
 
 StepServer::Outcome StepServer::Reset(Request& r) {
-  physics::PhysicsEngine& engine = session_.engine();
-  const mjModel* m = engine.model();
-  // Everything is checked before anything is submitted: a bad request resets nothing.
-  int key = -1;
+  // The wire's fields to the typed request; ops::Reset checks it whole before resetting.
+  ops::ResetRequest reset;
   if (const auto it = r.body.find("keyframe_name"); it != r.body.end() && !it->is_null()) {
-    const std::string name = String(*it, "keyframe_name");
-    // Short ("home") or full ("dog_home") name; a short name two articulations share is
-    // ambiguous (world/names.h).
-    std::vector<std::string> prefixes;
-    for (const world::Articulation& a : session_.articulations()) prefixes.push_back(a.prefix);
-    try {
-      key = world::FindNamed(m, mjOBJ_KEY, prefixes, name);
-    } catch (const Error& e) {
-      Fail("ambiguous_keyframe", e.what());
-    }
-    if (key < 0) Fail("unknown_keyframe", "no keyframe '" + name + "' (see list_keyframes)");
+    reset.keyframe = String(*it, "keyframe_name");
   }
-  physics::cmd::SetState joints_after;  // per_articulation_qpos, written after the reset
   if (const auto it = r.body.find("per_articulation_qpos"); it != r.body.end()) {
     if (!it->is_object()) Fail("bad_value", "per_articulation_qpos must be a map");
     for (const auto& [name, joints] : it->items()) {
-      const ArticulationTopics& t = Articulation(name);
+      ops::RequireArticulation(session_, name);
       if (!joints.is_object()) Fail("bad_value", name + ": a map of joint to value");
       for (const auto& [joint, value] : joints.items()) {
-        std::size_t i = 0;
-        while (i < t.joint_names.size() && t.joint_names[i] != joint) ++i;
-        if (i == t.joint_names.size()) Fail("bad_value", name + ": no joint '" + joint + "'");
-        std::vector<double> v =
-            value.is_array() ? Numbers(value, "qpos") : std::vector<double>{Number(value, "qpos")};
-        const int width = replay::JointQposWidth(t.joints[i].type);
-        if (v.size() != static_cast<std::size_t>(width)) {
-          Fail("dim_mismatch", name + ": joint '" + joint + "' takes " + std::to_string(width) +
-                                   " qpos value(s), got " + std::to_string(v.size()));
-        }
-        CheckRanges(v, "qpos", name + ": joint '" + joint + "'");
-        joints_after.qpos.push_back({t.joints[i].qpos_adr, std::move(v)});
+        reset.joints.push_back({name, joint,
+                                value.is_array() ? Numbers(value, "qpos")
+                                                 : std::vector<double>{Number(value, "qpos")}});
       }
     }
-    CheckQposQuaternions(m, joints_after.qpos, "per_articulation_qpos");
   }
-  std::uint64_t seq = 0;
-  if (key >= 0) {
-    seq = engine.ResetToKeyframe(key);
-  } else {
-    seq = session_.ResetToInitialState();
-    if (seq == 0) seq = engine.Reset();
-  }
-  if (!joints_after.qpos.empty()) seq = engine.Submit(std::move(joints_after));
   Outcome out;
   out.reply = Json{{"op", "reset_ok"}};
-  out.wait_for = seq;
   out.observation = ObservationFor(r);
+  out.wait_for = ops::Reset(session_, reset);
   return out;
 }
 
 StepServer::Outcome StepServer::Forward(Request& r) {
   Outcome out;
   out.reply = Json{{"op", "forward_ok"}};
-  out.wait_for = session_.engine().Submit(physics::cmd::Forward{});
+  out.wait_for = ops::Forward(session_);
   out.observation = ObservationFor(r);
   return out;
 }
@@ -1023,7 +995,7 @@ StepServer::Outcome StepServer::SetMode(Request& r) {
                    {"cancelled", cancelled}};
   // Direct: the physics thread waits for step requests (paused between them). Puppet: it never
   // steps; each step request writes the client's state and runs mj_forward.
-  out.wait_for = session_.engine().Submit(physics::cmd::SetPaused{mode != "live"});
+  out.wait_for = ops::SetPaused(session_, mode != "live");
   mode_ = mode;
   return out;
 }
@@ -1032,52 +1004,36 @@ StepServer::Outcome StepServer::SetPaused(Request& r) {
   const bool paused = Bool(r.body["paused"], "paused");
   Outcome out;
   out.reply = Json{{"op", "set_paused_ok"}, {"paused", paused}};
-  out.wait_for = session_.engine().Submit(physics::cmd::SetPaused{paused});
+  out.wait_for = ops::SetPaused(session_, paused);
   return out;
 }
 
 StepServer::Outcome StepServer::SetSimSpeed(Request& r) {
-  const double percent = Number(r.body["percent"], "percent");
-  session_.engine().SetSpeedPercent(static_cast<int>(std::lround(std::clamp(percent, 5.0, 100.0))));
-  return {Json{{"op", "set_sim_speed_ok"}, {"percent", session_.engine().speed_percent()}}};
+  const int percent = ops::SetSpeed(session_, Number(r.body["percent"], "percent"));
+  return {Json{{"op", "set_sim_speed_ok"}, {"percent", percent}}};
 }
 
 StepServer::Outcome StepServer::SetControlSource(Request& r) {
   const std::string name = String(r.body["source"], "source");
-  const auto source = control::ParseControlSource(name);
-  if (!source) Fail("bad_value", "source must be network, ui, input, hold or replay");
   Json reply{{"op", "set_control_source_ok"}, {"source", name}};
   if (const auto it = r.body.find("articulation"); it != r.body.end() && !it->is_null()) {
-    const ArticulationTopics& t = Articulation(*it);
-    t.control->SetSourceOverride(*source);
-    reply["articulation"] = t.name;
+    const std::string art = String(*it, "articulation");
+    ops::SetControlSource(session_, name, art);
+    reply["articulation"] = art;
   } else {
-    session_.controls().SetGlobalSource(*source);
+    ops::SetControlSource(session_, name);
     reply["articulation"] = nullptr;
   }
   return {reply};
 }
 
 StepServer::Outcome StepServer::SetQpos(Request& r) {
-  const ArticulationTopics& t = Articulation(r.body["articulation"]);
+  const std::string name = String(r.body["articulation"], "articulation");
+  ops::RequireArticulation(session_, name);
   const std::vector<double> q = Numbers(r.body["qpos"], "qpos");
-  CheckRanges(q, "qpos");
-  if (t.qpos_adrs.empty()) Fail("no_joints", t.name + " has no joints");
-  physics::cmd::SetState state;
-  if (t.free_joint >= 0 && q.size() == 7 && t.qpos_adrs.size() != 7) {
-    state.qpos.push_back({t.joints[static_cast<std::size_t>(t.free_joint)].qpos_adr, q});
-  } else if (q.size() == t.qpos_adrs.size()) {
-    state.qpos = Runs(t.qpos_adrs, q);  // one command, whatever the addresses' layout
-  } else {
-    Fail("dim_mismatch", t.name + ": qpos needs " + std::to_string(t.qpos_adrs.size()) + " values" +
-                             (t.free_joint >= 0 ? " (or 7 for the free base)" : "") + ", got " +
-                             std::to_string(q.size()));
-  }
-  CheckQposQuaternions(session_.engine().model(), state.qpos, "set_qpos");
-  const std::uint64_t seq = session_.engine().Submit(std::move(state));
   Outcome out;
   out.reply = Json{{"op", "set_qpos_ok"}};
-  out.wait_for = seq;
+  out.wait_for = ops::SetQpos(session_, name, q);
   out.observation = ObservationFor(r);
   return out;
 }

@@ -12,6 +12,12 @@
 // client causes are rate-limited. A client on this host may move its session onto a shared-memory
 // channel (shm_transport.h), offered in `hello`; its requests and replies are the same bytes.
 //
+// The server is transport, sessions and leases, and a vocabulary: the OpSpec rows of Ops() map
+// each wire operation (its name, required fields, session and lease needs) to a handler that
+// reads the wire's fields into the typed request of one operation (urlab/ops/*.h: its one
+// validation, whoever calls it), calls it and writes the reply. Step modes, lockstep queues and
+// per-client replay sessions belong to the server's clients and stay here.
+//
 // Threading: the network subsystem's I/O thread only (it owns the socket); built on the main
 // thread in BeginPlay.
 #include <spdlog/spdlog.h>

@@ -1,6 +1,7 @@
 // The step server's runtime operations: mocap poses, keyframes, physics options, contacts,
-// counters, twist and controller configuration (docs/protocol.md, "Runtime operations"). Sessions,
-// leases, stepping, resets and modes are in step_server.cc.
+// counters, twist and controller configuration (docs/protocol.md, "Runtime operations"). Each
+// handler reads the wire's fields into an operation's typed request (urlab/ops/*.h), calls it and
+// writes the reply. Sessions, leases, stepping, resets and modes are in step_server.cc.
 #include <mujoco/mujoco.h>
 #include <spdlog/spdlog.h>
 
@@ -16,45 +17,38 @@
 #include "net/step_server.h"
 #include "net/value_ranges.h"
 #include "urlab/control/controllers.h"
+#include "urlab/ops/controllers.h"
+#include "urlab/ops/queries.h"
+#include "urlab/ops/simulation.h"
+#include "urlab/ops/state.h"
 #include "urlab/world/names.h"
 
 namespace urlab::net {
 
 using namespace request;
 
-namespace {
-int MocapBody(const mjModel* m, const std::string& body) {
-  const int id = mj_name2id(m, mjOBJ_BODY, body.c_str());
-  if (id < 0) Fail("unknown_body", "no body '" + body + "' (full name, with its prefix)");
-  if (m->body_mocapid[id] < 0) Fail("not_mocap_body", "body '" + body + "' is not a mocap body");
-  return m->body_mocapid[id];
-}
-}  // namespace
-
 StepServer::Outcome StepServer::SetMocapPose(Request& r) {
   const std::string body = String(r.body["body"], "body");
-  const int mocap = MocapBody(session_.engine().model(), body);
+  const int mocap = ops::MocapIndex(session_, body);
+  // Absent parts keep the pose the newest frame shows.
   const physics::StateFrame* f = state_->Latest();
-  physics::cmd::SetMocap c;
-  c.mocap_id = mocap;
-  std::copy_n(f->mocap_pos.begin() + 3 * mocap, 3, c.pos.begin());
-  std::copy_n(f->mocap_quat.begin() + 4 * mocap, 4, c.quat.begin());
+  std::array<double, 3> pos;
+  std::array<double, 4> quat;
+  std::copy_n(f->mocap_pos.begin() + 3 * mocap, 3, pos.begin());
+  std::copy_n(f->mocap_quat.begin() + 4 * mocap, 4, quat.begin());
   if (const auto it = r.body.find("pos"); it != r.body.end()) {
     const std::vector<double> p = Numbers(*it, "pos");
     if (p.size() != 3) Fail("dim_mismatch", "pos needs 3 values");
-    CheckRanges(p, "pos");
-    std::copy(p.begin(), p.end(), c.pos.begin());
+    std::copy(p.begin(), p.end(), pos.begin());
   }
   if (const auto it = r.body.find("quat"); it != r.body.end()) {
     const std::vector<double> q = Numbers(*it, "quat");
     if (q.size() != 4) Fail("dim_mismatch", "quat needs 4 values (w x y z)");
-    CheckRange(std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]), "quaternion norm",
-               "the norm of quat");
-    std::copy(q.begin(), q.end(), c.quat.begin());
+    std::copy(q.begin(), q.end(), quat.begin());
   }
   Outcome out;
   out.reply = Json{{"op", "set_mocap_pose_ok"}, {"body", body}};
-  out.wait_for = session_.engine().Submit(c);
+  out.wait_for = ops::SetMocapPose(session_, body, pos, quat);
   out.on_applied = [this, mocap](Json& reply) {
     const physics::StateFrame* now = state_->Latest();
     reply["pos"] = Array(now->mocap_pos.data() + 3 * mocap, 3, false);
@@ -65,7 +59,7 @@ StepServer::Outcome StepServer::SetMocapPose(Request& r) {
 
 StepServer::Outcome StepServer::ReadMocapPose(Request& r) {
   const std::string body = String(r.body["body"], "body");
-  const int mocap = MocapBody(session_.engine().model(), body);
+  const int mocap = ops::MocapIndex(session_, body);
   const physics::StateFrame* f = state_->Latest();
   return {Json{{"op", "read_mocap_pose_ok"},
                {"body", body},
@@ -74,16 +68,12 @@ StepServer::Outcome StepServer::ReadMocapPose(Request& r) {
 }
 
 StepServer::Outcome StepServer::ListKeyframes(Request&) {
-  const mjModel* m = session_.engine().model();
-  // Each keyframe by short name beside its articulation (world/names.h); the full name is what
-  // `reset {keyframe_name}` always accepts.
   Json keys = Json::array();
-  for (int k = 0; k < m->nkey; ++k) {
-    const char* name = mj_id2name(m, mjOBJ_KEY, k);
-    const world::Articulation* owner = name ? session_.OwnerOf(name) : nullptr;
-    keys.push_back(Json{{"name", world::ShortNameOf(m, mjOBJ_KEY, k, owner ? owner->prefix : "")},
-                        {"articulation", owner ? Json(owner->name()) : Json(nullptr)},
-                        {"full_name", name ? name : ""}});
+  for (const ops::KeyframeInfo& k : ops::ListKeyframes(session_)) {
+    keys.push_back(
+        Json{{"name", k.name},
+             {"articulation", k.articulation.empty() ? Json(nullptr) : Json(k.articulation)},
+             {"full_name", k.full_name}});
   }
   return {Json{{"op", "list_keyframes_ok"}, {"keyframes", keys}}};
 }
@@ -91,19 +81,14 @@ StepServer::Outcome StepServer::ListKeyframes(Request&) {
 StepServer::Outcome StepServer::SetSimOptions(Request& r) {
   const Json& options = r.body["options"];
   if (!options.is_object()) Fail("bad_value", "options must be a map");
-  // Validate everything on this thread; the physics thread only copies values in.
-  struct Change {
-    std::optional<double> timestep, impratio, tolerance, density, viscosity;
-    std::optional<std::array<double, 3>> gravity, wind, magnetic;
-    std::optional<int> iterations, integrator, cone, solver;
-  } ch;
+  // The wire's names and types to the typed change; ops::SetOptions checks the ranges.
+  ops::OptionsChange ch;
   const auto vec3 = [](const Json& v, const char* f) {
     const std::vector<double> x = Numbers(v, f);
     if (x.size() != 3) Fail("dim_mismatch", std::string(f) + " needs 3 values");
-    CheckRanges(x, f);
     return std::array<double, 3>{x[0], x[1], x[2]};
   };
-  const auto keyword = [](const Json& v, const char* f, std::vector<const char*> names) {
+  const auto keyword = [](const Json& v, const char* f, const std::vector<const char*>& names) {
     const std::string s = String(v, f);
     for (std::size_t i = 0; i < names.size(); ++i) {
       if (s == names[i]) return static_cast<int>(i);
@@ -111,17 +96,16 @@ StepServer::Outcome StepServer::SetSimOptions(Request& r) {
     Fail("bad_value", std::string(f) + ": unknown value '" + s + "'");
   };
   for (const auto& [key, value] : options.items()) {
-    // Each number within its range (value_range_table.cc); one bad field refuses them all.
     if (key == "timestep") {
-      ch.timestep = RangedNumber(value, "timestep");
+      ch.timestep = Number(value, "timestep");
     } else if (key == "impratio") {
-      ch.impratio = RangedNumber(value, "impratio");
+      ch.impratio = Number(value, "impratio");
     } else if (key == "tolerance") {
-      ch.tolerance = RangedNumber(value, "tolerance");
+      ch.tolerance = Number(value, "tolerance");
     } else if (key == "density") {
-      ch.density = RangedNumber(value, "density");
+      ch.density = Number(value, "density");
     } else if (key == "viscosity") {
-      ch.viscosity = RangedNumber(value, "viscosity");
+      ch.viscosity = Number(value, "viscosity");
     } else if (key == "gravity") {
       ch.gravity = vec3(value, "gravity");
     } else if (key == "wind") {
@@ -129,38 +113,24 @@ StepServer::Outcome StepServer::SetSimOptions(Request& r) {
     } else if (key == "magnetic") {
       ch.magnetic = vec3(value, "magnetic");
     } else if (key == "iterations") {
-      ch.iterations = static_cast<int>(RangedNumber(value, "iterations"));
+      const double n = Number(value, "iterations");
+      CheckRange(n, "iterations");  // a whole number before it becomes an int
+      ch.iterations = static_cast<int>(n);
     } else if (key == "integrator") {
-      ch.integrator = keyword(value, "integrator", {"Euler", "RK4", "implicit"});
+      ch.integrator = keyword(value, "integrator", ops::IntegratorNames());
     } else if (key == "cone") {
-      ch.cone = keyword(value, "cone", {"pyramidal", "elliptic"});
+      ch.cone = keyword(value, "cone", ops::ConeNames());
     } else if (key == "solver") {
-      ch.solver = keyword(value, "solver", {"PGS", "CG", "Newton"});
+      ch.solver = keyword(value, "solver", ops::SolverNames());
     } else {
       Fail("bad_value", "unknown option '" + key + "'");
     }
   }
-  auto result = std::make_shared<mjOption>();
+  const ops::OptionsSet set = ops::SetOptions(session_, ch);
   Outcome out;
   out.reply = Json{{"op", "set_sim_options_ok"}};
-  out.wait_for = session_.engine().Submit(physics::cmd::SetOptions{
-      [ch, result](mjOption& o) {
-        if (ch.timestep) o.timestep = *ch.timestep;
-        if (ch.impratio) o.impratio = *ch.impratio;
-        if (ch.tolerance) o.tolerance = *ch.tolerance;
-        if (ch.density) o.density = *ch.density;
-        if (ch.viscosity) o.viscosity = *ch.viscosity;
-        if (ch.gravity) std::copy_n(ch.gravity->begin(), 3, o.gravity);
-        if (ch.wind) std::copy_n(ch.wind->begin(), 3, o.wind);
-        if (ch.magnetic) std::copy_n(ch.magnetic->begin(), 3, o.magnetic);
-        if (ch.iterations) o.iterations = *ch.iterations;
-        if (ch.integrator) o.integrator = *ch.integrator;
-        if (ch.cone) o.cone = *ch.cone;
-        if (ch.solver) o.solver = *ch.solver;
-        *result = o;  // read by the I/O thread once the command is finished
-      },
-      "set_sim_options"});
-  out.on_applied = [result](Json& reply) {
+  out.wait_for = set.seq;
+  out.on_applied = [result = set.options](Json& reply) {
     const mjOption& o = *result;
     reply["options"] = Json{{"timestep", o.timestep},
                             {"gravity", {o.gravity[0], o.gravity[1], o.gravity[2]}},
@@ -179,39 +149,29 @@ StepServer::Outcome StepServer::SetSimOptions(Request& r) {
 }
 
 StepServer::Outcome StepServer::GetContacts(Request& r) {
-  const mjModel* m = session_.engine().model();
-  int max_contacts = 64;
+  ops::ContactsRequest request;
   if (const auto it = r.body.find("max_contacts"); it != r.body.end()) {
-    max_contacts = static_cast<int>(RangedNumber(*it, "max_contacts"));
+    request.max_contacts = static_cast<int>(RangedNumber(*it, "max_contacts"));
   }
-  ContactFilter filter;
   if (const auto it = r.body.find("filter"); it != r.body.end() && !it->is_null()) {
     if (!it->is_object()) Fail("bad_value", "filter must be a map (body1, body2, geom1, geom2)");
     for (const auto& [key, value] : it->items()) {
-      const std::string name = String(value, "filter");
-      if (key == "body1" || key == "body2") {
-        const int id = mj_name2id(m, mjOBJ_BODY, name.c_str());
-        if (id < 0) Fail("unknown_body", "no body '" + name + "' (full name, with its prefix)");
-        (key == "body1" ? filter.body1 : filter.body2) = id;
-      } else if (key == "geom1" || key == "geom2") {
-        const int id = mj_name2id(m, mjOBJ_GEOM, name.c_str());
-        if (id < 0) Fail("bad_value", "no geom '" + name + "' (full name, with its prefix)");
-        (key == "geom1" ? filter.geom1 : filter.geom2) = id;
-      } else {
+      std::string* slot = key == "body1"   ? &request.body1
+                          : key == "body2" ? &request.body2
+                          : key == "geom1" ? &request.geom1
+                          : key == "geom2" ? &request.geom2
+                                           : nullptr;
+      if (!slot)
         Fail("bad_value", "filter: unknown key '" + key + "' (body1, body2, geom1, geom2)");
-      }
+      *slot = String(value, "filter");
     }
   }
-  auto list = std::make_shared<ContactList>();
+  const ops::ContactsQuery query = ops::QueryContacts(session_, request);
   Outcome out;
   out.reply = Json{{"op", "get_contacts_ok"}};
-  out.wait_for = session_.engine().Submit(
-      physics::cmd::Inspect{[filter, max_contacts, list](const mjModel* model, const mjData* d) {
-                              CollectContacts(model, d, filter, max_contacts, list.get());
-                            },
-                            "get_contacts"});
-  out.on_applied = [m, list](Json& reply) {  // read once the command is finished
-    Json fields = ContactsReply(m, *list);
+  out.wait_for = query.seq;
+  out.on_applied = [m = session_.engine().model(), list = query.list](Json& reply) {
+    Json fields = ContactsReply(m, *list);  // read once the command is finished
     for (auto& [k, v] : fields.items()) reply[k] = std::move(v);
   };
   return out;
@@ -228,28 +188,24 @@ StepServer::Outcome StepServer::GetCounters(Request&) {
 }
 
 StepServer::Outcome StepServer::SetTwist(Request& r) {
-  const ArticulationTopics& t = Articulation(r.body["articulation"]);
-  if (!t.twist) Fail("no_twist_controller", t.name + " has no twist controller (no free base)");
+  const std::string name = String(r.body["articulation"], "articulation");
+  ops::RequireTwist(session_, name);  // before the fields: a fixed base is the first thing wrong
   // linear [vx, vy, vz] in the base's heading frame, angular [wx, wy, yaw rate]: the planar parts
   // drive the twist controller (twist.h), which attaches; the rest must be given but is unused.
   const std::vector<double> linear = Numbers(Require(r.body, "linear"), "linear");
   const std::vector<double> angular = Numbers(Require(r.body, "angular"), "angular");
   if (linear.size() != 3) Fail("dim_mismatch", "linear needs 3 values");
   if (angular.size() != 3) Fail("dim_mismatch", "angular needs 3 values");
-  t.twist->Attach(true);
-  const control::Twist applied = t.twist->SetTwist({linear[0], linear[1], angular[2]});
+  const control::Twist applied = ops::SetTwist(session_, name, {linear[0], linear[1], angular[2]});
   return {Json{{"op", "set_twist_ok"},
-               {"articulation", t.name},
+               {"articulation", name},
                {"linear", {applied.vx, applied.vy, 0.0}},
                {"angular", {0.0, 0.0, applied.yaw_rate}}}};
 }
 
 StepServer::Outcome StepServer::FireLauncher(Request& r) {
   const std::string name = String(r.body["launcher"], "launcher");
-  if (!session_.FindLauncher(name)) {
-    Fail("unknown_launcher", "no launcher '" + name + "' in the scene");
-  }
-  const world::Session::Launch launch = session_.FireLauncher(name);
+  const world::Session::Launch launch = ops::FireLauncher(session_, name);
   Outcome out;
   out.reply =
       Json{{"op", "fire_launcher_ok"}, {"launcher", name}, {"projectile", launch.projectile}};
@@ -258,59 +214,46 @@ StepServer::Outcome StepServer::FireLauncher(Request& r) {
 }
 
 StepServer::Outcome StepServer::ConfigureController(Request& r) {
-  const ArticulationTopics& t = Articulation(r.body["articulation"]);
+  const std::string name = String(r.body["articulation"], "articulation");
+  ops::RequireArticulation(session_, name);
   const Json& params = r.body["params"];
   if (!params.is_object()) Fail("controller_schema_violation", "params must be a map");
-  auto* pd = dynamic_cast<control::PdController*>(t.control->controller());
-  if (!pd) {
-    Fail("no_controller", t.name + " has no configurable controller (PD gains only)");
-  }
   // Schema: {"kp"|"kv"|"torque_limit": number (every actuator)} and/or
-  // {"gains": {actuator or joint name: {"kp", "kv", "torque_limit"}}}. Validated whole first.
-  const auto gain_value = [](const Json& v, const std::string& what) {
-    if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() < 0) {
-      Fail("controller_schema_violation", what + " must be a finite number >= 0");
-    }
-    return v.get<double>();
-  };
-  const auto patch = [&](control::PdGains g, const Json& fields, const std::string& where) {
+  // {"gains": {actuator or joint name: {"kp", "kv", "torque_limit"}}}; ops::SetGains checks the
+  // names and values.
+  const auto change = [](const Json& fields, const std::string& where) {
+    ops::GainChange c;
     for (const auto& [k, v] : fields.items()) {
-      if (k == "kp") {
-        g.kp = gain_value(v, where + "kp");
-      } else if (k == "kv") {
-        g.kv = gain_value(v, where + "kv");
-      } else if (k == "torque_limit") {
-        g.torque_limit = gain_value(v, where + "torque_limit");
-      } else if (k != "gains" || !where.empty()) {
+      std::optional<double>* slot = k == "kp"             ? &c.kp
+                                    : k == "kv"           ? &c.kv
+                                    : k == "torque_limit" ? &c.torque_limit
+                                                          : nullptr;
+      if (!slot) {
+        if (k == "gains" && where.empty()) continue;
         Fail("controller_schema_violation", "unknown parameter '" + where + k + "'");
       }
+      if (!v.is_number()) {
+        Fail("controller_schema_violation", where + k + " must be a finite number >= 0");
+      }
+      *slot = v.get<double>();
     }
-    return g;
+    return c;
   };
-  const int n = static_cast<int>(t.actuator_ids.size());
-  std::vector<control::PdGains> next(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) next[static_cast<std::size_t>(i)] = patch(pd->gains(i), params, "");
+  ops::GainsRequest request;
+  request.all = change(params, "");
   if (const auto g = params.find("gains"); g != params.end()) {
     if (!g->is_object()) Fail("controller_schema_violation", "gains must be a map of name to map");
-    for (const auto& [name, fields] : g->items()) {
-      const auto it = t.gain_index.find(name);
-      if (it == t.gain_index.end()) {
-        Fail("controller_schema_violation", t.name + ": no actuator or joint '" + name + "'");
-      }
-      if (!fields.is_object()) Fail("controller_schema_violation", name + ": a map of gains");
-      auto& slot = next[static_cast<std::size_t>(it->second)];
-      slot = patch(slot, fields, name + ".");
+    for (const auto& [actuator, fields] : g->items()) {
+      if (!fields.is_object()) Fail("controller_schema_violation", actuator + ": a map of gains");
+      request.named.emplace_back(actuator, change(fields, actuator + "."));
     }
   }
-  for (int i = 0; i < n; ++i) pd->SetGains(i, next[static_cast<std::size_t>(i)]);
   Json gains = Json::object();
-  for (int i = 0; i < n; ++i) {
-    const control::PdGains g = pd->gains(i);
-    gains[t.actuator_names[static_cast<std::size_t>(i)]] =
-        Json{{"kp", g.kp}, {"kv", g.kv}, {"torque_limit", g.torque_limit}};
+  for (const ops::ActuatorGains& g : ops::SetGains(session_, name, request)) {
+    gains[g.actuator] = Json{{"kp", g.kp}, {"kv", g.kv}, {"torque_limit", g.torque_limit}};
   }
   return {Json{{"op", "configure_controller_ok"},
-               {"articulation", t.name},
+               {"articulation", name},
                {"kind", "pd"},
                {"params", Json{{"gains", std::move(gains)}}}}};
 }

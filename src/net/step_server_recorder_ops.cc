@@ -12,8 +12,9 @@
 #include "net/request_fields.h"
 #include "net/step_server.h"
 #include "net/value_ranges.h"
+#include "urlab/ops/error.h"
+#include "urlab/ops/recording.h"
 #include "urlab/physics/model.h"
-#include "urlab/replay/snapshot.h"
 
 namespace urlab::net {
 
@@ -43,14 +44,7 @@ StepServer::Json StatusJson(const replay::RecorderStatus& s) {
 
 }  // namespace
 
-replay::Recorder& StepServer::RequireRecorder() {
-  replay::Recorder* r = recorder_ ? recorder_->recorder() : nullptr;
-  if (!r) {
-    Fail("not_ready",
-         "this simulation has no recorder (run it with a recorder subsystem to record)");
-  }
-  return *r;
-}
+replay::Recorder& StepServer::RequireRecorder() { return ops::RequireRecorder(recorder_); }
 
 void StepServer::RefreshLeases() {
   const auto now = Clock::now();
@@ -60,6 +54,9 @@ void StepServer::RefreshLeases() {
 void StepServer::RunFileOp(const std::function<void()>& op, const char* other_errors) {
   try {
     op();
+  } catch (const ops::OpError&) {  // the operations' own refusals, as they are
+    RefreshLeases();
+    throw;
   } catch (const replay::RecorderError& e) {
     RefreshLeases();
     Fail(e.code(), e.what());
@@ -77,8 +74,6 @@ void StepServer::RunFileOp(const std::function<void()>& op, const char* other_er
 // ---- Recordings
 
 StepServer::Outcome StepServer::RecordingStart(Request& r) {
-  replay::Recorder& recorder = RequireRecorder();
-  replay::RecorderOptions o;
   // A name in the files folder (a fresh one when none is given); the recorder writes NAME.part
   // and renames it to NAME at the end: neither may be anything but a regular file, and NAME is
   // not replaced unless the request says overwrite.
@@ -88,24 +83,22 @@ StepServer::Outcome StepServer::RecordingStart(Request& r) {
   } else {
     name = files_.FreshName("recording", ".urrec");
   }
-  if (recorder.active()) {
-    Fail("recording_already_active",
-         "a recording is already running (to " + recorder.status().path + ")");
-  }
+  ops::RequireIdleRecorder(recorder_);  // before the file checks
+  ops::RecordingRequest o;
   o.path = files_.ForWriting(name, "path", OptionalBool(r.body, "overwrite", false), {kPartSuffix});
   o.compress = OptionalBool(r.body, "compress", true);
   o.sensordata = OptionalBool(r.body, "sensordata", false);
   o.keyframe_interval = OptionalNumber(r.body, "keyframe_interval", o.keyframe_interval);
   o.max_duration = OptionalNumber(r.body, "max_duration", o.max_duration);
   o.ring_seconds = OptionalNumber(r.body, "ring_seconds", o.ring_seconds);
-  RunFileOp([&] { recorder.Start(std::move(o)); });
-  return {Json{{"op", "recording_start_ok"}, {"path", recorder.status().path}}};
+  std::string path;
+  RunFileOp([&] { path = ops::StartRecording(recorder_, o); });
+  return {Json{{"op", "recording_start_ok"}, {"path", path}}};
 }
 
 StepServer::Outcome StepServer::RecordingStop(Request&) {
-  replay::Recorder& recorder = RequireRecorder();
   replay::RecorderStatus s;
-  RunFileOp([&] { s = recorder.Stop(); });
+  RunFileOp([&] { s = ops::StopRecording(recorder_); });
   return {Json{{"op", "recording_stop_ok"},
                {"path", s.path},
                {"frames", s.frames},
@@ -115,25 +108,20 @@ StepServer::Outcome StepServer::RecordingStop(Request&) {
 }
 
 StepServer::Outcome StepServer::RecordingSave(Request& r) {
-  replay::Recorder& recorder = RequireRecorder();
+  RequireRecorder();
   const std::string path = WritablePath(r);
   std::string saved;
-  RunFileOp([&] { saved = recorder.Save(path); });
+  RunFileOp([&] { saved = ops::SaveRecording(recorder_, path); });
   return {Json{{"op", "recording_save_ok"}, {"path", saved}}};
 }
 
 StepServer::Outcome StepServer::RecordingClear(Request&) {
-  replay::Recorder& recorder = RequireRecorder();
-  try {
-    recorder.Clear();
-  } catch (const replay::RecorderError& e) {
-    Fail(e.code(), e.what());
-  }
+  ops::ClearRecording(recorder_);
   return {Json{{"op", "recording_clear_ok"}}};
 }
 
 StepServer::Outcome StepServer::RecordingStatus(Request&) {
-  Json reply = StatusJson(RequireRecorder().status());
+  Json reply = StatusJson(ops::RecordingStatus(recorder_));
   reply["op"] = "recording_status_ok";
   return {reply};
 }
@@ -142,38 +130,18 @@ StepServer::Outcome StepServer::RecordingStatus(Request&) {
 
 StepServer::Outcome StepServer::SnapshotSave(Request& r) {
   const std::string path = WritablePath(r);
-  physics::PhysicsEngine& engine = session_.engine();
-  // The state and the model it belongs to, taken together (the options may change).
-  physics::PhysicsState state;
-  physics::Model model;
-  engine.WithLockedData([&engine, &state, &model](mjModel* m, mjData* d) {
-    state = physics::CaptureState(m, d);
-    model = engine.owned_model().Copy();  // with its extensions
-  });
-  replay::RecordingInfo info;
-  replay::Recorder* recorder = recorder_ ? recorder_->recorder() : nullptr;
-  if (recorder) {
-    info = recorder->info();  // scene, MJCF and the articulations' name tables
-  } else {
-    std::vector<std::string> names;
-    for (const ArticulationTopics& t : tables_) names.push_back(t.name);
-    info.tables = replay::ModelTables::Of(model.get(), names);
-  }
-  replay::DescribeModel(model, &info);  // the model as it is now
-  RunFileOp([&] { replay::SaveSnapshot(path, info, state); }, "path_not_writable");
-  return {Json{{"op", "snapshot_save_ok"}, {"path", path}, {"time", state.time}}};
+  double time = 0;
+  RunFileOp([&] { time = ops::SaveSnapshot(session_, recorder_, path); });
+  return {Json{{"op", "snapshot_save_ok"}, {"path", path}, {"time", time}}};
 }
 
 StepServer::Outcome StepServer::SnapshotLoad(Request& r) {
   const std::string path = files_.ForReading(String(r.body["path"], "path"), "path");
-  physics::PhysicsEngine& engine = session_.engine();
-  const physics::Model model = engine.CopyModel();
-  physics::PhysicsState state;
-  RunFileOp([&] { state = replay::LoadSnapshot(path, model); }, "path_not_readable");
-  const double time = state.time;
+  ops::Restored restored;
+  RunFileOp([&] { restored = ops::LoadSnapshot(session_, path); });
   Outcome out;
-  out.reply = Json{{"op", "snapshot_load_ok"}, {"path", path}, {"time", time}};
-  out.wait_for = engine.Restore(std::move(state));  // a misfit state: bad_value at once
+  out.reply = Json{{"op", "snapshot_load_ok"}, {"path", path}, {"time", restored.time}};
+  out.wait_for = restored.seq;
   return out;
 }
 

@@ -1,5 +1,6 @@
 #include "net/topic_table.h"
 
+#include "urlab/ops/controllers.h"
 #include "urlab/wire/wire.h"
 #include "urlab/world/names.h"
 
@@ -53,7 +54,6 @@ std::vector<ArticulationTopics> BuildTopicTables(world::Session& session) {
     for (std::size_t i = 0; i < ids.size(); ++i) {
       const int id = ids[i];
       t.actuator_ids.push_back(id);
-      const char* name = mj_id2name(m, mjOBJ_ACTUATOR, id);
       t.actuator_names.push_back(world::ShortNameOf(m, mjOBJ_ACTUATOR, id, a.prefix));
       // The range of the target the articulation's controller takes (a PD controller's is the
       // joint's range, not the actuator's ctrlrange).
@@ -62,18 +62,9 @@ std::vector<ArticulationTopics> BuildTopicTables(world::Session& session) {
       t.mins.push_back(range[0]);
       t.maxs.push_back(range[1]);
       t.index_of_actuator[id] = static_cast<int>(i);
-      if (name) {
-        t.gain_index[name] = static_cast<int>(i);
-        t.gain_index[std::string(name).substr(a.prefix.size())] = static_cast<int>(i);
-      }
-      // A joint name reaches the actuator that drives it (clients key gains by joint).
-      if (m->actuator_trntype[id] == mjTRN_JOINT) {
-        if (const char* jn = mj_id2name(m, mjOBJ_JOINT, m->actuator_trnid[2 * id])) {
-          t.gain_index.emplace(jn, static_cast<int>(i));
-          t.gain_index.emplace(std::string(jn).substr(a.prefix.size()), static_cast<int>(i));
-        }
-      }
     }
+    // The names the operations resolve (ctrl_map reads them too).
+    t.gain_index = ops::ActuatorNameIndex(m, a);
     out.push_back(std::move(t));
   }
   return out;

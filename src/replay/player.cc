@@ -205,7 +205,7 @@ ResimReport Resimulate(const RecordingReader& reader, const physics::Model* give
       } else if (auto* o = std::get_if<OptionsRecord>(&rec)) {
         ApplyOptions(*o, &m->opt);
       } else if (auto* mk = std::get_if<Marker>(&rec)) {
-        if (mk->text.find("not captured") != std::string::npos) {
+        if (IsUncapturedJump(*mk)) {
           need_state = true;
           if (r.stopped.empty()) {
             r.stopped = fmt::format(

@@ -508,7 +508,7 @@ void Recorder::Impl::Run() {
         if (f->discontinuity != 0 && !captured_jump) {
           // A jump no command made (an automatic reset after divergence): marked, and a keyframe
           // follows as soon as the physics thread takes the request.
-          enc.Add(Marker{f->discontinuity, f->time, f->step,
+          enc.Add(Marker{f->discontinuity | kMarkerNotCaptured, f->time, f->step,
                          physics::DiscontinuityString(f->discontinuity) + " (not captured)"});
           ++markers;
           if (!pending_token) request_keyframe();

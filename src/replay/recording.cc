@@ -24,6 +24,11 @@ void DescribeModel(const physics::Model& m, RecordingInfo* info) {
 
 std::string HashText(std::uint64_t hash) { return fmt::format("{:016x}", hash); }
 
+bool IsUncapturedJump(const Marker& m) {
+  // The flag; before it existed, only the text said so (files of earlier builds).
+  return (m.flags & kMarkerNotCaptured) != 0 || m.text.ends_with(" (not captured)");
+}
+
 RecordingReader::RecordingReader(RecordingReader&&) noexcept = default;
 RecordingReader& RecordingReader::operator=(RecordingReader&&) noexcept = default;
 RecordingReader::~RecordingReader() = default;

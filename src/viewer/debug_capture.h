@@ -1,10 +1,11 @@
 #pragma once
 // DebugCapture: the debug drawing's data from the physics thread (the description's
 // UMjDebugVisualizer::CaptureDebugData): a post-step callback copies the contacts, each with its
-// force from mj_contactForce, into the viewer's own buffer under the capture's own mutex. Only
-// what a state frame does not carry is captured (body and geom poses come from the frame). The
-// capture runs only when the viewer asked for one since the last, so with contact drawing off (or
-// the viewer slower than the physics) the callback costs one atomic load per step.
+// force from mj_contactForce (ops::CollectContacts, the extractor get_contacts uses too), into the
+// viewer's own buffer under the capture's own mutex. Only what a state frame does not carry is
+// captured (body and geom poses come from the frame). The capture runs only when the viewer asked
+// for one since the last, so with contact drawing off (or the viewer slower than the physics) the
+// callback costs one atomic load per step.
 //
 // Threading contract
 // - Physics thread (step mutex held): Capture, through the post-step callback.
@@ -16,15 +17,12 @@
 #include <mutex>
 #include <vector>
 
+#include "urlab/ops/queries.h"
+
 namespace urlab::viewer::internal {
 
-struct CapturedContact {
-  mjtNum pos[3];
-  mjtNum frame[9];  // rows: normal, tangent 1, tangent 2 (world)
-  mjtNum force[6];  // in the contact frame (normal first), from mj_contactForce
-  mjtNum dist;
-  int geom1, geom2;
-};
+// A contact as the one contact extractor (ops::CollectContacts) gives it, also to get_contacts.
+using CapturedContact = ops::Contact;
 
 class DebugCapture {
  public:
@@ -43,7 +41,7 @@ class DebugCapture {
   std::mutex mutex_;  // guards buffer_ and fresh_
   std::vector<CapturedContact> buffer_;
   bool fresh_ = false;
-  std::vector<CapturedContact> scratch_;  // physics thread
+  ops::ContactList scratch_;  // physics thread
 };
 
 }  // namespace urlab::viewer::internal

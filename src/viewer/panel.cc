@@ -8,6 +8,11 @@
 #include <array>
 #include <cmath>
 
+#include "urlab/ops/controllers.h"
+#include "urlab/ops/error.h"
+#include "urlab/ops/recording.h"
+#include "urlab/ops/simulation.h"
+#include "urlab/ops/state.h"
 #include "urlab/replay/recorder.h"
 #include "urlab/world/manager.h"
 #include "viewer/viewer_core.h"
@@ -16,9 +21,6 @@ namespace urlab::viewer::internal {
 
 namespace {
 
-// MuJoCo 2.2.2's integrators and solvers, as the panel's combo boxes list them.
-constexpr std::array<const char*, 3> kIntegrators = {"Euler", "RK4", "implicit"};
-constexpr std::array<const char*, 3> kSolvers = {"PGS", "CG", "Newton"};
 // The sources a user may pick for an articulation (hold and replay are set by their features).
 constexpr std::array<const char*, 4> kSourceChoices = {"scene default", "network", "ui", "input"};
 constexpr std::array<control::ControlSource, 3> kSources = {
@@ -115,7 +117,7 @@ void Panel::DrawSimulation(ViewerCore& core) {
   ImGui::SameLine();
   if (ImGui::Button("Reset (R)")) core.Perform(Action::kReset);
   int speed = engine.speed_percent();
-  if (ImGui::SliderInt("speed %", &speed, 5, 100)) engine.SetSpeedPercent(speed);
+  if (ImGui::SliderInt("speed %", &speed, 5, 100)) ops::SetSpeed(core.session(), speed);
   bool fast = engine.as_fast_as_possible();
   if (ImGui::Checkbox("as fast as possible", &fast)) engine.SetAsFastAsPossible(fast);
 }
@@ -129,7 +131,7 @@ void Panel::DrawLaunchers(ViewerCore& core) {
   }
   for (std::size_t i = 0; i < launchers.size(); ++i) {
     ImGui::PushID(static_cast<int>(i));
-    if (ImGui::Button("Fire")) core.session().FireLauncher(i);
+    if (ImGui::Button("Fire")) ops::FireLauncher(core.session(), launchers[i].name);
     const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
     fire_buttons_.push_back({(a.x + b.x) / 2, (a.y + b.y) / 2});
     ImGui::SameLine();
@@ -142,29 +144,29 @@ void Panel::DrawLaunchers(ViewerCore& core) {
 void Panel::DrawOptions(ViewerCore& core) {
   if (!ImGui::CollapsingHeader("Physics options")) return;
   const mjOption& opt = core.view().model()->opt;  // the viewer's copy follows what it sets
+  // What set_sim_options also changes goes through the same operation (ops::SetOptions).
   double timestep = opt.timestep;
   if (ImGui::InputDouble("timestep", &timestep, 0.0005, 0.001, "%.5f",
-                         ImGuiInputTextFlags_EnterReturnsTrue) &&
-      timestep > 0) {
-    core.SetOptions([timestep](mjOption& o) { o.timestep = timestep; }, "timestep");
+                         ImGuiInputTextFlags_EnterReturnsTrue)) {
+    core.SetOptions(ops::OptionsChange{.timestep = timestep});
   }
-  int integrator = std::clamp(opt.integrator, 0, static_cast<int>(kIntegrators.size()) - 1);
-  if (ImGui::Combo("integrator", &integrator, kIntegrators.data(),
-                   static_cast<int>(kIntegrators.size()))) {
-    core.SetOptions([integrator](mjOption& o) { o.integrator = integrator; }, "integrator");
+  const auto names = [](const std::vector<const char*>& n) { return static_cast<int>(n.size()); };
+  int integrator = std::clamp(opt.integrator, 0, names(ops::IntegratorNames()) - 1);
+  if (ImGui::Combo("integrator", &integrator, ops::IntegratorNames().data(),
+                   names(ops::IntegratorNames()))) {
+    core.SetOptions(ops::OptionsChange{.integrator = integrator});
   }
-  int solver = std::clamp(opt.solver, 0, static_cast<int>(kSolvers.size()) - 1);
-  if (ImGui::Combo("solver", &solver, kSolvers.data(), static_cast<int>(kSolvers.size()))) {
-    core.SetOptions([solver](mjOption& o) { o.solver = solver; }, "solver");
+  int solver = std::clamp(opt.solver, 0, names(ops::SolverNames()) - 1);
+  if (ImGui::Combo("solver", &solver, ops::SolverNames().data(), names(ops::SolverNames()))) {
+    core.SetOptions(ops::OptionsChange{.solver = solver});
   }
   int iterations = opt.iterations;
   if (ImGui::SliderInt("iterations", &iterations, 1, 200)) {
-    core.SetOptions([iterations](mjOption& o) { o.iterations = iterations; }, "iterations");
+    core.SetOptions(ops::OptionsChange{.iterations = iterations});
   }
-  int cone = std::clamp(opt.cone, 0, 1);
-  constexpr std::array<const char*, 2> kCones = {"pyramidal", "elliptic"};
-  if (ImGui::Combo("cone", &cone, kCones.data(), static_cast<int>(kCones.size()))) {
-    core.SetOptions([cone](mjOption& o) { o.cone = cone; }, "cone");
+  int cone = std::clamp(opt.cone, 0, names(ops::ConeNames()) - 1);
+  if (ImGui::Combo("cone", &cone, ops::ConeNames().data(), names(ops::ConeNames()))) {
+    core.SetOptions(ops::OptionsChange{.cone = cone});
   }
   int jacobian = std::clamp(opt.jacobian, 0, 2);
   constexpr std::array<const char*, 3> kJacobians = {"dense", "sparse", "auto"};
@@ -177,36 +179,30 @@ void Panel::DrawOptions(ViewerCore& core) {
   }
   // Numbers take effect on Enter (a half-typed value never reaches the simulation).
   const auto number = [&](const char* label, double value, const char* format,
-                          void (*set)(mjOption&, double), bool positive) {
-    if (ImGui::InputDouble(label, &value, 0, 0, format, ImGuiInputTextFlags_EnterReturnsTrue) &&
-        std::isfinite(value) && (!positive || value > 0)) {
-      core.SetOptions([set, value](mjOption& o) { set(o, value); }, label);
+                          std::optional<double> ops::OptionsChange::*field) {
+    if (ImGui::InputDouble(label, &value, 0, 0, format, ImGuiInputTextFlags_EnterReturnsTrue)) {
+      ops::OptionsChange change;
+      change.*field = value;
+      core.SetOptions(change);
     }
   };
-  number(
-      "tolerance", opt.tolerance, "%.3g", [](mjOption& o, double v) { o.tolerance = v; }, false);
-  number(
-      "impratio", opt.impratio, "%.3g", [](mjOption& o, double v) { o.impratio = v; }, true);
-  number(
-      "density", opt.density, "%.4g", [](mjOption& o, double v) { o.density = v; }, false);
-  number(
-      "viscosity", opt.viscosity, "%.4g", [](mjOption& o, double v) { o.viscosity = v; }, false);
-  const auto vector = [&](const char* label, const mjtNum* v, mjtNum* (*field)(mjOption&)) {
+  number("tolerance", opt.tolerance, "%.3g", &ops::OptionsChange::tolerance);
+  number("impratio", opt.impratio, "%.3g", &ops::OptionsChange::impratio);
+  number("density", opt.density, "%.4g", &ops::OptionsChange::density);
+  number("viscosity", opt.viscosity, "%.4g", &ops::OptionsChange::viscosity);
+  const auto vector = [&](const char* label, const mjtNum* v,
+                          std::optional<std::array<double, 3>> ops::OptionsChange::*field) {
     double xyz[3] = {v[0], v[1], v[2]};
     if (ImGui::InputScalarN(label, ImGuiDataType_Double, xyz, 3, nullptr, nullptr, "%.3g",
-                            ImGuiInputTextFlags_EnterReturnsTrue) &&
-        std::isfinite(xyz[0]) && std::isfinite(xyz[1]) && std::isfinite(xyz[2])) {
-      core.SetOptions(
-          [field, x = xyz[0], y = xyz[1], z = xyz[2]](mjOption& o) {
-            mjtNum* f = field(o);
-            f[0] = x, f[1] = y, f[2] = z;
-          },
-          label);
+                            ImGuiInputTextFlags_EnterReturnsTrue)) {
+      ops::OptionsChange change;
+      change.*field = std::array<double, 3>{xyz[0], xyz[1], xyz[2]};
+      core.SetOptions(change);
     }
   };
-  vector("gravity", opt.gravity, [](mjOption& o) -> mjtNum* { return o.gravity; });
-  vector("wind", opt.wind, [](mjOption& o) -> mjtNum* { return o.wind; });
-  vector("magnetic", opt.magnetic, [](mjOption& o) -> mjtNum* { return o.magnetic; });
+  vector("gravity", opt.gravity, &ops::OptionsChange::gravity);
+  vector("wind", opt.wind, &ops::OptionsChange::wind);
+  vector("magnetic", opt.magnetic, &ops::OptionsChange::magnetic);
 }
 
 void Panel::DrawArticulation(ViewerCore& core) {
@@ -288,7 +284,11 @@ void Panel::DrawArticulation(ViewerCore& core) {
     keyframe_ = std::clamp(keyframe_, 0, static_cast<int>(keys.size()) - 1);
     ImGui::Combo("keyframe", &keyframe_, ptrs.data(), static_cast<int>(ptrs.size()));
     if (ImGui::Button("Reset##key")) {
-      session.ResetArticulation(art.name(), key_names[static_cast<std::size_t>(keyframe_)]);
+      try {
+        ops::ResetArticulation(session, art.name(), key_names[static_cast<std::size_t>(keyframe_)]);
+      } catch (const ops::OpError& e) {
+        message_ = e.what();
+      }
     }
     ImGui::SameLine();
     if (ImGui::Button("Hold")) ctl.HoldKeyframe(keys[static_cast<std::size_t>(keyframe_)]);
@@ -369,36 +369,40 @@ void Panel::DrawRendering(ViewerCore& core) {
 
 void Panel::DrawRecording(ViewerCore& core) {
   if (!ImGui::CollapsingHeader("Record and snapshot")) return;
-  physics::PhysicsEngine& engine = core.session().engine();
+  world::Session& session = core.session();
+  // The operations the step server's snapshot and recording requests use (ops/recording.h); a
+  // refusal (or a file that cannot be written) is shown below the buttons.
+  const auto act = [this](const auto& op) {
+    try {
+      op();
+    } catch (const std::exception& e) {
+      message_ = e.what();
+    }
+  };
   if (ImGui::Button("Snapshot")) {
-    snapshot_ = engine.Snapshot();
-    message_ = fmt::format("snapshot at t={:.3f} s", snapshot_->time);
+    act([&] {
+      snapshot_ = ops::TakeState(session);
+      message_ = fmt::format("snapshot at t={:.3f} s", snapshot_->time);
+    });
   }
   ImGui::SameLine();
   ImGui::BeginDisabled(!snapshot_);
-  if (ImGui::Button("Restore")) engine.Restore(*snapshot_);
+  if (ImGui::Button("Restore")) act([&] { ops::RestoreState(session, *snapshot_); });
   ImGui::EndDisabled();
-  auto* recorder =
-      core.manager()
-          ? dynamic_cast<replay::RecorderSubsystem*>(core.manager()->FindSubsystem("recorder"))
-          : nullptr;
-  replay::Recorder* rec = recorder ? recorder->recorder() : nullptr;
-  if (rec) {
+  replay::RecorderSubsystem* recorder = core.recorder();
+  if (recorder && recorder->recorder()) {
     ImGui::InputText("file", &record_path_);
-    if (!rec->active()) {
+    if (!recorder->recorder()->active()) {
       if (ImGui::Button("Record")) {
-        try {
-          replay::RecorderOptions o;
-          o.path = record_path_;
-          rec->Start(o);
-          message_ = "recording " + record_path_;
-        } catch (const std::exception& e) {
-          message_ = e.what();
-        }
+        act([&] {
+          message_ = "recording " + ops::StartRecording(recorder, {.path = record_path_});
+        });
       }
     } else if (ImGui::Button("Stop recording")) {
-      const replay::RecorderStatus st = rec->Stop();
-      message_ = fmt::format("{}: {} steps", st.path, st.frames);
+      act([&] {
+        const replay::RecorderStatus st = ops::StopRecording(recorder);
+        message_ = fmt::format("{}: {} steps", st.path, st.frames);
+      });
     }
   } else {
     ImGui::TextUnformatted("(no recorder in this run)");

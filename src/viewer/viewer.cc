@@ -13,6 +13,7 @@ ViewerSubsystem::~ViewerSubsystem() = default;
 
 void ViewerSubsystem::BeginPlay(world::Session& session) {
   auto core = std::make_unique<internal::ViewerCore>(options_, manager_, playback_);
+  core->SetRecorder(recorder_);
   core->Begin(session);
   core_ = std::move(core);
 }

@@ -9,6 +9,9 @@
 #include <ctime>
 
 #include "urlab/core/error.h"
+#include "urlab/ops/controllers.h"
+#include "urlab/ops/error.h"
+#include "urlab/ops/simulation.h"
 #include "viewer/framing.h"
 #include "viewer/panel.h"
 
@@ -335,10 +338,11 @@ void ViewerCore::Perform(Action action) {
   physics::PhysicsEngine& engine = session_->engine();
   switch (action) {
     case Action::kTogglePause:  // in replay mode the replay pauses (the engine runs the player)
-      if (!PerformTimeline(TimelineAction::kPlayPause)) session_->SetPaused(!engine.paused());
+      if (!PerformTimeline(TimelineAction::kPlayPause))
+        ops::SetPaused(*session_, !engine.paused(), ops::When::kNow);
       break;
     case Action::kReset:
-      session_->ResetToInitialState();
+      ops::Reset(*session_, {});
       break;
     case Action::kScreenshot: {
       const std::time_t t = std::time(nullptr);
@@ -422,9 +426,9 @@ void ViewerCore::Perform(Action action) {
       break;
     }
     case Action::kFireLaunchers: {  // every launcher once
-      const std::size_t launchers = session_->launchers().size();
-      if (launchers == 0) spdlog::info("viewer: this scene has no launchers");
-      for (std::size_t i = 0; i < launchers; ++i) session_->FireLauncher(i);
+      if (session_->launchers().empty()) spdlog::info("viewer: this scene has no launchers");
+      for (const world::LauncherLayout& l : session_->launchers())
+        ops::FireLauncher(*session_, l.name);
       break;
     }
     default:
@@ -456,6 +460,16 @@ void ViewerCore::TogglePossess() {
       "viewer: possessing '{}' (W/S, A/D, Q/E or a gamepad; 0-9 actions; max {} m/s, {} m/s, {} "
       "rad/s)",
       art.name(), s.max_vx, s.max_vy, s.max_yaw_rate);
+}
+
+void ViewerCore::SetOptions(const ops::OptionsChange& change) {
+  try {
+    ops::SetOptions(*session_, change);
+  } catch (const ops::OpError& e) {
+    SetStatus(e.what());
+    return;
+  }
+  ops::ApplyOptions(change, view_->model()->opt);
 }
 
 void ViewerCore::SetOptions(std::function<void(mjOption&)> fn, std::string label) {

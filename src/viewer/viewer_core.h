@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "render/video_writer.h"
+#include "urlab/ops/state.h"
 #include "urlab/physics/engine.h"
 #include "urlab/replay/playback.h"
 #include "urlab/viewer/viewer.h"
@@ -89,6 +90,9 @@ class ViewerCore : public InputHandler {
   const std::vector<CapturedContact>& contacts() const { return contacts_; }
   const physics::StateFrame* frame() const { return frame_; }
   const world::Manager* manager() const { return manager_; }
+  // The recorder the panel drives (nullptr: none). Main thread, before Begin.
+  void SetRecorder(replay::RecorderSubsystem* recorder) { recorder_ = recorder; }
+  replay::RecorderSubsystem* recorder() const { return recorder_; }
   // Frames drawn, and the frame rate over the last second.
   std::uint64_t frames_drawn() const { return frames_drawn_; }
   // After End: why the video is not complete (ffmpeg failed), "" when it is or there is none.
@@ -108,6 +112,9 @@ class ViewerCore : public InputHandler {
   const std::string& last_screenshot() const { return last_screenshot_; }
   // Applies physics options to the simulation (a queued command) and to the viewer's copy.
   void SetOptions(std::function<void(mjOption&)> fn, std::string label);
+  // The options the step server's set_sim_options changes, through the same operation (its
+  // checks; a refusal becomes the status line and changes nothing).
+  void SetOptions(const ops::OptionsChange& change);
   // Seconds since Begin (the clock double-clicks use).
   double Now() const;
 
@@ -174,6 +181,7 @@ class ViewerCore : public InputHandler {
   RenderQuality quality_;
   mjrRect last_viewport_ = {0, 0, 0, 0};
   const world::Manager* manager_;
+  replay::RecorderSubsystem* recorder_ = nullptr;
   std::shared_ptr<world::Session> session_;
   std::unique_ptr<Window> window_;
   std::unique_ptr<SceneView> view_;

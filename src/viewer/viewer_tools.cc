@@ -16,6 +16,7 @@
 #include "urlab/core/error.h"
 #include "urlab/core/files.h"
 #include "urlab/mjcf/writer.h"
+#include "urlab/ops/simulation.h"
 #include "viewer/viewer_core.h"
 
 namespace urlab::viewer::internal {
@@ -118,7 +119,7 @@ void ViewerCore::Step() {
     SetStatus("single steps while paused (P pauses)");
     return;
   }
-  engine.Submit(physics::cmd::Step{1});
+  ops::Step(*session_, 1);
 }
 
 std::string ViewerCore::SaveXml() {

@@ -123,6 +123,14 @@ TEST_F(CommandFrameTest, ChannelPublishesWholeFramesAndPatches) {
   EXPECT_EQ(f.targets, t);
   EXPECT_EQ(f.kp, (std::vector<double>{10, 11, 30}));  // gain patches accumulate
   EXPECT_EQ(f.kv, (std::vector<double>{1, 1, 1}));
+  // Gains alone: the targets stay, NaN keeps a gain, a wrong size publishes nothing.
+  EXPECT_FALSE(c.PatchGains(std::vector<double>{1}, {}));
+  EXPECT_TRUE(c.PatchGains(std::vector<double>{nan, 12, nan}, {}));
+  const CommandFrame& g = c.Read();
+  EXPECT_EQ(g.seq, 5u);
+  EXPECT_EQ(g.targets, t);
+  EXPECT_EQ(g.kp, (std::vector<double>{10, 12, 30}));
+  EXPECT_EQ(c.Gains(1), (std::pair<double, double>{12, 1}));
 }
 
 // Gains that arrive with a frame drive the PD law from the same step as their targets.

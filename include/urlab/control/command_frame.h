@@ -43,6 +43,11 @@ class FrameChannel {
   bool Patch(std::span<const std::pair<int, double>> values);
   // Any thread: one target (a Patch of one value).
   bool Set(int index, double value);
+  // Any thread: publishes the last frame with its gain overrides patched (`kp`/`kv` empty or
+  // size() values; NaN: that gain unchanged). False (nothing published) on a size mismatch.
+  bool PatchGains(std::span<const double> kp, std::span<const double> kv);
+  // Any thread: the gain overrides of the last published frame (NaN: the controller's own).
+  std::pair<double, double> Gains(int index) const;
   // Any thread: a target / all targets of the last published frame.
   double Get(int index) const;
   std::vector<double> Targets() const;

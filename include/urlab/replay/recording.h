@@ -110,13 +110,22 @@ struct StateRecord {
   physics::PhysicsState state;
 };
 
+// A marker's flag beside the physics::Discontinuity ones: the recorder could not capture the
+// state after this jump (an automatic reset after a divergence), so a re-simulation waits for the
+// next keyframe. Recordings made before the flag existed say so only in the marker's text
+// ("... (not captured)"), which IsUncapturedJump also reads.
+inline constexpr std::uint32_t kMarkerNotCaptured = 1u << 31;
+
 // Where the state jumped, and why (the frame after it follows the jump).
 struct Marker {
-  std::uint32_t flags = 0;  // physics::Discontinuity
+  std::uint32_t flags = 0;  // physics::Discontinuity, and kMarkerNotCaptured
   double time = 0;
   std::uint64_t step = 0;
   std::string text;  // DiscontinuityString(flags)
 };
+
+// True for a jump whose state the recorder did not capture (kMarkerNotCaptured).
+bool IsUncapturedJump(const Marker& m);
 
 // Physics options changed (the whole mjOption after the change, raw bytes of MuJoCo 2.2.2's
 // struct).

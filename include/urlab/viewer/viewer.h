@@ -26,7 +26,8 @@ class Manager;
 }
 namespace urlab::replay {
 class PlaybackSlot;
-}
+class RecorderSubsystem;
+}  // namespace urlab::replay
 
 namespace urlab::viewer {
 
@@ -90,9 +91,12 @@ class ViewerSubsystem : public world::Subsystem {
   // command's exit code. Main thread.
   const std::string& video_error() const { return video_error_; }
 
-  // The manager whose other subsystems the panel shows (their Status) and drives (the recorder).
+  // The manager whose other subsystems the panel shows (their Status).
   // Main thread, before BeginPlay; optional.
   void SetManager(const world::Manager* manager) { manager_ = manager; }
+  // The recorder the panel's Record and Stop recording drive (nullptr: none; the panel says so).
+  // Main thread, before BeginPlay; optional.
+  void SetRecorder(replay::RecorderSubsystem* recorder) { recorder_ = recorder; }
   // Replay mode: while the slot holds a playback (the step server's replay_start, `urlab replay
   // --view`), the viewer shows the replay timeline and its keys drive the player; P pauses the
   // replay. Main thread, before BeginPlay; optional.
@@ -106,6 +110,7 @@ class ViewerSubsystem : public world::Subsystem {
  private:
   ViewerOptions options_;
   const world::Manager* manager_ = nullptr;
+  replay::RecorderSubsystem* recorder_ = nullptr;
   std::shared_ptr<replay::PlaybackSlot> playback_;
   std::unique_ptr<internal::ViewerCore> core_;
   std::string video_error_;

@@ -1,9 +1,10 @@
-// The ranges the step server accepts (value_ranges.h is the mechanism; docs/network.md lists
-// them). Bounds are wide enough for any model we know and narrow enough that a typo or a hostile
-// value (a negative viscosity, a time of 1e300) is refused instead of destabilising the run.
-#include "net/value_ranges.h"
+// The ranges the operations accept, whoever asks (the step server, a topic, the viewer, the
+// CLI); ops/value_ranges.h is the mechanism, docs/network.md lists them. Bounds are wide enough for
+// any model we know and narrow enough that a typo or a hostile value (a negative viscosity, a time
+// of 1e300) is refused instead of destabilising the run.
+#include "ops/value_ranges.h"
 
-namespace urlab::net {
+namespace urlab::ops {
 
 namespace {
 
@@ -43,4 +44,4 @@ constexpr ValueRange kTable[] = {
 
 std::span<const ValueRange> ValueRanges() { return kTable; }
 
-}  // namespace urlab::net
+}  // namespace urlab::ops

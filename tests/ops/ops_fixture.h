@@ -1,0 +1,119 @@
+#pragma once
+// What every operation family's test plays: one articulation with a PD or no controller, a
+// mocap body, a keyframe, behind the network subsystem (step server and topics on ephemeral
+// loopback ports), so a test reaches one operation through the step server, through a topic and
+// directly (the call the viewer's panel and the CLI make), and compares what each path answers.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <zmq.hpp>
+
+#include "net/step_test_client.h"
+#include "support/mujoco_test.h"
+#include "urlab/net/network.h"
+#include "urlab/ops/error.h"
+#include "urlab/replay/recorder.h"
+#include "urlab/world/manager.h"
+
+namespace urlab::ops::test {
+
+using Json = nlohmann::json;
+using net::test_client::Client;
+using namespace std::chrono_literals;
+
+inline constexpr const char* kArmXml = R"(<mujoco model="arm">
+  <option timestep="0.002" gravity="0 0 0"/>
+  <worldbody>
+    <body name="link" pos="0 0 1">
+      <joint name="hinge" type="hinge" axis="0 1 0" damping="0.5"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="1"/>
+    </body>
+    <body name="ball" pos="0.5 0 0.049">
+      <freejoint name="ball_free"/>
+      <geom name="ball_geom" type="sphere" size="0.05" mass="0.1"/>
+    </body>
+    <body name="target" mocap="true" pos="0 0 2">
+      <geom type="sphere" size="0.05" contype="0" conaffinity="0"/>
+    </body>
+    <geom name="floor" type="plane" size="2 2 0.1"/>
+  </worldbody>
+  <actuator>
+    <motor name="motor" joint="hinge"/>
+  </actuator>
+  <sensor>
+    <jointpos name="angle" joint="hinge"/>
+  </sensor>
+  <keyframe>
+    <key name="bent" qpos="0.7 0.5 0 0.049 1 0 0 0"/>
+  </keyframe>
+</mujoco>
+)";
+
+// What a refusal looks like, whichever path it took.
+struct Refusal {
+  std::string code, message;
+  bool operator==(const Refusal&) const = default;
+};
+inline std::ostream& operator<<(std::ostream& os, const Refusal& r) {
+  return os << r.code << ": " << r.message;
+}
+// The step server's error reply.
+inline Refusal FromReply(const Json& reply) {
+  return {reply.value("code", "(no error: " + reply.value("op", "?") + ")"),
+          reply.value("message", "")};
+}
+// A direct call's OpError.
+inline Refusal FromCall(const std::function<void()>& call) {
+  try {
+    call();
+  } catch (const OpError& e) {
+    return {e.code, e.message};
+  }
+  return {"(no error)", ""};
+}
+
+class OpsTest : public urlab::testing::MujocoTest {
+ protected:
+  void SetUp() override {
+    dir_ = urlab::testing::MakeTempDir("ops");
+    urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml);
+  }
+  // `controller`: ", controller: {...}" appended to the articulation's entry.
+  // `recorder`: with a recorder subsystem the step server's recording operations use.
+  void Play(const std::string& mode = "live", const std::string& controller = "",
+            const std::string& extra = "", bool recorder = false) {
+    if (recorder) {
+      recorder_ = &static_cast<replay::RecorderSubsystem&>(
+          manager_.AddSubsystem(std::make_unique<replay::RecorderSubsystem>()));
+    }
+    net::NetworkOptions o;
+    o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
+    o.step_mode = mode;
+    o.files_dir = dir_;  // clients name files in the test's folder
+    auto net = std::make_unique<net::NetworkSubsystem>(o);
+    net->SetRecorder(recorder_);
+    net_ = &static_cast<net::NetworkSubsystem&>(manager_.AddSubsystem(std::move(net)));
+    manager_.BeginPlay(
+        world::ParseScene("control_source: network\narticulations:\n  - {name: arm, mjcf: arm.xml" +
+                              controller + "}\n" + extra,
+                          dir_ + "/scene.yaml"));
+    ASSERT_FALSE(net_->endpoints().rpc.empty());
+  }
+  world::Session& session() { return manager_.session(); }
+  std::string rpc() const { return net_->endpoints().rpc; }
+  // Waits for command `seq` (a direct call's) to take effect.
+  void Wait(std::uint64_t seq) {
+    ASSERT_TRUE(session().engine().WaitForCommand(seq, std::chrono::seconds(10)).ok());
+  }
+
+  std::string dir_;
+  world::Manager manager_;
+  net::NetworkSubsystem* net_ = nullptr;
+  replay::RecorderSubsystem* recorder_ = nullptr;
+  zmq::context_t ctx_{1};
+};
+
+}  // namespace urlab::ops::test
