@@ -158,6 +158,19 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
       {"replay_stop", &StepServer::ReplayStop, true, true, {}, "session"},
       {"replay_unload", &StepServer::ReplayUnload, true, true, {}, "session"},
       {"cancel", &StepServer::Cancel, true, true, {}, "cancelled"},
+      {"set_latency",
+       &StepServer::SetLatency,
+       true,
+       true,
+       {"articulation"},
+       "articulation, seed, control, observation"},
+      {"get_latency",
+       &StepServer::GetLatency,
+       true,
+       false,
+       {"articulation"},
+       "articulation, seed, control, observation"},
+
       {"replay_status",
        &StepServer::ReplayStatus,
        true,
@@ -965,15 +978,19 @@ StepServer::Outcome StepServer::Reset(Request& r) {
     CheckQposQuaternions(m, joints_after.qpos, "per_articulation_qpos");
   }
   std::uint64_t seq = 0;
+  // Domain randomisation: new draws into the model, then the reset (step_server_randomize.cc).
+  const std::optional<world::Session::RandomizedReset> randomized = RandomizeForReset(r);
+  if (randomized) seq = randomized->seq;
   if (key >= 0) {
     seq = engine.ResetToKeyframe(key);
-  } else {
+  } else if (!randomized) {
     seq = session_.ResetToInitialState();
     if (seq == 0) seq = engine.Reset();
   }
   if (!joints_after.qpos.empty()) seq = engine.Submit(std::move(joints_after));
   Outcome out;
   out.reply = Json{{"op", "reset_ok"}};
+  if (randomized) out.reply["randomized"] = DrawsJson(randomized->draws);
   out.wait_for = seq;
   out.observation = ObservationFor(r);
   return out;

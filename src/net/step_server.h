@@ -252,6 +252,13 @@ class StepServer {
   Outcome FireLauncher(Request& r);
   Outcome ConfigureController(Request& r);
   Outcome Cancel(Request& r);
+  // Emulated latency (step_server_latency_ops.cc).
+  Outcome SetLatency(Request& r);
+  Outcome GetLatency(Request& r);
+  // Domain randomisation (step_server_randomize.cc): the reset's draws when the request or the
+  // scene asks for them (validated; refused while recording), applied as a reset.
+  std::optional<world::Session::RandomizedReset> RandomizeForReset(const Request& r);
+  static Json DrawsJson(const world::RandomDraws& draws);
   // Recorder, snapshot and replay operations (step_server_recorder_ops.cc). File names are
   // names under options.files_dir (network_files.h).
   replay::Recorder& RequireRecorder();
