@@ -21,8 +21,9 @@ world::RandomRange Range(const Json& v, const std::string& what) {
                           " must be one of {\"uniform\": [low, high]}, {\"normal\": [mean, "
                           "std]}, {\"log_uniform\": [low, high]}");
   }
-  const auto& [dist, ab] = *v.items().begin();
-  const std::vector<double> n = Numbers(ab, "randomize");
+  const auto it = v.begin();
+  const std::string dist = it.key();
+  const std::vector<double> n = Numbers(it.value(), "randomize");
   if (n.size() != 2) Fail("bad_value", what + "." + dist + " needs two numbers");
   world::RandomRange r;
   const std::string problem = world::MakeRange(dist, n[0], n[1], &r);
