@@ -53,11 +53,12 @@ struct RunArgs {
   bool paused = false;
   bool reset_on_divergence = false;
   bool no_network = false;
-  std::string files_dir;        // --files-dir: replaces the scene's network.files_dir
-  std::string ports = "scene";  // --ports: scene | auto
-  int port_base = 0;            // --port-base N (0: the scene's ports)
-  std::string announce;         // --announce FILE: the bound endpoints as JSON
-  std::string instance;         // --instance ID ("" : host:pid)
+  std::string files_dir;              // --files-dir: replaces the scene's network.files_dir
+  std::optional<std::uint64_t> seed;  // --seed: replaces the scene's seed
+  std::string ports = "scene";        // --ports: scene | auto
+  int port_base = 0;                  // --port-base N (0: the scene's ports)
+  std::string announce;               // --announce FILE: the bound endpoints as JSON
+  std::string instance;               // --instance ID ("" : host:pid)
   bool allow_no_network = false;
   std::string step_mode;  // --step-mode: replaces the scene's network.step_mode
   // --envs N (0: not given, one environment) and the batch's options (world/batch_subsystem.h).
@@ -123,6 +124,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   if (!args.files_dir.empty()) {
     scene.network.files_dir = std::filesystem::absolute(args.files_dir).lexically_normal().string();
   }
+  if (args.seed) scene.seed = *args.seed;
   ChooseNetworkPorts(scene.network, args.ports, args.port_base);
   if (!args.step_mode.empty()) scene.network.step_mode = args.step_mode;
   // Several environments step only together, in lockstep: the run waits for batch steps.
@@ -520,6 +522,9 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                   "without overwrite and the lease, never over the scene's inputs); replaces the "
                   "scene's network.files_dir (default: recordings/ in the working folder)")
       ->check(kFolderOrAbsent);
+  cmd->add_option("--seed", args.seed,
+                  "the run's seed, from which every emulated delay's jitter is drawn (the scene's "
+                  "`latency:` sections); replaces the scene's seed (default 0)");
   cmd->add_flag("--reset-on-divergence", args.reset_on_divergence,
                 "reset to the initial state when the simulation diverges (NaN/Inf, MuJoCo's "
                 "instability warnings) or MuJoCo reports an error, and go on (by default either "

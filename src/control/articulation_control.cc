@@ -127,9 +127,20 @@ void ArticulationControl::SeedTargets(int key) {
   }
 }
 
+void ArticulationControl::SetControlDelay(const physics::DelaySpec& spec, ControlSource global) {
+  control_delay_.Configure(spec);
+  RestartControlDelay(global);
+}
+
+void ArticulationControl::RestartControlDelay(ControlSource global) {
+  control_delay_.Restart();
+  if (control_delay_.active()) control_delay_.Prime(channel(EffectiveSource(global)).Read());
+}
+
 const CommandFrame& ArticulationControl::ApplyControls(const mjModel* m, mjData* d,
                                                        ControlSource global) {
-  const CommandFrame& frame = channel(EffectiveSource(global)).Read();
+  const CommandFrame& arrived = channel(EffectiveSource(global)).Read();
+  const CommandFrame& frame = control_delay_.active() ? control_delay_.Push(arrived) : arrived;
   controller_->UseFrameGains(frame.kp, frame.kv);
   controller_->ComputeAndApply(m, d, frame.targets);
   if (twist_) twist_->Apply(m, d);
@@ -186,6 +197,13 @@ void ControlSystem::Install(PhysicsEngine& engine) {
   PhysicsEngine* e = &engine;
   engine.SetApplyControlsHook(
       [this, e](const mjModel* m, mjData* d) { ApplyControls(m, d, &e->applied_commands()); });
+  // A reset or restore starts every control delay afresh (the same seed, the same delays).
+  engine.AddCommandListener(
+      [this](const physics::AppliedCommand& c, const mjModel*, const mjData*) {
+        if (c.discontinuity & (physics::kDiscontinuityReset | physics::kDiscontinuityRestore)) {
+          for (const auto& a : all_) a->RestartControlDelay(global_source());
+        }
+      });
 }
 
 void ControlSystem::ApplyControls(const mjModel* m, mjData* d, physics::AppliedCommands* applied) {

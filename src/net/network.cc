@@ -557,7 +557,8 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
                    options_.full_state);
     }
   }
-  impl_->ring = session.engine().SubscribeEveryStep("network", options_.ring_capacity);
+  impl_->ring = session.engine().SubscribeEveryStep("network", options_.ring_capacity,
+                                                    /*observed=*/true);
   session.engine().AddDoorbell(impl_->bell);
   if (!options_.rpc.empty()) {
     StepServerOptions so;
@@ -573,7 +574,8 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
     so.instance = options_.instance;
     so.server_session = options_.server_session;
     impl_->server = std::make_unique<StepServer>(
-        session, impl_->tables, session.engine().SubscribeState("step_server"), so);
+        session, impl_->tables, session.engine().SubscribeState("step_server", /*observed=*/true),
+        so);
     impl_->server->SetRecorder(recorder_);
     impl_->server->SetCameras(cameras_);
     impl_->server->SetBatch(batch_);

@@ -161,6 +161,19 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
       {"replay_stop", &StepServer::ReplayStop, true, true, {}, "session"},
       {"replay_unload", &StepServer::ReplayUnload, true, true, {}, "session"},
       {"cancel", &StepServer::Cancel, true, true, {}, "cancelled"},
+      {"set_latency",
+       &StepServer::SetLatency,
+       true,
+       true,
+       {"articulation"},
+       "articulation, seed, control, observation"},
+      {"get_latency",
+       &StepServer::GetLatency,
+       true,
+       false,
+       {"articulation"},
+       "articulation, seed, control, observation"},
+
       {"replay_status",
        &StepServer::ReplayStatus,
        true,
@@ -965,10 +978,20 @@ StepServer::Outcome StepServer::Reset(Request& r) {
       }
     }
   }
+  // Domain randomisation (step_server_randomize.cc): checked here; the draws are the reset's
+  // first action once ops::Reset checked the rest (a keyframe then sets the state again).
+  std::optional<world::Session::RandomizedReset> randomized;
+  if (std::function<world::Session::RandomizedReset()> draw = RandomizerForReset(r)) {
+    reset.randomize = [&randomized, draw = std::move(draw)] {
+      randomized = draw();
+      return randomized->seq;
+    };
+  }
   Outcome out;
-  out.reply = Json{{"op", "reset_ok"}};
-  out.observation = ObservationFor(r);
   out.wait_for = ops::Reset(session_, reset);
+  out.reply = Json{{"op", "reset_ok"}};
+  if (randomized) out.reply["randomized"] = DrawsJson(randomized->draws);
+  out.observation = ObservationFor(r);
   return out;
 }
 

@@ -271,6 +271,14 @@ class StepServer {
   Outcome FireLauncher(Request& r);
   Outcome ConfigureController(Request& r);
   Outcome Cancel(Request& r);
+  // Emulated latency (step_server_latency_ops.cc).
+  Outcome SetLatency(Request& r);
+  Outcome GetLatency(Request& r);
+  // Domain randomisation (step_server_randomize.cc): when the request or the scene asks for
+  // draws, checks the request's seed and ranges (refused while recording) and returns what
+  // draws them and resets (Session::ResetRandomized); empty when nothing is to be drawn.
+  std::function<world::Session::RandomizedReset()> RandomizerForReset(const Request& r);
+  static Json DrawsJson(const world::RandomDraws& draws);
   // Recorder, snapshot and replay operations (step_server_recorder_ops.cc). File names are
   // names under options.files_dir (network_files.h).
   replay::Recorder& RequireRecorder();

@@ -63,8 +63,13 @@ std::uint64_t Reset(world::Session& session, const ResetRequest& request) {
   const int key = request.keyframe.empty() ? -1 : FindKeyframe(session, request.keyframe);
   physics::cmd::SetState after = JointWrites(session, request.joints, "per_articulation_qpos");
   physics::PhysicsEngine& engine = session.engine();
-  std::uint64_t seq = key >= 0 ? engine.ResetToKeyframe(key) : session.ResetToInitialState();
-  if (seq == 0) seq = engine.Reset();
+  std::uint64_t seq = request.randomize ? request.randomize() : 0;
+  if (key >= 0) {
+    seq = engine.ResetToKeyframe(key);
+  } else if (!request.randomize) {
+    seq = session.ResetToInitialState();
+    if (seq == 0) seq = engine.Reset();
+  }
   if (!after.qpos.empty()) seq = engine.Submit(std::move(after));
   return seq;
 }

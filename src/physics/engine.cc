@@ -173,22 +173,29 @@ PhysicsEngine::CallbackId PhysicsEngine::AddCommandListener(CommandListener fn) 
 // ---------------------------------------------------------------------------------------------
 // State readers
 
-std::shared_ptr<StateSubscription> PhysicsEngine::SubscribeState(std::string name) {
+std::shared_ptr<StateSubscription> PhysicsEngine::SubscribeState(std::string name, bool observed) {
   ThrowIfOnPhysicsThread("SubscribeState");
   if (running()) throw Error("SubscribeState('" + name + "'): subscribe before Start");
   std::lock_guard<std::mutex> lock(step_mutex_);
-  auto s = core_.publisher().SubscribeLatest(std::move(name));
+  auto s = core_.publisher().SubscribeLatest(std::move(name), observed);
   // The current state, so a reader has a frame before the first step (others get nothing new).
   StatePublisher::PublishTo(*s, core_.model(), core_.data(), core_.CurrentMeta());
   return s;
 }
 
-std::shared_ptr<StateRing> PhysicsEngine::SubscribeEveryStep(std::string name,
-                                                             std::size_t capacity) {
+std::shared_ptr<StateRing> PhysicsEngine::SubscribeEveryStep(std::string name, std::size_t capacity,
+                                                             bool observed) {
   ThrowIfOnPhysicsThread("SubscribeEveryStep");
   if (running()) throw Error("SubscribeEveryStep('" + name + "'): subscribe before Start");
   std::lock_guard<std::mutex> lock(step_mutex_);
-  return core_.publisher().SubscribeEveryStep(std::move(name), capacity);
+  return core_.publisher().SubscribeEveryStep(std::move(name), capacity, observed);
+}
+
+void PhysicsEngine::SetObservationDelay(std::shared_ptr<ObservationDelay> delay) {
+  ThrowIfOnPhysicsThread("SetObservationDelay");
+  if (running()) throw Error("SetObservationDelay: set it before Start");
+  std::lock_guard<std::mutex> lock(step_mutex_);
+  core_.publisher().SetObservationDelay(std::move(delay));
 }
 
 void PhysicsEngine::AddDoorbell(std::shared_ptr<Doorbell> doorbell) {

@@ -5,6 +5,7 @@
 
 #include "core/gcc_workarounds.h"
 #include "urlab/core/error.h"
+#include "urlab/physics/observation_delay.h"
 
 namespace urlab::physics {
 
@@ -113,15 +114,18 @@ StateRing::StateRing(std::string name, const mjModel* m, std::size_t capacity,
   if (capacity == 0) throw Error("StateRing '" + name_ + "': capacity must be at least 1");
 }
 
-std::shared_ptr<StateSubscription> StatePublisher::SubscribeLatest(std::string name) {
+std::shared_ptr<StateSubscription> StatePublisher::SubscribeLatest(std::string name,
+                                                                   bool observed) {
   auto s = std::make_shared<StateSubscription>(std::move(name), model_, layout_);
+  s->observed_ = observed;
   latest_.push_back(s);
   return s;
 }
 
 std::shared_ptr<StateRing> StatePublisher::SubscribeEveryStep(std::string name,
-                                                              std::size_t capacity) {
+                                                              std::size_t capacity, bool observed) {
   auto r = std::make_shared<StateRing>(std::move(name), model_, capacity, layout_);
+  r->observed_ = observed;
   rings_.push_back(r);
   return r;
 }
@@ -146,12 +150,33 @@ void StatePublisher::PublishTo(StateSubscription& s, const mjModel* m, const mjD
 }
 
 void StatePublisher::Publish(const mjModel* m, const mjData* d, const FrameMeta& meta) {
-  for (const auto& s : latest_) PublishTo(*s, m, d, meta);
+  // The observed frame, once per publication (the delay lines tick here, observers or not).
+  const bool delayed = observation_delay_ && observation_delay_->active();
+  if (delayed) {
+    if (observed_.qpos.size() != static_cast<std::size_t>(m->nq)) {
+      observed_ = StateFrame::SizedFor(m, layout_);
+    }
+    observed_.CopyFrom(m, d, meta.xfrc_applied);
+    ApplyMeta(&observed_, meta);
+    observation_delay_->Apply(&observed_);
+  }
+  for (const auto& s : latest_) {
+    if (delayed && s->observed_) {
+      s->buffer_.Back() = observed_;  // copy-assignment: no allocation once sized
+      s->buffer_.Publish();
+    } else {
+      PublishTo(*s, m, d, meta);
+    }
+  }
   for (const auto& r : rings_) {
     if (!r->active()) continue;
     if (StateFrame* f = r->ring_.BeginPush()) {
-      f->CopyFrom(m, d, meta.xfrc_applied);
-      ApplyMeta(f, meta);
+      if (delayed && r->observed_) {
+        *f = observed_;
+      } else {
+        f->CopyFrom(m, d, meta.xfrc_applied);
+        ApplyMeta(f, meta);
+      }
       r->ring_.CommitPush();
     }
   }

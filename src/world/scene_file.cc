@@ -682,10 +682,10 @@ class Parser {
   }
 
   ArticulationConfig Articulation(const YAML::Node& n) const {
-    CheckKeys(
-        n, "articulation",
-        {"name", "mjcf", "pos", "quat", "euler", "axisangle", "options", "control_source",
-         "controller", "keyframe", "hold_keyframe", "include_world", "cameras", "twist", "input"});
+    CheckKeys(n, "articulation",
+              {"name", "mjcf", "pos", "quat", "euler", "axisangle", "options", "control_source",
+               "controller", "keyframe", "hold_keyframe", "include_world", "cameras", "twist",
+               "input", "latency"});
     ArticulationConfig a;
     a.where = At(n);
     a.name = EntryName(n, "articulation");
@@ -724,7 +724,94 @@ class Parser {
       if (!in.IsSequence()) Fail(in, a.name + ".input must be a list of bindings");
       for (const auto& b : in) a.input.push_back(InputBinding(b, a.name + ".input"));
     }
+    if (const auto l = n["latency"]) a.latency = Latency(l, a.name + ".latency");
     return a;
+  }
+
+  // A range: {uniform: [low, high]}, {normal: [mean, std]} or {log_uniform: [low, high]}.
+  RandomRange Range2(const YAML::Node& n, const std::string& where) const {
+    const auto entries = Entries(n, where);
+    if (entries.size() != 1) {
+      Fail(n, where +
+                  " must be one of {uniform: [low, high]}, {normal: [mean, std]}, "
+                  "{log_uniform: [low, high]}");
+    }
+    const auto& [dist, v] = entries.front();
+    const std::vector<double> ab = Numbers(v, where + "." + dist, 2);
+    RandomRange r;
+    const std::string problem = MakeRange(dist, ab[0], ab[1], &r);
+    if (!problem.empty()) Fail(v, where + ": " + problem);
+    return r;
+  }
+
+  // `randomize:`: gravity components, and per articulation or prop its parameters (the table of
+  // world/randomize.h). Names are checked against the scene's articulations and props.
+  RandomizeConfig Randomize(const YAML::Node& n, const SceneConfig& s) const {
+    RandomizeConfig c;
+    for (const auto& [name, v] : Entries(n, "randomize")) {
+      const std::string where = "randomize." + name;
+      if (name == "gravity") {
+        CheckKeys(v, where, {"x", "y", "z"});
+        for (const auto& [axis, r] : Entries(v, where))
+          c.gravity[axis] = Range2(r, where + "." + axis);
+        continue;
+      }
+      const ArticulationConfig* art = nullptr;
+      for (const auto& a : s.articulations) {
+        if (a.name == name) art = &a;
+      }
+      bool prop = false;
+      for (const auto& p : s.props) prop |= p.spec.name == name;
+      if (!art && !prop) {
+        Fail(v, where + ": no articulation or prop '" + name + "' in the scene (or 'gravity')");
+      }
+      auto& params = c.targets[name];
+      for (const auto& [key, r] : Entries(v, where)) {
+        if (!IsRandomParam(key, prop)) {
+          std::string known;
+          for (const RandomParamInfo& p : RandomParams()) {
+            if (!prop || p.props) known += (known.empty() ? "" : ", ") + std::string(p.key);
+          }
+          Fail(r, where + ": unknown parameter '" + key + "' (expected one of: " + known + ")");
+        }
+        if ((key == "kp" || key == "kv") && art && art->controller.type != "pd" &&
+            art->controller.type != "gait") {
+          Fail(r, where + "." + key + " needs a PD controller (controller type pd or gait)");
+        }
+        params[key] = Range2(r, where + "." + key);
+      }
+    }
+    return c;
+  }
+
+  // One delay setting: the keys of physics/latency.h (delay_steps | delay, jitter_steps |
+  // jitter, rate_hz).
+  physics::LatencySetting LatencyEntry(const YAML::Node& n, const std::string& where) const {
+    if (!n.IsMap()) Fail(n, where + " must be a mapping (delay_steps, delay, jitter_steps, ...)");
+    physics::LatencySetting s;
+    bool delay = false, jitter = false;
+    for (const auto& [key, v] : Entries(n, where)) {
+      const bool is_delay = key == "delay" || key == "delay_steps";
+      const bool is_jitter = key == "jitter" || key == "jitter_steps";
+      if ((is_delay && delay) || (is_jitter && jitter)) {
+        Fail(v, where + ": give the " + (is_delay ? "delay" : "jitter") +
+                    " in steps or in seconds, not both");
+      }
+      delay |= is_delay;
+      jitter |= is_jitter;
+      const double value = Number(v, where + "." + key, kFinite);
+      const std::string problem = physics::SetLatencyKey(&s, key, value);
+      if (!problem.empty()) Fail(v, where + ": " + problem);
+    }
+    return s;
+  }
+
+  physics::ArticulationLatency Latency(const YAML::Node& n, const std::string& where) const {
+    CheckKeys(n, where, {"control", "observation"});
+    physics::ArticulationLatency l;
+    if (n["control"]) l.control = LatencyEntry(n["control"], where + ".control");
+    if (n["observation"]) l.observation = LatencyEntry(n["observation"], where + ".observation");
+    return l;
   }
 
   std::vector<std::string> Names(const YAML::Node& n, const std::string& what) const {
@@ -837,9 +924,10 @@ class Parser {
         }
       }
     }
-    CheckKeys(root, "the scene",
-              {"articulations", "props", "terrain", "launchers", "options", "size",
-               "control_source", "network", "save_debug_xml", "cameras", "cinematic", "viewer"});
+    CheckKeys(
+        root, "the scene",
+        {"articulations", "props", "terrain", "launchers", "options", "size", "control_source",
+         "network", "save_debug_xml", "cameras", "cinematic", "viewer", "seed", "randomize"});
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {
       Fail(arts ? arts : root, "the scene needs a non-empty list 'articulations'");
@@ -866,6 +954,15 @@ class Parser {
       }
     }
     if (root["control_source"]) s.control_source = Source(root["control_source"]);
+    if (const auto n = root["seed"]) {
+      const double v = Number(n, "seed", Range{0, 9007199254740992.0});
+      if (v != std::floor(v)) Fail(n, "seed must be a whole number, not " + n.Scalar());
+      s.seed = static_cast<std::uint64_t>(v);
+    }
+    if (const auto n = root["randomize"]) {
+      s.randomize_where = At(n);
+      s.randomize = Randomize(n, s);
+    }
     if (const auto n = root["cinematic"]) s.cinematic = Cinematic(n);
     if (const auto n = root["viewer"]) s.viewer = Viewer(n);
     if (root["cameras"]) s.cameras = Cameras(root["cameras"]);

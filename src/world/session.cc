@@ -9,8 +9,32 @@
 #include "urlab/world/controller_factory.h"
 #include "urlab/world/names.h"
 #include "urlab/world/scene_checks.h"
+#include "world/randomizer.h"
 
 namespace urlab::world {
+
+namespace {
+
+// The state addresses an articulation's observations come from (its joints, actuators, sensors
+// and bodies).
+physics::ObservedSlice ObservedSliceOf(const physics::ArticulationBindings& b) {
+  physics::ObservedSlice s;
+  for (const physics::JointView& j : b.joints().all()) {
+    for (int k = 0; k < j.qpos_size; ++k) s.qpos.push_back(j.qpos_adr + k);
+    for (int k = 0; k < j.dof_size; ++k) s.dof.push_back(j.dof_adr + k);
+  }
+  for (const physics::ActuatorView& a : b.actuators().all()) {
+    s.actuator.push_back(a.id);
+    if (a.act_adr >= 0) s.act.push_back(a.act_adr);
+  }
+  for (const physics::SensorView& v : b.sensors().all()) {
+    for (int k = 0; k < v.dim; ++k) s.sensor.push_back(v.adr + k);
+  }
+  for (const physics::BodyView& body : b.bodies().all()) s.body.push_back(body.id);
+  return s;
+}
+
+}  // namespace
 
 std::shared_ptr<Session> Session::Create(const SceneConfig& scene, SessionOptions options) {
   std::shared_ptr<Session> s(new Session(options));
@@ -43,6 +67,7 @@ void Session::Build(const SceneConfig& scene) {
   controls_->SetGlobalSource(scene.control_source);
 
   // Bind every articulation and build its controller (the thread does not run yet).
+  observation_delay_ = std::make_shared<physics::ObservationDelay>();
   engine_->WithLockedData([&](mjModel* m, mjData* d) {
     for (std::size_t i = 0; i < scene.articulations.size(); ++i) {
       const ArticulationConfig& ac = scene.articulations[i];
@@ -66,9 +91,14 @@ void Session::Build(const SceneConfig& scene) {
                            ac.name + ": keyframe '" + ac.keyframe + "' is not in " + ac.mjcf);
         }
       }
+      observation_delay_->AddGroup(ac.name, ObservedSliceOf(*a.bindings));
       articulations_.push_back(std::move(a));
     }
   });
+  engine_->SetObservationDelay(observation_delay_);
+  BuildRandomizer();
+  latency_.resize(articulations_.size());
+  latency_seed_ = scene.seed;
   launches_ = std::make_unique<std::atomic<std::uint64_t>[]>(compiled_.launchers.size());
   controls_->Install(*engine_);
   engine_->SetArticulationResolver([this](std::string_view name) {
@@ -88,7 +118,52 @@ void Session::Build(const SceneConfig& scene) {
     a.control->SeedTargets(a.initial_key);
     if (a.config.hold_keyframe) a.control->HoldKeyframe(a.initial_key);
   }
-  engine_->DrainEvents();  // the initial reset is not news
+  // Delays start holding the seeded targets (the command in effect now).
+  for (const Articulation& a : articulations_) {
+    if (a.config.latency != physics::ArticulationLatency{}) SetLatency(a.name(), a.config.latency);
+  }
+  if (randomizes()) ResetRandomized(std::nullopt);  // the first draw (applied at once)
+  engine_->DrainEvents();                           // the initial reset is not news
+}
+
+void Session::BuildRandomizer() {
+  std::vector<Randomizer::Target> targets;
+  const mjModel* m = engine_->model();
+  for (const Articulation& a : articulations_) {
+    Randomizer::Target t;
+    t.name = a.name();
+    const physics::ArticulationBindings& b = *a.bindings;
+    for (const physics::GeomView& g : b.geoms().all()) t.geoms.push_back(g.id);
+    for (const physics::BodyView& body : b.bodies().all()) t.bodies.push_back(body.id);
+    for (std::size_t i = 0; i < b.joints().size(); ++i) {
+      const physics::JointView& j = b.joints().all()[i];
+      for (int k = 0; k < j.dof_size; ++k) t.dofs.push_back(j.dof_adr + k);
+      if (j.type == mjJNT_HINGE || j.type == mjJNT_SLIDE) {
+        t.joints.emplace_back(b.joints().short_names()[i], j.qpos_adr);
+      }
+    }
+    for (const physics::ActuatorView& act : b.actuators().all()) t.actuators.push_back(act.id);
+    t.pd = dynamic_cast<control::PdController*>(a.control->controller());
+    if (t.pd) {
+      for (int i = 0; i < a.control->num_actuators(); ++i)
+        t.nominal_gains.push_back(t.pd->gains(i));
+    }
+    targets.push_back(std::move(t));
+  }
+  for (const PropLayout& p : compiled_.props) {
+    Randomizer::Target t;
+    t.name = p.name;
+    t.prop = true;
+    if (p.body >= 0) t.bodies.push_back(p.body);
+    for (int g = 0; g < m->ngeom; ++g) {
+      if (m->geom_bodyid[g] == p.body) t.geoms.push_back(g);
+    }
+    targets.push_back(std::move(t));
+  }
+  auto r = std::make_shared<Randomizer>(m, std::move(targets));
+  const std::string problem = r->Check(config_.randomize);
+  if (!problem.empty()) throw InputError(config_.randomize_where, "randomize: " + problem);
+  randomizer_ = std::move(r);
 }
 
 void Session::Start() {
@@ -130,7 +205,10 @@ const Articulation& Session::Require(std::string_view name) const {
 // ---------------------------------------------------------------------------------------------
 // Commands
 
-std::uint64_t Session::ResetToInitialState() { return QueueInitialReset(/*full=*/true); }
+std::uint64_t Session::ResetToInitialState() {
+  if (randomizes()) return ResetRandomized(std::nullopt).seq;
+  return QueueInitialReset(/*full=*/true);
+}
 
 std::uint64_t Session::ResetArticulation(std::string_view name, std::string_view key) {
   const Articulation& a = Require(name);
@@ -148,16 +226,19 @@ std::uint64_t Session::ResetArticulation(std::string_view name, std::string_view
                                          mj_id2name(engine_->model(), mjOBJ_KEY, id));
 }
 
-std::uint64_t Session::QueueInitialReset(bool full) {
+std::uint64_t Session::QueueInitialReset(bool full,
+                                         std::vector<std::pair<int, double>> qpos_offsets) {
   std::vector<std::pair<const control::ArticulationControl*, int>> keys;
   for (const Articulation& a : articulations_) {
     if (a.initial_key >= 0) keys.emplace_back(a.control, a.initial_key);
   }
-  if (!full && keys.empty()) return 0;
+  if (!full && keys.empty() && qpos_offsets.empty()) return 0;
   return engine_->ResetWith(
-      [keys = std::move(keys), full](const mjModel* m, mjData* d) {
+      [keys = std::move(keys), full, offsets = std::move(qpos_offsets)](const mjModel* m,
+                                                                        mjData* d) {
         if (full) mj_resetData(m, d);
         for (const auto& [control, key] : keys) control->ResetToKeyframe(m, d, key);
+        for (const auto& [adr, v] : offsets) d->qpos[adr] += v;
       },
       full ? "reset to the initial state" : "initial keyframes");
 }
@@ -283,6 +364,91 @@ void Session::ApplyHostPoses(mjData* d) {
     std::memcpy(d->mocap_pos + 3 * h.mocap_id, h.pose.pos.data(), 3 * sizeof(mjtNum));
     std::memcpy(d->mocap_quat + 4 * h.mocap_id, h.pose.quat.data(), 4 * sizeof(mjtNum));
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Emulated latency
+
+void Session::SetLatency(std::string_view name, const physics::ArticulationLatency& latency,
+                         std::optional<std::uint64_t> seed) {
+  const Articulation& a = Require(name);
+  const auto index = static_cast<std::size_t>(&a - articulations_.data());
+  const int group = observation_delay_->Find(a.name());
+  std::uint64_t s = 0;
+  {
+    std::lock_guard<std::mutex> lock(latency_mutex_);
+    if (seed) latency_seed_ = *seed;
+    s = latency_seed_;
+    latency_[index] = latency;
+  }
+  // Not under latency_mutex_: the step mutex is never taken with another lock held.
+  engine_->WithLockedData([&](mjModel* m, mjData* d) {
+    const double dt = m->opt.timestep;
+    using physics::LatencyChannel;
+    a.control->SetControlDelay(
+        physics::ResolveLatency(latency.control, dt,
+                                physics::LatencySeed(s, index, LatencyChannel::kControl)),
+        controls_->global_source());
+    observation_delay_->Configure(
+        group,
+        physics::ResolveLatency(latency.observation, dt,
+                                physics::LatencySeed(s, index, LatencyChannel::kObservation)),
+        d);
+  });
+}
+
+physics::ArticulationLatency Session::Latency(std::string_view name) const {
+  const Articulation& a = Require(name);
+  std::lock_guard<std::mutex> lock(latency_mutex_);
+  return latency_[static_cast<std::size_t>(&a - articulations_.data())];
+}
+
+std::uint64_t Session::latency_seed() const {
+  std::lock_guard<std::mutex> lock(latency_mutex_);
+  return latency_seed_;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Domain randomisation
+
+Session::RandomizedReset Session::ResetRandomized(std::optional<std::uint64_t> seed,
+                                                  const RandomizeConfig* config) {
+  const RandomizeConfig& c = config ? *config : config_.randomize;
+  if (config) {
+    const std::string problem = randomizer_->Check(*config);
+    if (!problem.empty()) throw Error("randomize: " + problem);
+  }
+  std::uint64_t s = 0;
+  {
+    std::lock_guard<std::mutex> lock(randomize_mutex_);
+    // "RAND": the draws' streams differ from the latency jitter's for the same scene seed.
+    s = seed ? *seed : physics::DeriveSeed(config_.seed ^ 0x52414E44u, randomized_resets_);
+    ++randomized_resets_;
+  }
+  Randomizer::Applied applied;
+  // The model is this engine's own (moved out of the compiled scene); the physics thread reads
+  // it only under the step mutex held here.
+  engine_->WithLockedData([&](mjModel* m, mjData*) {
+    applied = randomizer_->Apply(c, s, m);
+    for (int g = 0; g < observation_delay_->num_groups(); ++g) {
+      observation_delay_->SetNoise(g, 0, 0);
+    }
+    for (const auto& [name, stddev] : applied.obs_noise) {
+      const int g = observation_delay_->Find(name);
+      if (g >= 0) observation_delay_->SetNoise(g, stddev, physics::DeriveSeed(s, 1000 + g));
+    }
+  });
+  RandomizedReset out;
+  out.seq = QueueInitialReset(/*full=*/true, std::move(applied.qpos_offsets));
+  out.draws = std::move(applied.draws);
+  std::lock_guard<std::mutex> lock(randomize_mutex_);
+  last_draws_ = out.draws;
+  return out;
+}
+
+RandomDraws Session::last_draws() const {
+  std::lock_guard<std::mutex> lock(randomize_mutex_);
+  return last_draws_;
 }
 
 }  // namespace urlab::world

@@ -26,6 +26,7 @@
 #include "urlab/control/controller.h"
 #include "urlab/control/twist.h"
 #include "urlab/core/error.h"
+#include "urlab/physics/delay_line.h"
 #include "urlab/physics/engine.h"
 #include "urlab/physics/views.h"
 
@@ -91,8 +92,20 @@ class ArticulationControl {
   void StopHold() { holding_.store(false, std::memory_order_release); }
   bool holding() const { return holding_.load(std::memory_order_acquire); }
 
-  // Physics thread: feeds the active targets to the controller, which writes d->ctrl. Returns
-  // the frame it applied (valid until the next call).
+  // Control delay (physics/delay_line.h): the frame that reaches the controller in a step is the
+  // one the active source held `delay` steps (plus jitter) earlier; each ApplyControls is one
+  // tick. Physics thread, or the step mutex held (PhysicsEngine::WithLockedData). Setting a
+  // spec restarts the line; ControlSystem restarts every line after a reset or restore. A
+  // restarted line holds the frame the active source holds at that moment (the command in
+  // effect) until the first delayed frame is released.
+  void SetControlDelay(const physics::DelaySpec& spec, ControlSource global);
+  const physics::DelaySpec& control_delay() const { return control_delay_.spec(); }
+  void RestartControlDelay(ControlSource global);
+  // The jitter drawn for the last step's command (0 without jitter).
+  int last_control_jitter() const { return control_delay_.last_jitter(); }
+
+  // Physics thread: feeds the active targets (through the control delay) to the controller,
+  // which writes d->ctrl. Returns the frame it applied (valid until the next call).
   const CommandFrame& ApplyControls(const mjModel* m, mjData* d, ControlSource global);
 
   // Physics thread (use via ControlSystem::RequestKeyframeReset or PhysicsEngine::ResetWith):
@@ -123,6 +136,7 @@ class ArticulationControl {
   std::array<std::unique_ptr<FrameChannel>, kNumControlSources> channels_;
   std::atomic<int> override_{-1};  // -1: none, else ControlSource
   std::atomic<bool> holding_{false};
+  physics::DelayLine<CommandFrame> control_delay_;
 };
 
 class ControlSystem {

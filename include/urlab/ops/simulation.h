@@ -10,6 +10,7 @@
 // Thread: any (each queues engine commands or sets an engine atomic; see world/session.h).
 // Functions that queue a command return its sequence number (PhysicsEngine::WaitForCommand).
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -38,6 +39,10 @@ struct ResetRequest {
   // Written after the reset, in the same iteration's commands (dim_mismatch for a wrong width,
   // bad_value for an unknown joint, a value out of range or a quaternion whose norm is not ~1).
   std::vector<JointQpos> joints;
+  // Replaces the reset to the initial state once the request was checked (a randomised reset,
+  // which draws new model parameters first; returns its command's sequence number). With a
+  // keyframe it runs first and the keyframe sets the state after it.
+  std::function<std::uint64_t()> randomize;
 };
 std::uint64_t Reset(world::Session& session, const ResetRequest& request);
 

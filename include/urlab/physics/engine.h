@@ -145,9 +145,15 @@ class PhysicsEngine {
 
   // ---- State readers (main thread, before Start or after Stop) ----
   // The newest frame for one reader thread.
-  std::shared_ptr<StateSubscription> SubscribeState(std::string name);
+  // `observed`: the state as an observer sees it, through SetObservationDelay's delay (the
+  // network's topics and replies); otherwise the true state (recorder, viewer).
+  std::shared_ptr<StateSubscription> SubscribeState(std::string name, bool observed = false);
   // Every frame, in order, through a ring of `capacity` frames (full: dropped and counted).
-  std::shared_ptr<StateRing> SubscribeEveryStep(std::string name, std::size_t capacity);
+  std::shared_ptr<StateRing> SubscribeEveryStep(std::string name, std::size_t capacity,
+                                                bool observed = false);
+  // The observation delay of observed subscriptions (physics/observation_delay.h). Main thread,
+  // before Start; configure it later under WithLockedData.
+  void SetObservationDelay(std::shared_ptr<ObservationDelay> delay);
   // Drops a subscription made above; false when unknown.
   bool Unsubscribe(const void* subscription);
   // Rung on the physics thread after a published frame, once the commands that frame shows are

@@ -109,6 +109,8 @@ class StateSubscription {
   StateSubscription(std::string name, const mjModel* m,
                     const std::vector<CommandGroupLayout>& layout = {});
   const std::string& name() const { return name_; }
+  // Made `observed`: frames pass through the publisher's observation delay.
+  bool observed() const { return observed_; }
   // Consumer: the newest frame (stable until the next call), nullptr before the first.
   const StateFrame* Latest() { return buffer_.Latest(); }
   // Consumer: true when a frame newer than the last Latest() is waiting.
@@ -120,6 +122,7 @@ class StateSubscription {
   friend class StatePublisher;
   std::string name_;
   TripleBuffer<StateFrame> buffer_;
+  bool observed_ = false;
 };
 
 // Every-step subscription: one consumer thread takes frames in order.
@@ -128,6 +131,7 @@ class StateRing {
   StateRing(std::string name, const mjModel* m, std::size_t capacity,
             const std::vector<CommandGroupLayout>& layout = {});
   const std::string& name() const { return name_; }
+  bool observed() const { return observed_; }
   // Consumer: swaps the oldest frame into *out (keep reusing the same frame); false when empty.
   bool TryPop(StateFrame* out) { return ring_.TryPop(out); }
   // Consumer: the oldest frame without copying, nullptr when empty; Pop() releases it.
@@ -148,7 +152,10 @@ class StateRing {
   std::string name_;
   SpscRing<StateFrame> ring_;
   std::atomic<bool> active_{true};
+  bool observed_ = false;
 };
+
+class ObservationDelay;
 
 // The physics thread's side: fills every subscription.
 class StatePublisher {
@@ -156,9 +163,18 @@ class StatePublisher {
   explicit StatePublisher(const mjModel* m) : model_(m) {}
   // Main thread, before subscribing: frames of later subscriptions are sized for this layout.
   void SetCommandLayout(std::vector<CommandGroupLayout> layout) { layout_ = std::move(layout); }
-  // Main thread, engine not running. `name` identifies the reader in logs.
-  std::shared_ptr<StateSubscription> SubscribeLatest(std::string name);
-  std::shared_ptr<StateRing> SubscribeEveryStep(std::string name, std::size_t capacity);
+  // Main thread, engine not running. `name` identifies the reader in logs. An `observed`
+  // subscription gets the state as an observer sees it (SetObservationDelay); the others the
+  // true state.
+  std::shared_ptr<StateSubscription> SubscribeLatest(std::string name, bool observed = false);
+  std::shared_ptr<StateRing> SubscribeEveryStep(std::string name, std::size_t capacity,
+                                                bool observed = false);
+  // Main thread, engine not running: the observation delay of observed subscriptions
+  // (observation_delay.h); it runs on the publishing thread, under the step mutex.
+  void SetObservationDelay(std::shared_ptr<ObservationDelay> delay) {
+    observation_delay_ = std::move(delay);
+  }
+  ObservationDelay* observation_delay() const { return observation_delay_.get(); }
   // Main thread, engine not running: false when unknown.
   bool Unsubscribe(const void* subscription);
   int num_subscribers() const;
@@ -173,6 +189,8 @@ class StatePublisher {
   std::vector<CommandGroupLayout> layout_;
   std::vector<std::shared_ptr<StateSubscription>> latest_;
   std::vector<std::shared_ptr<StateRing>> rings_;
+  std::shared_ptr<ObservationDelay> observation_delay_;
+  StateFrame observed_;  // scratch: the observed frame of one publication
 };
 
 }  // namespace urlab::physics

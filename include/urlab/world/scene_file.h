@@ -24,7 +24,9 @@
 #include "urlab/convert/heightfield.h"
 #include "urlab/convert/prop.h"
 #include "urlab/core/error.h"
+#include "urlab/physics/latency.h"
 #include "urlab/world/launchers.h"
+#include "urlab/world/randomize.h"
 
 namespace urlab::world {
 
@@ -95,6 +97,8 @@ struct ArticulationConfig {
   bool twist_mode_given = false;  // ... with a mode
 
   std::vector<InputBindingConfig> input;
+  // Emulated latency (`latency:`): control and observation delays (physics/latency.h).
+  physics::ArticulationLatency latency;
   SourceLocation where;
 };
 
@@ -203,6 +207,12 @@ struct SceneConfig {
   CinematicConfig cinematic;
   ViewerConfig viewer;
   std::string save_debug_xml;  // folder for scene_compiled.xml/.mjb ("" = off)
+  // The run's seed (`seed:`; `urlab run --seed` overrides): every emulated delay's jitter draws
+  // from it.
+  std::uint64_t seed = 0;
+  // Domain randomisation (`randomize:`), drawn at every reset (world/randomize.h).
+  RandomizeConfig randomize;
+  SourceLocation randomize_where;
 };
 
 // Parses a scene file. Relative MJCF paths resolve against the scene file's folder.

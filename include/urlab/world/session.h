@@ -16,17 +16,23 @@
 #include <atomic>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "urlab/control/articulation_control.h"
 #include "urlab/physics/engine.h"
+#include "urlab/physics/latency.h"
+#include "urlab/physics/observation_delay.h"
 #include "urlab/physics/views.h"
+#include "urlab/world/randomize.h"
 #include "urlab/world/scene.h"
 #include "urlab/world/scene_file.h"
 
 namespace urlab::world {
+
+class Randomizer;  // src/world/randomizer.h
 
 // What a session needs beyond the scene file.
 struct SessionOptions {
@@ -115,6 +121,34 @@ class Session : public std::enable_shared_from_this<Session> {
   Launch FireLauncher(std::string_view name);
   Launch FireLauncher(std::size_t index);
 
+  // ---- Emulated latency (any thread; physics/latency.h) ----
+  // Sets an articulation's control and observation delays (replacing the previous ones; every
+  // line restarts), drawing jitter from `seed` (the scene's seed when absent).
+  // Applied under the step mutex, so it takes effect at the next step. Throws Error for an
+  // unknown articulation.
+  void SetLatency(std::string_view articulation, const physics::ArticulationLatency& latency,
+                  std::optional<std::uint64_t> seed = std::nullopt);
+  // The setting in effect (as given) and the seed it draws from.
+  physics::ArticulationLatency Latency(std::string_view articulation) const;
+  std::uint64_t latency_seed() const;
+  // ---- Domain randomisation (any thread; world/randomize.h) ----
+  // Resets to the initial state like ResetToInitialState, after drawing `config` (the scene's
+  // `randomize:` when null) from `seed` into this simulation's own model (the engine's copy;
+  // never the compiled original the session was built from). Without a seed the draw comes from
+  // the scene's seed and the number of randomised resets so far, so a run with the same seed
+  // draws the same sequence. Throws Error for a config that names unknown targets or
+  // parameters. Returns the reset command's sequence number and the values drawn.
+  struct RandomizedReset {
+    std::uint64_t seq = 0;
+    RandomDraws draws;
+  };
+  RandomizedReset ResetRandomized(std::optional<std::uint64_t> seed,
+                                  const RandomizeConfig* config = nullptr);
+  // The draws of the last randomised reset (empty before one).
+  RandomDraws last_draws() const;
+  // True when the scene has a `randomize:` section (every reset then draws).
+  bool randomizes() const { return !config_.randomize.empty(); }
+
   // ---- Host-driven mocap bodies (main thread) ----
   // Marks a mocap body of an articulation as driven by the host and sets its world pose; from the
   // next SyncHostPoses on, the physics thread writes it into mocap_pos/mocap_quat before every
@@ -134,9 +168,11 @@ class Session : public std::enable_shared_from_this<Session> {
   explicit Session(SessionOptions options) : options_(options) {}
   void Build(const SceneConfig& scene);
   int MocapOf(std::string_view articulation, std::string_view body) const;
+  void BuildRandomizer();          // Build: the randomizer's targets, checked against the scene
   void ApplyHostPoses(mjData* d);  // physics thread
   // Queues one reset restoring every articulation's initial keyframe (qpos0 first when `full`).
-  std::uint64_t QueueInitialReset(bool full);
+  // `qpos_offsets` ({qpos address, offset}) are added after the keyframes (qpos noise).
+  std::uint64_t QueueInitialReset(bool full, std::vector<std::pair<int, double>> qpos_offsets = {});
 
   SessionOptions options_;
   SceneConfig config_;
@@ -153,6 +189,18 @@ class Session : public std::enable_shared_from_this<Session> {
   std::mutex host_mutex_;  // guards published_poses_
   std::vector<HostPose> published_poses_;
   std::vector<HostPose> applying_;  // physics thread scratch
+  // Emulated latency: the observation delay the engine's observed subscriptions pass through,
+  // and the settings in effect per articulation (guarded by latency_mutex_).
+  std::shared_ptr<physics::ObservationDelay> observation_delay_;
+  mutable std::mutex latency_mutex_;
+  std::vector<physics::ArticulationLatency> latency_;
+  std::uint64_t latency_seed_ = 0;
+  // Domain randomisation: the mechanism (src/world/randomizer.h), the number of randomised
+  // resets so far, the last draws (guarded by randomize_mutex_).
+  std::shared_ptr<const Randomizer> randomizer_;
+  mutable std::mutex randomize_mutex_;
+  std::uint64_t randomized_resets_ = 0;
+  RandomDraws last_draws_;
 };
 
 }  // namespace urlab::world
