@@ -67,7 +67,6 @@ struct RunArgs {
   bool no_auto_reset = false;
   int max_episode_steps = 0;
   double reset_noise = 0;
-  std::uint64_t seed = 0;
   bool no_cameras = false;
   std::vector<std::string> video;  // --video CAM OUT: a camera's frames to MP4/WebM
   // `urlab record` (and `run --record`): the file to record to, and how.
@@ -196,7 +195,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
     batch_options.auto_reset = !args.no_auto_reset;
     batch_options.max_episode_steps = args.max_episode_steps;
     batch_options.reset_noise = args.reset_noise;
-    batch_options.seed = args.seed;
+    batch_options.seed = scene.seed;  // environment i: the run's seed + i
     auto* batch = &static_cast<world::BatchSubsystem&>(
         manager.AddSubsystem(std::make_unique<world::BatchSubsystem>(batch_options)));
     auto network = std::make_unique<net::NetworkSubsystem>(net_options);
@@ -449,9 +448,10 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
   cmd->add_flag("--no-cameras", args.no_cameras,
                 "render no camera (by default the cameras the scene streams render off-screen and "
                 "publish from network.camera_base_port, 5558, upward)");
-  cmd->add_flag("--no-network", args.no_network,
-                "no ZeroMQ sockets (by default the streaming topics and the step server of "
-                "docs/protocol.md are served on the scene's endpoints or the defaults 5555-5557, 5559)");
+  cmd->add_flag(
+      "--no-network", args.no_network,
+      "no ZeroMQ sockets (by default the streaming topics and the step server of "
+      "docs/protocol.md are served on the scene's endpoints or the defaults 5555-5557, 5559)");
   CLI::Option* ports =
       cmd->add_option("--ports", args.ports,
                       "auto: the system chooses a free port for every TCP socket (state, "
@@ -510,9 +510,6 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                   "generator (default 0)")
       ->check(CLI::Range(0.0, 1e6))
       ->needs(envs);
-  cmd->add_option("--seed", args.seed,
-                  "with --envs: environment i's generator starts with seed + i (default 0)")
-      ->needs(envs);
   cmd->add_flag("--allow-no-network", args.allow_no_network,
                 "go on without a socket that cannot bind (by default a run without a window "
                 "whose port is taken exits 1 before simulating, naming the process holding it)");
@@ -523,8 +520,10 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                   "scene's network.files_dir (default: recordings/ in the working folder)")
       ->check(kFolderOrAbsent);
   cmd->add_option("--seed", args.seed,
-                  "the run's seed, from which every emulated delay's jitter is drawn (the scene's "
-                  "`latency:` sections); replaces the scene's seed (default 0)");
+                  "the run's seed, from which every emulated delay's jitter and every "
+                  "randomisation is drawn (the scene's `latency:` and `randomize:` sections); with "
+                  "--envs environment i's generator starts with seed + i; replaces the scene's "
+                  "seed (default 0)");
   cmd->add_flag("--reset-on-divergence", args.reset_on_divergence,
                 "reset to the initial state when the simulation diverges (NaN/Inf, MuJoCo's "
                 "instability warnings) or MuJoCo reports an error, and go on (by default either "
