@@ -953,11 +953,31 @@ StepServer::Outcome StepServer::Step(Request& r) {
   Outcome out;
   out.reply = Json{{"op", "step_ok"}};
   out.observation = observation;
-  if (mode_ == "direct") {
+  if (mode_ == "direct" && !StepHere(n)) {
     out.wait_for = ops::Step(session_, n);
     out.steps = static_cast<std::uint64_t>(n);
   }
   return out;
+}
+
+bool StepServer::StepHere(int n) {
+  // Only a short window with nothing queued before it: this thread serves every client, and a
+  // reply waiting for a command must not be overtaken.
+  physics::PhysicsEngine& engine = session_.engine();
+  const double budget = std::chrono::duration<double>(kMaxStepHere).count();
+  const bool short_window = sync_step_seconds_ > 0 ? n * sync_step_seconds_ <= budget : n == 1;
+  if (!short_window || !pending_.empty() || !engine.paused()) return false;
+  const auto start = Clock::now();
+  try {
+    engine.StepSync(n);
+  } catch (const std::exception& e) {
+    if (!engine.paused()) return false;  // the loop was unpaused meanwhile: it steps instead
+    Fail("bad_value", e.what());
+  }
+  const double per_step = std::chrono::duration<double>(Clock::now() - start).count() / n;
+  sync_step_seconds_ =
+      sync_step_seconds_ > 0 ? 0.8 * sync_step_seconds_ + 0.2 * per_step : per_step;
+  return true;
 }
 
 StepServer::Outcome StepServer::Reset(Request& r) {

@@ -253,6 +253,14 @@ class StepServer {
   Outcome Meta(Request& r);
   Outcome Bye(Request& r);
   Outcome Step(Request& r);
+  // Direct mode: runs a short lockstep window of `n` steps on this thread (the physics thread
+  // sleeps between windows), so a round trip needs no hand-over to the physics thread and back
+  // (on 2 cores, client, I/O and physics threads all waiting hot cost each other the CPU). False
+  // (nothing done) for a window longer than kMaxStepHere at the measured step cost, while
+  // replies wait for commands, or while the loop runs: the physics thread steps it then.
+  bool StepHere(int n);
+  static constexpr auto kMaxStepHere = std::chrono::microseconds(2000);
+  double sync_step_seconds_ = 0;  // measured wall seconds per step of StepHere windows
   Outcome PuppetStep(Request& r);
   Outcome Reset(Request& r);
   Outcome Forward(Request& r);

@@ -19,7 +19,8 @@
 //   allowed (queued for the next iteration); registration, Snapshot, WithLockedData, StepSync,
 //   WaitForCommand, Start and Stop throw Error (they would deadlock).
 // - Any thread: Submit and its wrappers (Reset*, Restore, ...), WaitForCommand, SetPaused,
-//   Snapshot, the pacing setters, the measurement getters (atomics) and WithLockedData. Commands
+//   Snapshot, the pacing setters, the measurement getters (atomics) and WithLockedData; StepSync
+//   while the loop is paused (a lockstep server steps short windows on its own thread). Commands
 //   are applied by the physics thread at its next iteration when it runs, immediately (under the
 //   mutex, on the caller's thread) when it does not.
 // - CopyModel and WithLockedData: any thread, not from inside a callback.
