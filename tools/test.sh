@@ -100,11 +100,12 @@ tsan_stage() {
   cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_core urlab_tests_physics \
     urlab_tests_control urlab_tests_world urlab_tests_replay urlab_tests_net urlab_tests_client
   # The Python end-to-end tests whose subject is the Python side (examples, gait, the gymnasium
-  # contract, Dask, the learning example, port choice) run in the main stage only; the ones
-  # that load the server's threads (client, shared memory, hardening) run here too.
+  # contract, Dask with plain and batched servers, the learning example, port choice) run in the
+  # main stage only; the ones that load the server's threads (client, shared memory, hardening,
+  # batched environments, latency) run here too.
   TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/tsan.supp" \
     ctest --test-dir "$dir" -L 'core|physics|control|world|replay|net|client' --output-on-failure \
-    -E 'python_examples_e2e|gait_e2e|gym_env_e2e|cluster_e2e|learn_reach_smoke|ports_e2e' \
+    -E 'python_examples_e2e|gait_e2e|gym_env_e2e|cluster_(batch_)?e2e|learn_reach_smoke|ports_e2e' \
     -j"$JOBS" --timeout 900
 }
 
