@@ -1,6 +1,6 @@
-// The step server's recorder operations (docs/protocol.md, "Runtime operations"): recordings through
-// the recorder subsystem the network was given, snapshots of the engine's state, and replay of
-// loaded recordings through a Player on the live engine. File operations block the I/O thread
+// The step server's recorder operations (docs/protocol.md, "Runtime operations"): recordings
+// through the recorder subsystem the network was given, snapshots of the engine's state, and replay
+// of loaded recordings through a Player on the live engine. File operations block the I/O thread
 // for their duration; leases run from their end.
 #include <mujoco/mujoco.h>
 #include <spdlog/spdlog.h>

@@ -1,6 +1,6 @@
 #pragma once
-// The streaming topics' byte layouts (docs/protocol.md, "Streaming topics"): little-endian, packed, no
-// padding; int32 ids and f32 values. Encoders for what the simulator publishes, decoders for
+// The streaming topics' byte layouts (docs/protocol.md, "Streaming topics"): little-endian, packed,
+// no padding; int32 ids and f32 values. Encoders for what the simulator publishes, decoders for
 // what clients send, both over plain byte strings, so the server, the C++ client and the tests
 // share one definition. Decoders never read past their input and report why they refuse it.
 //
