@@ -1,5 +1,6 @@
 #include "urlab/world/randomize.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "urlab/physics/delay_line.h"
