@@ -16,6 +16,7 @@
 #include "urlab/core/error.h"
 #include "urlab/core/files.h"
 #include "urlab/mjcf/writer.h"
+#include "urlab/ops/scene_export.h"
 #include "urlab/ops/simulation.h"
 #include "viewer/viewer_core.h"
 
@@ -126,8 +127,12 @@ std::string ViewerCore::SaveXml() {
   const std::string path = OutputPath("urlab_scene.xml");
   mjcf::WriteOptions o;  // asset paths relative to the output folder
   o.relative_to = fs::absolute(path).parent_path().lexically_normal().string();
-  WriteFileAtomic(path, mjcf::WriteString(session_->scene().doc, o));
-  SetStatus("saved the composed scene to " + path);
+  std::vector<std::string> changed;
+  WriteFileAtomic(path, ops::SceneXml(*session_, o, &changed));
+  SetStatus("saved the composed scene to " + path +
+            (changed.empty() ? ""
+                             : fmt::format(" with the options changed at run time ({})",
+                                           fmt::join(changed, ", "))));
   return path;
 }
 

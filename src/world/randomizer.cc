@@ -60,6 +60,10 @@ std::string Randomizer::Check(const RandomizeConfig& config) const {
 
 Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64_t seed,
                                       mjModel* m) const {
+  // The mass distribution before this reset (a previous draw's, or nominal).
+  const bool inertial_was_drawn = !std::equal(mass_.begin(), mass_.end(), m->body_mass) ||
+                                  !std::equal(inertia_.begin(), inertia_.end(), m->body_inertia) ||
+                                  !std::equal(armature_.begin(), armature_.end(), m->dof_armature);
   // Nominal first: each reset draws from the model as compiled, never from the last draw.
   std::copy(friction_.begin(), friction_.end(), m->geom_friction);
   std::copy(mass_.begin(), mass_.end(), m->body_mass);
@@ -137,6 +141,20 @@ Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64
       } else if (p.key == "obs_noise") {
         out.obs_noise.emplace_back(t.name, std::max(0.0, v));
       }
+    }
+  }
+  // What the compiler derives from masses, inertias and armature (subtree masses, the inverse
+  // weights that scale constraint impedance, actuator_acc0, the mean inertia) follows the draw,
+  // as if the model had been compiled with it. mj_setConst overwrites the mjData it is given, so
+  // it gets a scratch one: the running simulation's state is untouched until the reset.
+  const bool inertial_drawn = !std::equal(mass_.begin(), mass_.end(), m->body_mass) ||
+                              !std::equal(inertia_.begin(), inertia_.end(), m->body_inertia) ||
+                              !std::equal(armature_.begin(), armature_.end(), m->dof_armature);
+  if (inertial_was_drawn || inertial_drawn) {
+    mjData* scratch = mj_makeData(m);
+    if (scratch) {
+      mj_setConst(m, scratch);
+      mj_deleteData(scratch);
     }
   }
   return out;

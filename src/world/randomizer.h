@@ -44,7 +44,8 @@ class Randomizer {
   };
   // Puts every field back to its nominal value, then draws `config` from `seed` (gravity x, y,
   // z first, then the targets in their order, each in the parameter table's order) and writes
-  // the draws into `m` and the controllers. Step mutex held.
+  // the draws into `m` and the controllers; when masses, inertias or armature changed, the
+  // constants MuJoCo derives from them are recomputed (mj_setConst). Step mutex held.
   Applied Apply(const RandomizeConfig& config, std::uint64_t seed, mjModel* m) const;
 
  private:

@@ -62,6 +62,7 @@ void Session::Build(const SceneConfig& scene) {
   eo.as_fast_as_possible = options_.as_fast_as_possible;
   eo.reset_on_divergence = options_.reset_on_divergence;
   eo.log_events = false;  // the Manager's event log reports each event once
+  compiled_options_ = compiled_.model.get()->opt;
   engine_ = std::make_unique<physics::PhysicsEngine>(std::move(compiled_.model), eo);
   controls_ = std::make_unique<control::ControlSystem>();
   controls_->SetGlobalSource(scene.control_source);

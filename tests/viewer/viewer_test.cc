@@ -1049,14 +1049,19 @@ TEST_F(ViewerTest, SavesMjbXmlAndPrintsModelAndData) {
   EXPECT_EQ(physics::ContentHash(physics::MjbBytes(loaded.get()), running.extension_text()),
             running.Hash())
       << "the saved MJB loads as the same model";
+  // An option changed at run time (gravity off, as the panel's physics flags do) is saved too.
+  core().SetDisableFlag(6, true);  // mjDSBL_GRAVITY
+  ASSERT_TRUE(TickUntil([&] { return engine().CopyModel()->opt.disableflags & mjDSBL_GRAVITY; }));
   Key(GLFW_KEY_S, GLFW_MOD_CONTROL);
   const std::string xml = dir_ + "/urlab_scene.xml";
   ASSERT_TRUE(std::filesystem::exists(xml));
+  EXPECT_NE(core().status().find("flag.gravity"), std::string::npos) << core().status();
   char error[500] = "";
   mjModel* m = mj_loadXML(xml.c_str(), nullptr, error, sizeof error);
   ASSERT_NE(m, nullptr) << error;
   EXPECT_EQ(m->nq, running->nq);
   EXPECT_EQ(m->nbody, running->nbody);
+  EXPECT_TRUE(m->opt.disableflags & mjDSBL_GRAVITY);
   mj_deleteModel(m);
   Key(GLFW_KEY_M, GLFW_MOD_CONTROL);
   Key(GLFW_KEY_D, GLFW_MOD_CONTROL);

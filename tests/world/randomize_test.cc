@@ -149,6 +149,48 @@ TEST_F(RandomizeTest, DrawsAreWrittenIntoTheSessionsOwnModel) {
   });
 }
 
+// Masses and armature drawn: what MuJoCo derives from them (subtree masses, inverse weights,
+// actuator_acc0, mean inertia) is as if the model had been compiled with the drawn values.
+TEST_F(RandomizeTest, DerivedConstantsFollowTheDrawnMasses) {
+  const world::SceneConfig scene = Scene();
+  const world::CompiledScene nominal = world::BuildScene(scene);
+  auto s = world::Session::Create(scene);
+  const auto r = s->ResetRandomized(11);
+  const double mass = r.draws.targets.at("arm").at("mass");
+  ASSERT_NE(mass, 1.0);
+  s->engine().WithLockedData([&](mjModel* m, mjData*) {
+    // The reference: the nominal model with the same fields written, its constants recomputed.
+    mjModel* ref = mj_copyModel(nullptr, nominal.model.get());
+    std::copy_n(m->body_mass, m->nbody, ref->body_mass);
+    std::copy_n(m->body_inertia, 3 * m->nbody, ref->body_inertia);
+    std::copy_n(m->dof_armature, m->nv, ref->dof_armature);
+    mjData* scratch = mj_makeData(ref);
+    mj_setConst(ref, scratch);
+    double total = 0;
+    for (int b = 1; b < m->nbody; ++b) total += m->body_mass[b];
+    EXPECT_DOUBLE_EQ(m->body_subtreemass[0], total);
+    EXPECT_NE(m->body_subtreemass[0], nominal.model.get()->body_subtreemass[0]);
+    for (int b = 0; b < m->nbody; ++b) {
+      EXPECT_EQ(m->body_subtreemass[b], ref->body_subtreemass[b]) << b;
+      EXPECT_EQ(m->body_invweight0[2 * b], ref->body_invweight0[2 * b]) << b;
+    }
+    for (int i = 0; i < m->nv; ++i) EXPECT_EQ(m->dof_invweight0[i], ref->dof_invweight0[i]) << i;
+    for (int a = 0; a < m->nu; ++a) EXPECT_EQ(m->actuator_acc0[a], ref->actuator_acc0[a]) << a;
+    EXPECT_EQ(m->stat.meaninertia, ref->stat.meaninertia);
+    mj_deleteData(scratch);
+    mj_deleteModel(ref);
+  });
+  // A reset without mass draws puts the nominal constants back.
+  s->ResetRandomized(12, nullptr);
+  world::RandomizeConfig none;
+  s->ResetRandomized(13, &none);
+  s->engine().WithLockedData([&](mjModel* m, mjData*) {
+    const mjModel* n = nominal.model.get();
+    for (int b = 0; b < m->nbody; ++b) EXPECT_EQ(m->body_subtreemass[b], n->body_subtreemass[b]);
+    for (int i = 0; i < m->nv; ++i) EXPECT_EQ(m->dof_invweight0[i], n->dof_invweight0[i]);
+  });
+}
+
 // Kolmogorov-Smirnov statistic of `x` against `range`'s CDF.
 double KsStatistic(std::vector<double> x, const world::RandomRange& range) {
   std::sort(x.begin(), x.end());

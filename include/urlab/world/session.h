@@ -84,6 +84,8 @@ class Session : public std::enable_shared_from_this<Session> {
   control::ControlSystem& controls() { return *controls_; }
   // The compiled scene (layouts, diagnostics, document); its model lives in engine().
   const CompiledScene& scene() const { return compiled_; }
+  // The physics options as compiled from the scene (the engine's follow run-time changes).
+  const mjOption& compiled_options() const { return compiled_options_; }
   const SceneConfig& scene_config() const { return config_; }
   const SessionOptions& options() const { return options_; }
   const std::vector<Articulation>& articulations() const { return articulations_; }
@@ -177,6 +179,7 @@ class Session : public std::enable_shared_from_this<Session> {
   SessionOptions options_;
   SceneConfig config_;
   CompiledScene compiled_;
+  mjOption compiled_options_{};
   std::unique_ptr<control::ControlSystem> controls_;
   std::unique_ptr<physics::PhysicsEngine> engine_;
   std::vector<Articulation> articulations_;
