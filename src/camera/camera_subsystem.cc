@@ -7,6 +7,7 @@
 #include <condition_variable>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <future>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -69,13 +70,26 @@ CameraOptions CameraOptionsFromScene(const world::SceneConfig& scene) {
 }
 
 struct CameraSubsystem::Impl {
+  // A rendered frame of every stream of one camera, waiting for its release step.
+  struct Held {
+    std::int64_t release = 0;
+    std::vector<world::CameraFrame> frames;  // per stream of the camera
+  };
   struct Camera {
     internal::PlannedCamera plan;
+    std::string key;  // "{articulation}/{camera}"
     render::ImageRequest request;
     std::vector<std::size_t> streams;  // indices into infos
     Clock::duration period{};
     Clock::time_point next_due{};
     std::uint64_t frames = 0;
+    // ---- Emulated delay (render thread; `setting` and `pending` also under mu) ----
+    physics::LatencySetting setting;  // as given (Delay reports it)
+    physics::DelaySpec pending;       // set by SetDelay, taken by the render thread
+    bool pending_set = false;
+    physics::DelaySpec delay;  // in effect (render thread)
+    std::int64_t last_release = -1, last_change = -1;
+    std::deque<Held> held;
   };
 
   std::vector<world::CameraStreamInfo> infos;
@@ -97,7 +111,12 @@ struct CameraSubsystem::Impl {
   std::condition_variable frames_cv, wake_cv;
   std::vector<world::CameraFrame> latest;     // per stream
   std::vector<std::uint64_t> requested_step;  // per stream: a waiter's step, 0 for none
-  std::uint64_t request_gen = 0;              // requests made so far
+  std::vector<std::uint64_t> rendered_step;   // per stream: the step of its newest render
+  // Per stream: the newest step whose releases the render thread has made (delayed cameras).
+  std::vector<std::uint64_t> released_through;
+  std::vector<bool> delayed;      // per stream: its camera has a delay
+  double timestep = 0;            // the model's, resolving delays in seconds
+  std::uint64_t request_gen = 0;  // requests made so far
 
   std::atomic<std::uint64_t> renders{0}, published{0}, dropped{0};
   std::atomic<double> render_ms_total{0};
@@ -113,6 +132,13 @@ struct CameraSubsystem::Impl {
   void Init(const CameraOptions& options);
   void Run();
   void RenderCamera(Camera& cam, const physics::StateFrame& frame, std::int64_t state_wall);
+  // Delivers frames: to the topics and as the streams' latest.
+  void Deliver(Camera& cam, std::vector<world::CameraFrame>& frames);
+  // Takes a delay setting SetDelay left for the camera (render thread).
+  void TakeSetting(Camera& cam);
+  // Takes a new setting and releases the held frames due at `step`.
+  void Release(Camera& cam, std::uint64_t step);
+  Camera& Find(const std::string& key);
   void Publish(std::size_t stream, const world::CameraFrame& frame);
 };
 
@@ -218,12 +244,74 @@ void CameraSubsystem::Impl::RenderCamera(Camera& cam, const physics::StateFrame&
   renders.fetch_add(1, std::memory_order_relaxed);
   render_ms_total.store(render_ms_total.load(std::memory_order_relaxed) + ms,
                         std::memory_order_relaxed);
-  for (std::size_t k = 0; k < cam.streams.size(); ++k) Publish(cam.streams[k], out[k]);
   {
     std::lock_guard lock(mu);
-    for (std::size_t k = 0; k < cam.streams.size(); ++k) latest[cam.streams[k]] = out[k];
+    for (std::size_t s : cam.streams) rendered_step[s] = frame.step;
+  }
+  TakeSetting(cam);  // a setting given while this frame rendered applies to it
+  if (!cam.delay.active()) {
+    Deliver(cam, out);
+    return;
+  }
+  // Held until step + delay + jitter (never before its own step, never before an older frame).
+  // The jitter is a function of the seed and the step, so however often the thread renders one
+  // state, a lockstep run releases the same frames at the same steps for the same seed.
+  const auto t = static_cast<std::int64_t>(frame.step);
+  int j = 0;
+  if (cam.delay.jitter > 0) {
+    std::uint64_t state = physics::DeriveSeed(cam.delay.seed, frame.step);
+    const auto span = static_cast<std::uint64_t>(2 * cam.delay.jitter + 1);
+    j = static_cast<int>(
+            static_cast<std::uint64_t>(physics::UnitDouble(&state) * static_cast<double>(span))) -
+        cam.delay.jitter;
+  }
+  const std::int64_t release = std::max({t, t + cam.delay.delay + j, cam.last_release});
+  cam.last_release = release;
+  cam.held.push_back({release, std::move(out)});
+}
+
+void CameraSubsystem::Impl::Deliver(Camera& cam, std::vector<world::CameraFrame>& frames) {
+  for (std::size_t k = 0; k < cam.streams.size(); ++k) Publish(cam.streams[k], frames[k]);
+  {
+    std::lock_guard lock(mu);
+    for (std::size_t k = 0; k < cam.streams.size(); ++k) latest[cam.streams[k]] = frames[k];
   }
   frames_cv.notify_all();
+}
+
+void CameraSubsystem::Impl::TakeSetting(Camera& cam) {
+  std::lock_guard lock(mu);
+  if (!cam.pending_set) return;
+  // A new setting restarts the camera's line: the frames held are dropped.
+  cam.delay = cam.pending;
+  cam.pending_set = false;
+  cam.last_release = cam.last_change = -1;
+  cam.held.clear();
+  for (std::size_t s : cam.streams) delayed[s] = cam.delay.active();
+}
+
+void CameraSubsystem::Impl::Release(Camera& cam, std::uint64_t step) {
+  TakeSetting(cam);
+  const auto t = static_cast<std::int64_t>(step);
+  const bool may_change = cam.delay.min_interval <= 1 || cam.last_change < 0 ||
+                          t - cam.last_change >= cam.delay.min_interval;
+  // The newest frame due is delivered; older ones due at the same step are superseded.
+  std::optional<Held> due;
+  while (may_change && !cam.held.empty() && cam.held.front().release <= t) {
+    due = std::move(cam.held.front());
+    cam.held.pop_front();
+  }
+  if (due) {
+    cam.last_change = t;
+    Deliver(cam, due->frames);
+  }
+  if (cam.delay.active()) {
+    {
+      std::lock_guard lock(mu);
+      for (std::size_t s : cam.streams) released_through[s] = std::max(released_through[s], step);
+    }
+    frames_cv.notify_all();
+  }
 }
 
 void CameraSubsystem::Impl::Run() {
@@ -240,7 +328,8 @@ void CameraSubsystem::Impl::Run() {
       seen_gen = request_gen;
       for (std::size_t c = 0; c < cameras.size(); ++c) {
         for (std::size_t s : cameras[c].streams) {
-          if (requested_step[s] > latest[s].step || (requested_step[s] && !latest[s].bytes)) {
+          if (requested_step[s] > rendered_step[s] ||
+              (requested_step[s] && !latest[s].bytes && !delayed[s])) {
             wanted[c] = std::max(wanted[c], requested_step[s]);
           }
         }
@@ -269,10 +358,15 @@ void CameraSubsystem::Impl::Run() {
           if (cam.next_due < Clock::now()) cam.next_due = Clock::now() + cam.period;  // behind
         }
       }
+      for (Camera& cam : cameras) Release(cam, frame->step);
     }
     auto until = Clock::time_point::max();
     for (const auto& cam : cameras) until = std::min(until, cam.next_due);
-    if (!frame || waiting_for_state) until = std::min(until, Clock::now() + kSyncPoll);
+    bool holding = false;  // a delayed camera waits for the steps that release its frames
+    for (const auto& cam : cameras) holding |= !cam.held.empty();
+    if (!frame || waiting_for_state || holding) {
+      until = std::min(until, Clock::now() + kSyncPoll);
+    }
     std::unique_lock lock(mu);
     wake_cv.wait_until(lock, until, [&] {
       return stop.load(std::memory_order_acquire) || request_gen != seen_gen;
@@ -317,6 +411,7 @@ void CameraSubsystem::BeginPlay(world::Session& session) {
     cam.plan = p;
     cam.period =
         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / p.rate));
+    cam.key = p.articulation + "/" + p.camera;
     for (const std::string& mode : p.modes) {
       world::CameraStreamInfo info;
       info.articulation = p.articulation;
@@ -343,6 +438,10 @@ void CameraSubsystem::BeginPlay(world::Session& session) {
   }
   d.latest.resize(d.infos.size());
   d.requested_step.assign(d.infos.size(), 0);
+  d.rendered_step.assign(d.infos.size(), 0);
+  d.released_through.assign(d.infos.size(), 0);
+  d.delayed.assign(d.infos.size(), false);
+  d.timestep = d.model->opt.timestep;
   d.subscription = session.engine().SubscribeState("cameras");
   std::promise<void> ready;
   auto started = ready.get_future();
@@ -392,17 +491,52 @@ bool CameraSubsystem::WaitForStep(std::size_t index, std::uint64_t step,
   Impl& d = *impl_;
   std::unique_lock lock(d.mu);
   if (index >= d.latest.size()) return false;
-  auto ready = [&] { return d.latest[index].bytes && d.latest[index].step >= step; };
+  // Undelayed: a frame of `step` or later. Delayed: the releases of `step` are made (the frame of
+  // `step` rendered and held, what is due by then delivered).
+  auto ready = [&] {
+    if (d.delayed[index])
+      return d.released_through[index] >= step && d.rendered_step[index] >= step;
+    return d.latest[index].bytes && d.latest[index].step >= step;
+  };
   if (!ready()) {
     d.requested_step[index] = std::max(d.requested_step[index], step);
     ++d.request_gen;
     d.wake_cv.notify_all();
     d.frames_cv.wait_for(lock, timeout, [&] { return ready() || d.stop.load(); });
-    if (ready() || d.requested_step[index] <= d.latest[index].step) d.requested_step[index] = 0;
+    if (ready() || d.requested_step[index] <= d.rendered_step[index]) d.requested_step[index] = 0;
   }
-  if (!ready()) return false;
+  if (!ready() || !d.latest[index].bytes) return false;
   out = d.latest[index];
   return true;
+}
+
+CameraSubsystem::Impl::Camera& CameraSubsystem::Impl::Find(const std::string& key) {
+  for (Camera& cam : cameras) {
+    if (cam.key == key) return cam;
+  }
+  std::string known;
+  for (const Camera& cam : cameras) known += (known.empty() ? "" : ", ") + cam.key;
+  throw Error("unknown camera '" + key +
+              "' (streamed cameras: " + (known.empty() ? std::string("none") : known) + ")");
+}
+
+void CameraSubsystem::SetDelay(const std::string& camera, const physics::LatencySetting& setting,
+                               std::uint64_t seed) {
+  Impl& d = *impl_;
+  std::lock_guard lock(d.mu);
+  Impl::Camera& cam = d.Find(camera);
+  cam.setting = setting;
+  cam.pending = physics::ResolveLatency(setting, d.timestep, seed);
+  cam.pending_set = true;
+  // Until the render thread takes it, waits follow the new setting.
+  for (std::size_t s : cam.streams) d.delayed[s] = cam.pending.active();
+  ++d.request_gen;  // wakes the render thread, which takes the setting
+  d.wake_cv.notify_all();
+}
+
+physics::LatencySetting CameraSubsystem::Delay(const std::string& camera) const {
+  std::lock_guard lock(impl_->mu);
+  return impl_->Find(camera).setting;
 }
 
 CameraCounters CameraSubsystem::counters() const {

@@ -173,6 +173,7 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
        false,
        {"articulation"},
        "articulation, seed, control, observation"},
+      {"set_camera_delay", &StepServer::SetCameraDelay, true, true, {"cameras"}, "cameras"},
 
       {"replay_status",
        &StepServer::ReplayStatus,

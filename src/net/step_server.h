@@ -282,6 +282,7 @@ class StepServer {
   // Emulated latency (step_server_latency_ops.cc).
   Outcome SetLatency(Request& r);
   Outcome GetLatency(Request& r);
+  Outcome SetCameraDelay(Request& r);  // step_server_camera_ops.cc
   // Domain randomisation (step_server_randomize.cc): when the request or the scene asks for
   // draws, checks the request's seed and ranges (refused while recording) and returns what
   // draws them and resets (Session::ResetRandomized); empty when nothing is to be drawn.

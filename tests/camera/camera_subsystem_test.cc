@@ -6,8 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <set>
+#include <vector>
 
 #include "mujoco_test.h"
+#include "urlab/core/error.h"
 #include "urlab/world/manager.h"
 
 namespace urlab::camera {
@@ -67,6 +70,98 @@ TEST_F(CameraSubsystemTest, StreamsRenderAndWaitsGetTheirStep) {
   EXPECT_EQ(f.bytes->size(), 32u * 24u * 4u);
   manager.EndPlay();
   EXPECT_GT(cams.counters().renders, 0u);
+}
+
+// Lockstep with a sync wait at every step, from the step a setting was given: the step of the
+// frame each wait returns, -1 while it is none or one from before the setting (a new setting
+// drops the frames held; the camera goes on showing its last frame until the first release).
+std::vector<std::int64_t> DelayedFrameSteps(world::Manager& manager, CameraSubsystem& cams,
+                                            int stream, int steps) {
+  physics::PhysicsEngine& engine = manager.session().engine();
+  const std::uint64_t start = engine.step_count();
+  std::vector<std::int64_t> out;
+  for (int i = 0; i < steps; ++i) {
+    engine.StepSync(1);
+    world::CameraFrame f;
+    const bool got = cams.WaitForStep(stream, engine.step_count(), std::chrono::seconds(10), f);
+    out.push_back(got && f.step > start ? static_cast<std::int64_t>(f.step) : -1);
+  }
+  return out;
+}
+
+TEST_F(CameraSubsystemTest, ADelayedCameraShowsTheStateItsDelayAgo) {
+  const world::SceneConfig s = Scene("    cameras: [wrist]\ncameras: {width: 16, height: 12}\n");
+  world::Manager manager;
+  auto& cams = static_cast<CameraSubsystem&>(
+      manager.AddSubsystem(std::make_unique<CameraSubsystem>(Options(s))));
+  manager.BeginPlay(s);
+  manager.session().SetPaused(true);
+  const int wrist = cams.Find("rig", "wrist");
+  ASSERT_GE(wrist, 0);
+  physics::LatencySetting three;
+  three.delay = 3;
+  cams.SetDelay("rig/wrist", three, 1);
+  EXPECT_EQ(cams.Delay("rig/wrist"), three);
+  const std::uint64_t start = manager.session().engine().step_count();
+  const auto steps = DelayedFrameSteps(manager, cams, wrist, 12);
+  // Nothing is released for the first three steps; from then on each frame is 3 steps old.
+  for (int i = 0; i < 12; ++i) {
+    const auto now = static_cast<std::int64_t>(start) + i + 1;
+    if (i < 3) {
+      EXPECT_EQ(steps[i], -1) << i;
+    } else {
+      EXPECT_EQ(steps[i], now - 3) << i;
+    }
+  }
+  // A rate cap of 1/(4 dt): the frame shown changes at most every 4 steps.
+  physics::LatencySetting capped;
+  capped.delay = 1;
+  capped.rate_hz = 1.0 / (4 * manager.session().engine().timestep());
+  cams.SetDelay("rig/wrist", capped, 1);
+  const auto c = DelayedFrameSteps(manager, cams, wrist, 24);
+  int changes = 0;
+  for (std::size_t i = 1; i < c.size(); ++i) changes += c[i] != c[i - 1];
+  EXPECT_GE(changes, 4);
+  EXPECT_LE(changes, 7);
+  EXPECT_THROW(cams.SetDelay("rig/nope", three, 1), Error);
+  manager.EndPlay();
+}
+
+TEST_F(CameraSubsystemTest, JitteredDelaysStayInRangeKeepOrderAndFollowTheSeed) {
+  const world::SceneConfig s = Scene("    cameras: [wrist]\ncameras: {width: 16, height: 12}\n");
+  physics::LatencySetting jittery;
+  jittery.delay = 3;
+  jittery.jitter = 2;
+  // Two runs from the start with the same seed, one with another.
+  auto run = [&](std::uint64_t seed) {
+    world::Manager manager;
+    auto& cams = static_cast<CameraSubsystem&>(
+        manager.AddSubsystem(std::make_unique<CameraSubsystem>(Options(s))));
+    manager.BeginPlay(s);
+    manager.session().SetPaused(true);
+    cams.SetDelay("rig/wrist", jittery, seed);
+    const auto start = static_cast<std::int64_t>(manager.session().engine().step_count());
+    auto steps = DelayedFrameSteps(manager, cams, cams.Find("rig", "wrist"), 40);
+    manager.EndPlay();
+    for (auto& v : steps) v = v < 0 ? -1 : v - start;
+    return steps;
+  };
+  const auto a = run(7), b = run(7), c = run(8);
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a, c);
+  std::set<std::int64_t> delays;
+  EXPECT_EQ(a[0], -1);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i] < 0) continue;
+    const auto now = static_cast<std::int64_t>(i + 1);
+    EXPECT_GE(now - a[i], 1) << i;
+    EXPECT_LE(now - a[i], 5) << i;
+    if (i > 0 && a[i - 1] >= 0) {
+      EXPECT_GE(a[i], a[i - 1]) << i;
+    }
+    delays.insert(now - a[i]);
+  }
+  EXPECT_GE(delays.size(), 3u) << "the jitter varies the delay";
 }
 
 TEST_F(CameraSubsystemTest, AnUnknownCameraIsRefusedAtItsLine) {

@@ -2,7 +2,8 @@
 """End to end: `urlab run` streams two cameras of tests/data/cameras/rig.xml; the Python client
 discovers them, receives numpy frames from both (RGB, depth, segmentation), checks what the top
 camera sees (the red box 1.9 m away, its geom id), and through the step server gets frames with
-include_cameras: "sync" frames show exactly the step of the reply.
+include_cameras: "sync" frames show exactly the step of the reply, and with set_camera_delay the
+state that many steps before.
 Usage: python_camera_e2e.py URLAB_BINARY SOURCE_DIR
 """
 import os
@@ -105,7 +106,27 @@ cameras:
                 fail("unknown camera accepted", proc)
             except Exception as e:  # UrlabError
                 assert "nose" in str(e), e
-        print(f"step server: 10 sync steps, camera_meta step == step (last {reply['step']})")
+            # An emulated camera delay of 3 steps: sync frames show the state 3 steps before the
+            # reply's, from the camera's topic too.
+            ok = sim.call("set_camera_delay", cameras={"top": {"delay_steps": 3}})
+            assert ok["cameras"]["rig/top"]["delay_steps"] == 3, ok
+            seen = []
+            for i in range(8):
+                reply = sim.step(n_steps=1, include_cameras={"top": "sync"})
+                top = reply["cameras"]["rig"]["top"]
+                seen.append(reply["step"] - top["step"] if "step" in top else None)
+            if seen[3:] != [3] * 5:
+                fail(f"delayed camera: reply step - frame step over 8 steps: {seen}", proc)
+            try:
+                sim.call("set_camera_delay", cameras={"nose": {"delay_steps": 1}})
+                fail("a delay for an unknown camera was accepted", proc)
+            except Exception as e:  # UrlabError unknown_camera
+                assert "nose" in str(e), e
+            sim.call("set_camera_delay", cameras={"rig/top": {}})
+            reply = sim.step(n_steps=1, include_cameras={"top": "sync"})
+            assert reply["cameras"]["rig"]["top"]["step"] == reply["step"], reply["cameras"]
+        print(f"step server: 10 sync steps, camera_meta step == step (last {reply['step']}); "
+              f"a 3-step camera delay seen as {seen}")
     finally:
         proc.terminate()
         try:

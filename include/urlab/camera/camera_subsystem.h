@@ -12,7 +12,8 @@
 // - Render thread (started in BeginPlay, joined in EndPlay): the GL context, the renderer, its
 //   own mjData (filled from its own latest-state subscription: the physics thread never waits
 //   for it), every camera socket.
-// - Any thread: the CameraStreams methods and counters().
+// - Any thread: the CameraStreams methods and counters(). SetDelay hands a camera's delay to the
+//   render thread under the lock; the render thread holds each delayed camera's queue of frames.
 #include <atomic>
 #include <memory>
 #include <string>
@@ -64,6 +65,9 @@ class CameraSubsystem : public world::Subsystem, public world::CameraStreams {
   bool Latest(std::size_t index, world::CameraFrame& out) const override;
   bool WaitForStep(std::size_t index, std::uint64_t step, std::chrono::milliseconds timeout,
                    world::CameraFrame& out) override;
+  void SetDelay(const std::string& camera, const physics::LatencySetting& setting,
+                std::uint64_t seed) override;
+  physics::LatencySetting Delay(const std::string& camera) const override;
 
   CameraCounters counters() const;
   // The GL backend in use ("egl (surfaceless)", ...), "" when not rendering.

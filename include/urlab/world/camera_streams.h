@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "urlab/physics/latency.h"
+
 namespace urlab::world {
 
 struct CameraStreamInfo {
@@ -55,6 +57,18 @@ class CameraStreams {
   // the stream's rate); false after `timeout` or when the cameras stop.
   virtual bool WaitForStep(std::size_t index, std::uint64_t step, std::chrono::milliseconds timeout,
                            CameraFrame& out) = 0;
+
+  // Emulated camera latency: the frames of camera `camera` ("{articulation}/{camera}", every
+  // mode of it) are released `setting` after the state they show, counted in physics steps
+  // (physics/latency.h: delay, jitter drawn from `seed`, never reordering, and a rate cap), to
+  // its topics, to Latest and to WaitForStep alike. A frame's `step` and `sim_time` stay those of
+  // the state it shows. With a delay, WaitForStep(step) returns the newest frame released by
+  // `step` (false while none has been). Replaces the camera's previous setting; throws Error for
+  // an unknown camera.
+  virtual void SetDelay(const std::string& camera, const physics::LatencySetting& setting,
+                        std::uint64_t seed) = 0;
+  // The camera's setting (empty: none); throws Error for an unknown camera.
+  virtual physics::LatencySetting Delay(const std::string& camera) const = 0;
 };
 
 }  // namespace urlab::world

@@ -1,0 +1,131 @@
+// The step server's camera latency operation (docs/protocol.md, "Emulated latency"):
+// set_camera_delay hands each named camera's delay to the camera subsystem
+// (world::CameraStreams::SetDelay); what a setting means is physics/latency.h.
+#include <string>
+
+#include "net/request_fields.h"
+#include "net/step_server.h"
+#include "urlab/core/error.h"
+#include "urlab/physics/latency.h"
+
+namespace urlab::net {
+
+using namespace request;
+
+namespace {
+
+// The seed streams of camera delays ("CAM" and the camera's first stream index): apart from the
+// articulations' latency streams.
+constexpr std::uint64_t kCamera = 0x43414D000000ull;
+
+// The keys a camera's setting takes: ours (physics/latency.h) and the seconds-and-rate names
+// other clients use (delay_s, jitter_s, max_fps; clock "sim").
+physics::LatencySetting CameraSetting(const Json& v, const std::string& what,
+                                      std::optional<std::uint64_t>* seed) {
+  if (!v.is_object()) {
+    Fail("bad_value", what +
+                          " must be a map (delay_steps or delay, jitter_steps or jitter, rate_hz, "
+                          "seed)");
+  }
+  physics::LatencySetting s;
+  bool delay = false, jitter = false;
+  for (const auto& [key, value] : v.items()) {
+    if (key == "seed") {
+      if (!value.is_number_unsigned() &&
+          !(value.is_number_integer() && value.get<std::int64_t>() >= 0)) {
+        Fail("bad_value", what + ".seed must be a whole number >= 0");
+      }
+      *seed = value.get<std::uint64_t>();
+      continue;
+    }
+    if (key == "clock") {
+      if (!value.is_string() || value.get<std::string>() != "sim") {
+        Fail("bad_value", what +
+                              ".clock: only \"sim\" (delays count physics steps, so lockstep "
+                              "stays deterministic)");
+      }
+      continue;
+    }
+    const std::string name = key == "delay_s"    ? "delay"
+                             : key == "jitter_s" ? "jitter"
+                             : key == "max_fps"  ? "rate_hz"
+                                                 : key;
+    const bool is_delay = name == "delay" || name == "delay_steps";
+    const bool is_jitter = name == "jitter" || name == "jitter_steps";
+    if ((is_delay && delay) || (is_jitter && jitter)) {
+      Fail("bad_value", what + ": give the " + (is_delay ? "delay" : "jitter") +
+                            " in steps or in seconds, not both");
+    }
+    delay |= is_delay;
+    jitter |= is_jitter;
+    if (!value.is_number()) Fail("bad_value", what + "." + key + " must be a number");
+    const std::string problem = physics::SetLatencyKey(&s, name, value.get<double>());
+    if (!problem.empty()) Fail("bad_value", what + ": " + problem);
+  }
+  return s;
+}
+
+// "{articulation}/{camera}", or a camera name that only one articulation streams; *index is
+// the camera's first stream.
+std::string CameraKey(const world::CameraStreams& cameras, const std::string& name,
+                      std::size_t* index) {
+  std::string found;
+  const auto& streams = cameras.Streams();
+  for (std::size_t i = 0; i < streams.size(); ++i) {
+    const auto& info = streams[i];
+    const std::string key = info.articulation + "/" + info.camera;
+    if (key == name) {
+      *index = i;
+      return key;
+    }
+    if (info.camera == name && found != key) {
+      *index = i;
+      if (!found.empty()) {
+        Fail("unknown_camera", "camera '" + name + "' is streamed by more than one articulation (" +
+                                   found + ", " + key + "): name it \"articulation/camera\"");
+      }
+      found = key;
+    }
+  }
+  if (found.empty()) Fail("unknown_camera", "no streamed camera '" + name + "'");
+  return found;
+}
+
+}  // namespace
+
+StepServer::Outcome StepServer::SetCameraDelay(Request& r) {
+  if (!cameras_ || cameras_->Streams().empty()) {
+    Fail("unknown_camera", "this scene streams no camera (the scene's cameras: section)");
+  }
+  const Json& map = r.body["cameras"];
+  if (!map.is_object() || map.empty()) {
+    Fail("bad_value", "cameras must map camera names to delay settings");
+  }
+  // Every entry is checked before any is applied.
+  struct Entry {
+    std::string key;
+    physics::LatencySetting setting;
+    std::uint64_t seed;
+  };
+  std::vector<Entry> entries;
+  for (const auto& [name, value] : map.items()) {
+    std::size_t index = 0;
+    const std::string key = CameraKey(*cameras_, name, &index);
+    std::optional<std::uint64_t> seed;
+    const physics::LatencySetting s = CameraSetting(value, "cameras." + name, &seed);
+    // Each camera draws its own jitter from the run's seed unless the request gives one.
+    entries.push_back(
+        {key, s, seed ? *seed : physics::DeriveSeed(session_.latency_seed(), kCamera + index)});
+  }
+  Json reply{{"op", "set_camera_delay_ok"}, {"cameras", Json::object()}};
+  for (const Entry& e : entries) {
+    cameras_->SetDelay(e.key, e.setting, e.seed);
+    Json fields = Json::object();
+    for (const auto& [k, v] : physics::LatencyFields(cameras_->Delay(e.key))) fields[k] = v;
+    fields["seed"] = e.seed;
+    reply["cameras"][e.key] = std::move(fields);
+  }
+  return {reply};
+}
+
+}  // namespace urlab::net
