@@ -3,6 +3,7 @@
 // (world::CameraStreams::SetDelay); what a setting means is physics/latency.h.
 #include <string>
 
+#include "net/latency_request.h"
 #include "net/request_fields.h"
 #include "net/step_server.h"
 #include "urlab/core/error.h"
@@ -17,53 +18,6 @@ namespace {
 // The seed streams of camera delays ("CAM" and the camera's first stream index): apart from the
 // articulations' latency streams.
 constexpr std::uint64_t kCamera = 0x43414D000000ull;
-
-// The keys a camera's setting takes: ours (physics/latency.h) and the seconds-and-rate names
-// other clients use (delay_s, jitter_s, max_fps; clock "sim").
-physics::LatencySetting CameraSetting(const Json& v, const std::string& what,
-                                      std::optional<std::uint64_t>* seed) {
-  if (!v.is_object()) {
-    Fail("bad_value", what +
-                          " must be a map (delay_steps or delay, jitter_steps or jitter, rate_hz, "
-                          "seed)");
-  }
-  physics::LatencySetting s;
-  bool delay = false, jitter = false;
-  for (const auto& [key, value] : v.items()) {
-    if (key == "seed") {
-      if (!value.is_number_unsigned() &&
-          !(value.is_number_integer() && value.get<std::int64_t>() >= 0)) {
-        Fail("bad_value", what + ".seed must be a whole number >= 0");
-      }
-      *seed = value.get<std::uint64_t>();
-      continue;
-    }
-    if (key == "clock") {
-      if (!value.is_string() || value.get<std::string>() != "sim") {
-        Fail("bad_value", what +
-                              ".clock: only \"sim\" (delays count physics steps, so lockstep "
-                              "stays deterministic)");
-      }
-      continue;
-    }
-    const std::string name = key == "delay_s"    ? "delay"
-                             : key == "jitter_s" ? "jitter"
-                             : key == "max_fps"  ? "rate_hz"
-                                                 : key;
-    const bool is_delay = name == "delay" || name == "delay_steps";
-    const bool is_jitter = name == "jitter" || name == "jitter_steps";
-    if ((is_delay && delay) || (is_jitter && jitter)) {
-      Fail("bad_value", what + ": give the " + (is_delay ? "delay" : "jitter") +
-                            " in steps or in seconds, not both");
-    }
-    delay |= is_delay;
-    jitter |= is_jitter;
-    if (!value.is_number()) Fail("bad_value", what + "." + key + " must be a number");
-    const std::string problem = physics::SetLatencyKey(&s, name, value.get<double>());
-    if (!problem.empty()) Fail("bad_value", what + ": " + problem);
-  }
-  return s;
-}
 
 // "{articulation}/{camera}", or a camera name that only one articulation streams; *index is
 // the camera's first stream.
@@ -112,7 +66,7 @@ StepServer::Outcome StepServer::SetCameraDelay(Request& r) {
     std::size_t index = 0;
     const std::string key = CameraKey(*cameras_, name, &index);
     std::optional<std::uint64_t> seed;
-    const physics::LatencySetting s = CameraSetting(value, "cameras." + name, &seed);
+    const physics::LatencySetting s = LatencySettingFromRequest(value, "cameras." + name, &seed);
     // Each camera draws its own jitter from the run's seed unless the request gives one.
     entries.push_back(
         {key, s, seed ? *seed : physics::DeriveSeed(session_.latency_seed(), kCamera + index)});
