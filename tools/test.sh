@@ -3,7 +3,8 @@
 # ctest, then more stages, each printing its wall time, and a table of them at the end:
 #   main        GCC build (RelWithDebInfo: -O2, line tables) of everything + every test (ctest);
 #               the same build is the one installed by the install stage
-#   tsan        ThreadSanitizer (-O1): the core, physics, control, world, replay, net and client tests
+#   tsan        ThreadSanitizer (-O1): the core, physics, control, world, replay, ops, net and client
+#               tests
 #   asan        clang build with AddressSanitizer + UndefinedBehaviorSanitizer and libFuzzer's
 #               coverage (-O1, assertions on, no precompiled headers, so every file's own includes
 #               are checked): the CLI, the fuzz targets, and the decoders' and model readers' tests
@@ -98,13 +99,14 @@ tsan_stage() {
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=$SANITIZER_OPT"
   # The net tests include the Python client's end-to-end test, which runs the urlab binary.
   cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_core urlab_tests_physics \
-    urlab_tests_control urlab_tests_world urlab_tests_replay urlab_tests_net urlab_tests_client
+    urlab_tests_control urlab_tests_world urlab_tests_replay urlab_tests_ops urlab_tests_net \
+    urlab_tests_client
   # The Python end-to-end tests whose subject is the Python side (examples, gait, the gymnasium
   # contract, Dask with plain and batched servers, the learning example, port choice) run in the
   # main stage only; the ones that load the server's threads (client, shared memory, hardening,
   # batched environments, latency) run here too.
   TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/tsan.supp" \
-    ctest --test-dir "$dir" -L 'core|physics|control|world|replay|net|client' --output-on-failure \
+    ctest --test-dir "$dir" -L 'core|physics|control|world|replay|ops|net|client' --output-on-failure \
     -E 'python_examples_e2e|gait_e2e|gym_env_e2e|cluster_(batch_)?e2e|learn_reach_smoke|ports_e2e' \
     -j"$JOBS" --timeout 900
 }
