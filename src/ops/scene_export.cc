@@ -113,18 +113,23 @@ std::vector<std::string> WriteOptionChanges(const mjOption& compiled, const mjOp
     }
     return *flag;
   };
-  for (int i = 0; i < mjNDISABLE; ++i) {
-    const bool off = now.disableflags & (1 << i);
-    if (off == static_cast<bool>(compiled.disableflags & (1 << i))) continue;
+  // Each flag that differs, by its MJCF name: disable flags then enable flags, in bit order.
+  const unsigned disabled = static_cast<unsigned>(now.disableflags);
+  const unsigned disable_changed = disabled ^ static_cast<unsigned>(compiled.disableflags);
+  for (unsigned i = 0; i < static_cast<unsigned>(mjNDISABLE); ++i) {
+    const unsigned bit = 1u << i;
+    if ((disable_changed & bit) == 0) continue;
     const std::string name = FlagName(mjDISABLESTRING[i]);
-    flags().Set(name, off ? "disable" : "enable");
+    flags().Set(name, (disabled & bit) ? "disable" : "enable");
     written.push_back("flag." + name);
   }
-  for (int i = 0; i < mjNENABLE; ++i) {
-    const bool on = now.enableflags & (1 << i);
-    if (on == static_cast<bool>(compiled.enableflags & (1 << i))) continue;
+  const unsigned enabled = static_cast<unsigned>(now.enableflags);
+  const unsigned enable_changed = enabled ^ static_cast<unsigned>(compiled.enableflags);
+  for (unsigned i = 0; i < static_cast<unsigned>(mjNENABLE); ++i) {
+    const unsigned bit = 1u << i;
+    if ((enable_changed & bit) == 0) continue;
     const std::string name = FlagName(mjENABLESTRING[i]);
-    flags().Set(name, on ? "enable" : "disable");
+    flags().Set(name, (enabled & bit) ? "enable" : "disable");
     written.push_back("flag." + name);
   }
   return written;
