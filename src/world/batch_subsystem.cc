@@ -48,7 +48,9 @@ BatchSubsystem::BatchSubsystem(BatchSubsystemOptions options) : options_(options
   auto_reset_.store(options_.auto_reset);
 }
 
-BatchSubsystem::~BatchSubsystem() = default;
+BatchSubsystem::~BatchSubsystem() {
+  if (others_) others_->Settle();  // a step begun reads arrays destroyed before the batch
+}
 
 int BatchSubsystem::threads() const { return others_ ? others_->threads() : 1; }
 
@@ -111,6 +113,7 @@ void BatchSubsystem::BeginPlay(Session& session) {
 
 void BatchSubsystem::EndPlay(Session& session) {
   physics::PhysicsEngine& engine = session.engine();
+  if (others_) engine.WithLockedData([this](mjModel*, mjData*) { others_->Settle(); });
   for (std::uint64_t id : callbacks_) engine.RemoveCallback(id);
   callbacks_.clear();
   control::ControlSystem* controls = &session.controls();

@@ -90,7 +90,8 @@ class Batch {
   // own environment): StepBegin checks the arrays and starts the workers on the environments;
   // StepEnd steps with them on the caller until none is left and throws like Step. The arrays
   // must stay valid, and the batch untouched, until StepEnd; a StepBegin, Step or the destructor
-  // after a StepBegin without its StepEnd finishes that step first.
+  // after a StepBegin without its StepEnd finishes that step first (so the arrays must outlive
+  // the batch, or Settle be called before they go).
   void StepBegin(std::span<const double> actions, std::span<double> observations,
                  std::span<std::uint8_t> done = {}, std::span<const std::uint8_t> skip = {});
   void StepEnd();
