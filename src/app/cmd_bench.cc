@@ -229,6 +229,19 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
                    "the folder holding urlab_client (default: this build's clients/python; "
                    "\"\": no Python figures)")
       ->capture_default_str();
+  std::vector<std::string> parts;
+  std::string part_list;
+  for (const auto& [name, produce] : net::FleetFigureProducers()) {
+    part_list += (parts.empty() ? "" : ", ") + name;
+    parts.push_back(name);
+  }
+  fleet
+      ->add_option("--only", fleet_args.only,
+                   "run only these parts, comma-separated (default: all of them, in this "
+                   "order): " +
+                       part_list)
+      ->check(CLI::IsMember(parts))
+      ->delimiter(',');
   fleet->callback([&exit_code] {
     CurrentInput() = fleet_scene;
     fleet_args.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };

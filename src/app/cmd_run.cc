@@ -67,6 +67,7 @@ struct RunArgs {
   bool no_auto_reset = false;
   int max_episode_steps = 0;
   double reset_noise = 0;
+  int record_env = 0;  // --record-env I: the environment the engine runs (recorded, shown)
   bool no_cameras = false;
   std::vector<std::string> video;  // --video CAM OUT: a camera's frames to MP4/WebM
   // `urlab record` (and `run --record`): the file to record to, and how.
@@ -133,6 +134,19 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
                 ": several environments are driven through the step server, and the network is "
                 "off here");
   }
+  if (args.envs > 1) {
+    // Emulated latency and domain randomisation live in the engine's session: the environments
+    // of the batch would run without them, so such a scene is refused rather than half-served.
+    const std::string why = ": applies to the engine's own simulation only, and --envs " +
+                            std::to_string(args.envs) +
+                            " steps the others without it; remove it, or run without --envs";
+    for (const world::ArticulationConfig& a : scene.articulations) {
+      if (!a.latency.control.empty() || !a.latency.observation.empty()) {
+        throw InputError(a.where, "articulation '" + a.name + "': latency" + why);
+      }
+    }
+    if (!scene.randomize.empty()) throw InputError(scene.randomize_where, "randomize" + why);
+  }
   if (args.no_network || !scene.network.enabled) NetworkSourcesToUi(scene);
   if (!args.announce.empty()) {
     CheckOutputs({{args.announce, "--announce"}}, world::SceneInputFiles(scene));
@@ -187,6 +201,9 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
       net_options.instance = fmt::format("{}:{}", host, ::getpid());
     }
     net_options.server_session = NewServerSession();
+    // With --envs the I/O thread steps the batch itself (short windows, StepHere): it keeps the
+    // physics thread's priority instead of yielding to it.
+    if (args.envs > 0) net_options.io_nice = 0;
     // The batched environments (environment 0 is the engine's own; --envs N adds N - 1), driven
     // by the step server's batch operations; added before the network, which uses it.
     world::BatchSubsystemOptions batch_options;
@@ -196,6 +213,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
     batch_options.max_episode_steps = args.max_episode_steps;
     batch_options.reset_noise = args.reset_noise;
     batch_options.seed = scene.seed;  // environment i: the run's seed + i
+    batch_options.engine_env = args.record_env;
     auto* batch = &static_cast<world::BatchSubsystem&>(
         manager.AddSubsystem(std::make_unique<world::BatchSubsystem>(batch_options)));
     auto network = std::make_unique<net::NetworkSubsystem>(net_options);
@@ -483,7 +501,8 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                       "N independent copies of the scene (one model, N simulations) stepped "
                       "together in lockstep by the step server's batch operations (batch_info, "
                       "batch_step, batch_reset; docs/network.md \"Batched environments\"); the "
-                      "topics, the viewer and a recording follow environment 0; implies "
+                      "topics, the viewer and a recording follow environment 0 (--record-env); "
+                      "implies "
                       "--step-mode direct when N > 1, and a divergence ends that environment's "
                       "episode instead of the run (default 1)")
           ->check(kInteger)
@@ -493,6 +512,13 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                   "most N)")
       ->check(kInteger)
       ->check(CLI::Range(1, 1024))
+      ->needs(envs);
+  cmd->add_option("--record-env", args.record_env,
+                  "with --envs: the environment the engine itself runs, which the recording "
+                  "(--record, recording_start), the streaming topics and the viewer follow "
+                  "(default 0; at most N-1)")
+      ->check(kInteger)
+      ->check(CLI::Range(0, 65535))
       ->needs(envs);
   cmd->add_flag("--no-auto-reset", args.no_auto_reset,
                 "with --envs: an ended episode waits for batch_reset (by default the next "

@@ -22,6 +22,12 @@ WorkerPool::WorkerPool(int threads) {
 }
 
 WorkerPool::~WorkerPool() {
+  if (job_) {
+    try {
+      Finish();
+    } catch (...) {  // nobody to tell: the job's owner is going away
+    }
+  }
   stop_.store(true, std::memory_order_release);
   generation_.fetch_add(1, std::memory_order_seq_cst);
   generation_.notify_all();
@@ -42,7 +48,7 @@ void WorkerPool::Work(int part) {
   std::uint64_t seen = 0;
   while (true) {
     const auto moved = [&] { return generation_.load(std::memory_order_acquire) != seen; };
-    if (!spin.Spin(kSpin, moved)) {
+    if (!spin.Spin(kWorkerSpin, moved)) {
       sleeping_workers_.fetch_add(1, std::memory_order_seq_cst);
       generation_.wait(seen, std::memory_order_seq_cst);  // returns once it moved
       sleeping_workers_.fetch_sub(1, std::memory_order_relaxed);
@@ -58,12 +64,22 @@ void WorkerPool::Work(int part) {
 }
 
 void WorkerPool::Run(const std::function<void(int part)>& fn) {
+  Start(fn);
+  Finish();
+}
+
+void WorkerPool::Start(const std::function<void(int part)>& fn) {
+  if (job_) Finish();
   job_ = &fn;
   if (!workers_.empty()) {
     remaining_.store(static_cast<int>(workers_.size()), std::memory_order_relaxed);
     generation_.fetch_add(1, std::memory_order_seq_cst);  // publishes job_ and remaining_
     if (sleeping_workers_.load(std::memory_order_seq_cst) > 0) generation_.notify_all();
   }
+}
+
+void WorkerPool::Finish() {
+  if (!job_) return;
   RunPart(0);
   if (!workers_.empty()) {
     thread_local SpinWait spin;

@@ -7,8 +7,9 @@
 // system call to wake a waiter only when one sleeps.
 //
 // Threading contract
-// - Construction, destruction and Run: one owner thread (Run is not reentrant; a part must not
-//   call Run). The owner blocks in Run until every part returned.
+// - Construction, destruction, Run, Start and Finish: one owner (not reentrant; a part must not
+//   call them). Threads may take turns as the owner when a lock of theirs orders their calls.
+//   The owner blocks in Run and Finish until every part returned.
 // - Parts run concurrently on distinct threads; what they share is theirs to keep apart (a batch
 //   gives each part its own environments). Everything the owner wrote before Run is visible to
 //   every part, and everything a part wrote is visible to the owner after Run.
@@ -34,9 +35,22 @@ class WorkerPool {
 
   int threads() const { return static_cast<int>(workers_.size()) + 1; }
   void Run(const std::function<void(int part)>& fn);
+  // Run in two halves: Start hands parts 1 .. K-1 to the workers and returns at once; Finish
+  // runs part 0 on the caller, waits for the others and rethrows. Between them the caller may
+  // do other work (a batch steps the engine's own environment meanwhile); `fn` must live until
+  // Finish returned. A second Start, or the destructor, first finishes a job started.
+  void Start(const std::function<void(int part)>& fn);
+  void Finish();
+  bool started() const { return job_ != nullptr; }
 
-  // How long a worker spins for the next job, and the owner for the last part, before sleeping.
+  // How long the owner spins for the last part before sleeping (the parts end within one unit
+  // of work of each other).
   static constexpr auto kSpin = std::chrono::microseconds(200);
+  // How long a worker spins for the next job before sleeping: jobs that follow each other at
+  // once (the iterations of a window) find it awake; between a batch server's requests it
+  // sleeps, so that it does not take a core from the client computing the next request (Start
+  // wakes it, and the owner has work of its own to overlap the wake-up with).
+  static constexpr auto kWorkerSpin = std::chrono::microseconds(50);
 
  private:
   void Work(int part);

@@ -380,7 +380,12 @@ std::vector<FleetFigure> RunFleetBench(world::SceneConfig scene, const FleetBenc
                     scene.path.c_str(), ctx.articulation().c_str(), engine.timestep(),
                     options.rounds, ctx.steps_per_round()));
   std::vector<FleetFigure> figures;
-  for (const auto& [name, produce] : FleetFigureProducers()) produce(ctx, &figures);
+  for (const auto& [name, produce] : FleetFigureProducers()) {
+    if (options.only.empty() ||
+        std::find(options.only.begin(), options.only.end(), name) != options.only.end()) {
+      produce(ctx, &figures);
+    }
+  }
   manager.EndPlay();
   return figures;
 }

@@ -21,6 +21,7 @@
 #include "urlab/ops/simulation.h"
 #include "urlab/ops/state.h"
 #include "urlab/replay/tables.h"
+#include "urlab/world/batch_subsystem.h"
 #include "urlab/world/names.h"
 #include "wire/request_limits.h"
 
@@ -638,15 +639,18 @@ std::size_t StepServer::PendingRequests(const std::string& client) const {
 std::size_t StepServer::CancelQueuedSteps(const std::string& client, const std::string& why) {
   std::uint64_t through = 0;
   std::size_t n = 0;
+  bool batch = false;
   for (Pending& p : pending_) {
     if (p.steps == 0 || !p.cancelled.empty() || (!client.empty() && p.client != client)) continue;
     p.cancelled = why;
     through = std::max(through, p.command);
+    batch |= p.op.starts_with("batch_");
     ++n;
   }
   // The physics thread drops them: queued ones never run, a running one stops after its
   // current iteration. (Only drivers queue steps, so nobody else's work is among them.)
   if (through > 0) session_.engine().CancelStepsThrough(through);
+  if (batch && batch_) batch_->Disarm();  // applied before any later step
   return n;
 }
 

@@ -54,7 +54,8 @@
 
 namespace urlab::world {
 class BatchSubsystem;
-}
+struct BatchStepJob;
+}  // namespace urlab::world
 
 namespace urlab::net {
 
@@ -261,6 +262,11 @@ class StepServer {
   bool StepHere(int n);
   static constexpr auto kMaxStepHere = std::chrono::microseconds(2000);
   double sync_step_seconds_ = 0;  // measured wall seconds per step of StepHere windows
+  // A batch step, like StepHere: on this thread and the batch's workers (the physics thread
+  // sleeps), for a window up to kMaxBatchHere at the measured cost; false: nothing done.
+  bool BatchStepHere(world::BatchSubsystem& b, const std::shared_ptr<world::BatchStepJob>& job);
+  static constexpr auto kMaxBatchHere = std::chrono::milliseconds(25);
+  double batch_step_seconds_ = 0;  // measured wall seconds per step of BatchStepHere windows
   Outcome PuppetStep(Request& r);
   Outcome Reset(Request& r);
   Outcome Forward(Request& r);

@@ -5,6 +5,7 @@
 // environments").
 #include <mujoco/mujoco.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -198,13 +199,32 @@ StepServer::Outcome StepServer::BatchStep(Request& r) {
   }
   Outcome out;
   out.reply = Json{{"op", "batch_step_ok"}, {"envs", b.envs()}};
-  out.wait_for = b.SubmitStep(job, &out.steps);
+  if (!BatchStepHere(b, job)) out.wait_for = b.SubmitStep(job, &out.steps);
   out.on_applied = [this, job](Json& reply) {
     if (!job->out.complete) Fail("cancelled", "the batch step did not complete");
     batch_->NoteCompleted(job->out);
     AddResult(reply, job->out);
   };
   return out;
+}
+
+bool StepServer::BatchStepHere(world::BatchSubsystem& b,
+                               const std::shared_ptr<world::BatchStepJob>& job) {
+  // Like StepHere: only with nothing queued before it (a reply waiting for a command must not be
+  // overtaken), and only a window this thread can afford at the measured cost per step.
+  const double budget = std::chrono::duration<double>(kMaxBatchHere).count();
+  const bool affordable =
+      batch_step_seconds_ > 0 ? job->n * batch_step_seconds_ <= budget : job->n == 1;
+  if (!affordable || !pending_.empty()) return false;
+  try {
+    if (!b.StepHere(job)) return false;
+  } catch (const std::exception& e) {
+    Fail("bad_value", e.what());
+  }
+  const double per_step = job->out.seconds / job->n;
+  batch_step_seconds_ =
+      batch_step_seconds_ > 0 ? 0.8 * batch_step_seconds_ + 0.2 * per_step : per_step;
+  return true;
 }
 
 StepServer::Outcome StepServer::BatchReset(Request& r) {

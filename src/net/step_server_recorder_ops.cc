@@ -15,6 +15,7 @@
 #include "urlab/ops/error.h"
 #include "urlab/ops/recording.h"
 #include "urlab/physics/model.h"
+#include "urlab/world/batch_subsystem.h"
 
 namespace urlab::net {
 
@@ -207,6 +208,12 @@ StepServer::Outcome StepServer::ReplaySetActive(Request& r) {
 }
 
 StepServer::Outcome StepServer::ReplayStart(Request& r) {
+  if (batch_ && batch_->envs() > 1) {
+    Fail("bad_mode", "replay_start: this run steps " + std::to_string(batch_->envs()) +
+                         " environments together (urlab run --envs), and a replay would move "
+                         "one of them alone; replay the recording in a run without --envs "
+                         "(urlab replay FILE, or urlab run SCENE and replay_start)");
+  }
   std::string id = active_replay_;
   if (const auto it = r.body.find("session"); it != r.body.end() && !it->is_null()) {
     id = String(*it, "session");

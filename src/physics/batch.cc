@@ -74,6 +74,7 @@ Batch::Batch(const Model& model, BatchOptions options) : options_(options) {
   for (int i = 0; i < options.envs; ++i) envs_.push_back(std::make_unique<Env>(model_));
   int threads = options.threads;
   if (threads == 0) threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  part_ = [this](int) { StepPart(); };
   pool_ = std::make_unique<WorkerPool>(std::min(threads, options.envs));
   ResetAll(options.seed);
 }
@@ -179,6 +180,13 @@ void Batch::StepEnv(Env& e, const double* action, double* obs, std::uint8_t* don
 
 void Batch::Step(std::span<const double> actions, std::span<double> observations,
                  std::span<std::uint8_t> done, std::span<const std::uint8_t> skip) {
+  StepBegin(actions, observations, done, skip);
+  StepEnd();
+}
+
+void Batch::StepBegin(std::span<const double> actions, std::span<double> observations,
+                      std::span<std::uint8_t> done, std::span<const std::uint8_t> skip) {
+  if (pool_->started()) StepEnd();
   const std::size_t n = envs_.size();
   const std::size_t nu = static_cast<std::size_t>(action_size());
   const std::size_t row = static_cast<std::size_t>(observation_size());
@@ -200,22 +208,46 @@ void Batch::Step(std::span<const double> actions, std::span<double> observations
     throw Error("batch: skip holds " + std::to_string(skip.size()) + " flags, expected " +
                 std::to_string(n));
   }
+  pass_.actions = actions;
+  pass_.observations = observations;
+  pass_.done = done;
+  pass_.skip = skip;
+  pass_.next.store(0, std::memory_order_relaxed);
+  pool_->Start(part_);  // publishes pass_ to the workers
+}
+
+void Batch::StepPart() {
   // Each thread claims the next environment from a shared counter: a thread the machine
   // preempts holds back only the environment it is stepping, the others take the rest.
-  std::atomic<std::size_t> next{0};
-  pool_->Run([&](int) {
-    for (std::size_t i = next.fetch_add(1, std::memory_order_relaxed); i < n;
-         i = next.fetch_add(1, std::memory_order_relaxed)) {
-      double* obs = observations.empty() ? nullptr : observations.data() + row * i;
-      if (!skip.empty() && skip[i]) {
-        if (!done.empty()) done[i] = 0;
-        if (obs) ObserveEnv(*envs_[i], obs);
-        continue;
-      }
-      StepEnv(*envs_[i], actions.data() + nu * i, obs, done.empty() ? nullptr : done.data() + i);
+  const std::size_t n = envs_.size();
+  const std::size_t nu = static_cast<std::size_t>(action_size());
+  const std::size_t row = static_cast<std::size_t>(observation_size());
+  const Pass& p = pass_;
+  for (std::size_t i = pass_.next.fetch_add(1, std::memory_order_relaxed); i < n;
+       i = pass_.next.fetch_add(1, std::memory_order_relaxed)) {
+    double* obs = p.observations.empty() ? nullptr : p.observations.data() + row * i;
+    if (!p.skip.empty() && p.skip[i]) {
+      if (!p.done.empty()) p.done[i] = 0;
+      if (obs) ObserveEnv(*envs_[i], obs);
+      continue;
     }
-  });
-  for (std::size_t i = 0; i < n; ++i) {
+    StepEnv(*envs_[i], p.actions.data() + nu * i, obs,
+            p.done.empty() ? nullptr : p.done.data() + i);
+  }
+}
+
+void Batch::Settle() {
+  if (!pool_->started()) return;
+  try {
+    StepEnd();
+  } catch (const std::exception&) {  // the environment stays latched until it is reset
+  }
+}
+
+void Batch::StepEnd() {
+  if (!pool_->started()) return;
+  pool_->Finish();
+  for (std::size_t i = 0; i < envs_.size(); ++i) {
     if (envs_[i]->error.empty()) continue;
     std::string error = std::move(envs_[i]->error);
     envs_[i]->error.clear();

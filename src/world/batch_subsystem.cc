@@ -40,10 +40,17 @@ BatchSubsystem::BatchSubsystem(BatchSubsystemOptions options) : options_(options
   if (options_.threads < 0) throw Error("--threads must be 0 (the cores) or more");
   if (!(options_.reset_noise >= 0)) throw Error("--reset-noise must be 0 or more");
   if (options_.max_episode_steps < 0) throw Error("--max-episode-steps must be 0 or more");
+  if (options_.engine_env < 0 || options_.engine_env >= options_.envs) {
+    throw Error("--record-env " + std::to_string(options_.engine_env) +
+                ": no such environment (--envs " + std::to_string(options_.envs) + " has 0.." +
+                std::to_string(options_.envs - 1) + ")");
+  }
   auto_reset_.store(options_.auto_reset);
 }
 
-BatchSubsystem::~BatchSubsystem() = default;
+BatchSubsystem::~BatchSubsystem() {
+  if (others_) others_->Settle();  // a step begun reads arrays destroyed before the batch
+}
 
 int BatchSubsystem::threads() const { return others_ ? others_->threads() : 1; }
 
@@ -66,19 +73,21 @@ void BatchSubsystem::BeginPlay(Session& session) {
   batch_options_.auto_reset = false;  // next-step autoreset is ours (SubmitStep)
   batch_options_.max_episode_steps = options_.max_episode_steps;
   batch_options_.reset_noise = options_.reset_noise;
-  batch_options_.seed = options_.seed + 1;  // environment j of the batch is environment j + 1
+  batch_options_.seed = options_.seed;  // reseeded below: environment e starts with seed + e
   batch_options_.reset_state = [keys](const mjModel* model, mjData* d) {
     mj_resetData(model, d);
     for (const auto& [control, key] : keys) control->ResetToKeyframe(model, d, key);
   };
-  if (options_.envs > 1)
+  if (options_.envs > 1) {
     others_ = std::make_unique<physics::Batch>(engine.owned_model(), batch_options_);
+    for (int j = 0; j < others_->envs(); ++j) others_->Reset(j, options_.seed + Wire(j));
+  }
   const std::size_t others = static_cast<std::size_t>(options_.envs - 1);
   skip_.assign(others, 0);
   done_.assign(others, 0);
   iteration_done_.assign(others, 0);
   ended_.assign(static_cast<std::size_t>(options_.envs), 0);
-  env0_rng_.seed(options_.seed);
+  env0_rng_.seed(options_.seed + static_cast<std::uint64_t>(options_.engine_env));
   if (options_.reset_noise > 0) {
     // Environment 0 starts like the others: the initial state plus its first noise.
     engine.ResetWith([this](const mjModel* model, mjData* d) { ResetEnv0(model, d, std::nullopt); },
@@ -95,13 +104,16 @@ void BatchSubsystem::BeginPlay(Session& session) {
   callbacks_.push_back(engine.AddCommandListener(
       [this](const physics::AppliedCommand& c, const mjModel*, const mjData*) { OnCommand(c); }));
   if (options_.envs > 1) {
-    spdlog::info("batch: {} environments ({} in the batch beside the engine's own), {} thread(s)",
-                 options_.envs, options_.envs - 1, threads());
+    spdlog::info(
+        "batch: {} environments ({} in the batch beside the engine's own, environment {}: the "
+        "topics, the viewer and recordings follow it), {} thread(s)",
+        options_.envs, options_.envs - 1, options_.engine_env, threads());
   }
 }
 
 void BatchSubsystem::EndPlay(Session& session) {
   physics::PhysicsEngine& engine = session.engine();
+  if (others_) engine.WithLockedData([this](mjModel*, mjData*) { others_->Settle(); });
   for (std::uint64_t id : callbacks_) engine.RemoveCallback(id);
   callbacks_.clear();
   control::ControlSystem* controls = &session.controls();
@@ -158,17 +170,46 @@ void BatchSubsystem::ApplyControls(const mjModel*, mjData* d) {
   // The first iteration that steps after the job was armed is its window's (the engine is paused
   // in direct mode: only step windows step), and so are the next n - 1.
   window_ = 1;
-  // Environment 0's actions are raw controls, over what its controllers wrote.
-  std::memcpy(d->ctrl, armed_->actions.data(), sizeof(double) * static_cast<std::size_t>(nu_));
+  // The engine's environment's actions are raw controls, over what its controllers wrote.
+  std::memcpy(d->ctrl,
+              armed_->actions.data() +
+                  static_cast<std::size_t>(options_.engine_env) * static_cast<std::size_t>(nu_),
+              sizeof(double) * static_cast<std::size_t>(nu_));
+  // The other environments start stepping on the workers while this thread steps the engine's;
+  // PostStep joins them (StepOthers).
+  if (others_) {
+    try {
+      others_->StepBegin(
+          OthersRows(armed_->actions, static_cast<std::size_t>(nu_), &others_actions_), {},
+          iteration_done_, skip_);
+    } catch (const std::exception& e) {
+      spdlog::warn("batch: {}", e.what());
+    }
+  }
+}
+
+template <typename T>
+std::span<const T> BatchSubsystem::OthersRows(const std::vector<T>& all, std::size_t width,
+                                              std::vector<T>* scratch) const {
+  // Rows in the batch's order: every environment's but the engine's.
+  const std::size_t e = static_cast<std::size_t>(options_.engine_env);
+  if (e == 0) return std::span<const T>(all.data() + width, all.size() - width);
+  scratch->assign(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(e * width));
+  scratch->insert(scratch->end(), all.begin() + static_cast<std::ptrdiff_t>((e + 1) * width),
+                  all.end());
+  return *scratch;
 }
 
 void BatchSubsystem::StepOthers(const std::vector<double>& actions, std::vector<std::uint8_t>& done,
-                                const std::vector<std::uint8_t>& skip) {
+                                const std::vector<std::uint8_t>& skip, bool begun) {
   if (!others_) return;
-  const std::size_t nu = static_cast<std::size_t>(nu_);
   try {
-    others_->Step(std::span<const double>(actions.data() + nu, actions.size() - nu), {},
-                  iteration_done_, skip);
+    if (begun) {
+      others_->StepEnd();
+    } else {
+      others_->Step(OthersRows(actions, static_cast<std::size_t>(nu_), &others_actions_), {},
+                    iteration_done_, skip);
+    }
   } catch (const std::exception& e) {
     // The environment whose iteration threw is latched (done) until it is reset.
     spdlog::warn("batch: {}", e.what());
@@ -184,13 +225,15 @@ void BatchSubsystem::Gather(const mjModel* m, const mjData* d, BatchResult& out)
   out.episode_steps.resize(n);
   out.done.resize(n, 0);
   out.reset.resize(n, 0);
-  mju_copy(out.obs.data(), d->qpos, m->nq);
-  mju_copy(out.obs.data() + m->nq, d->qvel, m->nv);
-  mju_copy(out.obs.data() + m->nq + m->nv, d->sensordata, m->nsensordata);
-  out.time[0] = d->time;
-  out.episode_steps[0] = env0_steps_;
-  for (std::size_t i = 1; i < n; ++i) {
-    const int j = static_cast<int>(i - 1);
+  const std::size_t e = static_cast<std::size_t>(options_.engine_env);
+  double* engine_row = out.obs.data() + row * e;
+  mju_copy(engine_row, d->qpos, m->nq);
+  mju_copy(engine_row + m->nq, d->qvel, m->nv);
+  mju_copy(engine_row + m->nq + m->nv, d->sensordata, m->nsensordata);
+  out.time[e] = d->time;
+  out.episode_steps[e] = env0_steps_;
+  for (int j = 0; others_ && j < others_->envs(); ++j) {
+    const std::size_t i = static_cast<std::size_t>(Wire(j));
     others_->ObserveOne(j, out.obs.data() + row * i);
     out.time[i] = others_->env(j).data()->time;
     out.episode_steps[i] = static_cast<std::uint32_t>(others_->episode_steps(j));
@@ -203,16 +246,18 @@ void BatchSubsystem::PostStep(const mjModel* m, mjData* d) {
   ++iterations_;
   ++env0_steps_;
   if (Diverged(m, d)) env0_diverged_ = true;
-  StepOthers(job.actions, done_, skip_);
+  StepOthers(job.actions, done_, skip_, /*begun=*/true);
   if (iterations_ < job.n) return;
   BatchResult& out = job.out;
   out.done.assign(static_cast<std::size_t>(options_.envs), 0);
   out.reset = job.reset;
   Gather(m, d, out);
-  out.done[0] =
+  out.done[static_cast<std::size_t>(options_.engine_env)] =
       env0_diverged_ || (options_.max_episode_steps > 0 &&
                          env0_steps_ >= static_cast<std::uint32_t>(options_.max_episode_steps));
-  for (std::size_t i = 0; i < done_.size(); ++i) out.done[i + 1] = done_[i];
+  for (std::size_t j = 0; j < done_.size(); ++j) {
+    out.done[static_cast<std::size_t>(Wire(static_cast<int>(j)))] = done_[j];
+  }
   out.seconds = Now() - started_;
   out.complete = true;
   AddSeconds(busy_seconds_, out.seconds);
@@ -226,30 +271,76 @@ void BatchSubsystem::PostStep(const mjModel* m, mjData* d) {
 // ---------------------------------------------------------------------------------------------
 // Requests
 
-std::uint64_t BatchSubsystem::SubmitStep(std::shared_ptr<BatchStepJob> job, std::uint64_t* steps) {
+void BatchSubsystem::CheckStep(const BatchStepJob& job) const {
   if (!session_) throw Error("batch: not playing");
   const std::size_t n = static_cast<std::size_t>(options_.envs);
-  if (job->actions.size() != n * static_cast<std::size_t>(nu_)) {
-    throw Error("batch: actions hold " + std::to_string(job->actions.size()) +
-                " values, expected " + std::to_string(n * static_cast<std::size_t>(nu_)) + " (" +
-                std::to_string(n) + " x " + std::to_string(nu_) + ")");
+  if (job.actions.size() != n * static_cast<std::size_t>(nu_)) {
+    throw Error("batch: actions hold " + std::to_string(job.actions.size()) + " values, expected " +
+                std::to_string(n * static_cast<std::size_t>(nu_)) + " (" + std::to_string(n) +
+                " x " + std::to_string(nu_) + ")");
   }
-  if (!job->reset.empty() && job->reset.size() != n) {
-    throw Error("batch: reset holds " + std::to_string(job->reset.size()) + " flags, expected " +
+  if (!job.reset.empty() && job.reset.size() != n) {
+    throw Error("batch: reset holds " + std::to_string(job.reset.size()) + " flags, expected " +
                 std::to_string(n));
   }
-  if (job->n < 1) throw Error("batch: n_steps must be at least 1");
-  job->reset.resize(n, 0);
+  if (job.n < 1) throw Error("batch: n_steps must be at least 1");
+}
+
+void BatchSubsystem::TakeResets(BatchStepJob& job) {
+  const std::size_t n = static_cast<std::size_t>(options_.envs);
+  job.reset.resize(n, 0);
   if (auto_reset()) {
-    for (std::size_t i = 0; i < n; ++i) job->reset[i] |= ended_[i];
+    for (std::size_t i = 0; i < n; ++i) job.reset[i] |= ended_[i];
   }
   for (std::size_t i = 0; i < n; ++i) {
-    if (job->reset[i]) ended_[i] = 0;
+    if (job.reset[i]) ended_[i] = 0;
   }
+}
+
+void BatchSubsystem::Arm(const std::shared_ptr<BatchStepJob>& job, const mjModel* m) {
+  started_ = Now();
+  if (others_) others_->Settle();
+  SyncOptions(m);
+  for (std::size_t j = 0; j < skip_.size(); ++j) {
+    skip_[j] = job->reset[static_cast<std::size_t>(Wire(static_cast<int>(j)))];
+    if (skip_[j]) others_->Reset(static_cast<int>(j));
+  }
+  std::fill(done_.begin(), done_.end(), 0);
+  armed_ = job;
+  window_ = 0;
+  iterations_ = 0;
+}
+
+bool BatchSubsystem::StepHere(const std::shared_ptr<BatchStepJob>& job) {
+  CheckStep(*job);
+  // Environment 0 resetting in this step goes through its commands (SubmitStep).
+  const std::size_t e = static_cast<std::size_t>(options_.engine_env);
+  const bool reset0 = (!job->reset.empty() && job->reset[e]) || (auto_reset() && ended_[e]);
   physics::PhysicsEngine& engine = session_->engine();
-  if (job->reset[0]) {
-    // Environment 0 resets (and does not step): a command the recorder sees; the others step
-    // inside an Inspect command behind it.
+  if (reset0 || !engine.paused()) return false;
+  TakeResets(*job);
+  engine.WithLockedData([this, &job](mjModel* m, mjData*) { Arm(job, m); });
+  try {
+    engine.StepSync(job->n);
+  } catch (...) {
+    // The window stopped part-way (a MuJoCo error, or the loop unpaused meanwhile): the job
+    // does not complete, and no later iteration may take it for its own.
+    engine.WithLockedData([this](mjModel*, mjData*) {
+      armed_.reset();
+      window_ = 0;
+    });
+    throw;
+  }
+  return true;
+}
+
+std::uint64_t BatchSubsystem::SubmitStep(std::shared_ptr<BatchStepJob> job, std::uint64_t* steps) {
+  CheckStep(*job);
+  TakeResets(*job);
+  physics::PhysicsEngine& engine = session_->engine();
+  if (job->reset[static_cast<std::size_t>(options_.engine_env)]) {
+    // The engine's environment resets (and does not step): a command the recorder sees; the others
+    // step inside an Inspect command behind it.
     engine.Submit(physics::cmd::ResetCustom{
         [this](const mjModel* m, mjData* d) { ResetEnv0(m, d, std::nullopt); },
         "batch reset (environment 0)"});
@@ -257,8 +348,11 @@ std::uint64_t BatchSubsystem::SubmitStep(std::shared_ptr<BatchStepJob> job, std:
     return engine.Submit(physics::cmd::Inspect{
         [this, job](const mjModel* m, const mjData* d) {
           const double t0 = Now();
+          if (others_) others_->Settle();
           SyncOptions(m);
-          std::vector<std::uint8_t> skip(job->reset.begin() + 1, job->reset.end());
+          std::vector<std::uint8_t> rows;
+          const std::span<const std::uint8_t> flags = OthersRows(job->reset, 1, &rows);
+          const std::vector<std::uint8_t> skip(flags.begin(), flags.end());
           std::vector<std::uint8_t> done(skip.size(), 0);
           for (std::size_t i = 0; i < skip.size(); ++i) {
             if (skip[i]) others_->Reset(static_cast<int>(i));
@@ -268,7 +362,9 @@ std::uint64_t BatchSubsystem::SubmitStep(std::shared_ptr<BatchStepJob> job, std:
           out.done.assign(static_cast<std::size_t>(options_.envs), 0);
           out.reset = job->reset;
           Gather(m, d, out);
-          for (std::size_t i = 0; i < done.size(); ++i) out.done[i + 1] = done[i];
+          for (std::size_t j = 0; j < done.size(); ++j) {
+            out.done[static_cast<std::size_t>(Wire(static_cast<int>(j)))] = done[j];
+          }
           out.seconds = Now() - t0;
           out.complete = true;
           AddSeconds(busy_seconds_, out.seconds);
@@ -277,20 +373,9 @@ std::uint64_t BatchSubsystem::SubmitStep(std::shared_ptr<BatchStepJob> job, std:
         },
         "batch step"});
   }
-  engine.Submit(physics::cmd::Inspect{[this, job](const mjModel* m, const mjData*) {
-                                        started_ = Now();
-                                        SyncOptions(m);
-                                        for (std::size_t i = 1; i < job->reset.size(); ++i) {
-                                          skip_[i - 1] = job->reset[i];
-                                          if (job->reset[i])
-                                            others_->Reset(static_cast<int>(i - 1));
-                                        }
-                                        std::fill(done_.begin(), done_.end(), 0);
-                                        armed_ = job;
-                                        window_ = 0;
-                                        iterations_ = 0;
-                                      },
+  engine.Submit(physics::cmd::Inspect{[this, job](const mjModel* m, const mjData*) { Arm(job, m); },
                                       "batch arm"});
+  submitted_ = job;
   *steps = static_cast<std::uint64_t>(job->n);
   return engine.Submit(physics::cmd::Step{job->n});
 }
@@ -320,7 +405,7 @@ std::uint64_t BatchSubsystem::SubmitReset(std::shared_ptr<BatchResetJob> job) {
   physics::PhysicsEngine& engine = session_->engine();
   for (std::size_t k = 0; k < job->envs.size(); ++k) {
     ended_[static_cast<std::size_t>(job->envs[k])] = 0;
-    if (job->envs[k] == 0) {
+    if (job->envs[k] == options_.engine_env) {
       engine.Submit(physics::cmd::ResetCustom{
           [this, seed = job->seeds[k]](const mjModel* m, mjData* d) { ResetEnv0(m, d, seed); },
           "batch reset (environment 0)"});
@@ -329,10 +414,11 @@ std::uint64_t BatchSubsystem::SubmitReset(std::shared_ptr<BatchResetJob> job) {
   return engine.Submit(
       physics::cmd::Inspect{[this, job, listed](const mjModel* m, const mjData* d) {
                               const double t0 = Now();
+                              if (others_) others_->Settle();
                               SyncOptions(m);
                               for (std::size_t k = 0; k < job->envs.size(); ++k) {
-                                if (job->envs[k] > 0)
-                                  others_->Reset(job->envs[k] - 1, job->seeds[k]);
+                                if (job->envs[k] != options_.engine_env)
+                                  others_->Reset(Other(job->envs[k]), job->seeds[k]);
                               }
                               BatchResult& out = job->out;
                               out.done.assign(listed.size(), 0);
@@ -342,6 +428,18 @@ std::uint64_t BatchSubsystem::SubmitReset(std::shared_ptr<BatchResetJob> job) {
                               out.complete = true;
                             },
                             "batch reset"});
+}
+
+void BatchSubsystem::Disarm() {
+  if (!session_ || !submitted_) return;
+  // Only that job: a later one (armed by StepHere before this command applied) stays armed.
+  session_->engine().Submit(
+      physics::cmd::Inspect{[this, job = std::move(submitted_)](const mjModel*, const mjData*) {
+                              if (armed_ != job) return;
+                              armed_.reset();
+                              window_ = 0;
+                            },
+                            "batch disarm"});
 }
 
 void BatchSubsystem::NoteCompleted(const BatchResult& out) {

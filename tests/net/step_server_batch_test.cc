@@ -13,6 +13,7 @@
 
 #include "net/step_test_client.h"
 #include "support/mujoco_test.h"
+#include "support/wait.h"
 #include "urlab/net/network.h"
 #include "urlab/world/batch_subsystem.h"
 #include "urlab/world/manager.h"
@@ -227,6 +228,52 @@ TEST_F(StepServerBatchTest, EndedEpisodesResetAtTheNextStepUnlessAutoResetIsOff)
   r = Step(c, {0, 0, 0});
   EXPECT_EQ(Unpack<std::uint8_t>(r["reset"]), std::vector<std::uint8_t>(3, 0));
   EXPECT_EQ(Unpack<std::uint32_t>(r["episode_steps"]), std::vector<std::uint32_t>(3, 9));
+}
+
+TEST_F(StepServerBatchTest, ACancelledBatchStepLeavesNoJobForLaterSteps) {
+  Play({.envs = 2, .threads = 2});
+  Client c(ctx_, rpc());
+  c.Hello();
+  ASSERT_EQ(c.Op("batch_reset")["op"], "batch_reset_ok");
+  // A long batch step from a second socket of the same session (a DEALER: the first waits for
+  // nothing), cancelled while its window runs.
+  zmq::socket_t pipe(ctx_, zmq::socket_type::dealer);
+  pipe.set(zmq::sockopt::linger, 0);
+  pipe.set(zmq::sockopt::rcvtimeo, 60000);
+  pipe.connect(rpc());
+  const std::uint64_t before = manager_.session().engine().step_count();
+  const std::vector<std::uint8_t> request = Json::to_msgpack(Json{{"op", "batch_step"},
+                                                                  {"session_id", c.session()},
+                                                                  {"actions", Packed({1, 1})},
+                                                                  {"n_steps", 100000}});
+  pipe.send(zmq::buffer(request));
+  ASSERT_TRUE(urlab::testing::WaitFor(
+      [&] { return manager_.session().engine().step_count() > before; }, 10000ms));
+  const Json cancel = c.Op("cancel");
+  ASSERT_EQ(cancel["op"], "cancel_ok") << cancel.dump();
+  EXPECT_EQ(cancel["cancelled"], 1);
+  zmq::message_t m;
+  ASSERT_TRUE(pipe.recv(m));
+  const Json cancelled = Json::from_msgpack(static_cast<const std::uint8_t*>(m.data()),
+                                            static_cast<const std::uint8_t*>(m.data()) + m.size());
+  EXPECT_EQ(cancelled["code"], "cancelled") << cancelled.dump();
+  // Plain lockstep steps step environment 0 alone: the cancelled job is not theirs to finish.
+  for (int i = 0; i < 3; ++i) ASSERT_EQ(c.Op("step")["op"], "step_ok");
+  const Json r = Step(c, {0, 0});
+  ASSERT_EQ(r["op"], "batch_step_ok") << r.dump();
+  const auto time = Unpack<double>(r["time"]);
+  EXPECT_NEAR(time[0] - time[1], 3 * 0.002, 1e-9);
+  EXPECT_GT(time[1], 0.003);  // the cancelled window ran in both environments
+}
+
+TEST_F(StepServerBatchTest, AReplayIsRefusedWhileEnvironmentsStepTogether) {
+  Play({.envs = 2});
+  Client c(ctx_, rpc());
+  c.Hello();
+  const Json r = c.Op("replay_start", {{"mode", "resimulate"}});
+  EXPECT_EQ(r["code"], "bad_mode") << r.dump();
+  EXPECT_NE(r["message"].get<std::string>().find("--envs"), std::string::npos) << r.dump();
+  EXPECT_EQ(Step(c, {0, 0})["op"], "batch_step_ok");  // the batch goes on
 }
 
 TEST_F(StepServerBatchTest, OneEnvironmentIsTheEngineAlone) {

@@ -93,6 +93,40 @@ TEST_F(BatchTest, TheThreadCountChangesNoBit) {
   EXPECT_TRUE(SameBits(results[0].data(), results[2].data(), results[0].size()));
 }
 
+TEST_F(BatchTest, AStepInTwoHalvesIsTheSameStepAndOverlapsTheCallersWork) {
+  // StepBegin starts the workers, the caller works on something of its own (an engine's own
+  // simulation), StepEnd finishes: the same bits as Step, whatever the caller did meanwhile.
+  const Model model(LoadXmlFile(kHumanoidPath));
+  BatchOptions o;
+  o.envs = 6;
+  o.threads = 2;
+  o.reset_noise = 0.01;
+  o.seed = 7;
+  Batch whole(model, o), halves(model, o);
+  const DataPtr own = MakeData(model.get());
+  const std::size_t row = static_cast<std::size_t>(whole.observation_size());
+  std::vector<double> a(row * 6), b(row * 6);
+  std::vector<std::uint8_t> done_a(6), done_b(6);
+  for (int step = 0; step < 100; ++step) {
+    const std::vector<double> actions = Actions(whole, step, true);
+    whole.Step(actions, a, done_a);
+    halves.StepBegin(actions, b, done_b);
+    mj_step(model.get(), own.get());  // the caller's own work
+    halves.StepEnd();
+  }
+  EXPECT_TRUE(SameBits(a.data(), b.data(), a.size()));
+  EXPECT_EQ(done_a, done_b);
+  // A step begun and never ended is finished by the next one (or Settle).
+  const std::vector<double> first = Actions(halves, 100, true), second = Actions(halves, 101, true);
+  halves.StepBegin(first, b, done_b);
+  halves.Step(second, b, done_b);
+  whole.Step(first, a, done_a);
+  whole.Step(second, a, done_a);
+  EXPECT_TRUE(SameBits(a.data(), b.data(), a.size()));
+  halves.StepBegin(first, b, done_b);
+  halves.Settle();
+}
+
 TEST_F(BatchTest, SeedsDriveTheResetNoise) {
   const Model model(LoadXmlFile(kHumanoidPath));
   BatchOptions o;

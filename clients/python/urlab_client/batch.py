@@ -51,9 +51,10 @@ class BatchClient:
 
     def _result(self, reply):
         n = self.envs
+        # Views on the reply's bytes, no copies (the flags are bytes 0 or 1: read as bool).
         return {"obs": np.frombuffer(reply["obs"], _F8).reshape(n, self.obs_size),
-                "done": np.frombuffer(reply["done"], np.uint8).astype(bool),
-                "reset": np.frombuffer(reply["reset"], np.uint8).astype(bool),
+                "done": np.frombuffer(reply["done"], np.bool_),
+                "reset": np.frombuffer(reply["reset"], np.bool_),
                 "time": np.frombuffer(reply["time"], _F8),
                 "episode_steps": np.frombuffer(reply["episode_steps"], _U4),
                 "step_seconds": float(reply.get("step_seconds", 0.0))}
@@ -61,7 +62,8 @@ class BatchClient:
     def send_step(self, actions, reset=None):
         """actions: (envs, nu) float64; reset: (envs,) bool, those environments reset instead of
         stepping (their actions ignored)."""
-        fields = {"actions": np.ascontiguousarray(actions, dtype=_F8).tobytes()}
+        # A C-contiguous float64 array goes as a buffer (msgpack copies it once, no tobytes()).
+        fields = {"actions": memoryview(np.ascontiguousarray(actions, dtype=_F8)).cast("B")}
         if self.n_steps != 1:
             fields["n_steps"] = self.n_steps
         if reset is not None and reset.any():
@@ -151,6 +153,10 @@ class BatchBackend:
             (name, spaces.Box(-np.inf, np.inf, shape=(size,), dtype=np.float64))
             for name, _, size in first.layout))
         self._obs = np.zeros((self.num_envs, self.obs_size))
+        # The observation's parts as (name, column slice), and each server's rows.
+        self._parts = [(name, slice(off, off + size)) for name, off, size in first.layout]
+        self._rows = [slice(int(self.offsets[k]), int(self.offsets[k + 1]))
+                      for k in range(len(self.clients))]
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
         self._elapsed = np.zeros(self.num_envs, dtype=np.int64)
         self._lost = [False] * len(self.clients)
@@ -179,11 +185,10 @@ class BatchBackend:
     # ---- observations
     def _view(self, obs):
         """{"qpos", "qvel", "sensordata"} as views on the (N, obs_size) array."""
-        return OrderedDict((name, obs[:, off:off + size])
-                           for name, off, size in self.clients[0].layout)
+        return OrderedDict([(name, obs[:, cols]) for name, cols in self._parts])
 
     def _slice(self, k):
-        return slice(int(self.offsets[k]), int(self.offsets[k + 1]))
+        return self._rows[k]
 
     def _renew(self, k):
         old = self.clients[k]
@@ -292,8 +297,11 @@ class BatchBackend:
             for k in range(len(self.clients)):
                 new[self._slice(k)] = replies[k] if k in replies else self._obs[self._slice(k)]
             self._obs = new
-        self._elapsed[resetting] = 0
-        self._elapsed[~resetting] += 1
+        # No per-step work beyond what a step needs: the masks below only when something reset.
+        any_reset = bool(resetting.any())
+        self._elapsed += 1
+        if any_reset:
+            self._elapsed[resetting] = 0
         obs = self._view(self._obs)
         infos = _infos(n, time=time)
         rewards = np.zeros(n)
@@ -305,9 +313,10 @@ class BatchBackend:
         if self.max_episode_steps is not None:
             truncated |= self._elapsed >= self.max_episode_steps
         # The environments that reset in this step: reward 0, not ended (gymnasium's next-step).
-        rewards[resetting] = 0
-        terminated[resetting] = False
-        truncated[resetting & ~lost] = False
+        if any_reset:
+            rewards[resetting] = 0
+            terminated[resetting] = False
+            truncated[resetting & ~lost] = False
         if lost.any():
             infos["server_lost"] = lost
             infos["_server_lost"] = lost.copy()

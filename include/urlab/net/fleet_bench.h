@@ -25,7 +25,8 @@ struct FleetBenchOptions {
   int rounds = 5;      // alternations of bare and measured loops (medians reported)
   int samples = 4000;  // round trips per latency figure
   std::string python = "/usr/bin/python3";
-  std::string python_client;  // the folder holding urlab_client ("": no Python figures)
+  std::string python_client;      // the folder holding urlab_client ("": no Python figures)
+  std::vector<std::string> only;  // producers to run by name (empty: all of them)
   std::function<void(const std::string&)> report;  // report lines; empty: silent
 };
 

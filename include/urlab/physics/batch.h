@@ -13,13 +13,15 @@
 //   max_episode_steps reached).
 //
 // Threading contract
-// - One owner thread calls everything below. During Step the owner and K-1 persistent workers
-//   (a WorkerPool: no thread is created per step) advance the environments, each claiming the
-//   next one from a shared counter (a preempted thread holds back only the one it steps); no
-//   environment is touched by two threads in a step, and the model is only read. Which thread
-//   steps an environment changes none of its bits.
+// - One owner calls everything below: one thread, or threads taking turns under a lock of the
+//   caller's (a running engine's step mutex), never two at once. During Step the owner and K-1
+//   persistent workers (a WorkerPool: no thread is created per step) advance the environments,
+//   each claiming the next one from a shared counter (a preempted thread holds back only the one
+//   it steps); no environment is touched by two threads in a step, and the model is only read.
+//   Which thread steps an environment changes none of its bits.
 // - env(i) gives the environment's StepCore for its owner's use between steps (e.g. a state
 //   subscription on environment 0 made before stepping starts); never during Step.
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -84,6 +86,18 @@ class Batch {
   // their observation the current one, their actions ignored).
   void Step(std::span<const double> actions, std::span<double> observations,
             std::span<std::uint8_t> done = {}, std::span<const std::uint8_t> skip = {});
+  // Step in two halves, for an owner with work of its own to overlap (an engine stepping its
+  // own environment): StepBegin checks the arrays and starts the workers on the environments;
+  // StepEnd steps with them on the caller until none is left and throws like Step. The arrays
+  // must stay valid, and the batch untouched, until StepEnd; a StepBegin, Step or the destructor
+  // after a StepBegin without its StepEnd finishes that step first (so the arrays must outlive
+  // the batch, or Settle be called before they go).
+  void StepBegin(std::span<const double> actions, std::span<double> observations,
+                 std::span<std::uint8_t> done = {}, std::span<const std::uint8_t> skip = {});
+  void StepEnd();
+  // Finishes a step begun and not ended (its owner's work between the halves threw), dropping
+  // its errors: call before touching the batch again.
+  void Settle();
   // Resets environment `env` (keyframe or default state, then the noise); a seed restarts its
   // generator first. Throws Error for a bad index.
   void Reset(int env, std::optional<std::uint64_t> seed = std::nullopt);
@@ -108,10 +122,22 @@ class Batch {
   void ResetEnv(Env& e);
   void ObserveEnv(const Env& e, double* out) const;
 
+  // The step under way between StepBegin and StepEnd (the workers read them).
+  struct Pass {
+    std::span<const double> actions;
+    std::span<double> observations;
+    std::span<std::uint8_t> done;
+    std::span<const std::uint8_t> skip;
+    std::atomic<std::size_t> next{0};  // the next environment to claim
+  };
+  void StepPart();
+
   BatchOptions options_;
   std::shared_ptr<Model> model_;
   std::vector<std::unique_ptr<Env>> envs_;
-  std::unique_ptr<WorkerPool> pool_;
+  Pass pass_;
+  std::function<void(int)> part_;     // StepPart, for the pool
+  std::unique_ptr<WorkerPool> pool_;  // last: its workers stop before the rest goes
 };
 
 }  // namespace urlab::physics

@@ -1,20 +1,24 @@
 #pragma once
 // BatchSubsystem: N independent copies of the running scene (`urlab run --envs N`), stepped in
-// lockstep. Environment 0 is the engine's own simulation, so the streaming topics, the viewer and
-// the recorder follow it unchanged; environments 1..N-1 live in a physics::Batch (one copy of the
-// model, one mjData each, K threads) that only the physics thread touches, in the same iteration
-// as environment 0. Every environment resets to the session's initial state (each articulation in
-// its initial keyframe) plus noise from its own generator (physics::ResetBatchState), so
-// environment i with seed s runs the same episode as environment 0 of another run with seed s.
+// lockstep. One environment (0, or options.engine_env: `--record-env I`) is the engine's own
+// simulation, so the streaming topics, the viewer and the recorder follow it unchanged; the other
+// N-1 live in a physics::Batch (one copy of the model, one mjData each, K threads) that only the
+// iterating thread touches, in the same iteration as the engine's. Every environment resets to
+// the session's initial state (each articulation in its initial keyframe) plus noise from its own
+// generator (physics::ResetBatchState), so environment i with seed s runs the same episode as
+// any environment of another run reset with seed s. Below, "environment 0" stands for the
+// engine's environment; arrays on the wire are in environment order whichever it is.
 //
 // A batch step (SubmitStep) is, for the engine, one lockstep window: an Inspect command arms the
 // job (the other environments' resets, the options environment 0 runs with), then a Step{n}
 // command. While that window runs, the apply-controls hook writes environment 0's actions over
 // what its controllers wrote (actions are raw controls, in actuator order), and a post-step hook
-// steps environments 1..N-1 once per iteration. When environment 0 resets in a batch step
+// steps the other environments once per iteration. When environment 0 resets in a batch step
 // (gymnasium's next-step autoreset: the step after an episode ended resets that environment and
 // ignores its action), its reset is a ResetCustom command (the recorder sees the discontinuity)
-// and the other environments step inside an Inspect command instead of a window.
+// and the other environments step inside an Inspect command instead of a window. StepHere runs
+// the same window on the requesting thread (PhysicsEngine::StepSync) instead of the physics
+// thread's.
 //
 // Episodes end (done) when an environment diverges (NaN/Inf, MuJoCo's instability warnings) or
 // reaches max_episode_steps physics steps; with auto_reset the next batch step resets it.
@@ -22,16 +26,21 @@
 // Threading contract
 // - Main thread: construction, BeginPlay (hooks installed before the physics thread starts),
 //   EndPlay (hooks removed).
-// - One requesting thread (the step server's I/O thread): SubmitStep, SubmitReset and the
-//   getters; one batch request at a time (the next one after the previous job completed). A job's
-//   outputs are written on the physics thread before the command the requester waits for
-//   finishes (PhysicsEngine::last_applied_command / WaitForCommand order them).
-// - Physics thread: the hooks, the command functions and every environment's state.
+// - One requesting thread (the step server's I/O thread): SubmitStep, StepHere, SubmitReset and
+//   the getters; one batch request at a time (the next one after the previous job completed). A
+//   job's outputs are written by the iterating thread before the command the requester waits for
+//   finishes (PhysicsEngine::last_applied_command / WaitForCommand order them), or before
+//   StepHere returns.
+// - The iterating thread, always with the engine's step mutex held: the hooks, the command
+//   functions and every environment's state. That is the physics thread, or the requesting
+//   thread itself inside StepHere (PhysicsEngine::StepSync and WithLockedData take the mutex);
+//   the batch's worker threads step environments 1..N-1 only inside an iteration.
 #include <atomic>
 #include <cstdint>
 #include <memory>
 #include <optional>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -47,6 +56,9 @@ struct BatchSubsystemOptions {
   int max_episode_steps = 0;  // physics steps; 0: episodes end only by divergence
   double reset_noise = 0;     // uniform noise at each reset (physics::BatchOptions)
   std::uint64_t seed = 0;     // environment i starts with seed + i
+  // The environment the engine itself runs (`urlab run --record-env I`): the streaming topics,
+  // the viewer and the recorder follow it; the others live in the batch.
+  int engine_env = 0;
 };
 
 // The outputs every batch job fills (one entry or row per environment).
@@ -56,7 +68,7 @@ struct BatchResult {
   std::vector<std::uint8_t> reset;           // the environment was reset in this request
   std::vector<double> time;                  // each environment's simulation time
   std::vector<std::uint32_t> episode_steps;  // physics steps since its last reset
-  double seconds = 0;                        // wall time the physics thread spent on the job
+  double seconds = 0;                        // wall time the iterating thread spent
   bool complete = false;
 };
 
@@ -85,6 +97,7 @@ class BatchSubsystem : public Subsystem {
 
   // ---- Sizes (fixed once playing) ----
   int envs() const { return options_.envs; }
+  int engine_env() const { return options_.engine_env; }
   int threads() const;
   int action_size() const { return nu_; }
   int observation_size() const { return nq_ + nv_ + nsensordata_; }
@@ -95,7 +108,7 @@ class BatchSubsystem : public Subsystem {
   double reset_noise() const { return options_.reset_noise; }
   bool auto_reset() const { return auto_reset_.load(std::memory_order_relaxed); }
   void SetAutoReset(bool on) { auto_reset_.store(on, std::memory_order_relaxed); }
-  // Environment steps taken (sum over environments) and the physics thread's wall seconds on
+  // Environment steps taken (sum over environments) and the iterating thread's wall seconds on
   // batch jobs, since play began.
   std::uint64_t env_steps() const { return env_steps_.load(std::memory_order_relaxed); }
   double busy_seconds() const { return busy_seconds_.load(std::memory_order_relaxed); }
@@ -105,9 +118,18 @@ class BatchSubsystem : public Subsystem {
   // it is a lockstep window the server may cancel, 0 otherwise) in *steps. Throws Error for
   // arrays of the wrong size.
   std::uint64_t SubmitStep(std::shared_ptr<BatchStepJob> job, std::uint64_t* steps);
+  // Runs one batch step on this thread (PhysicsEngine::StepSync: the requesting thread and the
+  // batch's workers step, the physics thread stays asleep) and returns true with the job
+  // complete; false, with nothing done, while the loop runs or when environment 0 resets in
+  // this step (then SubmitStep). Throws Error like SubmitStep, or when the window stopped
+  // part-way (a MuJoCo error: the job does not complete).
+  bool StepHere(const std::shared_ptr<BatchStepJob>& job);
   // Queues the resets (environment 0's as a ResetCustom command) and returns the command to wait
   // for. Throws Error for a bad environment index.
   std::uint64_t SubmitReset(std::shared_ptr<BatchResetJob> job);
+  // After the server cancelled a batch step's window (before or while it ran): a command that
+  // drops the job it armed, so that no later iteration (a plain step) takes it for its own.
+  void Disarm();
   // The episodes that ended in the last completed step (read by the requester after the job
   // completed; auto-reset resets them at the next step).
   void NoteCompleted(const BatchResult& out);
@@ -119,12 +141,26 @@ class BatchSubsystem : public Subsystem {
   void OnCommand(const physics::AppliedCommand& c);
   void ResetEnv0(const mjModel* m, mjData* d, std::optional<std::uint64_t> seed);
   void SyncOptions(const mjModel* m);
-  // Steps environments 1..N-1 once (not those in `skip`), or-ing their done flags into `done`.
+  void CheckStep(const BatchStepJob& job) const;  // throws Error for arrays of the wrong size
+  void TakeResets(BatchStepJob& job);  // the job's reset flags (auto-reset adds the ended)
+  // Arms `job` for the next window (the other environments' resets, the options); step mutex.
+  void Arm(const std::shared_ptr<BatchStepJob>& job, const mjModel* m);
+  // Steps the other environments once (not those in `skip`), or-ing their done flags into
+  // `done`; `begun`: ApplyControls started that step (Batch::StepBegin), this finishes it.
   void StepOthers(const std::vector<double>& actions, std::vector<std::uint8_t>& done,
-                  const std::vector<std::uint8_t>& skip);
+                  const std::vector<std::uint8_t>& skip, bool begun = false);
   // Fills out's rows: environment 0 from `d`, the others from the batch.
   void Gather(const mjModel* m, const mjData* d, BatchResult& out);
   static bool Diverged(const mjModel* m, const mjData* d);
+  // Environment e (not the engine's) is the batch's Other(e); the batch's j is environment
+  // Wire(j).
+  int Other(int e) const { return e < options_.engine_env ? e : e - 1; }
+  int Wire(int j) const { return j < options_.engine_env ? j : j + 1; }
+  // The rows of `all` (one per environment, `width` values each) without the engine's: a view
+  // on `all`, or on `scratch` filled with them.
+  template <typename T>
+  std::span<const T> OthersRows(const std::vector<T>& all, std::size_t width,
+                                std::vector<T>* scratch) const;
 
   BatchSubsystemOptions options_;
   physics::BatchOptions batch_options_;  // the reset state, noise, max steps (all environments)
@@ -136,10 +172,12 @@ class BatchSubsystem : public Subsystem {
   std::atomic<std::uint64_t> env_steps_{0};
   std::atomic<double> busy_seconds_{0};
 
-  // Requesting thread: the episodes that ended in the last completed step.
+  // Requesting thread: the episodes that ended in the last completed step; the last job
+  // SubmitStep armed through commands (for Disarm).
   std::vector<std::uint8_t> ended_;
+  std::shared_ptr<BatchStepJob> submitted_;
 
-  // Physics thread only.
+  // The iterating thread only (step mutex held).
   std::mt19937_64 env0_rng_;
   std::uint32_t env0_steps_ = 0;
   bool env0_diverged_ = false;
@@ -147,6 +185,7 @@ class BatchSubsystem : public Subsystem {
   std::uint64_t window_ = 0;             // 1 once armed_'s window stepped (0: not started)
   int iterations_ = 0;                   // of armed_'s window so far
   std::vector<std::uint8_t> skip_, done_, iteration_done_;  // per other environment
+  std::vector<double> others_actions_;                      // their actions (OthersRows)
   double started_ = 0;                                      // armed_'s start (steady seconds)
 };
 
