@@ -154,6 +154,23 @@ TEST(RunTest, BenchFleetPrintsEveryFigure) {
   }
 }
 
+TEST(RunTest, BenchFleetRunsOnlyThePartsAsked) {
+  std::string out;
+  ASSERT_EQ(
+      RunCommand(UrlabBinary() + " bench fleet " + SourcePath("examples/scenes/humanoid_pd.yaml") +
+                     " --steps 200 --rounds 1 --samples 20 --only bare,shm",
+                 &out),
+      0)
+      << out;
+  EXPECT_TRUE(std::regex_search(out, std::regex("(^|\\n)shm_n1=[0-9][0-9.e+]*\\n"))) << out;
+  EXPECT_EQ(out.find("zmq_n1="), std::string::npos) << out;
+  EXPECT_EQ(out.find("batch64_ratio="), std::string::npos) << out;
+  EXPECT_NE(RunCommand(UrlabBinary() + " bench fleet " +
+                           SourcePath("examples/scenes/humanoid_pd.yaml") + " --only nonsense",
+                       &out),
+            0);
+}
+
 TEST(RunTest, RunAndBenchHaveHelp) {
   for (const char* sub : {"run", "bench", "bench loop", "bench fleet"}) {
     std::string out;
