@@ -211,7 +211,8 @@ StepServer::StepServer(world::Session& session, const std::vector<ArticulationTo
       state_(std::move(state)),
       options_(std::move(options)),
       mode_(options_.mode == "direct" ? "direct" : "live"),
-      files_(options_.files_dir, options_.inputs) {
+      files_(options_.files_dir, options_.inputs),
+      replays_(session, options_.limits.max_replay_sessions) {
   // The compiled model for hello, saved once here (main thread, before the physics thread).
   const mjModel* m = session_.engine().model();
   mjb_.resize(static_cast<std::size_t>(mj_sizeModel(m)));
@@ -259,10 +260,8 @@ void StepServer::Close() {
   }
   pending_.clear();
   socket_.reset();
-  shm_.reset();  // clients waiting on a channel see it closed; the files are removed
-  if (playback_) playback_->Set(nullptr);  // the viewer's timeline lets go first
-  shown_.reset();
-  player_.reset();  // removes the custom step handler while the engine still runs
+  shm_.reset();     // clients waiting on a channel see it closed; the files are removed
+  replays_.Stop();  // removes the custom step handler while the engine still runs
   for (const auto& [example, n] : log_limiter_.TakeSkipped()) {
     spdlog::info("step server: {} more line(s) like \"{}\" were not logged", n, example);
   }
@@ -589,7 +588,7 @@ void StepServer::ReleaseLease(const std::string& why) {
               fmt::format("step server: driver {} left ({})", driver, why));
   }
   driver_.clear();
-  ReleaseReplays(driver);  // its recordings go with its lease
+  replays_.Release(driver);  // its recordings go with its lease
 }
 
 StepServer::LeaseTake StepServer::CheckDriver(const Client& c, bool force, Clock::time_point now) {
@@ -613,7 +612,7 @@ void StepServer::CommitLease(const Client& c, const LeaseTake& take) {
   if (take.forced && !driver_.empty() && driver_ != c.id) {
     const std::string old = driver_;
     const std::size_t cancelled = CancelQueuedSteps(old, "the lease was taken over with force");
-    const std::size_t released = ReleaseReplays(old);
+    const std::size_t released = replays_.Release(old);
     LogRemote(spdlog::level::warn, "lease takeover",
               fmt::format("step server: {} took the lease from {} ({} queued step request(s) "
                           "cancelled, {} replay session(s) released)",
@@ -652,7 +651,7 @@ std::size_t StepServer::CancelQueuedSteps(const std::string& client, const std::
 
 void StepServer::ForgetClient(const std::string& id, const std::string& why) {
   if (driver_ == id) ReleaseLease(why);
-  ReleaseReplays(id);
+  replays_.Release(id);
   clients_.erase(id);
 }
 
