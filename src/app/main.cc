@@ -18,6 +18,7 @@
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/core/version.h"
 #include "urlab/physics/model.h"
+#include "urlab/viewer/scene_settings.h"
 
 namespace urlab::app {
 
@@ -50,6 +51,9 @@ int main(int argc, char** argv) {
   // Logs go to stderr so that stdout carries only results (e.g. `compile --json`).
   spdlog::set_default_logger(spdlog::stderr_color_mt("urlab"));
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
+  // The scene sections subsystems own, registered from the top (src/world/scene_section.h):
+  // world never includes the modules above it.
+  urlab::viewer::RegisterSceneSections();
 
   CLI::App app{"URLab: MuJoCo robotics simulation runtime (scenes, control over ZeroMQ, replay)."};
   app.require_subcommand(1);

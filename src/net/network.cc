@@ -28,6 +28,7 @@
 #include "urlab/core/error.h"
 #include "urlab/ops/controllers.h"
 #include "urlab/ops/error.h"
+#include "urlab/ops/targets.h"
 #include "urlab/world/scene.h"
 #include "urlab/world/session.h"
 
@@ -60,6 +61,21 @@ std::string InfoJson(const ArticulationTopics& t, const world::CameraStreams* ca
   j["maxs"] = t.maxs;
   j["camera_list"] = CameraList(cameras, t.name);
   return j.dump();
+}
+
+// The counter a refused control message counts in.
+wire::Drop ControlDrop(ops::TargetsFault fault) {
+  switch (fault) {
+    case ops::TargetsFault::kCount:
+      return wire::Drop::kTooMany;
+    case ops::TargetsFault::kOutOfRange:
+      return wire::Drop::kBadNumber;
+    case ops::TargetsFault::kUnknownActuator:
+    case ops::TargetsFault::kUnknownArticulation:  // (the topic names the articulation)
+    case ops::TargetsFault::kUnknownBody:          // (a control message has no bodies)
+      break;
+  }
+  return wire::Drop::kForeignActuator;
 }
 
 }  // namespace
@@ -98,7 +114,7 @@ struct NetworkSubsystem::Impl {
   std::unique_ptr<StepServer> server;  // built on the main thread, then used by the I/O thread
   std::vector<std::string> info_messages;
   const mjModel* model = nullptr;
-  world::Session* session = nullptr;  // set_gains goes through ops::SetGains
+  world::Session* session = nullptr;  // control: ops::SetTargets, set_gains: ops::SetGains
 
   std::thread thread;
   std::atomic<bool> stop{false};
@@ -124,7 +140,8 @@ struct NetworkSubsystem::Impl {
   std::optional<ObsLevel> full_state;  // the state/full level, none: not published
   MsgpackWriter full_writer;
   std::vector<std::pair<std::int32_t, float>> control_scratch;
-  std::vector<std::pair<int, double>> patch_scratch;
+  ops::TargetsRequest control_request;  // one articulation, reused: no allocation per message
+  ops::CheckedTargets control_checked;
   std::vector<wire::GainPatch> gains_scratch;
   std::array<std::uint64_t, wire::kNumDrops> logged_drops{};
   Clock::time_point last_drop_log{}, last_republish{}, last_paused_info{};
@@ -291,15 +308,18 @@ struct NetworkSubsystem::Impl {
 
   void HandleControl(ArticulationTopics& t, std::string_view body) {
     if (auto d = wire::DecodeControl(body, &control_scratch)) return Drop(*d);
-    if (control_scratch.size() > t.actuator_ids.size()) return Drop(wire::Drop::kTooMany);
-    patch_scratch.clear();
-    for (const auto& [id, value] : control_scratch) {
-      const auto it = t.index_of_actuator.find(id);
-      if (it == t.index_of_actuator.end()) return Drop(wire::Drop::kForeignActuator);
-      patch_scratch.emplace_back(it->second, value);
+    // The operation the step server's step and the viewer's sliders use: one validation, one
+    // whole frame (every value of the message or none).
+    if (control_request.articulations.empty()) control_request.articulations.emplace_back();
+    ops::ArticulationTargets& a = control_request.articulations[0];
+    a.articulation = t.name;
+    a.by_id.assign(control_scratch.begin(), control_scratch.end());
+    try {
+      ops::CheckTargets(*session, control_request, &control_checked);
+    } catch (const ops::TargetsError& e) {
+      return Drop(ControlDrop(e.fault));
     }
-    // One whole frame: every value of the message or none.
-    t.control->channel(control::ControlSource::kNetwork).Patch(patch_scratch);
+    ops::ApplyTargets(*session, control_checked);
     controls_applied.fetch_add(1);
   }
 

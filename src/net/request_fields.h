@@ -38,6 +38,20 @@ inline std::vector<double> Numbers(const Json& v, const char* field) {
   return out;
 }
 
+// A number as sent, for an operation that checks its range (ops/value_ranges.h: NaN and
+// infinities are outside every range, and the operation's message names the field in place).
+inline double AnyNumber(const Json& v, const std::string& field) {
+  if (!v.is_number()) Fail("bad_value", "'" + field + "' must be a number");
+  return v.get<double>();
+}
+inline std::vector<double> AnyNumbers(const Json& v, const char* field) {
+  if (!v.is_array()) Fail("bad_value", std::string("'") + field + "' must be an array");
+  std::vector<double> out;
+  out.reserve(v.size());
+  for (const Json& x : v) out.push_back(AnyNumber(x, field));
+  return out;
+}
+
 inline bool Bool(const Json& v, const char* field) {
   if (!v.is_boolean()) Fail("bad_value", std::string("'") + field + "' must be true or false");
   return v.get<bool>();

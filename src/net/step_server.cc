@@ -20,6 +20,7 @@
 #include "urlab/ops/controllers.h"
 #include "urlab/ops/simulation.h"
 #include "urlab/ops/state.h"
+#include "urlab/ops/targets.h"
 #include "urlab/replay/tables.h"
 #include "urlab/world/batch_subsystem.h"
 #include "urlab/world/names.h"
@@ -212,7 +213,8 @@ StepServer::StepServer(world::Session& session, const std::vector<ArticulationTo
       state_(std::move(state)),
       options_(std::move(options)),
       mode_(options_.mode == "direct" ? "direct" : "live"),
-      files_(options_.files_dir, options_.inputs) {
+      files_(options_.files_dir, options_.inputs),
+      replays_(session, options_.limits.max_replay_sessions) {
   // The compiled model for hello, saved once here (main thread, before the physics thread).
   const mjModel* m = session_.engine().model();
   mjb_.resize(static_cast<std::size_t>(mj_sizeModel(m)));
@@ -260,10 +262,8 @@ void StepServer::Close() {
   }
   pending_.clear();
   socket_.reset();
-  shm_.reset();  // clients waiting on a channel see it closed; the files are removed
-  if (playback_) playback_->Set(nullptr);  // the viewer's timeline lets go first
-  shown_.reset();
-  player_.reset();  // removes the custom step handler while the engine still runs
+  shm_.reset();     // clients waiting on a channel see it closed; the files are removed
+  replays_.Stop();  // removes the custom step handler while the engine still runs
   for (const auto& [example, n] : log_limiter_.TakeSkipped()) {
     spdlog::info("step server: {} more line(s) like \"{}\" were not logged", n, example);
   }
@@ -590,7 +590,7 @@ void StepServer::ReleaseLease(const std::string& why) {
               fmt::format("step server: driver {} left ({})", driver, why));
   }
   driver_.clear();
-  ReleaseReplays(driver);  // its recordings go with its lease
+  replays_.Release(driver);  // its recordings go with its lease
 }
 
 StepServer::LeaseTake StepServer::CheckDriver(const Client& c, bool force, Clock::time_point now) {
@@ -614,7 +614,7 @@ void StepServer::CommitLease(const Client& c, const LeaseTake& take) {
   if (take.forced && !driver_.empty() && driver_ != c.id) {
     const std::string old = driver_;
     const std::size_t cancelled = CancelQueuedSteps(old, "the lease was taken over with force");
-    const std::size_t released = ReleaseReplays(old);
+    const std::size_t released = replays_.Release(old);
     LogRemote(spdlog::level::warn, "lease takeover",
               fmt::format("step server: {} took the lease from {} ({} queued step request(s) "
                           "cancelled, {} replay session(s) released)",
@@ -656,7 +656,7 @@ std::size_t StepServer::CancelQueuedSteps(const std::string& client, const std::
 
 void StepServer::ForgetClient(const std::string& id, const std::string& why) {
   if (driver_ == id) ReleaseLease(why);
-  ReleaseReplays(id);
+  replays_.Release(id);
   clients_.erase(id);
 }
 
@@ -883,65 +883,37 @@ StepServer::Outcome StepServer::Step(Request& r) {
     n = static_cast<int>(RangedNumber(*it, "n_steps"));
   }
   const std::optional<ObsSpec> observation = ObservationFor(r);
-  // Controls: validate every articulation's entry first, then publish them (all or nothing).
-  std::vector<std::pair<const ArticulationTopics*, std::vector<std::pair<int, double>>>> patches;
-  std::vector<physics::cmd::ApplyForce> forces;
+  // Controls and forces: the wire's fields to one typed request, checked whole by the operation
+  // (ops/targets.h) before anything is published.
+  ops::TargetsRequest targets;
+  targets.force_steps = n;  // for the whole window, cleared after it
   if (const auto it = r.body.find("per_articulation"); it != r.body.end()) {
     if (!it->is_object()) Fail("bad_value", "per_articulation must be a map");
     for (const auto& [name, entry] : it->items()) {
-      const ArticulationTopics& t = Articulation(name);
+      ops::RequireArticulation(session_, name);
       if (!entry.is_object()) Fail("bad_value", name + ": a map of ctrl, ctrl_map, xfrc_applied");
       if (entry.contains("qpos") || entry.contains("qvel")) {
         Fail("bad_mode",
              name + ": qpos and qvel in a step are for puppet mode; the mode is " + mode_);
       }
-      std::vector<std::pair<int, double>> patch;
-      if (const auto c = entry.find("ctrl"); c != entry.end()) {
-        const std::vector<double> v = Numbers(*c, "ctrl");
-        CheckRanges(v, "ctrl", name + ": ctrl");
-        if (v.size() != t.actuator_ids.size()) {
-          Fail("dim_mismatch", name + ": ctrl has " + std::to_string(v.size()) + " values, " +
-                                   std::to_string(t.actuator_ids.size()) + " actuators");
-        }
-        for (std::size_t i = 0; i < v.size(); ++i) patch.emplace_back(static_cast<int>(i), v[i]);
-      }
+      ops::ArticulationTargets& t = targets.articulations.emplace_back();
+      t.articulation = name;
+      if (const auto c = entry.find("ctrl"); c != entry.end()) t.ctrl = AnyNumbers(*c, "ctrl");
       if (const auto c = entry.find("ctrl_map"); c != entry.end()) {
         if (!c->is_object()) Fail("bad_value", "ctrl_map must be a map of name to value");
         for (const auto& [actuator, value] : c->items()) {
-          const auto g = t.gain_index.find(actuator);
-          if (g == t.gain_index.end()) {
-            Fail("bad_value", name + ": no actuator or joint '" + actuator + "'");
-          }
-          patch.emplace_back(g->second, RangedNumber(value, "ctrl_map", name + ": ctrl_map"));
+          t.by_name.emplace_back(actuator, AnyNumber(value, name + ": ctrl_map"));
         }
       }
       if (const auto x = entry.find("xfrc_applied"); x != entry.end()) {
         if (!x->is_object()) Fail("bad_value", "xfrc_applied must be a map of body to 6 values");
         for (const auto& [body, wrench] : x->items()) {
-          std::size_t i = 0;
-          while (i < t.body_names.size() && t.body_names[i] != body &&
-                 t.name + "_" + t.body_names[i] != body) {
-            ++i;
-          }
-          if (i == t.body_names.size()) {
-            Fail("unknown_body", name + ": no body '" + body + "' in this articulation");
-          }
-          const std::vector<double> w = Numbers(wrench, "xfrc_applied");
-          CheckRanges(w, "xfrc_applied", name + ": xfrc_applied");
-          if (w.size() != 6) {
-            Fail("dim_mismatch", name + ": xfrc_applied needs 6 values (force, torque)");
-          }
-          physics::cmd::ApplyForce f;
-          f.body = t.body_ids[i];
-          std::copy_n(w.begin(), 3, f.force.begin());
-          std::copy_n(w.begin() + 3, 3, f.torque.begin());
-          f.steps = n;  // for the whole window, cleared after it
-          forces.push_back(f);
+          t.wrenches.push_back({body, AnyNumbers(wrench, "xfrc_applied")});
         }
       }
-      patches.emplace_back(&t, std::move(patch));
     }
   }
+  const ops::CheckedTargets checked = ops::CheckTargets(session_, targets);
   // Bounded work per client: a driver cannot queue more than max_queued_steps ahead.
   const std::uint64_t queued = QueuedSteps(r.client->id);
   if (mode_ == "direct" &&
@@ -951,10 +923,7 @@ StepServer::Outcome StepServer::Step(Request& r) {
                            std::to_string(options_.limits.max_queued_steps) +
                            " (wait for the replies, or send 'cancel')");
   }
-  for (auto& [t, patch] : patches) {
-    if (!patch.empty()) t->control->channel(control::ControlSource::kNetwork).Patch(patch);
-  }
-  for (const physics::cmd::ApplyForce& f : forces) session_.engine().Submit(f);
+  ops::ApplyTargets(session_, checked);
   Outcome out;
   out.reply = Json{{"op", "step_ok"}};
   out.observation = observation;

@@ -15,8 +15,9 @@
 // The server is transport, sessions and leases, and a vocabulary: the OpSpec rows of Ops() map
 // each wire operation (its name, required fields, session and lease needs) to a handler that
 // reads the wire's fields into the typed request of one operation (urlab/ops/*.h: its one
-// validation, whoever calls it), calls it and writes the reply. Step modes, lockstep queues and
-// per-client replay sessions belong to the server's clients and stay here.
+// validation, whoever calls it), calls it and writes the reply. Step modes and lockstep queues
+// belong to the server's clients and stay here; replay playback is ops::ReplaySessions
+// (urlab/ops/replay_sessions.h), to which the replay_* operations route.
 //
 // Threading: the network subsystem's I/O thread only (it owns the socket); built on the main
 // thread in BeginPlay.
@@ -43,6 +44,7 @@
 #include "net/observation.h"
 #include "net/shm_transport.h"
 #include "net/topic_table.h"
+#include "urlab/ops/replay_sessions.h"
 #include "urlab/physics/state_frame.h"
 #include "urlab/replay/playback.h"
 #include "urlab/replay/player.h"
@@ -135,7 +137,9 @@ class StepServer {
   void SetCameras(world::CameraStreams* cameras) { cameras_ = cameras; }
   // Where the replay replay_start plays is shown (the viewer's timeline); nullptr: nowhere. Main
   // thread, before the I/O thread starts.
-  void SetPlayback(std::shared_ptr<replay::PlaybackSlot> slot) { playback_ = std::move(slot); }
+  void SetPlayback(std::shared_ptr<replay::PlaybackSlot> slot) {
+    replays_.SetPlayback(std::move(slot));
+  }
   // The batched environments the batch operations drive (nullptr: none; they answer no_batch).
   // Main thread, before the I/O thread starts.
   void SetBatch(world::BatchSubsystem* batch) { batch_ = batch; }
@@ -327,9 +331,6 @@ class StepServer {
   // The path of the request's `path` for writing (NetworkFiles::ForWriting with its
   // `overwrite`), never the file a running recording writes.
   std::string WritablePath(const Request& r);
-  // Releases the replay sessions `owner` loaded ("" : any owner) except `keep`; stops the
-  // playback of a released one. Returns how many.
-  std::size_t ReleaseReplays(const std::string& owner, const std::string& keep = {});
 
   world::Session& session_;
   const std::vector<ArticulationTopics>& tables_;
@@ -352,23 +353,10 @@ class StepServer {
   world::CameraStreams* cameras_ = nullptr;
   NetworkFiles files_;                    // the names clients give, under files_dir
   internal::WarningLimiter log_limiter_;  // lines clients cause (LogRemote)
-  // Recordings loaded for replay ("r1", "r2", ...), in load order, each owned by the client
-  // that loaded it (released with its lease, its session, its next load or replay_unload).
-  struct ReplaySession {
-    std::string id;
-    std::string owner;
-    std::unique_ptr<replay::RecordingReader> reader;
-  };
-  std::vector<ReplaySession> replays_;
-  std::uint64_t next_replay_ = 1;
-  std::size_t ReleaseReplaysIf(const std::function<bool(const ReplaySession&)>& which);
-  std::string active_replay_;
-  std::string playing_replay_;              // the session player_ plays
-  std::string player_mode_;                 // kinematic | resimulate
-  std::unique_ptr<replay::Player> player_;  // declared after replays_: destroyed first
-  std::shared_ptr<replay::PlaybackSlot> playback_;
-  std::unique_ptr<replay::Playback> shown_;  // what playback_ points at (player_, its reader)
   world::BatchSubsystem* batch_ = nullptr;
+  // Recordings loaded for replay and the one playing (released with their client's lease, its
+  // session, its next load or replay_unload): the replay_* operations route here.
+  ops::ReplaySessions replays_;
 };
 
 }  // namespace urlab::net

@@ -148,62 +148,38 @@ StepServer::Outcome StepServer::SnapshotLoad(Request& r) {
 
 // ---- Replay
 
+// ---- Replay: the wire's fields to ops::ReplaySessions and its results to replies.
+
 StepServer::Outcome StepServer::ReplayLoad(Request& r) {
   const std::string path = files_.ForReading(String(r.body["path"], "path"), "path");
-  // A new load releases this client's earlier recordings (except one playing); the total is
-  // bounded too.
-  ReleaseReplays(r.client->id, playing_replay_);
-  if (replays_.size() >= options_.limits.max_replay_sessions) {
-    Fail("replay_limit", std::to_string(replays_.size()) +
-                             " recordings are loaded (the limit); replay_unload one first");
-  }
-  std::unique_ptr<replay::RecordingReader> reader;
-  RunFileOp(
-      [&] {
-        reader = std::make_unique<replay::RecordingReader>(
-            replay::RecordingReader::Open(path, {.allow_partial = true}));
-        replay::CheckSameModel(*reader, session_.engine().CopyModel());
-      },
-      "path_not_readable");
-  if (reader->info().kind != "recording") {
-    Fail("path_not_readable", path + ": not a recording (a " + reader->info().kind + ")");
-  }
-  // fmt, not "r" + std::to_string: GCC 12 -O3 raises a false -Wrestrict on the latter.
-  ReplaySession s{fmt::format("r{}", next_replay_++), r.client->id, std::move(reader)};
-  const replay::RecordingReader& rd = *s.reader;
-  Json reply{{"op", "replay_load_ok"},
-             {"session", s.id},
-             {"path", rd.path()},
-             {"frames", rd.frame_count()},
-             {"duration", rd.frame_count() > 0 ? rd.last_time() - rd.first_time() : 0.0},
-             {"chunks", rd.chunks().size()},
-             {"finished", rd.finished()},
-             {"problem", rd.problem()}};
-  active_replay_ = s.id;  // the newest recording is the one replay_start plays by default
-  replays_.push_back(std::move(s));
-  return {reply};
+  std::string id;
+  const replay::RecordingReader* rd = nullptr;
+  RunFileOp([&] { rd = &replays_.Load(r.client->id, path, &id); }, "path_not_readable");
+  return {Json{{"op", "replay_load_ok"},
+               {"session", id},
+               {"path", rd->path()},
+               {"frames", rd->frame_count()},
+               {"duration", rd->frame_count() > 0 ? rd->last_time() - rd->first_time() : 0.0},
+               {"chunks", rd->chunks().size()},
+               {"finished", rd->finished()},
+               {"problem", rd->problem()}}};
 }
 
 StepServer::Outcome StepServer::ReplayListSessions(Request&) {
   Json sessions = Json::array();
-  for (const ReplaySession& s : replays_) {
-    sessions.push_back(Json{{"session", s.id},
-                            {"path", s.reader->path()},
-                            {"frames", s.reader->frame_count()},
-                            {"active", s.id == active_replay_}});
+  for (const ops::ReplaySessions::Entry& s : replays_.List()) {
+    sessions.push_back(
+        Json{{"session", s.id}, {"path", s.path}, {"frames", s.frames}, {"active", s.active}});
   }
+  const std::string& active = replays_.active();
   return {Json{{"op", "replay_list_sessions_ok"},
                {"sessions", std::move(sessions)},
-               {"active", active_replay_.empty() ? Json() : Json(active_replay_)}}};
+               {"active", active.empty() ? Json() : Json(active)}}};
 }
 
 StepServer::Outcome StepServer::ReplaySetActive(Request& r) {
   const std::string id = String(r.body["session"], "session");
-  if (std::none_of(replays_.begin(), replays_.end(),
-                   [&id](const ReplaySession& s) { return s.id == id; })) {
-    Fail("replay_session_not_found", "no replay session '" + id + "' (see replay_list_sessions)");
-  }
-  active_replay_ = id;
+  replays_.SetActive(id);
   return {Json{{"op", "replay_set_active_ok"}, {"session", id}}};
 }
 
@@ -214,28 +190,11 @@ StepServer::Outcome StepServer::ReplayStart(Request& r) {
                          "one of them alone; replay the recording in a run without --envs "
                          "(urlab replay FILE, or urlab run SCENE and replay_start)");
   }
-  std::string id = active_replay_;
+  ops::ReplaySessions::StartRequest o;
   if (const auto it = r.body.find("session"); it != r.body.end() && !it->is_null()) {
-    id = String(*it, "session");
+    o.session = String(*it, "session");
   }
-  const auto s = std::find_if(replays_.begin(), replays_.end(),
-                              [&id](const ReplaySession& x) { return x.id == id; });
-  if (s == replays_.end()) {
-    Fail("replay_session_not_found",
-         id.empty() ? std::string("no recording loaded (replay_load first)")
-                    : "no replay session '" + id + "' (see replay_list_sessions)");
-  }
-  replay::PlayerOptions o;
-  const std::string mode =
-      r.body.contains("mode") ? String(r.body["mode"], "mode") : std::string("kinematic");
-  if (mode == "kinematic") {
-    o.mode = replay::PlayMode::kKinematic;
-  } else if (mode == "resimulate") {
-    o.mode = replay::PlayMode::kResimulate;
-  } else {
-    Fail("bad_value", "mode must be kinematic or resimulate");
-  }
-  o.speed = 1.0;
+  if (r.body.contains("mode")) o.mode = String(r.body["mode"], "mode");
   if (const auto it = r.body.find("speed"); it != r.body.end() && !it->is_null()) {
     o.speed = RangedNumber(*it, "speed");
   }
@@ -246,112 +205,53 @@ StepServer::Outcome StepServer::ReplayStart(Request& r) {
          "replay plays through physics steps; puppet mode never steps (set_mode live or "
          "direct)");
   }
-  if (playback_) playback_->Set(nullptr);  // the viewer's timeline lets go of the old player
-  shown_.reset();
-  player_.reset();  // one replay at a time: a new start replaces it
-  try {
-    player_ = std::make_unique<replay::Player>(session_.engine(), *s->reader, o);
-  } catch (const replay::RecordingError& e) {
-    Fail(e.reason() == Reason::kWrongModel ? "bad_value" : "path_not_readable", e.what());
-  }
-  playing_replay_ = id;
-  player_mode_ = mode;
-  if (playback_) {  // a running viewer shows it on its timeline
-    auto shown = std::make_unique<replay::Playback>();
-    shown->player = player_.get();
-    shown->reader = s->reader.get();
-    try {
-      shown->marks = replay::ScanTimeline(*s->reader);
-    } catch (const replay::RecordingError& e) {
-      spdlog::warn("step server: the timeline shows no keyframes or resets: {}", e.what());
-    }
-    shown->label = id + ": " + s->reader->path();
-    shown->mode = mode;
-    shown_ = std::move(shown);
-    playback_->Set(shown_.get());
-  }
-  LogRemote(
-      spdlog::level::info, "replay start",
-      fmt::format("step server: replaying {} ({}, speed {})", s->reader->path(), mode, o.speed));
+  const ops::ReplaySessions::Started s = replays_.Start(o);
+  LogRemote(spdlog::level::info, "replay start",
+            fmt::format("step server: replaying {} ({}, speed {})", s.path, s.mode, s.speed));
   return {Json{{"op", "replay_start_ok"},
-               {"session", id},
-               {"mode", mode},
-               {"speed", o.speed},
-               {"loop", o.loop},
-               {"frames", s->reader->frame_count()}}};
+               {"session", s.id},
+               {"mode", s.mode},
+               {"speed", s.speed},
+               {"loop", s.loop},
+               {"frames", s.frames}}};
 }
 
 StepServer::Outcome StepServer::ReplayStop(Request&) {
-  const std::string was = player_ ? playing_replay_ : std::string();
-  if (playback_) playback_->Set(nullptr);
-  shown_.reset();
-  player_.reset();  // the engine steps on its own again
-  playing_replay_.clear();
+  const std::string was = replays_.Stop();  // the engine steps on its own again
   return {Json{{"op", "replay_stop_ok"}, {"session", was.empty() ? Json() : Json(was)}}};
 }
 
 StepServer::Outcome StepServer::ReplayStatus(Request&) {
-  if (!player_) return {Json{{"op", "replay_status_ok"}, {"active", false}}};
-  const replay::PlayerStatus st = player_->status();
-  Json resim{{"identical", st.resim.identical},
-             {"steps_checked", st.resim.steps_checked},
-             {"diverged", st.resim.diverged}};
-  if (st.resim.diverged) resim["report"] = st.resim.str();
+  const ops::ReplaySessions::Status st = replays_.GetStatus();
+  if (!st.active) return {Json{{"op", "replay_status_ok"}, {"active", false}}};
+  const replay::PlayerStatus& p = st.player;
+  Json resim{{"identical", p.resim.identical},
+             {"steps_checked", p.resim.steps_checked},
+             {"diverged", p.resim.diverged}};
+  if (p.resim.diverged) resim["report"] = p.resim.str();
   return {Json{{"op", "replay_status_ok"},
                {"active", true},
-               {"session", playing_replay_},
-               {"mode", player_mode_},
-               {"playing", st.playing},
-               {"finished", st.finished},
-               {"time", st.time},
-               {"step", st.step},
-               {"frame", st.frame},
-               {"frames", st.frames},
-               {"speed", st.speed},
-               {"loop", st.loop},
-               {"loops", st.loops},
+               {"session", st.session},
+               {"mode", st.mode},
+               {"playing", p.playing},
+               {"finished", p.finished},
+               {"time", p.time},
+               {"step", p.step},
+               {"frame", p.frame},
+               {"frames", p.frames},
+               {"speed", p.speed},
+               {"loop", p.loop},
+               {"loops", p.loops},
                {"resim", std::move(resim)},
-               {"error", st.error}}};
+               {"error", p.error}}};
 }
 
 StepServer::Outcome StepServer::ReplayUnload(Request& r) {
-  std::string id = active_replay_;
+  std::string id;
   if (const auto it = r.body.find("session"); it != r.body.end() && !it->is_null()) {
     id = String(*it, "session");
   }
-  if (ReleaseReplaysIf([&id](const ReplaySession& s) { return s.id == id; }) == 0) {
-    Fail("replay_session_not_found",
-         id.empty() ? std::string("no recording loaded")
-                    : "no replay session '" + id + "' (see replay_list_sessions)");
-  }
-  return {Json{{"op", "replay_unload_ok"}, {"session", id}}};
-}
-
-std::size_t StepServer::ReleaseReplays(const std::string& owner, const std::string& keep) {
-  return ReleaseReplaysIf([&](const ReplaySession& s) {
-    return (owner.empty() || s.owner == owner) && (keep.empty() || s.id != keep);
-  });
-}
-
-std::size_t StepServer::ReleaseReplaysIf(const std::function<bool(const ReplaySession&)>& which) {
-  std::size_t n = 0;
-  for (auto it = replays_.begin(); it != replays_.end();) {
-    if (!which(*it)) {
-      ++it;
-      continue;
-    }
-    if (it->id == playing_replay_) {
-      if (playback_) playback_->Set(nullptr);  // the viewer's timeline lets go first
-      shown_.reset();
-      player_.reset();  // the reader it plays goes away: the engine steps on its own again
-      playing_replay_.clear();
-    }
-    if (it->id == active_replay_) active_replay_.clear();
-    it = replays_.erase(it);
-    ++n;
-  }
-  if (active_replay_.empty() && !replays_.empty()) active_replay_ = replays_.back().id;
-  return n;
+  return {Json{{"op", "replay_unload_ok"}, {"session", replays_.Unload(id)}}};
 }
 
 std::string StepServer::WritablePath(const Request& r) {

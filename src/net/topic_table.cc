@@ -1,6 +1,5 @@
 #include "net/topic_table.h"
 
-#include "urlab/ops/controllers.h"
 #include "urlab/wire/wire.h"
 #include "urlab/world/names.h"
 
@@ -61,10 +60,7 @@ std::vector<ArticulationTopics> BuildTopicTables(world::Session& session) {
       control::MakeActuatorBinding(m, id).TargetRange(positions, range);
       t.mins.push_back(range[0]);
       t.maxs.push_back(range[1]);
-      t.index_of_actuator[id] = static_cast<int>(i);
     }
-    // The names the operations resolve (ctrl_map reads them too).
-    t.gain_index = ops::ActuatorNameIndex(m, a);
     out.push_back(std::move(t));
   }
   return out;

@@ -1,11 +1,10 @@
 #pragma once
 // What the network publishes and accepts for each articulation, resolved once at BeginPlay from
 // the session's bindings: joint and sensor topics with their state addresses, actuator ids and
-// ranges for discovery, and the name lookups set_gains needs. Immutable afterwards, so the I/O
+// ranges for discovery (names are resolved by the operations). Immutable afterwards, so the I/O
 // thread reads it without locks.
 #include <cstdint>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "urlab/world/session.h"
@@ -36,9 +35,6 @@ struct ArticulationTopics {
   // The target range (ActuatorBinding::TargetRange: a PD actuator's is its joint's range), or
   // -100/100 when unbounded.
   std::vector<double> mins, maxs;
-  std::unordered_map<int, int> index_of_actuator;  // global id -> frame index
-  // set_gains: short or prefixed actuator names, and joint names (the actuator driving it).
-  std::unordered_map<std::string, int> gain_index;
   control::ArticulationControl* control = nullptr;
   // The twist controller (free bases only, else nullptr): {art}/twist every step while attached,
   // {art}/actions while an action bit is held.

@@ -45,25 +45,26 @@ std::vector<ActuatorGains> InEffect(const mjModel* m, const world::Articulation&
 
 }  // namespace
 
-std::unordered_map<std::string, int> ActuatorNameIndex(const mjModel* m,
-                                                       const world::Articulation& a) {
-  std::unordered_map<std::string, int> index;
+int ActuatorIndex(const mjModel* m, const world::Articulation& a, std::string_view name) {
   const std::vector<int>& ids = a.control->actuator_ids();
+  // `full` names the element, or is its short name below the articulation's prefix.
+  const auto names = [&](const char* full) {
+    if (!full) return false;
+    const std::string_view f(full);
+    return f == name || (f.starts_with(a.prefix) && f.substr(a.prefix.size()) == name);
+  };
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    if (names(mj_id2name(m, mjOBJ_ACTUATOR, ids[i]))) return static_cast<int>(i);
+  }
+  // A joint name reaches the actuator that drives it (clients key gains and targets by joint).
   for (std::size_t i = 0; i < ids.size(); ++i) {
     const int id = ids[i];
-    if (const char* name = mj_id2name(m, mjOBJ_ACTUATOR, id)) {
-      index[name] = static_cast<int>(i);
-      index[std::string(name).substr(a.prefix.size())] = static_cast<int>(i);
-    }
-    // A joint name reaches the actuator that drives it (clients key gains by joint).
-    if (m->actuator_trntype[id] == mjTRN_JOINT) {
-      if (const char* jn = mj_id2name(m, mjOBJ_JOINT, m->actuator_trnid[2 * id])) {
-        index.emplace(jn, static_cast<int>(i));
-        index.emplace(std::string(jn).substr(a.prefix.size()), static_cast<int>(i));
-      }
+    if (m->actuator_trntype[id] == mjTRN_JOINT &&
+        names(mj_id2name(m, mjOBJ_JOINT, m->actuator_trnid[2 * id]))) {
+      return static_cast<int>(i);
     }
   }
-  return index;
+  return -1;
 }
 
 std::vector<ActuatorGains> SetGains(world::Session& session, std::string_view articulation,
@@ -83,13 +84,12 @@ std::vector<ActuatorGains> SetGains(world::Session& session, std::string_view ar
   };
   for (std::size_t i = 0; i < n; ++i) apply(i, request.all, "");
   if (!request.named.empty()) {
-    const std::unordered_map<std::string, int> index = ActuatorNameIndex(m, a);
     for (const auto& [name, change] : request.named) {
-      const auto it = index.find(name);
-      if (it == index.end()) {
+      const int i = ActuatorIndex(m, a, name);
+      if (i < 0) {
         Fail("controller_schema_violation", a.name() + ": no actuator or joint '" + name + "'");
       }
-      apply(static_cast<std::size_t>(it->second), change, name + ".");
+      apply(static_cast<std::size_t>(i), change, name + ".");
     }
   }
   // The controller's own gains (what a frame without overrides leaves in effect), then the

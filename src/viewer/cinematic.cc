@@ -31,7 +31,7 @@ const char* ToString(CinematicMode mode) {
   }
 }
 
-CameraPose SamplePath(const std::vector<world::CameraKey>& keys, double t, bool loop) {
+CameraPose SamplePath(const std::vector<CameraKey>& keys, double t, bool loop) {
   CameraPose pose;
   if (keys.empty()) return pose;
   const double t0 = keys.front().time, t1 = keys.back().time;
@@ -40,11 +40,11 @@ CameraPose SamplePath(const std::vector<world::CameraKey>& keys, double t, bool 
   const auto last = static_cast<int>(keys.size()) - 1;
   int i = 0;  // the segment [i, i + 1] holding t
   while (i < last - 1 && t > keys[static_cast<std::size_t>(i + 1)].time) ++i;
-  const auto key = [&](int k) -> const world::CameraKey& {
+  const auto key = [&](int k) -> const CameraKey& {
     return keys[static_cast<std::size_t>(std::clamp(k, 0, last))];
   };
   if (last == 0) return {keys[0].pos, keys[0].look_at};
-  const world::CameraKey &k0 = key(i - 1), &k1 = key(i), &k2 = key(i + 1), &k3 = key(i + 2);
+  const CameraKey &k0 = key(i - 1), &k1 = key(i), &k2 = key(i + 1), &k3 = key(i + 2);
   const double dt12 = std::max(k2.time - k1.time, 1e-9);
   const double dt01 = i > 0 ? std::max(k1.time - k0.time, 1e-9) : dt12;
   const double dt23 = i + 2 <= last ? std::max(k3.time - k2.time, 1e-9) : dt12;
@@ -69,7 +69,7 @@ void PoseToCamera(const CameraPose& pose, mjvCamera* camera) {
   camera->elevation = std::asin(std::clamp(dz / dist, -1.0, 1.0)) * 180 / mjPI;
 }
 
-void Cinematic::Configure(const world::CinematicConfig& config, std::vector<int> root_bodies) {
+void Cinematic::Configure(const CinematicSettings& config, std::vector<int> root_bodies) {
   config_ = config;
   roots_ = std::move(root_bodies);
 }

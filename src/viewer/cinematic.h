@@ -11,7 +11,7 @@
 #include <array>
 #include <vector>
 
-#include "urlab/world/scene_file.h"
+#include "urlab/viewer/scene_settings.h"
 
 namespace urlab::viewer::internal {
 
@@ -24,13 +24,13 @@ struct CameraPose {
 
 // The path's pose at time t (keys sorted by time, at least one): before the first key the first
 // pose, after the last the last one, or with `loop` t wraps over the path's duration.
-CameraPose SamplePath(const std::vector<world::CameraKey>& keys, double t, bool loop);
+CameraPose SamplePath(const std::vector<CameraKey>& keys, double t, bool loop);
 // Points a free camera from pose.pos at pose.look_at.
 void PoseToCamera(const CameraPose& pose, mjvCamera* camera);
 
 class Cinematic {
  public:
-  void Configure(const world::CinematicConfig& config, std::vector<int> root_bodies);
+  void Configure(const CinematicSettings& config, std::vector<int> root_bodies);
   // O: off -> orbit -> path (when the scene has one) -> off. Returns the new mode.
   CinematicMode Next();
   CinematicMode mode() const { return mode_; }
@@ -40,7 +40,7 @@ class Cinematic {
   void Apply(const mjModel* m, const mjData* d, double t, mjvCamera* camera) const;
 
  private:
-  world::CinematicConfig config_;
+  CinematicSettings config_;
   std::vector<int> roots_;
   CinematicMode mode_ = CinematicMode::kOff;
 };

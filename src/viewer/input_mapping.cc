@@ -1,6 +1,7 @@
 #include "viewer/input_mapping.h"
 
 #include <GLFW/glfw3.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <array>
@@ -8,6 +9,8 @@
 #include <string>
 
 #include "urlab/core/error.h"
+#include "urlab/ops/error.h"
+#include "urlab/ops/targets.h"
 
 namespace urlab::viewer::internal {
 
@@ -64,7 +67,8 @@ int KeyCode(std::string_view name) {
   return -1;
 }
 
-void InputMapping::Build(const world::Session& session) {
+void InputMapping::Build(world::Session& session) {
+  session_ = &session;
   bound_.clear();
   target_of_.clear();
   targets_.clear();
@@ -92,7 +96,7 @@ void InputMapping::Build(const world::Session& session) {
         return t.control == b.control && t.index == b.index;
       });
       const auto target = static_cast<int>(it - targets_.begin());
-      if (it == targets_.end()) targets_.push_back({b.control, b.index});
+      if (it == targets_.end()) targets_.push_back({b.control, b.index, &art.name()});
       target_of_.push_back(target);
       bound_.push_back(b);
     }
@@ -134,7 +138,16 @@ void InputMapping::Update() {
   for (std::size_t t = 0; t < targets_.size(); ++t) {
     Target& target = targets_[t];
     if (values[t] == target.last) continue;  // (nothing is published until an input moves)
-    target.control->SetTarget(control::ControlSource::kInput, target.index, values[t]);
+    const int id = target.control->actuator_ids()[static_cast<std::size_t>(target.index)];
+    try {
+      ops::SetTargets(
+          *session_,
+          {.source = control::ControlSource::kInput,
+           .articulations = {{.articulation = *target.articulation, .by_id = {{id, values[t]}}}}});
+    } catch (const ops::OpError& e) {
+      // (a sum of scales out of the targets' range: refused, said once per change)
+      spdlog::warn("input mapping: {}", e.what());
+    }
     target.last = values[t];
   }
 }

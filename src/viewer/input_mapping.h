@@ -2,12 +2,14 @@
 // InputMapping (the description's MjInputMapping): the scene's input bindings (a key, gamepad
 // axis or gamepad button -> one actuator's target, value * scale) resolved against the session,
 // and applied each frame through the articulation's `input` control source (a frame is published
-// only when a mapped value changed; the source must be active for it to drive the robot, as
-// with the panel's sliders and the `ui` source). Key names come from a table (letters, digits,
+// only when a mapped value changed, through ops::SetTargets like every path that sets targets;
+// the source must be active for it to drive the robot, as with the panel's sliders and the `ui`
+// source). Key names come from a table (letters, digits,
 // arrows, Space...), separate from what is done with them. Mapped keys are consumed: they do not
 // also trigger a hotkey.
 //
 // Threading contract: main thread only (publishing a target is any-thread).
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -23,7 +25,7 @@ class InputMapping {
  public:
   // Resolves every articulation's bindings; throws InputError at a binding's file:line for an
   // unknown key name or actuator.
-  void Build(const world::Session& session);
+  void Build(world::Session& session);
   bool empty() const { return bound_.empty(); }
 
   // A key event; true when the key is mapped (consumed).
@@ -42,8 +44,10 @@ class InputMapping {
   struct Target {
     control::ArticulationControl* control = nullptr;
     int index = -1;
-    double last = 0;  // last published
+    const std::string* articulation = nullptr;  // its name (the session's, which outlives this)
+    double last = 0;                            // last published
   };
+  world::Session* session_ = nullptr;
   std::vector<Bound> bound_;
   std::vector<int> target_of_;  // per bound: index into targets_
   std::vector<Target> targets_;

@@ -13,6 +13,7 @@
 #include "urlab/ops/recording.h"
 #include "urlab/ops/simulation.h"
 #include "urlab/ops/state.h"
+#include "urlab/ops/targets.h"
 #include "urlab/replay/recorder.h"
 #include "urlab/world/manager.h"
 #include "viewer/viewer_core.h"
@@ -260,7 +261,15 @@ void Panel::DrawArticulation(ViewerCore& core) {
       const float frame_width = ImGui::CalcItemWidth();
       if (ImGui::SliderScalar(label.c_str(), ImGuiDataType_Double, &value, &lo, &hi, "%.3f") &&
           editable) {
-        ctl.SetTarget(control::ControlSource::kUi, i, value);
+        // The operation the step server and the control topic use (one validation: a value
+        // typed out of range, Ctrl+click, is refused with its message).
+        try {
+          ops::SetTargets(
+              session, {.source = control::ControlSource::kUi,
+                        .articulations = {{.articulation = art.name(), .by_id = {{id, value}}}}});
+        } catch (const ops::OpError& e) {
+          message_ = e.what();
+        }
       }
       const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
       sliders_.push_back({a.x, a.x + frame_width, (a.y + b.y) / 2});

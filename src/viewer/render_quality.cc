@@ -8,7 +8,7 @@
 
 namespace urlab::viewer::internal {
 
-RenderQuality ResolveQuality(const ViewerOptions& cli, const world::ViewerConfig& scene,
+RenderQuality ResolveQuality(const ViewerOptions& cli, const QualitySettings& scene,
                              bool software_renderer) {
   RenderQuality q;
   q.shadows = cli.shadows.value_or(scene.shadows.value_or(true));

@@ -8,8 +8,8 @@
 // Threading contract: main thread only (the thread whose GL context is current).
 #include <mujoco/mujoco.h>
 
+#include "urlab/viewer/scene_settings.h"
 #include "urlab/viewer/viewer.h"
-#include "urlab/world/scene_file.h"
 
 namespace urlab::viewer::internal {
 
@@ -25,7 +25,7 @@ struct RenderQuality {
 // frame; 1024 still gives clean shadows at window sizes.
 inline constexpr int kSoftwareShadowSize = 1024;
 
-RenderQuality ResolveQuality(const ViewerOptions& cli, const world::ViewerConfig& scene,
+RenderQuality ResolveQuality(const ViewerOptions& cli, const QualitySettings& scene,
                              bool software_renderer);
 
 // Puts `q` into the scene's render flags.

@@ -67,7 +67,7 @@ void ViewerCore::Begin(world::Session& session) {
   view_ = std::make_unique<SceneView>(engine.model(), kMaxGeom);  // engine not running yet
   SeparateCoplanarPlanes(view_->model());
   const bool software = window_->software_renderer();
-  quality_ = ResolveQuality(options_, session.scene_config().viewer, software);
+  quality_ = ResolveQuality(options_, QualityOf(session.scene_config()), software);
   {
     int fw = 0, fh = 0;
     window_->FramebufferSize(&fw, &fh);
@@ -209,7 +209,7 @@ void ViewerCore::BuildTables() {
       }
     }
   }
-  cinematic_.Configure(session_->scene_config().cinematic, std::move(roots));
+  cinematic_.Configure(CinematicOf(session_->scene_config()), std::move(roots));
 }
 
 void ViewerCore::SelectArticulation(int index) {

@@ -19,6 +19,7 @@
 #include "urlab/world/names.h"
 #include "world/input_keys.h"
 #include "world/scene_names.h"
+#include "world/scene_section.h"
 
 namespace urlab::world {
 
@@ -39,115 +40,23 @@ constexpr std::pair<const char*, const char*> kNotYetSupported[] = {
     {"lights", "scene lights are not supported; put <light> elements in an articulation's MJCF"},
 };
 
-// A closed or half-open interval a number must lie in; NaN never does.
-struct Range {
-  double min = -kInf;
-  double max = kInf;
-  bool min_exclusive = false;
-  bool Contains(double v) const {
-    return (min_exclusive ? v > min : v >= min) && v <= max;  // false for NaN
-  }
-  std::string Text() const {
-    if (max == kInf && min == -kInf) return "a number (not NaN)";
-    if (max == kInf) return std::string(min_exclusive ? "> " : ">= ") + document::FormatReal(min);
-    if (max == std::numeric_limits<double>::max()) {
-      return std::string(min_exclusive ? "> " : ">= ") + document::FormatReal(min) + " and finite";
-    }
-    if (min_exclusive) {
-      return "> " + document::FormatReal(min) + " and <= " + document::FormatReal(max);
-    }
-    return document::FormatReal(min) + " to " + document::FormatReal(max);
-  }
-};
+using Range = NumberRange;
 constexpr Range kFinite{-std::numeric_limits<double>::max(), std::numeric_limits<double>::max()};
 constexpr Range kNonNegativeFinite{0, std::numeric_limits<double>::max()};
 constexpr Range kNonNegative{0, kInf};  // inf allowed (e.g. an unlimited torque)
 
-class Parser {
+// The scene's own keys; the reader's checks (world/scene_section.h) are shared with the sections
+// subsystems parse.
+class Parser : public SectionReader {
  public:
-  explicit Parser(std::string path) : path_(std::move(path)) {}
-
-  SourceLocation At(const YAML::Node& n) const { return {path_, n.Mark().line + 1}; }
-
-  [[noreturn]] void Fail(const YAML::Node& n, const std::string& what) const {
-    throw InputError(At(n), what);
-  }
-
-  // The key of a mapping entry: a plain string, never a list, mapping or null.
-  std::string Key(const YAML::Node& key, const std::string& where) const {
-    if (!key.IsScalar() || key.Tag() == "tag:yaml.org,2002:null" || key.Scalar().empty()) {
-      Fail(key, "keys in " + where + " must be names (strings), not " +
-                    (key.IsMap()        ? "a mapping"
-                     : key.IsSequence() ? "a list"
-                                        : "empty/null"));
-    }
-    return key.Scalar();
-  }
-
-  // Every key of `map` once, as a string (duplicates and non-string keys are errors).
-  std::vector<std::pair<std::string, YAML::Node>> Entries(const YAML::Node& map,
-                                                          const std::string& where) const {
-    if (!map.IsMap()) Fail(map, where + " must be a mapping");
-    std::vector<std::pair<std::string, YAML::Node>> out;
-    std::map<std::string, int> seen;
-    for (const auto& kv : map) {
-      const std::string key = Key(kv.first, where);
-      const int line = kv.first.Mark().line + 1;
-      if (auto [it, fresh] = seen.emplace(key, line); !fresh) {
-        Fail(kv.first, "duplicate key '" + key + "' in " + where + " (first at line " +
-                           std::to_string(it->second) + ")");
-      }
-      out.emplace_back(key, kv.second);
-    }
-    return out;
-  }
-
-  void CheckKeys(const YAML::Node& map, const std::string& where,
-                 const std::set<std::string>& allowed) const {
-    Entries(map, where);  // keys are strings, each once
-    for (const auto& kv : map) {
-      const std::string key = kv.first.Scalar();
-      if (!allowed.count(key)) {
-        std::string list;
-        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-        Fail(kv.first,
-             "unknown key '" + key + "' in " + where + " (expected one of: " + list + ")");
-      }
-    }
-  }
-
-  template <typename T>
-  T As(const YAML::Node& n, const std::string& what) const {
-    try {
-      return n.as<T>();
-    } catch (const YAML::Exception&) {
-      Fail(n, what + ": wrong type");
-    }
-  }
-
-  double Number(const YAML::Node& n, const std::string& what, const Range& range = kFinite) const {
-    if (!n.IsScalar()) Fail(n, what + " must be a number");
-    const double v = As<double>(n, what + " must be a number");
-    if (!range.Contains(v)) {
-      Fail(n, what + " must be " + range.Text() + ", not " + n.Scalar());
-    }
-    return v;
-  }
+  explicit Parser(std::string path) : SectionReader(std::move(path)) {}
+  using SectionReader::Number;
 
   // A whole number 0..max.
   int Index(const YAML::Node& n, const std::string& what, int max) const {
     const double v = Number(n, what, {0, static_cast<double>(max)});
     if (v != std::floor(v)) Fail(n, what + " must be a whole number, not " + n.Scalar());
     return static_cast<int>(v);
-  }
-
-  std::vector<double> Numbers(const YAML::Node& n, const std::string& what, size_t count) const {
-    if (!n.IsSequence() || n.size() != count) {
-      Fail(n, what + " must be a list of " + std::to_string(count) + " numbers");
-    }
-    std::vector<double> out;
-    for (const auto& v : n) out.push_back(Number(v, what, kFinite));
-    return out;
   }
 
   // `value` checked as the MJCF attribute `attribute` of grammar context `element` (count, type,
@@ -167,16 +76,6 @@ class Parser {
     }
     const std::string problem = document::CheckValue(*a, value);
     if (!problem.empty()) Fail(at, what + " " + attribute + ": " + problem);
-  }
-
-  bool Bool(const YAML::Node& n, const std::string& what) const {
-    if (!n.IsScalar()) Fail(n, what + " must be true or false");
-    return As<bool>(n, what + " must be true or false");
-  }
-
-  std::string String(const YAML::Node& n, const std::string& what) const {
-    if (!n.IsScalar()) Fail(n, what + " must be a string");
-    return n.as<std::string>();
   }
 
   std::map<std::string, std::string> Options(const YAML::Node& n, const std::string& where) const {
@@ -359,7 +258,7 @@ class Parser {
     const std::string& name = p.spec.name;
     if (!n["mesh"]) Fail(n, name + ": a prop needs a mesh file");
     fs::path mesh(String(n["mesh"], "mesh"));
-    if (mesh.is_relative()) mesh = fs::path(path_).parent_path() / mesh;
+    if (mesh.is_relative()) mesh = fs::path(path()).parent_path() / mesh;
     p.spec.mesh = fs::absolute(mesh).lexically_normal().string();
     CheckInputFile(p.spec.mesh, name + ": mesh file", At(n["mesh"]), convert::kMaxMeshFileBytes);
     if (!convert::IsReadableMeshFormat(p.spec.mesh)) {
@@ -423,7 +322,7 @@ class Parser {
   std::string InputPath(const YAML::Node& n, const std::string& what,
                         std::uintmax_t max_bytes = kMaxTextInputBytes) const {
     fs::path p(String(n, what));
-    if (p.is_relative()) p = fs::path(path_).parent_path() / p;
+    if (p.is_relative()) p = fs::path(path()).parent_path() / p;
     const std::string out = fs::absolute(p).lexically_normal().string();
     CheckInputFile(out, what, At(n), max_bytes);
     return out;
@@ -623,64 +522,6 @@ class Parser {
     return b;
   }
 
-  // cinematic: {orbit_period, orbit_elevation, orbit_distance, loop, path: [{t, pos, look_at}]}.
-  CinematicConfig Cinematic(const YAML::Node& n) const {
-    if (!n.IsMap()) Fail(n, "cinematic must be a map");
-    CheckKeys(n, "cinematic",
-              {"orbit_period", "orbit_elevation", "orbit_distance", "loop", "path"});
-    CinematicConfig c;
-    c.where = At(n);
-    if (n["orbit_period"]) {
-      c.orbit_period = Number(n["orbit_period"], "cinematic.orbit_period",
-                              Range{0, std::numeric_limits<double>::max(), true});
-    }
-    if (n["orbit_elevation"]) {
-      c.orbit_elevation = Number(n["orbit_elevation"], "cinematic.orbit_elevation", Range{-90, 90});
-    }
-    if (n["orbit_distance"]) {
-      c.orbit_distance =
-          Number(n["orbit_distance"], "cinematic.orbit_distance", kNonNegativeFinite);
-    }
-    if (n["loop"]) c.loop = Bool(n["loop"], "cinematic.loop");
-    if (const auto path = n["path"]) {
-      if (!path.IsSequence()) Fail(path, "cinematic.path must be a list of keys {t, pos, look_at}");
-      for (const auto& k : path) {
-        if (!k.IsMap()) Fail(k, "cinematic.path keys must be maps {t, pos, look_at}");
-        CheckKeys(k, "cinematic.path key", {"t", "pos", "look_at"});
-        if (!k["t"] || !k["pos"] || !k["look_at"]) {
-          Fail(k, "a cinematic.path key needs t, pos and look_at");
-        }
-        CameraKey key;
-        key.time = Number(k["t"], "cinematic.path.t", kNonNegativeFinite);
-        const auto p = Numbers(k["pos"], "cinematic.path.pos", 3);
-        const auto l = Numbers(k["look_at"], "cinematic.path.look_at", 3);
-        key.pos = {p[0], p[1], p[2]};
-        key.look_at = {l[0], l[1], l[2]};
-        if (!c.path.empty() && key.time <= c.path.back().time) {
-          Fail(k["t"], "cinematic.path times must increase");
-        }
-        if (key.pos == key.look_at) Fail(k, "cinematic.path: pos and look_at must differ");
-        c.path.push_back(key);
-      }
-    }
-    return c;
-  }
-
-  // viewer: {shadows, reflections, skybox, render_scale}.
-  ViewerConfig Viewer(const YAML::Node& n) const {
-    if (!n.IsMap()) Fail(n, "viewer must be a map {shadows, reflections, skybox, render_scale}");
-    CheckKeys(n, "viewer", {"shadows", "reflections", "skybox", "render_scale"});
-    ViewerConfig v;
-    v.where = At(n);
-    if (n["shadows"]) v.shadows = Bool(n["shadows"], "viewer.shadows");
-    if (n["reflections"]) v.reflections = Bool(n["reflections"], "viewer.reflections");
-    if (n["skybox"]) v.skybox = Bool(n["skybox"], "viewer.skybox");
-    if (n["render_scale"]) {
-      v.render_scale = Number(n["render_scale"], "viewer.render_scale", Range{0.25, 2});
-    }
-    return v;
-  }
-
   ArticulationConfig Articulation(const YAML::Node& n) const {
     CheckKeys(n, "articulation",
               {"name", "mjcf", "pos", "quat", "euler", "axisangle", "options", "control_source",
@@ -693,7 +534,7 @@ class Parser {
     // Relative to the scene file's folder as written (a symlinked folder is not resolved first,
     // so "../models" means the folder next to the link, as users expect).
     fs::path p(String(n["mjcf"], "mjcf"));
-    if (p.is_relative()) p = fs::path(path_).parent_path() / p;
+    if (p.is_relative()) p = fs::path(path()).parent_path() / p;
     a.mjcf = fs::absolute(p).lexically_normal().string();
     CheckInputFile(a.mjcf, a.name + ": mjcf file", At(n["mjcf"]));
     if (n["pos"]) {
@@ -821,13 +662,6 @@ class Parser {
     return out;
   }
 
-  // A whole number in [min, max] (a fraction is refused, never truncated).
-  int Whole(const YAML::Node& n, const std::string& what, int min, int max) const {
-    const double v = Number(n, what, Range{static_cast<double>(min), static_cast<double>(max)});
-    if (v != std::floor(v)) Fail(n, what + " must be a whole number, not " + n.Scalar());
-    return static_cast<int>(v);
-  }
-
   int Pixels(const YAML::Node& n, const std::string& what) const { return Whole(n, what, 1, 8192); }
 
   std::vector<std::string> Modes(const YAML::Node& n, const std::string& what) const {
@@ -911,8 +745,8 @@ class Parser {
 
   SceneConfig Scene(const YAML::Node& root) const {
     SceneConfig s;
-    s.path = path_;
-    if (!root || root.IsNull()) throw InputError({path_, 0}, "the scene file is empty");
+    s.path = path();
+    if (!root || root.IsNull()) throw InputError({path(), 0}, "the scene file is empty");
     if (root.IsMap()) {
       for (const auto& kv : root) {
         if (!kv.first.IsScalar()) continue;  // reported by CheckKeys
@@ -924,10 +758,12 @@ class Parser {
         }
       }
     }
-    CheckKeys(
-        root, "the scene",
-        {"articulations", "props", "terrain", "launchers", "options", "size", "control_source",
-         "network", "save_debug_xml", "cameras", "cinematic", "viewer", "seed", "randomize"});
+    // The scene's own keys, and the sections registered subsystems parse.
+    std::set<std::string> keys = {"articulations",  "props",   "terrain",        "launchers",
+                                  "options",        "size",    "control_source", "network",
+                                  "save_debug_xml", "cameras", "seed",           "randomize"};
+    keys.merge(SceneSectionNames());
+    CheckKeys(root, "the scene", keys);
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {
       Fail(arts ? arts : root, "the scene needs a non-empty list 'articulations'");
@@ -963,8 +799,10 @@ class Parser {
       s.randomize_where = At(n);
       s.randomize = Randomize(n, s);
     }
-    if (const auto n = root["cinematic"]) s.cinematic = Cinematic(n);
-    if (const auto n = root["viewer"]) s.viewer = Viewer(n);
+    for (const auto& [key, node] : Entries(root, "the scene")) {
+      if (const SectionParser parse = FindSceneSection(key))
+        s.sections.Set(key, parse(*this, node));
+    }
     if (root["cameras"]) s.cameras = Cameras(root["cameras"]);
     for (const auto& [key, settings] : s.cameras.cameras) {
       const std::string art = key.substr(0, key.find('/'));
@@ -1006,7 +844,7 @@ class Parser {
         const std::string text = String(d, "network.files_dir");
         if (text.empty()) Fail(d, "network.files_dir must name a folder (or leave it out)");
         fs::path p(text);
-        if (p.is_relative()) p = fs::path(path_).parent_path() / p;
+        if (p.is_relative()) p = fs::path(path()).parent_path() / p;
         s.network.files_dir = fs::absolute(p).lexically_normal().string();
         std::error_code ec;
         if (fs::exists(s.network.files_dir, ec) && !fs::is_directory(s.network.files_dir, ec)) {
@@ -1021,19 +859,16 @@ class Parser {
     if (const auto n = root["save_debug_xml"]) {
       if (n.IsScalar() && (n.as<std::string>() == "true" || n.as<std::string>() == "false")) {
         if (Bool(n, "save_debug_xml")) {
-          s.save_debug_xml = (fs::path(path_).parent_path() / "Saved" / "URLab").string();
+          s.save_debug_xml = (fs::path(path()).parent_path() / "Saved" / "URLab").string();
         }
       } else {
         fs::path p(String(n, "save_debug_xml"));
-        if (p.is_relative()) p = fs::path(path_).parent_path() / p;
+        if (p.is_relative()) p = fs::path(path()).parent_path() / p;
         s.save_debug_xml = p.lexically_normal().string();
       }
     }
     return s;
   }
-
- private:
-  std::string path_;
 };
 
 }  // namespace

@@ -84,6 +84,9 @@ TEST_F(ValidateRunAgreeTest, TheNewerKeysAreRefusedByValidateAndRunAtTheirLines)
       {"    input:\n      - {actuator: lift, key: ''}\n", ":5: a.input: an empty key"},
       {"cameras: {width: 640.5}\n", ":4: cameras.width must be a whole number"},
       {"cameras: {samples: 1.5}\n", ":4: cameras.samples must be a whole number"},
+      // sections a subsystem parses (the viewer's, registered by the tool at start)
+      {"viewer: {render_scale: 3}\n", ":4: viewer.render_scale must be 0.25 to 2"},
+      {"cinematic:\n  orbit_elevation: 95\n", ":5: cinematic.orbit_elevation must be -90 to 90"},
   };
   int i = 0;
   for (const Case& c : cases) {
@@ -108,7 +111,8 @@ TEST_F(ValidateRunAgreeTest, TheNewerKeysAreRefusedByValidateAndRunAtTheirLines)
             "gamepad_axis: 1}\n"
             "  - {name: b, mjcf: cart.xml}\n"
             "cameras: {enabled: false, width: 320, samples: 0, streams: {a/eye: {rate: 5}}}\n"
-            "network: {enabled: false, camera_base_port: 6000}\n");
+            "network: {enabled: false, camera_base_port: 6000}\n"
+            "viewer: {shadows: false}\ncinematic: {orbit_period: 10}\n");
   std::string out;
   EXPECT_EQ(Urlab("validate " + good, &out), 0) << out;
   EXPECT_EQ(Urlab("run --ports auto " + good + " --duration 0.3 --no-network", &out), 0) << out;

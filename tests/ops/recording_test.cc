@@ -1,11 +1,13 @@
 // Recording and snapshots (urlab/ops/recording.h): the step server's recording_* and
 // snapshot_* and the viewer panel's Record / Stop recording / Snapshot / Restore are the same
-// operations, with the same refusals.
+// operations, with the same refusals. Replay sessions (urlab/ops/replay_sessions.h) are a module of
+// their own the step server's replay_* operations route to.
 #include "urlab/ops/recording.h"
 
 #include <filesystem>
 
 #include "ops/ops_fixture.h"
+#include "urlab/ops/replay_sessions.h"
 
 namespace urlab::ops::test {
 namespace {
@@ -63,6 +65,50 @@ TEST_F(OpsTest, SnapshotsRoundTripAcrossPaths) {
   physics::PhysicsState wrong = state;
   wrong.qpos.resize(1);
   EXPECT_EQ(FromCall([&] { RestoreState(session(), wrong); }).code, "bad_value");
+}
+
+TEST_F(OpsTest, ReplaySessionsPlayWithoutTheStepServer) {
+  Play("direct", "", "", /*recorder=*/true);
+  Client c(ctx_, rpc());
+  c.Hello();
+  ASSERT_EQ(c.Op("recording_start", {{"path", "run.urrec"}})["op"], "recording_start_ok");
+  c.Op("step", {{"n_steps", 50}});
+  ASSERT_EQ(c.Op("recording_stop")["frames"], 50);
+  const std::string file = dir_ + "/run.urrec";
+
+  // The module alone (the step server holds another instance): the same refusals.
+  ReplaySessions replays(session(), /*max_sessions=*/2);
+  EXPECT_EQ(FromReply(c.Op("replay_start")), FromCall([&] { replays.Start({}); }));
+  EXPECT_EQ(FromCall([&] { replays.Start({}); }).code, "replay_session_not_found");
+  std::string a, b;
+  EXPECT_EQ(replays.Load("panel", file, &a).frame_count(), 50u);
+  EXPECT_EQ(a, "r1");
+  replays.Load("panel", file, &b);  // the owner's earlier one is released
+  EXPECT_EQ(b, "r2");
+  ASSERT_EQ(replays.List().size(), 1u);
+  EXPECT_TRUE(replays.List()[0].active);
+  ASSERT_EQ(c.Op("replay_load", {{"path", "run.urrec"}})["op"], "replay_load_ok");
+  EXPECT_EQ(FromReply(c.Op("replay_set_active", {{"session", "r9"}})),
+            FromCall([&] { replays.SetActive("r9"); }));
+  EXPECT_EQ(FromReply(c.Op("replay_start", {{"mode", "fast"}})),
+            FromCall([&] { replays.Start({.mode = "fast"}); }));
+  replays.Load("other", file, &a);
+  EXPECT_EQ(FromCall([&] { replays.Load("third", file, &a); }).code, "replay_limit");
+
+  // Plays in the engine's step handler: the engine's steps show the recorded frames.
+  const ReplaySessions::Started started = replays.Start({.session = b});
+  EXPECT_EQ(started.frames, 50u);
+  c.Op("step", {{"n_steps", 10}});
+  const ReplaySessions::Status st = replays.GetStatus();
+  EXPECT_TRUE(st.active);
+  EXPECT_EQ(st.session, b);
+  EXPECT_GT(st.player.frame, 0u);
+  // Releasing the playing one stops it; the other stays, active.
+  EXPECT_EQ(replays.Release("panel"), 1u);
+  EXPECT_FALSE(replays.GetStatus().active);
+  EXPECT_EQ(replays.active(), "r3");
+  EXPECT_EQ(replays.Unload(""), "r3");
+  EXPECT_TRUE(replays.List().empty());
 }
 
 }  // namespace

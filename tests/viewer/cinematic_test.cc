@@ -11,7 +11,7 @@ namespace {
 using viewer::internal::CameraPose;
 using viewer::internal::SamplePath;
 
-std::vector<world::CameraKey> Keys() {
+std::vector<viewer::CameraKey> Keys() {
   return {{0, {0, 0, 1}, {1, 0, 0}},
           {1, {2, 0, 1}, {1, 1, 0}},
           {3, {2, 4, 2}, {0, 1, 0}},
@@ -24,7 +24,7 @@ double Dist(const std::array<double, 3>& a, const std::array<double, 3>& b) {
 }
 
 TEST(CinematicPath, PassesThroughEveryKeyAtItsTime) {
-  for (const world::CameraKey& k : Keys()) {
+  for (const viewer::CameraKey& k : Keys()) {
     const CameraPose p = SamplePath(Keys(), k.time, false);
     EXPECT_LT(Dist(p.pos, k.pos), 1e-12) << "t=" << k.time;
     EXPECT_LT(Dist(p.look_at, k.look_at), 1e-12) << "t=" << k.time;
@@ -59,7 +59,7 @@ TEST(CinematicPath, HoldsOrLoopsOutsideItsTimes) {
   // Looping: t and t + duration give the same pose.
   EXPECT_LT(Dist(SamplePath(Keys(), 5.5, true).pos, SamplePath(Keys(), 1.5, true).pos), 1e-12);
   // One key: that pose whatever the time.
-  const std::vector<world::CameraKey> one = {Keys()[1]};
+  const std::vector<viewer::CameraKey> one = {Keys()[1]};
   EXPECT_LT(Dist(SamplePath(one, 7, true).look_at, one[0].look_at), 1e-12);
 }
 

@@ -21,6 +21,7 @@
 #include "urlab/net/network.h"
 #include "urlab/replay/playback.h"
 #include "urlab/replay/recording.h"
+#include "urlab/viewer/scene_settings.h"
 #include "urlab/world/manager.h"
 #include "viewer/image_io.h"
 #include "viewer/panel.h"
@@ -127,7 +128,10 @@ double DistToSegment(Pixel p, Pixel a, Pixel b) {
 
 class ViewerTest : public testing::MujocoTest {
  protected:
-  void SetUp() override { dir_ = testing::MakeTempDir("viewer"); }
+  void SetUp() override {
+    dir_ = testing::MakeTempDir("viewer");
+    viewer::RegisterSceneSections();  // scenes here have viewer: and cinematic: sections
+  }
   void TearDown() override {
     manager_.reset();
     testing::MujocoTest::TearDown();

@@ -104,24 +104,10 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       {WithArm("cameras:\n  streams:\n    head: {rate: 5}\n"), 6, "\"articulation/camera\""},
       {WithArm("cameras:\n  streams:\n    a/head: {zoom: 5}\n"), 6, "unknown key 'zoom'"},
       {WithArm("    cameras: maybe\n"), 4, "true, false or a list of camera names"},
-      // cinematic cameras (the viewer's O)
-      {WithArm("cinematic: []\n"), 4, "cinematic must be a map"},
-      {WithArm("cinematic: {orbit_period: 0}\n"), 4, "cinematic.orbit_period"},
-      {WithArm("cinematic: {orbit_elevation: 95}\n"), 4, "cinematic.orbit_elevation"},
-      {WithArm("cinematic: {zoom: 2}\n"), 4, "unknown key 'zoom'"},
-      {WithArm("cinematic:\n  path:\n    - {t: 0, pos: [1, 0, 0]}\n"), 6,
-       "needs t, pos and look_at"},
-      {WithArm("cinematic:\n  path:\n    - {t: 1, pos: [1, 0, 0], look_at: [0, 0, 0]}\n"
-               "    - {t: 1, pos: [2, 0, 0], look_at: [0, 0, 0]}\n"),
-       7, "times must increase"},
-      {WithArm("cinematic:\n  path:\n    - {t: 0, pos: [1, 0, 0], look_at: [1, 0, 0]}\n"), 6,
-       "pos and look_at must differ"},
       {WithArm("recording: {file: r.bin}\n"), 4, "'recording:' is not a scene section"},
-      // the viewer's render quality
-      {WithArm("viewer: true\n"), 4, "viewer must be a map"},
-      {WithArm("viewer: {shadows: maybe}\n"), 4, "viewer.shadows"},
-      {WithArm("viewer: {render_scale: 3}\n"), 4, "viewer.render_scale must be 0.25 to 2"},
-      {WithArm("viewer: {fog: true}\n"), 4, "unknown key 'fog'"},
+      // a section no subsystem registered (the viewer's, in a program without the viewer)
+      {WithArm("viewer: {shadows: false}\n"), 4, "unknown key 'viewer' in the scene"},
+      {WithArm("cinematic: {loop: false}\n"), 4, "unknown key 'cinematic' in the scene"},
       // impulse launchers
       {WithArm("launchers: {name: gun}\n"), 4, "launchers must be a list"},
       {WithArm("launchers:\n  - {pos: [0, 0, 1]}\n"), 5, "a launcher needs a name"},
@@ -232,13 +218,6 @@ TEST_F(SceneFileTest, GoodValuesStillPass) {
   EXPECT_EQ(g.speed, 12);
   EXPECT_NEAR(g.quat[3], std::sqrt(0.5), 1e-12);
   EXPECT_EQ(l.launchers[0].where.line, 5);
-  // viewer: render quality (was refused as "not a scene section").
-  const world::SceneConfig v = world::ParseScene(
-      WithArm("viewer: {shadows: false, skybox: true, render_scale: 0.5}\n"), dir_ + "/v.yaml");
-  EXPECT_EQ(v.viewer.shadows, false);
-  EXPECT_EQ(v.viewer.skybox, true);
-  EXPECT_FALSE(v.viewer.reflections.has_value());
-  EXPECT_EQ(v.viewer.render_scale, 0.5);
 }
 
 TEST_F(SceneFileTest, CamerasSectionAndArticulationCameras) {

@@ -18,7 +18,6 @@
 #include <optional>
 #include <string>
 #include <string_view>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -29,10 +28,11 @@
 
 namespace urlab::ops {
 
-// Names that reach an actuator of `a` (its index in the articulation's actuator order): its full
-// and short name, and the full and short name of the joint a joint-transmission actuator drives.
-std::unordered_map<std::string, int> ActuatorNameIndex(const mjModel* m,
-                                                       const world::Articulation& a);
+// The actuator of `a` that `name` reaches (its index in the articulation's actuator order), -1
+// when none: an actuator's full or short name, else the full or short name of the joint a
+// joint-transmission actuator drives (the first such actuator). Gains (SetGains) and targets
+// (ops/targets.h) resolve names through this one rule.
+int ActuatorIndex(const mjModel* m, const world::Articulation& a, std::string_view name);
 
 // Absent fields stay as they are.
 struct GainChange {

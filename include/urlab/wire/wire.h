@@ -69,7 +69,7 @@ enum class Drop {
   kNonFinite,        // NaN or infinity
   kBadJson,          // not well-formed JSON, or not an object of objects
   kUnknownName,      // a set_gains name that is neither an actuator nor a joint
-  kBadNumber,        // a gain that is not a finite number >= 0
+  kBadNumber,        // a gain that is not a finite number >= 0, a control value out of range
   kUnknownField,     // a set_gains field other than kp, kv, torque_limit
   kNoController,     // set_gains for an articulation whose controller has no gains
   kBadFraming,       // not exactly two frames [topic][payload]

@@ -4,7 +4,9 @@
 // pose, scale, mode, mass or density, friction and decomposition settings), terrain
 // (meshes sampled into a heightfield, or a PNG height map), impulse launchers, plus scene-wide
 // option overrides,
-// network endpoints and the debug-XML switch. Unknown keys, duplicate keys, keys that are not
+// network endpoints and the debug-XML switch; the sections a subsystem owns (`viewer:`,
+// `cinematic:`) go to the parser it registered (src/world/scene_section.h). Unknown keys,
+// duplicate keys, keys that are not
 // strings, wrong types and numbers out of range (gains, torque limits, hold/blend times, options
 // checked against the MJCF grammar, size fields), fractions where a whole number is meant
 // (pixels, samples, ports) and names outside the scene name character set
@@ -27,6 +29,7 @@
 #include "urlab/physics/latency.h"
 #include "urlab/world/launchers.h"
 #include "urlab/world/randomize.h"
+#include "urlab/world/scene_sections.h"
 
 namespace urlab::world {
 
@@ -154,30 +157,6 @@ struct CamerasConfig {
 // The camera modes a scene may ask for, in wire order.
 inline constexpr const char* kCameraModes[] = {"rgb", "depth", "segmentation", "instance"};
 
-// Cinematic cameras (the viewer's O key): an orbit around every articulation's root body, and a
-// keyframe camera path (positions and look-at targets at simulation times, interpolated smoothly).
-struct CameraKey {
-  double time = 0;
-  std::array<double, 3> pos{}, look_at{};
-};
-
-struct CinematicConfig {
-  double orbit_period = 30;      // seconds of simulation time per turn
-  double orbit_elevation = -20;  // degrees
-  double orbit_distance = 0;     // metres; 0 frames every robot
-  std::vector<CameraKey> path;   // strictly increasing times
-  bool loop = true;              // the path repeats (else it holds its last pose)
-  SourceLocation where;
-};
-
-// viewer: the desktop viewer's render quality (the command line's --shadows, --reflections,
-// --skybox and --render-scale win over it); unset fields take the viewer's defaults.
-struct ViewerConfig {
-  std::optional<bool> shadows, reflections, skybox;
-  std::optional<double> render_scale;  // 0.25 to 2: the 3D view's resolution per window pixel
-  SourceLocation where;
-};
-
 struct NetworkConfig {
   bool enabled = true;
   std::string state = "tcp://*:5555";
@@ -204,8 +183,9 @@ struct SceneConfig {
   ControlSource control_source = ControlSource::kNetwork;
   NetworkConfig network;
   CamerasConfig cameras;
-  CinematicConfig cinematic;
-  ViewerConfig viewer;
+  // The sections subsystems own (`viewer:`, `cinematic:`), parsed by the parser each registered
+  // (src/world/scene_section.h) into its own settings type.
+  SceneSections sections;
   std::string save_debug_xml;  // folder for scene_compiled.xml/.mjb ("" = off)
   // The run's seed (`seed:`; `urlab run --seed` overrides): every emulated delay's jitter draws
   // from it.

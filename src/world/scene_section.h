@@ -1,0 +1,95 @@
+#pragma once
+// Scene sections a subsystem owns: the registration (a table of section name -> parser) and the
+// reader a parser gets. The scene file parser (scene_file.cc) keeps the scene's own keys and
+// dispatches every other top-level key to the parser registered under its name; the parser turns
+// the section into the subsystem's settings (stored type-erased in SceneConfig::sections,
+// urlab/world/scene_sections.h) or throws an InputError at the offending line through the
+// reader's checks, the same ones the scene's own keys use.
+//
+// Layering: the parsers and their settings types live in the subsystems' modules (viewer,
+// camera, net), above world; world only holds this table. The modules register from the top:
+// the `urlab` tool registers every subsystem's sections at start (app/scene_sections.cc), a test
+// or program registers those it parses. A top-level key no registered parser claims is an
+// unknown key, as before.
+//
+// Threading contract: register before any scene is parsed (main thread at start; registering a
+// name again replaces nothing and is harmless); parsing reads the table from any thread.
+#include <yaml-cpp/yaml.h>
+
+#include <any>
+#include <limits>
+#include <map>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "urlab/core/error.h"
+
+namespace urlab::world {
+
+// A closed or half-open interval a number must lie in; NaN never does.
+struct NumberRange {
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  bool min_exclusive = false;
+  bool Contains(double v) const {
+    return (min_exclusive ? v > min : v >= min) && v <= max;  // false for NaN
+  }
+  std::string Text() const;
+};
+inline constexpr NumberRange kFiniteNumber{-std::numeric_limits<double>::max(),
+                                           std::numeric_limits<double>::max()};
+inline constexpr NumberRange kNonNegativeFiniteNumber{0, std::numeric_limits<double>::max()};
+
+// The checks every part of a scene file is read with; each failure is an InputError at the
+// node's file:line.
+class SectionReader {
+ public:
+  explicit SectionReader(std::string path) : path_(std::move(path)) {}
+  virtual ~SectionReader() = default;
+
+  const std::string& path() const { return path_; }
+  SourceLocation At(const YAML::Node& n) const { return {path_, n.Mark().line + 1}; }
+  [[noreturn]] void Fail(const YAML::Node& n, const std::string& what) const {
+    throw InputError(At(n), what);
+  }
+
+  // The key of a mapping entry: a plain string, never a list, mapping or null.
+  std::string Key(const YAML::Node& key, const std::string& where) const;
+  // Every key of `map` once, as a string (duplicates and non-string keys are errors).
+  std::vector<std::pair<std::string, YAML::Node>> Entries(const YAML::Node& map,
+                                                          const std::string& where) const;
+  // Entries, and each key one of `allowed` ("unknown key ... (expected one of: ...)").
+  void CheckKeys(const YAML::Node& map, const std::string& where,
+                 const std::set<std::string>& allowed) const;
+
+  double Number(const YAML::Node& n, const std::string& what,
+                const NumberRange& range = kFiniteNumber) const;
+  // A whole number min..max.
+  int Whole(const YAML::Node& n, const std::string& what, int min, int max) const;
+  std::vector<double> Numbers(const YAML::Node& n, const std::string& what,
+                              std::size_t count) const;
+  bool Bool(const YAML::Node& n, const std::string& what) const;
+  std::string String(const YAML::Node& n, const std::string& what) const;
+
+ private:
+  std::string path_;
+};
+
+// A section's parser: the settings (any copyable type) of `section`, the node under its key.
+using SectionParser = std::any (*)(const SectionReader& reader, const YAML::Node& section);
+
+struct SectionSpec {
+  const char* name;  // the top-level key
+  SectionParser parse;
+};
+
+// Adds `spec` to the table (a name registered again keeps its first parser).
+void RegisterSceneSection(const SectionSpec& spec);
+// The parser registered for `name`, nullptr when none.
+SectionParser FindSceneSection(const std::string& name);
+// Every registered name.
+std::set<std::string> SceneSectionNames();
+
+}  // namespace urlab::world
