@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <memory>
 
 #include "net/request_fields.h"
@@ -93,7 +94,7 @@ StepServer::Outcome StepServer::RecordingStart(Request& r) {
   o.ring_seconds = OptionalNumber(r.body, "ring_seconds", o.ring_seconds);
   std::string path;
   RunFileOp([&] { path = ops::StartRecording(recorder_, o); });
-  return {Json{{"op", "recording_start_ok"}, {"path", path}}};
+  return {Json{{"op", "recording_start_ok"}, {"path", path}, {"max_duration", o.max_duration}}};
 }
 
 StepServer::Outcome StepServer::RecordingStop(Request&) {
@@ -112,7 +113,12 @@ StepServer::Outcome StepServer::RecordingSave(Request& r) {
   const std::string path = WritablePath(r);
   std::string saved;
   RunFileOp([&] { saved = ops::SaveRecording(recorder_, path); });
-  return {Json{{"op", "recording_save_ok"}, {"path", saved}}};
+  // absolute_path: where the file is on this host (the 2026 client reads it).
+  std::error_code ec;
+  const std::filesystem::path where = std::filesystem::absolute(saved, ec);
+  return {Json{{"op", "recording_save_ok"},
+               {"path", saved},
+               {"absolute_path", ec ? saved : where.lexically_normal().string()}}};
 }
 
 StepServer::Outcome StepServer::RecordingClear(Request&) {

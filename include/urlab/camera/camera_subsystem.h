@@ -65,6 +65,9 @@ class CameraSubsystem : public world::Subsystem, public world::CameraStreams {
   bool WaitForStep(std::size_t index, std::uint64_t step, std::chrono::milliseconds timeout,
                    world::CameraFrame& out) override;
 
+  void SetStreaming(std::size_t index, bool on) override;
+  bool Streaming(std::size_t index) const override;
+
   CameraCounters counters() const;
   // The GL backend in use ("egl (surfaceless)", ...), "" when not rendering.
   std::string backend() const;
