@@ -95,7 +95,7 @@ struct CameraSubsystem::Impl {
   // Guards latest, requests; frames_cv announces new frames, wake_cv wakes the render thread.
   mutable std::mutex mu;
   std::condition_variable frames_cv, wake_cv;
-  std::vector<world::CameraFrame> latest;     // per stream
+  std::vector<world::CameraFrame> latest;  // per stream
   // Per stream: published (set_camera_streaming; any thread).
   std::unique_ptr<std::atomic<bool>[]> streaming;
   // Render thread: per stream, subscribers to its header topic (the XPUB's subscriptions).
@@ -206,8 +206,7 @@ void CameraSubsystem::Impl::Publish(std::size_t i, const world::CameraFrame& f) 
     headed.resize(world::kFrameHeaderBytes + f.bytes->size());
     world::WriteFrameHeader(headed.data(), f.frame_id, f.sim_time, f.step);
     std::memcpy(headed.data() + world::kFrameHeaderBytes, f.bytes->data(), f.bytes->size());
-    std::array<zmq::const_buffer, 2> parts = {zmq::buffer(info.header_topic),
-                                              zmq::buffer(headed)};
+    std::array<zmq::const_buffer, 2> parts = {zmq::buffer(info.header_topic), zmq::buffer(headed)};
     if (!zmq::send_multipart(s, parts, zmq::send_flags::dontwait)) {
       dropped.fetch_add(1, std::memory_order_relaxed);
     }

@@ -92,10 +92,10 @@ OpPlace PlaceOf(std::string_view op) {
 namespace {
 constexpr std::array<std::string_view, 3> kEditorOps = {"begin_pie", "stop_pie", "pie_status"};
 constexpr std::array<std::string_view, 9> kEditorPrefixes = {
-    "pie_",      "level",      "actor",        "outliner",   "viewport",
-    "debug_",    "draw_debug", "upload_model", "render_farm"};
+    "pie_",   "level",      "actor",        "outliner",   "viewport",
+    "debug_", "draw_debug", "upload_model", "render_farm"};
 constexpr std::array<std::string_view, 8> kEditorParts = {
-    "_pie",      "_level",         "_actor",        "_outliner",
+    "_pie",      "_level",        "_actor",       "_outliner",
     "_viewport", "_debug_marker", "_render_farm", "_debug_draw"};
 }  // namespace
 

@@ -28,7 +28,7 @@ struct CameraStreamInfo {
   // "{articulation}/camera_ucm1/{stream} " (trailing space): the same frames behind a
   // kFrameHeaderBytes header (WriteFrameHeader), published while someone subscribes to it.
   std::string header_topic;
-  std::string endpoint;    // where clients connect ("" when its socket did not bind)
+  std::string endpoint;  // where clients connect ("" when its socket did not bind)
   int width = 0, height = 0;
   double rate = 0;  // frames per second
   // segmentation / instance: id -> name (geom names, or articulation names), in id order.
