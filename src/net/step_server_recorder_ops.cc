@@ -154,7 +154,20 @@ StepServer::Outcome StepServer::SnapshotLoad(Request& r) {
 // ---- Replay
 
 StepServer::Outcome StepServer::ReplayLoad(Request& r) {
-  const std::string path = files_.ForReading(String(r.body["path"], "path"), "path");
+  std::string name = String(r.body["path"], "path");
+  if (r.v2026) {
+    // The 2026 client names a file by the absolute_path recording_save answered: one inside
+    // the files folder is the name under it (any other stays refused as a path).
+    std::error_code ec;
+    const std::filesystem::path dir =
+        std::filesystem::absolute(files_.dir(), ec).lexically_normal();
+    const std::filesystem::path given(name);
+    if (!ec && given.is_absolute()) {
+      const std::filesystem::path rel = given.lexically_normal().lexically_relative(dir);
+      if (!rel.empty() && *rel.begin() != "..") name = rel.string();
+    }
+  }
+  const std::string path = files_.ForReading(name, "path");
   // A new load releases this client's earlier recordings (except one playing); the total is
   // bounded too.
   ReleaseReplays(r.client->id, playing_replay_);

@@ -243,7 +243,7 @@ def exercise(ctx, a, tmp, art, keyframe, free_base):
     saved = c.call("recording_save", name=f"{art}_saved.urrec")
     check(os.path.isabs(saved["absolute_path"]) and os.path.exists(saved["absolute_path"]),
           f"recording_save {saved}")
-    loaded = c.call("replay_load", name=f"{art}_saved.urrec")
+    loaded = c.call("replay_load", path=saved["absolute_path"])
     check(loaded["total_frames"] > 0 and isinstance(loaded["name"], str), f"replay_load {loaded}")
     listed = c.call("replay_list_sessions")["sessions"]
     check(listed == [loaded["name"]], f"replay_list_sessions {listed}")
