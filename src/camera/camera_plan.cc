@@ -63,6 +63,7 @@ std::vector<PlannedCamera> PlanCameras(const world::Session& session,
       p.height = s && s->height ? *s->height : config.height;
       p.rate = s && s->rate ? *s->rate : config.rate;
       p.modes = s && s->modes ? *s->modes : config.modes;
+      if (s) p.latency = s->latency;
       plan.push_back(std::move(p));
     }
   }

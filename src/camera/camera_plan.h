@@ -17,6 +17,7 @@ struct PlannedCamera {
   int width = 0, height = 0;
   double rate = 0;
   std::vector<std::string> modes;
+  std::optional<physics::LatencySetting> latency;  // the scene's camera delay
 };
 
 // Throws InputError (the scene file's line) for a camera the articulation's MJCF lacks.

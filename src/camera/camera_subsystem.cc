@@ -109,7 +109,18 @@ struct CameraSubsystem::Impl {
   // Guards latest, requests; frames_cv announces new frames, wake_cv wakes the render thread.
   mutable std::mutex mu;
   std::condition_variable frames_cv, wake_cv;
-  std::vector<world::CameraFrame> latest;     // per stream
+  std::vector<world::CameraFrame> latest;  // per stream
+  // Per stream: published (set_camera_streaming; any thread).
+  std::unique_ptr<std::atomic<bool>[]> streaming;
+  // Render thread: per stream, subscribers to its header topic (the XPUB's subscriptions).
+  std::vector<int> header_subscribers;
+  std::vector<std::uint8_t> headed;  // a frame behind its header, reused
+  bool AnyStreaming(const Camera& cam) const {
+    for (std::size_t s : cam.streams) {
+      if (streaming[s].load(std::memory_order_relaxed)) return true;
+    }
+    return false;
+  }
   std::vector<std::uint64_t> requested_step;  // per stream: a waiter's step, 0 for none
   std::vector<std::uint64_t> rendered_step;   // per stream: the step of its newest render
   // Per stream: the newest step whose releases the render thread has made (delayed cameras).
@@ -153,7 +164,8 @@ void CameraSubsystem::Impl::Init(const CameraOptions& options) {
   context.emplace(1);
   int port = options.base_port;
   for (std::size_t i = 0; i < infos.size(); ++i) {
-    zmq::socket_t s(*context, zmq::socket_type::pub);
+    // XPUB: the subscriptions tell whether anyone wants the header topic.
+    zmq::socket_t s(*context, zmq::socket_type::xpub);
     s.set(zmq::sockopt::linger, 0);
     s.set(zmq::sockopt::sndhwm, kSendHighWaterMark);
     std::string bound;
@@ -183,7 +195,19 @@ void CameraSubsystem::Impl::Init(const CameraOptions& options) {
 
 void CameraSubsystem::Impl::Publish(std::size_t i, const world::CameraFrame& f) {
   if (i >= sockets.size() || infos[i].endpoint.empty()) return;
+  if (!streaming[i].load(std::memory_order_relaxed)) return;
   const world::CameraStreamInfo& info = infos[i];
+  // Subscriptions since the last frame: 1 + prefix subscribes, 0 + prefix unsubscribes (ZeroMQ
+  // passes on the first subscription to a prefix and the last unsubscription only). A
+  // subscription to everything does not ask for the header topic.
+  zmq::message_t sub;
+  while (sockets[i].recv(sub, zmq::recv_flags::dontwait)) {
+    if (sub.size() == 0) continue;
+    const auto* b = static_cast<const char*>(sub.data());
+    const std::string_view prefix(b + 1, sub.size() - 1);
+    if (!info.header_topic.starts_with(prefix) || prefix.empty()) continue;
+    header_subscribers[i] += b[0] == 1 ? 1 : b[0] == 0 ? -1 : 0;
+  }
   nlohmann::ordered_json meta;
   meta["frame_id"] = f.frame_id;
   meta["step"] = f.step;
@@ -203,6 +227,15 @@ void CameraSubsystem::Impl::Publish(std::size_t i, const world::CameraFrame& f) 
       !zmq::send_multipart(s, frame_parts, zmq::send_flags::dontwait)) {
     dropped.fetch_add(1, std::memory_order_relaxed);
     return;
+  }
+  if (header_subscribers[i] > 0) {  // the frame behind its header, for those who asked
+    headed.resize(world::kFrameHeaderBytes + f.bytes->size());
+    world::WriteFrameHeader(headed.data(), f.frame_id, f.sim_time, f.step);
+    std::memcpy(headed.data() + world::kFrameHeaderBytes, f.bytes->data(), f.bytes->size());
+    std::array<zmq::const_buffer, 2> parts = {zmq::buffer(info.header_topic), zmq::buffer(headed)};
+    if (!zmq::send_multipart(s, parts, zmq::send_flags::dontwait)) {
+      dropped.fetch_add(1, std::memory_order_relaxed);
+    }
   }
   published.fetch_add(1, std::memory_order_relaxed);
 }
@@ -340,7 +373,7 @@ void CameraSubsystem::Impl::Run() {
     if (frame) {
       for (std::size_t c = 0; c < cameras.size(); ++c) {
         Camera& cam = cameras[c];
-        const bool due = now >= cam.next_due;
+        const bool due = now >= cam.next_due && AnyStreaming(cam);
         const bool sync = wanted[c] != 0 && frame->step >= wanted[c];
         if (wanted[c] != 0 && frame->step < wanted[c]) waiting_for_state = true;
         if (!due && !sync) continue;
@@ -361,7 +394,9 @@ void CameraSubsystem::Impl::Run() {
       for (Camera& cam : cameras) Release(cam, frame->step);
     }
     auto until = Clock::time_point::max();
-    for (const auto& cam : cameras) until = std::min(until, cam.next_due);
+    for (const auto& cam : cameras) {
+      if (AnyStreaming(cam)) until = std::min(until, cam.next_due);
+    }
     bool holding = false;  // a delayed camera waits for the steps that release its frames
     for (const auto& cam : cameras) holding |= !cam.held.empty();
     if (!frame || waiting_for_state || holding) {
@@ -420,6 +455,7 @@ void CameraSubsystem::BeginPlay(world::Session& session) {
       info.stream = StreamName(p.camera, mode);
       info.topic = p.articulation + "/camera/" + info.stream + " ";
       info.meta_topic = p.articulation + "/camera_meta/" + info.stream;
+      info.header_topic = p.articulation + "/camera_ucm1/" + info.stream + " ";
       info.width = p.width;
       info.height = p.height;
       info.rate = p.rate;
@@ -432,6 +468,13 @@ void CameraSubsystem::BeginPlay(world::Session& session) {
       d.infos.push_back(std::move(info));
       d.modes.push_back(mode);
     }
+    if (p.latency) {  // the scene's delay: taken by the render thread before its first frame
+      cam.setting = *p.latency;
+      cam.pending = physics::ResolveLatency(
+          *p.latency, d.model->opt.timestep,
+          world::CameraDelaySeed(session.latency_seed(), cam.streams.front()));
+      cam.pending_set = true;
+    }
     d.max_width = std::max(d.max_width, p.width);
     d.max_height = std::max(d.max_height, p.height);
     d.cameras.push_back(std::move(cam));
@@ -441,7 +484,13 @@ void CameraSubsystem::BeginPlay(world::Session& session) {
   d.rendered_step.assign(d.infos.size(), 0);
   d.released_through.assign(d.infos.size(), 0);
   d.delayed.assign(d.infos.size(), false);
+  for (const auto& cam : d.cameras) {
+    for (std::size_t i : cam.streams) d.delayed[i] = cam.pending_set && cam.pending.active();
+  }
   d.timestep = d.model->opt.timestep;
+  d.streaming = std::make_unique<std::atomic<bool>[]>(d.infos.size());
+  for (std::size_t i = 0; i < d.infos.size(); ++i) d.streaming[i] = true;
+  d.header_subscribers.assign(d.infos.size(), 0);
   d.subscription = session.engine().SubscribeState("cameras");
   std::promise<void> ready;
   auto started = ready.get_future();
@@ -477,6 +526,18 @@ void CameraSubsystem::EndPlay(world::Session& /*session*/) {
 
 const std::vector<world::CameraStreamInfo>& CameraSubsystem::Streams() const {
   return impl_->infos;
+}
+
+void CameraSubsystem::SetStreaming(std::size_t index, bool on) {
+  if (index >= impl_->infos.size()) return;
+  impl_->streaming[index].store(on, std::memory_order_relaxed);
+  std::lock_guard lock(impl_->mu);  // a camera turned on renders at once
+  ++impl_->request_gen;
+  impl_->wake_cv.notify_all();
+}
+
+bool CameraSubsystem::Streaming(std::size_t index) const {
+  return index < impl_->infos.size() && impl_->streaming[index].load(std::memory_order_relaxed);
 }
 
 bool CameraSubsystem::Latest(std::size_t index, world::CameraFrame& out) const {

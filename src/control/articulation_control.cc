@@ -141,6 +141,12 @@ const CommandFrame& ArticulationControl::ApplyControls(const mjModel* m, mjData*
                                                        ControlSource global) {
   const CommandFrame& arrived = channel(EffectiveSource(global)).Read();
   const CommandFrame& frame = control_delay_.active() ? control_delay_.Push(arrived) : arrived;
+  if (frame.raw) {  // the targets are the controls: no controller, no twist
+    for (std::size_t i = 0; i < actuator_ids_.size() && i < frame.targets.size(); ++i) {
+      d->ctrl[actuator_ids_[i]] = frame.targets[i];
+    }
+    return frame;
+  }
   controller_->UseFrameGains(frame.kp, frame.kv);
   controller_->ComputeAndApply(m, d, frame.targets);
   if (twist_) twist_->Apply(m, d);

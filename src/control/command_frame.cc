@@ -28,6 +28,7 @@ void FrameChannel::PublishLocked() {
   Assign(&back.targets, last_.targets);
   Assign(&back.kp, last_.kp);
   Assign(&back.kv, last_.kv);
+  back.raw = last_.raw;
   back.seq = last_.seq;
   buffer_.Publish();
 }
@@ -51,12 +52,13 @@ bool FrameChannel::Publish(std::span<const double> targets, std::span<const doub
   return true;
 }
 
-bool FrameChannel::Patch(std::span<const std::pair<int, double>> values) {
+bool FrameChannel::Patch(std::span<const std::pair<int, double>> values, std::optional<bool> raw) {
   for (const auto& [i, v] : values) {
     if (i < 0 || static_cast<std::size_t>(i) >= n_) return false;
   }
   std::lock_guard<std::mutex> lock(writer_mutex_);
   for (const auto& [i, v] : values) last_.targets[static_cast<std::size_t>(i)] = v;
+  if (raw) last_.raw = *raw;
   PublishLocked();
   return true;
 }

@@ -291,9 +291,15 @@ struct NetworkSubsystem::Impl {
       PublishTwist(ti);
     }
     if (full_state && full_wanted) {  // state/full: the step server's observation map, msgpack
+      // `op: state_full` names the snapshot; while a session speaks the 2026 dialect, its keys
+      // (arts, scene) travel beside ours (docs/protocol.md, "The 2026 dialect").
+      const ObsKeys keys =
+          server && server->dialect_2026_sessions() > 0 ? ObsKeys::kBoth : ObsKeys::kOurs;
       full_writer.Clear();
-      full_writer.Map(kObservationEntries);
-      WriteObservationEntries(full_writer, tables, f, *full_state, false);
+      full_writer.Map(ObservationEntries(keys) + 1);
+      full_writer.Key("op");
+      full_writer.Str("state_full");
+      WriteObservationEntries(full_writer, tables, f, *full_state, false, keys);
       SendState(wire::kFullStateTopic, std::string_view(full_writer.data(), full_writer.size()));
     }
   }

@@ -59,28 +59,21 @@ void Time(Out& out, double seconds) {
 }
 
 template <typename Out>
-void WriteEntries(Out& out, const std::vector<ArticulationTopics>& tables,
-                  const physics::StateFrame& f, ObsLevel level, bool binary) {
+void WriteArticulations(Out& out, const std::vector<ArticulationTopics>& tables,
+                        const physics::StateFrame& f, ObsLevel level, bool binary,
+                        bool bodies_by_name) {
   thread_local std::vector<double> tmp;
   const auto gather = [&](const std::vector<double>& src, const std::vector<int>& adrs) {
     tmp.clear();
     for (int a : adrs) tmp.push_back(src[static_cast<std::size_t>(a)]);
     out.Doubles(tmp.data(), tmp.size(), binary);
   };
-  out.Key("time");
-  out.Double(f.time);
-  out.Key("step");
-  out.UInt(f.step);
-  out.Key("sim_time");
-  Time(out, f.time);
-  out.Key("wall_time");
-  const auto wall = std::chrono::system_clock::now().time_since_epoch();
-  Time(out, std::chrono::duration<double>(wall).count());
-  out.Key("paused");
-  out.Bool(f.paused);
-  out.Key("per_articulation");
   out.Map(tables.size());
-  const std::size_t fields = level == ObsLevel::kMinimal ? 2 : level == ObsLevel::kStandard ? 5 : 8;
+  // Full level: xpos, xquat, actuator_force (ours); bodies, actuator_force (2026).
+  const std::size_t fields = level == ObsLevel::kMinimal    ? 2
+                             : level == ObsLevel::kStandard ? 5
+                             : bodies_by_name               ? 7
+                                                            : 8;
   for (const ArticulationTopics& t : tables) {
     // standard and full: the twist and held actions while a twist controller is attached.
     const bool twist = level != ObsLevel::kMinimal && t.twist && t.twist->attached();
@@ -113,24 +106,71 @@ void WriteEntries(Out& out, const std::vector<ArticulationTopics>& tables,
       out.Int(actions);
     }
     if (level == ObsLevel::kFull) {
-      out.Key("xpos");
-      out.Map(t.body_ids.size());
-      for (std::size_t i = 0; i < t.body_ids.size(); ++i) {
-        out.Key(t.body_names[i]);
+      const auto xpos = [&](std::size_t i) {
         out.Doubles(f.xpos.data() + 3 * static_cast<std::size_t>(t.body_ids[i]), 3, binary);
-      }
-      out.Key("xquat");
-      out.Map(t.body_ids.size());
-      for (std::size_t i = 0; i < t.body_ids.size(); ++i) {
-        out.Key(t.body_names[i]);
+      };
+      const auto xquat = [&](std::size_t i) {
         out.Doubles(f.xquat.data() + 4 * static_cast<std::size_t>(t.body_ids[i]), 4, binary);
+      };
+      if (bodies_by_name) {
+        out.Key("bodies");
+        out.Map(t.body_ids.size());
+        for (std::size_t i = 0; i < t.body_ids.size(); ++i) {
+          out.Key(t.body_names[i]);
+          out.Map(2);
+          out.Key("xpos");
+          xpos(i);
+          out.Key("xquat");
+          xquat(i);
+        }
+      } else {
+        out.Key("xpos");
+        out.Map(t.body_ids.size());
+        for (std::size_t i = 0; i < t.body_ids.size(); ++i) {
+          out.Key(t.body_names[i]);
+          xpos(i);
+        }
+        out.Key("xquat");
+        out.Map(t.body_ids.size());
+        for (std::size_t i = 0; i < t.body_ids.size(); ++i) {
+          out.Key(t.body_names[i]);
+          xquat(i);
+        }
       }
       out.Key("actuator_force");
       gather(f.actuator_force, t.actuator_ids);
     }
   }
-  out.Key("entities");
-  out.Map(0);
+}
+
+template <typename Out>
+void WriteEntries(Out& out, const std::vector<ArticulationTopics>& tables,
+                  const physics::StateFrame& f, ObsLevel level, bool binary, ObsKeys keys) {
+  out.Key("time");
+  out.Double(f.time);
+  out.Key("step");
+  out.UInt(f.step);
+  out.Key("sim_time");
+  Time(out, f.time);
+  out.Key("wall_time");
+  const auto wall = std::chrono::system_clock::now().time_since_epoch();
+  Time(out, std::chrono::duration<double>(wall).count());
+  out.Key("paused");
+  out.Bool(f.paused);
+  out.Key("frame_id");  // the state frame's publication number: monotonic
+  out.UInt(f.frame);
+  if (keys != ObsKeys::k2026) {
+    out.Key("per_articulation");
+    WriteArticulations(out, tables, f, level, binary, false);
+    out.Key("entities");
+    out.Map(0);
+  }
+  if (keys != ObsKeys::kOurs) {
+    out.Key("arts");
+    WriteArticulations(out, tables, f, level, binary, true);
+    out.Key("scene");
+    out.Map(0);
+  }
 }
 
 }  // namespace
@@ -154,20 +194,21 @@ Json Array(const double* v, std::size_t n, bool binary) {
 }
 
 void WriteObservationEntries(MsgpackWriter& out, const std::vector<ArticulationTopics>& tables,
-                             const physics::StateFrame& f, ObsLevel level, bool binary) {
-  WriteEntries(out, tables, f, level, binary);
+                             const physics::StateFrame& f, ObsLevel level, bool binary,
+                             ObsKeys keys) {
+  WriteEntries(out, tables, f, level, binary, keys);
 }
 
 void AddObservation(Json* reply, const std::vector<ArticulationTopics>& tables,
-                    const physics::StateFrame& f, ObsLevel level, bool binary) {
-  JsonWriter w(reply, kObservationEntries);
-  WriteEntries(w, tables, f, level, binary);
+                    const physics::StateFrame& f, ObsLevel level, bool binary, ObsKeys keys) {
+  JsonWriter w(reply, ObservationEntries(keys));
+  WriteEntries(w, tables, f, level, binary, keys);
 }
 
 Json Observation(const std::vector<ArticulationTopics>& tables, const physics::StateFrame& f,
-                 ObsLevel level, bool binary) {
+                 ObsLevel level, bool binary, ObsKeys keys) {
   Json o = Json::object();
-  AddObservation(&o, tables, f, level, binary);
+  AddObservation(&o, tables, f, level, binary, keys);
   return o;
 }
 

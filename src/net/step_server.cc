@@ -9,6 +9,8 @@
 
 #include "net/base64.h"
 #include "net/camera_list.h"
+#include "net/dialect_2026.h"
+#include "net/dialect_2026_hello.h"
 #include "net/loopback.h"
 #include "net/model_assets.h"
 #include "net/observation.h"
@@ -163,6 +165,7 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
       {"replay_stop", &StepServer::ReplayStop, true, true, {}, "session"},
       {"replay_unload", &StepServer::ReplayUnload, true, true, {}, "session"},
       {"cancel", &StepServer::Cancel, true, true, {}, "cancelled"},
+      {"set_camera_streaming", &StepServer::SetCameraStreaming, true, false, {}, "streaming"},
       {"set_latency",
        &StepServer::SetLatency,
        true,
@@ -175,7 +178,7 @@ const std::vector<StepServer::OpSpec>& StepServer::Ops() {
        false,
        {"articulation"},
        "articulation, seed, control, observation"},
-      {"set_camera_delay", &StepServer::SetCameraDelay, true, true, {"cameras"}, "cameras"},
+      {"set_camera_delay", &StepServer::SetCameraDelay, true, true, {}, "cameras"},
 
       {"replay_status",
        &StepServer::ReplayStatus,
@@ -280,20 +283,24 @@ void StepServer::Send(const Route& envelope, Json& reply, bool json,
   std::string text;
   std::span<const std::uint8_t> bytes;
   if (json) {
-    if (frame) AddObservation(&reply, tables_, *frame, observation->level, observation->binary);
+    if (frame) {
+      AddObservation(&reply, tables_, *frame, observation->level, observation->binary,
+                     observation->keys);
+    }
     BinaryToBase64(reply);  // bytes travel as <field>_base64 in JSON text
     text = reply.dump(-1, ' ', false, Json::error_handler_t::replace);
     bytes = {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()};
   } else {
     // msgpack: the reply's own fields, then the observation written straight from the frame.
     writer_.Clear();
-    writer_.Map(reply.size() + (frame ? kObservationEntries : 0));
+    writer_.Map(reply.size() + (frame ? ObservationEntries(observation->keys) : 0));
     for (const auto& [k, v] : reply.items()) {
       writer_.Key(k);
       writer_.Value(v);
     }
     if (frame) {
-      WriteObservationEntries(writer_, tables_, *frame, observation->level, observation->binary);
+      WriteObservationEntries(writer_, tables_, *frame, observation->level, observation->binary,
+                              observation->keys);
     }
     bytes = {reinterpret_cast<const std::uint8_t*>(writer_.data()), writer_.size()};
   }
@@ -318,7 +325,8 @@ void StepServer::Send(const Route& envelope, Json& reply, bool json,
 }
 
 std::optional<StepServer::ObsSpec> StepServer::ObservationFor(const Request& r) const {
-  ObsSpec spec{r.client->level, r.client->binary_arrays};
+  ObsSpec spec{r.client->level, r.client->binary_arrays,
+               r.client->v2026 ? ObsKeys::k2026 : ObsKeys::kOurs};
   if (const auto it = r.body.find("observations"); it != r.body.end()) {
     const auto level = ParseObservationLevel(String(*it, "observations"));
     if (!level) Fail("bad_value", "observations must be minimal, standard or full");
@@ -471,7 +479,22 @@ void StepServer::Dispatch(Request& r) {
     for (const OpSpec& s : Ops()) {
       if (op == s.name) spec = &s;
     }
-    if (!spec) Fail("unknown_op", "no operation '" + op + "' (see 'meta')");
+    if (!spec) {
+      if (std::optional<std::string> why = dialect2026::EditorOnly(op)) Fail("unknown_op", *why);
+      Fail("unknown_op", "no operation '" + op + "' (see 'meta')");
+    }
+    // The 2026 dialect (dialect_2026.h): chosen by hello's client_version, then by the session.
+    if (op == "hello") {
+      r.v2026 = dialect2026::Speaks(r.body);
+    } else if (const auto sid = r.body.find("session_id");
+               sid != r.body.end() && sid->is_string()) {
+      const auto c = clients_.find(sid->get<std::string>());
+      r.v2026 = c != clients_.end() && c->second.v2026;
+    }
+    if (r.v2026) {
+      if (op == "configure_controller") r.original = r.body;
+      dialect2026::TranslateRequest(r.body);
+    }
     if (spec->needs_session) {
       const auto sid = r.body.find("session_id");
       if (sid == r.body.end() || !sid->is_string()) {
@@ -498,6 +521,13 @@ void StepServer::Dispatch(Request& r) {
     Outcome out = (this->*spec->handler)(r);
     // The request succeeded (a failure threw above): only now does it take the lease.
     if (lease.take) CommitLease(*r.client, lease);
+    if (r.v2026) {  // the reply in the 2026 vocabulary, once it is complete
+      out.on_applied = [op, original = std::move(r.original),
+                        then = std::move(out.on_applied)](Json& reply) {
+        if (then) then(reply);
+        dialect2026::TranslateReply(op, original, reply);
+      };
+    }
     if (out.wait_for == 0) {
       if (out.on_applied) out.on_applied(out.reply);
       if (!seq.is_null()) out.reply["seq"] = seq;
@@ -712,6 +742,8 @@ StepServer::Outcome StepServer::Hello(Request& r) {
   Client c;
   c.id = NewSessionId(next_client_++);
   c.last_seen = r.now;
+  c.v2026 = r.v2026;
+  c.route = RouteOf(r.envelope);
   if (const auto it = r.body.find("observations"); it != r.body.end()) {
     const auto level = ParseObservationLevel(String(*it, "observations"));
     if (!level) Fail("bad_value", "observations must be minimal, standard or full");
@@ -789,6 +821,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
   }
   if (shm_) capabilities.push_back("shm");
   if (batch_) capabilities.push_back("batch");
+  capabilities.push_back("dialect:urlab_bridge");
   Outcome out;
   out.reply = Json{{"op", "hello_ok"},
                    {"session_id", c.id},
@@ -838,11 +871,78 @@ StepServer::Outcome StepServer::Hello(Request& r) {
                 fmt::format("step server: no shared-memory channel for a client: {}", e.what()));
     }
   }
+  if (c.v2026) Hello2026(r, out.reply);
+  // A new hello over the connection that holds the lease (a client refreshing its session)
+  // inherits the lease, and the recordings it loaded; a silent driver has lost it already.
+  if (!driver_.empty() && !LeaseExpired(driver_, r.now)) {
+    const auto d = clients_.find(driver_);
+    if (d != clients_.end() && !c.route.empty() && d->second.route == c.route) {
+      LogRemote(spdlog::level::info, "lease inherited",
+                fmt::format("step server: session {} inherits the lease of {} (a new hello over "
+                            "the same connection)",
+                            c.id, driver_));
+      replays_.Transfer(driver_, c.id);
+      driver_ = c.id;
+    }
+  }
   clients_[c.id] = c;
   return out;
 }
 
-StepServer::Outcome StepServer::Meta(Request&) {
+std::string StepServer::RouteOf(const Route& route) {
+  if (route.shm != 0) return "shm:" + std::to_string(route.shm);
+  if (route.frames.empty()) return "";
+  return "zmq:" + route.frames.front().to_string();
+}
+
+void StepServer::Hello2026(const Request& r, Json& reply) {
+  reply["entities"] = dialect2026::Entities(session_, tables_, cameras_, reply["articulations"]);
+  reply["global_cameras"] = dialect2026::GlobalCameras(session_.engine().model(), cameras_);
+  if (const auto it = r.body.find("raw_model"); it != r.body.end() && Bool(*it, "raw_model")) {
+    reply["raw_model"] = true;
+    reply["raw_joints"] = dialect2026::RawJoints(session_);
+    reply["raw_actuators"] = dialect2026::RawActuators(session_);
+  }
+}
+
+std::size_t StepServer::dialect_2026_sessions() const {
+  return static_cast<std::size_t>(std::count_if(clients_.begin(), clients_.end(),
+                                                [](const auto& c) { return c.second.v2026; }));
+}
+
+StepServer::Outcome StepServer::Meta(Request& r) {
+  if (r.v2026) {  // ops [{name, category, namespace, required_fields, reply_fields}]
+    Json ops = Json::array();
+    for (const OpSpec& s : Ops()) {
+      Json required = Json::array();
+      for (const char* f : s.required) {
+        // The 2026 names of the fields it requires.
+        std::string_view name = f;
+        for (const dialect2026::Field& x : dialect2026::kRequestFields) {
+          if (x.op == s.name && x.ours == name) name = x.theirs;
+        }
+        required.push_back(name);
+      }
+      Json replies = Json::array();
+      std::string_view rest = s.replies;
+      while (!rest.empty()) {  // "a, b, ..." as a list
+        const std::size_t comma = rest.find(',');
+        std::string_view f = rest.substr(0, comma);
+        while (f.starts_with(' ')) f.remove_prefix(1);
+        if (!f.empty() && f != "...") replies.push_back(f);
+        rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 1);
+      }
+      const dialect2026::OpPlace place = dialect2026::PlaceOf(s.name);
+      ops.push_back(Json{{"name", s.name},
+                         {"category", place.category},
+                         {"namespace", place.ns},
+                         {"required_fields", std::move(required)},
+                         {"reply_fields", std::move(replies)},
+                         {"session", s.needs_session},
+                         {"driver", s.needs_driver}});
+    }
+    return {Json{{"op", "meta_ok"}, {"protocol_version", kProtocolVersion}, {"ops", ops}}};
+  }
   Json ops = Json::array();
   for (const OpSpec& s : Ops()) {
     Json required = Json::array();
@@ -898,6 +998,15 @@ StepServer::Outcome StepServer::Step(Request& r) {
       }
       ops::ArticulationTargets& t = targets.articulations.emplace_back();
       t.articulation = name;
+      // control_mode: raw, the values are the actuators' controls; controller (ue_controller in
+      // the 2026 dialect), they are the controller's targets. It stays until changed.
+      if (const auto m = entry.find("control_mode"); m != entry.end() && !m->is_null()) {
+        const std::string mode = String(*m, "control_mode");
+        if (mode != "raw" && mode != "controller" && mode != "ue_controller") {
+          Fail("bad_value", name + ": control_mode must be raw, controller or ue_controller");
+        }
+        t.raw = mode == "raw";
+      }
       if (const auto c = entry.find("ctrl"); c != entry.end()) t.ctrl = AnyNumbers(*c, "ctrl");
       if (const auto c = entry.find("ctrl_map"); c != entry.end()) {
         if (!c->is_object()) Fail("bad_value", "ctrl_map must be a map of name to value");
@@ -1048,9 +1157,22 @@ StepServer::Outcome StepServer::SetQpos(Request& r) {
   const std::string name = String(r.body["articulation"], "articulation");
   ops::RequireArticulation(session_, name);
   const std::vector<double> q = Numbers(r.body["qpos"], "qpos");
+  const ArticulationTopics& t = Articulation(r.body["articulation"]);
+  const std::size_t index = static_cast<std::size_t>(&t - tables_.data());
   Outcome out;
-  out.reply = Json{{"op", "set_qpos_ok"}};
+  // free_base_shortcut: 7 values placed the free base of an articulation with more joints.
+  out.reply =
+      Json{{"op", "set_qpos_ok"},
+           {"articulation", name},
+           {"actor_id", index},
+           {"free_base_shortcut", t.free_joint >= 0 && q.size() == 7 && t.qpos_adrs.size() != 7}};
   out.wait_for = ops::SetQpos(session_, name, q);
+  out.on_applied = [this, &t](Json& reply) {  // the articulation's qpos as it now is
+    const physics::StateFrame* f = state_->Latest();
+    Json qpos = Json::array();
+    for (int a : t.qpos_adrs) qpos.push_back(f->qpos[static_cast<std::size_t>(a)]);
+    reply["qpos"] = std::move(qpos);
+  };
   out.observation = ObservationFor(r);
   return out;
 }

@@ -146,6 +146,9 @@ class StepServer {
 
   // Requests answered with an error, per code (I/O thread).
   const std::map<std::string, std::uint64_t>& errors() const { return errors_; }
+  // Sessions speaking the 2026 dialect (dialect_2026.h) open now: while there are any, the
+  // state/full snapshot carries their keys beside ours (I/O thread).
+  std::size_t dialect_2026_sessions() const;
 
   static constexpr int kProtocolVersion = 1;
 
@@ -155,6 +158,8 @@ class StepServer {
     ObsLevel level = ObsLevel::kStandard;
     bool binary_arrays = false;
     Clock::time_point last_seen;
+    bool v2026 = false;  // speaks the 2026 dialect (its hello's client_version)
+    std::string route;   // the connection its hello came over (ZeroMQ identity or channel)
   };
   // Where a reply goes: the ZeroMQ routing frames to echo, or a shared-memory channel.
   struct Route {
@@ -168,11 +173,14 @@ class StepServer {
     bool json = false;  // answer in JSON text
     Client* client = nullptr;
     Clock::time_point now;
+    bool v2026 = false;  // the 2026 dialect: translated in before the handler, out after it
+    Json original;       // a 2026 request as sent, for replies echoed in its shape
   };
   // The observation a reply carries (taken from the newest state frame when it is sent).
   struct ObsSpec {
     ObsLevel level;
     bool binary;
+    ObsKeys keys = ObsKeys::kOurs;
     // include_cameras: streams (indices into cameras_->Streams()) and whether the reply waits
     // for a frame rendered from its own state ("sync") or takes the newest one ("latest").
     std::vector<std::pair<std::size_t, bool>> cameras;
@@ -217,6 +225,10 @@ class StepServer {
   static const std::vector<OpSpec>& Ops();
 
   void Dispatch(Request& r);
+  // The connection a request came over (a hello from the driver's connection inherits its lease).
+  static std::string RouteOf(const Route& route);
+  // Hello's additions for a 2026 client (entities array, global_cameras, raw tables).
+  void Hello2026(const Request& r, Json& reply);
   // Decodes a request's bytes (msgpack or JSON text, within the limits) and dispatches it, or
   // answers bad_request.
   void DecodeAndDispatch(Request& r, std::span<const std::uint8_t> payload);
@@ -289,6 +301,8 @@ class StepServer {
   Outcome FireLauncher(Request& r);
   Outcome ConfigureController(Request& r);
   Outcome Cancel(Request& r);
+  // Camera streams on or off (step_server_camera_ops.cc).
+  Outcome SetCameraStreaming(Request& r);
   // Emulated latency (step_server_latency_ops.cc).
   Outcome SetLatency(Request& r);
   Outcome GetLatency(Request& r);

@@ -1,6 +1,7 @@
 // The step server's camera latency operation (docs/protocol.md, "Emulated latency"):
 // set_camera_delay hands each named camera's delay to the camera subsystem
 // (world::CameraStreams::SetDelay); what a setting means is physics/latency.h.
+#include <set>
 #include <string>
 
 #include "net/latency_request.h"
@@ -14,10 +15,6 @@ namespace urlab::net {
 using namespace request;
 
 namespace {
-
-// The seed streams of camera delays ("CAM" and the camera's first stream index): apart from the
-// articulations' latency streams.
-constexpr std::uint64_t kCamera = 0x43414D000000ull;
 
 // "{articulation}/{camera}", or a camera name that only one articulation streams; *index is
 // the camera's first stream.
@@ -51,10 +48,11 @@ StepServer::Outcome StepServer::SetCameraDelay(Request& r) {
   if (!cameras_ || cameras_->Streams().empty()) {
     Fail("unknown_camera", "this scene streams no camera (the scene's cameras: section)");
   }
-  const Json& map = r.body["cameras"];
-  if (!map.is_object() || map.empty()) {
-    Fail("bad_value", "cameras must map camera names to delay settings");
-  }
+  // {cameras: {camera: setting}}, or the cameras as the request's own keys (the 2026 form).
+  const Json* map = &r.body;
+  if (const auto it = r.body.find("cameras"); it != r.body.end()) map = &*it;
+  static const std::set<std::string> kNotCameras = {"op", "seq", "session_id", "force", "cameras"};
+  if (!map->is_object()) Fail("bad_value", "cameras must map camera names to delay settings");
   // Every entry is checked before any is applied.
   struct Entry {
     std::string key;
@@ -62,15 +60,17 @@ StepServer::Outcome StepServer::SetCameraDelay(Request& r) {
     std::uint64_t seed;
   };
   std::vector<Entry> entries;
-  for (const auto& [name, value] : map.items()) {
+  for (const auto& [name, value] : map->items()) {
+    if (map == &r.body && kNotCameras.count(name)) continue;
     std::size_t index = 0;
     const std::string key = CameraKey(*cameras_, name, &index);
     std::optional<std::uint64_t> seed;
     const physics::LatencySetting s = LatencySettingFromRequest(value, "cameras." + name, &seed);
     // Each camera draws its own jitter from the run's seed unless the request gives one.
     entries.push_back(
-        {key, s, seed ? *seed : physics::DeriveSeed(session_.latency_seed(), kCamera + index)});
+        {key, s, seed ? *seed : world::CameraDelaySeed(session_.latency_seed(), index)});
   }
+  if (entries.empty()) Fail("missing_field", "name at least one camera and its delay setting");
   Json reply{{"op", "set_camera_delay_ok"}, {"cameras", Json::object()}};
   for (const Entry& e : entries) {
     cameras_->SetDelay(e.key, e.setting, e.seed);

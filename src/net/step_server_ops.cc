@@ -68,12 +68,25 @@ StepServer::Outcome StepServer::ReadMocapPose(Request& r) {
 }
 
 StepServer::Outcome StepServer::ListKeyframes(Request&) {
+  // Each keyframe's names and its record: time, qpos, qvel, ctrl and mocap poses (whole model).
+  const mjModel* m = session_.engine().model();
+  const auto row = [](const mjtNum* v, int key, int n) {
+    return Array(v + static_cast<std::ptrdiff_t>(key) * n, static_cast<std::size_t>(n), false);
+  };
   Json keys = Json::array();
   for (const ops::KeyframeInfo& k : ops::ListKeyframes(session_)) {
-    keys.push_back(
-        Json{{"name", k.name},
-             {"articulation", k.articulation.empty() ? Json(nullptr) : Json(k.articulation)},
-             {"full_name", k.full_name}});
+    Json record{{"name", k.name},
+                {"articulation", k.articulation.empty() ? Json(nullptr) : Json(k.articulation)},
+                {"full_name", k.full_name}};
+    if (const int key = mj_name2id(m, mjOBJ_KEY, k.full_name.c_str()); key >= 0) {
+      record["time"] = m->key_time[key];
+      record["qpos"] = row(m->key_qpos, key, m->nq);
+      record["qvel"] = row(m->key_qvel, key, m->nv);
+      record["ctrl"] = row(m->key_ctrl, key, m->nu);
+      record["mocap_pos"] = row(m->key_mpos, key, 3 * m->nmocap);
+      record["mocap_quat"] = row(m->key_mquat, key, 4 * m->nmocap);
+    }
+    keys.push_back(std::move(record));
   }
   return {Json{{"op", "list_keyframes_ok"}, {"keyframes", keys}}};
 }
@@ -189,6 +202,21 @@ StepServer::Outcome StepServer::GetCounters(Request&) {
 
 StepServer::Outcome StepServer::SetTwist(Request& r) {
   const std::string name = String(r.body["articulation"], "articulation");
+  if (r.v2026) {
+    // The 2026 client sends a twist to every robot: one without a twist controller (a fixed
+    // base) answers a silent success that applied nothing.
+    ops::RequireArticulation(session_, name);
+    try {
+      ops::RequireTwist(session_, name);
+    } catch (const ops::OpError& e) {
+      if (e.code != "no_twist_controller") throw;
+      return {Json{{"op", "set_twist_ok"},
+                   {"articulation", name},
+                   {"linear", {0.0, 0.0, 0.0}},
+                   {"angular", {0.0, 0.0, 0.0}},
+                   {"applied", false}}};
+    }
+  }
   ops::RequireTwist(session_, name);  // before the fields: a fixed base is the first thing wrong
   // linear [vx, vy, vz] in the base's heading frame, angular [wx, wy, yaw rate]: the planar parts
   // drive the twist controller (twist.h), which attaches; the rest must be given but is unused.

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <memory>
 
 #include "net/request_fields.h"
@@ -94,7 +95,7 @@ StepServer::Outcome StepServer::RecordingStart(Request& r) {
   o.ring_seconds = OptionalNumber(r.body, "ring_seconds", o.ring_seconds);
   std::string path;
   RunFileOp([&] { path = ops::StartRecording(recorder_, o); });
-  return {Json{{"op", "recording_start_ok"}, {"path", path}}};
+  return {Json{{"op", "recording_start_ok"}, {"path", path}, {"max_duration", o.max_duration}}};
 }
 
 StepServer::Outcome StepServer::RecordingStop(Request&) {
@@ -113,7 +114,12 @@ StepServer::Outcome StepServer::RecordingSave(Request& r) {
   const std::string path = WritablePath(r);
   std::string saved;
   RunFileOp([&] { saved = ops::SaveRecording(recorder_, path); });
-  return {Json{{"op", "recording_save_ok"}, {"path", saved}}};
+  // absolute_path: where the file is on this host (the 2026 client reads it).
+  std::error_code ec;
+  const std::filesystem::path where = std::filesystem::absolute(saved, ec);
+  return {Json{{"op", "recording_save_ok"},
+               {"path", saved},
+               {"absolute_path", ec ? saved : where.lexically_normal().string()}}};
 }
 
 StepServer::Outcome StepServer::RecordingClear(Request&) {
@@ -151,7 +157,20 @@ StepServer::Outcome StepServer::SnapshotLoad(Request& r) {
 // ---- Replay: the wire's fields to ops::ReplaySessions and its results to replies.
 
 StepServer::Outcome StepServer::ReplayLoad(Request& r) {
-  const std::string path = files_.ForReading(String(r.body["path"], "path"), "path");
+  std::string name = String(r.body["path"], "path");
+  if (r.v2026) {
+    // The 2026 client names a file by the absolute_path recording_save answered: one inside
+    // the files folder is the name under it (any other stays refused as a path).
+    std::error_code ec;
+    const std::filesystem::path dir =
+        std::filesystem::absolute(files_.dir(), ec).lexically_normal();
+    const std::filesystem::path given(name);
+    if (!ec && given.is_absolute()) {
+      const std::filesystem::path rel = given.lexically_normal().lexically_relative(dir);
+      if (!rel.empty() && *rel.begin() != "..") name = rel.string();
+    }
+  }
+  const std::string path = files_.ForReading(name, "path");
   std::string id;
   const replay::RecordingReader* rd = nullptr;
   RunFileOp([&] { rd = &replays_.Load(r.client->id, path, &id); }, "path_not_readable");

@@ -133,6 +133,12 @@ std::size_t ReplaySessions::Release(const std::string& owner, const std::string&
   });
 }
 
+void ReplaySessions::Transfer(const std::string& from, const std::string& to) {
+  for (Loaded& s : loaded_) {
+    if (s.owner == from) s.owner = to;
+  }
+}
+
 std::size_t ReplaySessions::ReleaseIf(const std::function<bool(const Loaded&)>& which) {
   std::size_t n = 0;
   for (auto it = loaded_.begin(); it != loaded_.end();) {

@@ -52,6 +52,7 @@ void CheckOne(const world::Session& session, const ArticulationTargets& t, int f
   const std::vector<int>& ids = ctl.actuator_ids();  // in id order
   patch->control = a->control;
   patch->values.clear();
+  patch->raw = t.raw;
   if (t.ctrl) {
     for (const double v : *t.ctrl) CheckValue(v, "ctrl", name + ": ctrl");
     if (t.ctrl->size() != ids.size()) {
@@ -123,6 +124,7 @@ void CheckTargets(const world::Session& session, const TargetsRequest& request,
   for (std::size_t i = request.articulations.size(); i < out->patches.size(); ++i) {
     out->patches[i].control = nullptr;
     out->patches[i].values.clear();
+    out->patches[i].raw.reset();
   }
 }
 
@@ -134,7 +136,9 @@ CheckedTargets CheckTargets(const world::Session& session, const TargetsRequest&
 
 void ApplyTargets(world::Session& session, const CheckedTargets& checked) {
   for (const CheckedTargets::Patch& p : checked.patches) {
-    if (p.control && !p.values.empty()) p.control->channel(checked.source).Patch(p.values);
+    if (p.control && (!p.values.empty() || p.raw)) {
+      p.control->channel(checked.source).Patch(p.values, p.raw);
+    }
   }
   for (const physics::cmd::ApplyForce& f : checked.forces) session.engine().Submit(f);
 }

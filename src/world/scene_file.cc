@@ -712,12 +712,15 @@ class Parser : public SectionReader {
         CameraSettings cs;
         cs.where = At(v);
         if (!v.IsNull()) {
-          if (!v.IsMap()) Fail(v, what + " must be a mapping (width, height, rate, modes)");
-          CheckKeys(v, what, {"width", "height", "rate", "modes"});
+          if (!v.IsMap()) {
+            Fail(v, what + " must be a mapping (width, height, rate, modes, latency)");
+          }
+          CheckKeys(v, what, {"width", "height", "rate", "modes", "latency"});
           if (v["width"]) cs.width = Pixels(v["width"], what + ".width");
           if (v["height"]) cs.height = Pixels(v["height"], what + ".height");
           if (v["rate"]) cs.rate = Number(v["rate"], what + ".rate", Range{0, 1000, true});
           if (v["modes"]) cs.modes = Modes(v["modes"], what + ".modes");
+          if (v["latency"]) cs.latency = LatencyEntry(v["latency"], what + ".latency");
         }
         c.cameras[key] = cs;
       }

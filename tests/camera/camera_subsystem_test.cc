@@ -164,6 +164,37 @@ TEST_F(CameraSubsystemTest, JitteredDelaysStayInRangeKeepOrderAndFollowTheSeed) 
   EXPECT_GE(delays.size(), 3u) << "the jitter varies the delay";
 }
 
+TEST_F(CameraSubsystemTest, TheScenesCameraLatencyDelaysFromTheFirstFrame) {
+  const world::SceneConfig s = Scene(
+      "    cameras: [wrist]\ncameras:\n  width: 16\n  height: 12\n  streams:\n"
+      "    rig/wrist: {latency: {delay_steps: 2}}\n");
+  world::Manager manager;
+  auto& cams = static_cast<CameraSubsystem&>(
+      manager.AddSubsystem(std::make_unique<CameraSubsystem>(Options(s))));
+  manager.BeginPlay(s);
+  manager.session().SetPaused(true);
+  physics::LatencySetting two;
+  two.delay = 2;
+  EXPECT_EQ(cams.Delay("rig/wrist"), two);
+  const auto start = static_cast<std::int64_t>(manager.session().engine().step_count());
+  const auto steps = DelayedFrameSteps(manager, cams, cams.Find("rig", "wrist"), 8);
+  for (std::size_t i = 2; i < steps.size(); ++i) {
+    EXPECT_EQ(steps[i], start + static_cast<std::int64_t>(i) + 1 - 2) << i;
+  }
+  manager.EndPlay();
+  // A bad setting is refused at its line.
+  try {
+    Scene(
+        "    cameras: [wrist]\ncameras:\n  streams:\n    rig/wrist: {latency: {delay_steps: "
+        "-1}}\n");
+    ADD_FAILURE() << "a negative camera delay was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cameras.streams.rig/wrist.latency"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find(":5"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(CameraSubsystemTest, AnUnknownCameraIsRefusedAtItsLine) {
   const world::SceneConfig s = Scene("cameras:\n  streams:\n    rig/nose: {rate: 5}\n");
   world::Manager manager;

@@ -150,6 +150,30 @@ TEST_F(CommandFrameTest, FrameGainsOverrideThePdGains) {
   EXPECT_NEAR(ctrl, 7 * 0.5, 1e-3);
 }
 
+// A raw frame's targets are the controls as they are: the PD controller does not run on it, until
+// a patch says controller again (the step server's control_mode). The flag stays across patches
+// that do not name it.
+TEST_F(CommandFrameTest, RawFramesBypassTheController) {
+  Rig rig(1);
+  rig.robot->Use(std::make_unique<PdController>(PdGains{100, 0, 1e9}));
+  FrameChannel& net = rig.robot->channel(ControlSource::kNetwork);
+  const auto step_ctrl = [&] {
+    rig.engine.StepSync(1);
+    double c = 0;
+    rig.engine.WithLockedData([&](mjModel*, mjData* d) { c = d->ctrl[0]; });
+    return c;
+  };
+  const std::pair<int, double> target{0, 0.25};
+  ASSERT_TRUE(net.Patch(std::span(&target, 1), true));
+  EXPECT_EQ(step_ctrl(), 0.25);
+  const std::pair<int, double> next{0, 0.5};
+  ASSERT_TRUE(net.Patch(std::span(&next, 1)));  // still raw
+  EXPECT_EQ(step_ctrl(), 0.5);
+  ASSERT_TRUE(net.Patch({}, false));  // the controller's target again
+  rig.engine.Reset();
+  EXPECT_NEAR(step_ctrl(), 100 * 0.5, 1e-3);
+}
+
 // The active source switches atomically between whole frames of each source; hold wins while
 // holding and gives control back on StopHold.
 TEST_F(CommandFrameTest, NamedSourcesSwitchWholeFrames) {

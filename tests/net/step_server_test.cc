@@ -161,9 +161,15 @@ TEST_F(StepServerTest, ResetQposMocapOptionsAndKeyframesTakeEffectBeforeTheReply
   c.Hello({{"observations", "minimal"}});
   const Json keys = c.Op("list_keyframes");
   // Short names beside their articulation (world/names.h); reset takes the short or full name.
-  EXPECT_EQ(
-      keys["keyframes"],
-      Json::array({Json{{"name", "bent"}, {"articulation", "arm"}, {"full_name", "arm_bent"}}}));
+  // Each record carries the keyframe's vectors (the whole model's).
+  ASSERT_EQ(keys["keyframes"].size(), 1u);
+  const Json& bent = keys["keyframes"][0];
+  EXPECT_EQ(bent["name"], "bent");
+  EXPECT_EQ(bent["articulation"], "arm");
+  EXPECT_EQ(bent["full_name"], "arm_bent");
+  EXPECT_EQ(bent["qpos"], Json::array({0.7}));
+  EXPECT_EQ(bent["time"], 0.0);
+  for (const char* f : {"qvel", "ctrl", "mocap_pos", "mocap_quat"}) EXPECT_TRUE(bent.contains(f));
   EXPECT_EQ(c.Op("reset", {{"keyframe_name", "arm_bent"}})["op"], "reset_ok");
   Json r = c.Op("reset", {{"keyframe_name", "bent"}});
   ASSERT_EQ(r["op"], "reset_ok") << r.dump();

@@ -69,6 +69,9 @@ class CameraSubsystem : public world::Subsystem, public world::CameraStreams {
                 std::uint64_t seed) override;
   physics::LatencySetting Delay(const std::string& camera) const override;
 
+  void SetStreaming(std::size_t index, bool on) override;
+  bool Streaming(std::size_t index) const override;
+
   CameraCounters counters() const;
   // The GL backend in use ("egl (surfaceless)", ...), "" when not rendering.
   std::string backend() const;

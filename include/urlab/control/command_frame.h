@@ -9,6 +9,7 @@
 // - Physics thread only: Read (the newest complete frame, through a triple buffer).
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <span>
 #include <utility>
 #include <vector>
@@ -22,6 +23,9 @@ namespace urlab::control {
 struct CommandFrame {
   std::vector<double> targets;
   std::vector<double> kp, kv;
+  // The targets are the actuators' controls as they are (the step server's control_mode raw):
+  // the controller does not run on this frame.
+  bool raw = false;
   std::uint64_t seq = 0;  // publication number in its channel (0: the initial all-zero frame)
 };
 
@@ -40,7 +44,8 @@ class FrameChannel {
                std::span<const double> kv = {});
   // Any thread: publishes the last frame with some targets replaced ({index, value}); false
   // (nothing published) when an index is out of range.
-  bool Patch(std::span<const std::pair<int, double>> values);
+  // `raw` given: the frame's raw flag from now on (CommandFrame::raw).
+  bool Patch(std::span<const std::pair<int, double>> values, std::optional<bool> raw = {});
   // Any thread: one target (a Patch of one value).
   bool Set(int index, double value);
   // Any thread: publishes the last frame with its gain overrides patched (`kp`/`kv` empty or

@@ -82,6 +82,8 @@ class ReplaySessions {
   // Releases the sessions `owner` loaded ("": any owner) except `keep`; stops the playback of a
   // released one. Returns how many.
   std::size_t Release(const std::string& owner, const std::string& keep = {});
+  // The sessions `from` loaded belong to `to` from now on (a client that renewed its session).
+  void Transfer(const std::string& from, const std::string& to);
 
  private:
   struct Loaded {

@@ -42,6 +42,10 @@ struct ArticulationTargets {
   // Targets by model actuator id (the control topic's ids; the viewer's sliders).
   std::vector<std::pair<int, double>> by_id;
   std::vector<Wrench> wrenches;
+  // The step's control_mode: true (raw) makes the targets the actuators' controls (the controller
+  // does not run), false (controller) makes them the controller's targets again; it stays until
+  // changed (control/command_frame.h). Absent: unchanged.
+  std::optional<bool> raw;
 };
 
 struct TargetsRequest {
@@ -71,6 +75,7 @@ struct CheckedTargets {
   struct Patch {
     control::ArticulationControl* control = nullptr;
     std::vector<std::pair<int, double>> values;  // {index in the actuator order, target}
+    std::optional<bool> raw;                     // ArticulationTargets::raw
   };
   control::ControlSource source = control::ControlSource::kNetwork;
   std::vector<Patch> patches;  // one per articulation of the request, in its order
@@ -82,7 +87,8 @@ struct CheckedTargets {
 void CheckTargets(const world::Session& session, const TargetsRequest& request,
                   CheckedTargets* out);
 CheckedTargets CheckTargets(const world::Session& session, const TargetsRequest& request);
-// Publishes each articulation's patch on the source's channel (an empty one publishes nothing)
+// Publishes each articulation's patch on the source's channel (one with no values and no
+// control_mode publishes nothing)
 // and queues the forces.
 void ApplyTargets(world::Session& session, const CheckedTargets& checked);
 // Both.

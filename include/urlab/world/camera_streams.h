@@ -27,7 +27,10 @@ struct CameraStreamInfo {
   std::string stream;      // "{camera}" for rgb, "{camera}/{mode}" for the others
   std::string topic;       // "{articulation}/camera/{stream} " (trailing space)
   std::string meta_topic;  // "{articulation}/camera_meta/{stream}"
-  std::string endpoint;    // where clients connect ("" when its socket did not bind)
+  // "{articulation}/camera_ucm1/{stream} " (trailing space): the same frames behind a
+  // kFrameHeaderBytes header (WriteFrameHeader), published while someone subscribes to it.
+  std::string header_topic;
+  std::string endpoint;  // where clients connect ("" when its socket did not bind)
   int width = 0, height = 0;
   double rate = 0;  // frames per second
   // segmentation / instance: id -> name (geom names, or articulation names), in id order.
@@ -45,9 +48,25 @@ struct CameraFrame {
   std::shared_ptr<const std::vector<std::uint8_t>> bytes;  // the wire payload
 };
 
+// The header of a frame on a stream's header_topic (docs/protocol.md, "Camera frames"): magic
+// "UCM1", u32 header size (32), u64 frame_id, f64 sim_time, u64 step, little-endian.
+inline constexpr std::size_t kFrameHeaderBytes = 32;
+void WriteFrameHeader(std::uint8_t* out, std::uint64_t frame_id, double sim_time,
+                      std::uint64_t step);
+
+// The seed of a camera's delay jitter from the run's seed, when none is given: its own stream
+// ("CAM" and the index of the camera's first stream), apart from the articulations' latency.
+inline std::uint64_t CameraDelaySeed(std::uint64_t run_seed, std::size_t first_stream) {
+  return physics::DeriveSeed(run_seed, 0x43414D000000ull + first_stream);
+}
+
 class CameraStreams {
  public:
   virtual ~CameraStreams() = default;
+  // Whether stream `index` publishes its frames (every stream does until told otherwise). A
+  // camera none of whose streams publish renders only for WaitForStep.
+  virtual void SetStreaming(std::size_t index, bool on) = 0;
+  virtual bool Streaming(std::size_t index) const = 0;
   virtual const std::vector<CameraStreamInfo>& Streams() const = 0;
   // Index into Streams() of `{articulation}`'s stream `stream`, -1 when none.
   int Find(const std::string& articulation, const std::string& stream) const;

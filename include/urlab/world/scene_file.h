@@ -135,6 +135,9 @@ struct CameraSettings {
   std::optional<int> width, height;
   std::optional<double> rate;                     // frames per second
   std::optional<std::vector<std::string>> modes;  // rgb | depth | segmentation | instance
+  // Emulated camera delay (physics/latency.h's keys; world::CameraStreams::SetDelay), drawn
+  // from the scene's seed.
+  std::optional<physics::LatencySetting> latency;
   SourceLocation where;
 };
 
