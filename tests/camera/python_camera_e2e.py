@@ -15,31 +15,13 @@ URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
 sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 import numpy as np  # noqa: E402
-from urlab_process import fail, start_urlab  # noqa: E402
+from urlab_process import camera_rig_scene, fail, start_urlab  # noqa: E402
 from urlab_client import CameraClient, StepClient, StreamClient  # noqa: E402
 
 
 def main():
     tmp = tempfile.mkdtemp(prefix="urlab_cam_")
-    scene = os.path.join(tmp, "scene.yaml")
-    model = os.path.join(SOURCE, "tests", "data", "cameras", "rig.xml")
-    with open(scene, "w") as f:
-        f.write(f"""network:
-  state: "tcp://127.0.0.1:*"
-  control: "tcp://127.0.0.1:*"
-  info: "tcp://127.0.0.1:*"
-  rpc: "tcp://127.0.0.1:*"
-articulations:
-  - name: rig
-    mjcf: {model}
-    cameras: true
-cameras:
-  width: 64
-  height: 48
-  rate: 30
-  streams:
-    rig/top: {{modes: [rgb, depth, segmentation]}}
-""")
+    scene = camera_rig_scene(tmp, "  streams:\n    rig/top: {modes: [rgb, depth, segmentation]}\n")
     proc, endpoints = start_urlab(URLAB, scene, "--ports", "auto")  # cameras' ports too
     try:
         with StreamClient(state=endpoints[0], control=endpoints[1], info=endpoints[2]) as client:

@@ -24,7 +24,7 @@ import zmq
 
 URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
-from urlab_process import fail, start_urlab  # noqa: E402
+from urlab_process import camera_rig_scene, fail, start_urlab  # noqa: E402
 
 PROC = None
 
@@ -51,23 +51,7 @@ def receive(sub, timeout):
 def main():
     global PROC
     tmp = tempfile.mkdtemp(prefix="urlab_cam2026_")
-    scene = os.path.join(tmp, "scene.yaml")
-    model = os.path.join(SOURCE, "tests", "data", "cameras", "rig.xml")
-    with open(scene, "w") as f:
-        f.write(f"""network:
-  state: "tcp://127.0.0.1:*"
-  control: "tcp://127.0.0.1:*"
-  info: "tcp://127.0.0.1:*"
-  rpc: "tcp://127.0.0.1:*"
-articulations:
-  - name: rig
-    mjcf: {model}
-    cameras: true
-cameras:
-  width: 64
-  height: 48
-  rate: 30
-""")
+    scene = camera_rig_scene(tmp)
     PROC, endpoints = start_urlab(URLAB, scene, "--ports", "auto")
     ctx = zmq.Context()
     try:

@@ -35,6 +35,30 @@ network:
     return path
 
 
+def camera_rig_scene(folder, extra=""):
+    """Writes the camera tests' scene into `folder`: tests/data/cameras/rig.xml as articulation
+    `rig` streaming every camera at 64x48, 30 Hz, every socket on a port the system chooses, with
+    `extra` YAML appended (under `cameras:`, indented two spaces). Returns the scene's path."""
+    model = os.path.join(SOURCE, "tests", "data", "cameras", "rig.xml")
+    path = os.path.join(folder, "scene.yaml")
+    with open(path, "w") as f:
+        f.write(f"""network:
+  state: "tcp://127.0.0.1:*"
+  control: "tcp://127.0.0.1:*"
+  info: "tcp://127.0.0.1:*"
+  rpc: "tcp://127.0.0.1:*"
+articulations:
+  - name: rig
+    mjcf: {model}
+    cameras: true
+cameras:
+  width: 64
+  height: 48
+  rate: 30
+""" + extra)
+    return path
+
+
 def fail(message, proc=None):
     """Prints FAIL and exits 1; kills `proc` first and shows its log."""
     if proc:
