@@ -36,10 +36,10 @@ StepServer::Outcome StepServer::SetCameraStreaming(Request& r) {
       }
     }
     if (found.empty()) {
-      Fail("bad_value", "no camera stream '" + name + "' (see hello's camera_topics)");
+      Fail("unknown_camera", "no camera stream '" + name + "' (see hello's camera_topics)");
     }
     if (owners.size() > 1) {
-      Fail("bad_value",
+      Fail("unknown_camera",
            "several articulations stream '" + name + "' (name it \"articulation/stream\")");
     }
     for (std::size_t i : found) changes.emplace_back(i, on);

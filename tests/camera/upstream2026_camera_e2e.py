@@ -8,7 +8,7 @@ msgpack):
 - in stepped mode a frame whose header's sim_time is the time a step reply showed arrives after
   that step (a client can tell it from an older one);
 - set_camera_streaming {camera: false} stops a camera's frames, true starts them again; an
-  unknown camera is bad_value;
+  unknown camera is unknown_camera;
 - subscribers of the bare topic still get bare pixels.
 Usage: upstream2026_camera_e2e.py URLAB_BINARY SOURCE_DIR
 """
@@ -128,7 +128,7 @@ def main():
         if receive(sub, 10) is None:
             fail("no frame after set_camera_streaming true", PROC)
         r = call(rpc, sid, "set_camera_streaming", nose=True)
-        if r.get("code") != "bad_value":
+        if r.get("code") != "unknown_camera":
             fail(f"unknown camera: {r}", PROC)
         r = call(rpc, sid, "begin_pie")
         if r.get("code") != "unknown_op" or "Unreal editor" not in r.get("message", ""):
