@@ -1,7 +1,7 @@
 // libFuzzer target for the network's decoders of untrusted bytes (include/urlab/wire/wire.h):
 // the control topic's binary payload and set_gains' JSON, resolved against a real articulation's
 // table (net::BuildTopicTables over a built Session) and applied as the network's I/O thread
-// does (a command-frame patch, PD gains), then one physics step consumes them.
+// does (ops::CheckTargets/ApplyTargets, ops::SetGains), then one physics step consumes them.
 //
 // Input: the first byte picks the message kind (even: control, odd: set_gains); the rest is the
 // payload, up to wire::kMaxInboundPayloadBytes (tools/fuzz.sh's -max_len, asked from this target).
@@ -19,6 +19,8 @@
 #include "net/topic_table.h"
 #include "urlab/control/controllers.h"
 #include "urlab/core/error.h"
+#include "urlab/ops/controllers.h"
+#include "urlab/ops/targets.h"
 #include "urlab/physics/commands.h"
 #include "urlab/wire/wire.h"
 
@@ -51,7 +53,7 @@ Fixture& F() {
   return f;
 }
 
-void Control(ArticulationTopics& t, std::string_view payload) {
+void Control(urlab::world::Session& session, ArticulationTopics& t, std::string_view payload) {
   std::vector<std::pair<std::int32_t, float>> values;
   if (wire::DecodeControl(payload, &values)) return;  // refused, with a reason
   if (payload.size() != 4 + 8 * values.size()) __builtin_trap();
@@ -61,21 +63,25 @@ void Control(ArticulationTopics& t, std::string_view payload) {
   std::string again;
   wire::AppendControl(&again, values);
   if (again != payload) __builtin_trap();
-  // As the I/O thread: every id must be one of this articulation's actuators.
-  if (values.size() > t.actuator_ids.size()) return;
-  std::vector<std::pair<int, double>> patch;
-  for (const auto& [id, v] : values) {
-    const auto it = t.index_of_actuator.find(id);
-    if (it == t.index_of_actuator.end()) return;
-    patch.emplace_back(it->second, v);
+  // As the I/O thread: the targets operation checks the ids and values whole, then patches.
+  urlab::ops::TargetsRequest request;
+  urlab::ops::ArticulationTargets& a = request.articulations.emplace_back();
+  a.articulation = t.name;
+  a.by_id.assign(values.begin(), values.end());
+  urlab::ops::CheckedTargets checked;
+  try {
+    urlab::ops::CheckTargets(session, request, &checked);
+  } catch (const urlab::ops::TargetsError&) {
+    return;  // dropped whole, with a reason
   }
-  auto& channel = t.control->channel(urlab::control::ControlSource::kNetwork);
-  if (!channel.Patch(patch)) __builtin_trap();  // indices come from the table: always in range
+  urlab::ops::ApplyTargets(session, checked);
   // The last value given for an actuator is the one in the frame.
+  const auto& patch = checked.patches.at(0).values;
+  auto& channel = t.control->channel(urlab::control::ControlSource::kNetwork);
   if (!patch.empty() && channel.Get(patch.back().first) != patch.back().second) __builtin_trap();
 }
 
-void SetGains(ArticulationTopics& t, urlab::control::PdController* pd, std::string_view payload) {
+void SetGains(urlab::world::Session& session, ArticulationTopics& t, std::string_view payload) {
   std::vector<wire::GainPatch> patches;
   if (wire::DecodeSetGains(payload, &patches)) return;
   for (const wire::GainPatch& p : patches) {
@@ -83,17 +89,15 @@ void SetGains(ArticulationTopics& t, urlab::control::PdController* pd, std::stri
       if (g && !(std::isfinite(*g) && *g >= 0)) __builtin_trap();
     }
   }
-  std::vector<std::pair<int, urlab::control::PdGains>> updates;
+  // As the I/O thread: the gains operation resolves the names, all or nothing.
+  urlab::ops::GainsRequest request;
   for (const wire::GainPatch& p : patches) {
-    const auto it = t.gain_index.find(p.name);
-    if (it == t.gain_index.end()) return;  // unknown name: the whole message is dropped
-    urlab::control::PdGains g = pd->gains(it->second);
-    if (p.kp) g.kp = *p.kp;
-    if (p.kv) g.kv = *p.kv;
-    if (p.torque_limit) g.torque_limit = *p.torque_limit;
-    updates.emplace_back(it->second, g);
+    request.named.push_back({p.name, {p.kp, p.kv, p.torque_limit}});
   }
-  for (const auto& [i, g] : updates) pd->SetGains(i, g);
+  try {
+    urlab::ops::SetGains(session, t.name, request);
+  } catch (const urlab::ops::OpError&) {
+  }
 }
 
 }  // namespace
@@ -118,9 +122,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::vector<double> zeros(t.actuator_ids.size(), 0.0);
     (void)t.control->channel(urlab::control::ControlSource::kNetwork).Publish(zeros);
     if (data[0] % 2 == 0) {
-      Control(t, payload);
+      Control(*f.session, t, payload);
     } else {
-      SetGains(t, &f.pd(), payload);
+      SetGains(*f.session, t, payload);
     }
     // The controller consumes the new targets and gains in one step (engine not running: the
     // step runs here).
