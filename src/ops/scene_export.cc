@@ -114,24 +114,22 @@ std::vector<std::string> WriteOptionChanges(const mjOption& compiled, const mjOp
     return *flag;
   };
   // Each flag that differs, by its MJCF name: disable flags then enable flags, in bit order.
-  const unsigned disabled = static_cast<unsigned>(now.disableflags);
-  const unsigned disable_changed = disabled ^ static_cast<unsigned>(compiled.disableflags);
-  for (unsigned i = 0; i < static_cast<unsigned>(mjNDISABLE); ++i) {
-    const unsigned bit = 1u << i;
-    if ((disable_changed & bit) == 0) continue;
-    const std::string name = FlagName(mjDISABLESTRING[i]);
-    flags().Set(name, (disabled & bit) ? "disable" : "enable");
-    written.push_back("flag." + name);
-  }
-  const unsigned enabled = static_cast<unsigned>(now.enableflags);
-  const unsigned enable_changed = enabled ^ static_cast<unsigned>(compiled.enableflags);
-  for (unsigned i = 0; i < static_cast<unsigned>(mjNENABLE); ++i) {
-    const unsigned bit = 1u << i;
-    if ((enable_changed & bit) == 0) continue;
-    const std::string name = FlagName(mjENABLESTRING[i]);
-    flags().Set(name, (enabled & bit) ? "enable" : "disable");
-    written.push_back("flag." + name);
-  }
+  auto write_flags = [&](int now_bits, int compiled_bits, const char* const* names, int count,
+                         const char* set_word, const char* clear_word) {
+    const unsigned set = static_cast<unsigned>(now_bits);
+    const unsigned changed = set ^ static_cast<unsigned>(compiled_bits);
+    for (unsigned i = 0; i < static_cast<unsigned>(count); ++i) {
+      const unsigned bit = 1u << i;
+      if ((changed & bit) == 0) continue;
+      const std::string name = FlagName(names[i]);
+      flags().Set(name, (set & bit) ? set_word : clear_word);
+      written.push_back("flag." + name);
+    }
+  };
+  write_flags(now.disableflags, compiled.disableflags, mjDISABLESTRING, mjNDISABLE, "disable",
+              "enable");
+  write_flags(now.enableflags, compiled.enableflags, mjENABLESTRING, mjNENABLE, "enable",
+              "disable");
   return written;
 }
 
