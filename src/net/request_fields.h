@@ -62,4 +62,21 @@ inline std::string String(const Json& v, const char* field) {
   return v.get<std::string>();
 }
 
+// The camera operations' map of camera name to value: the request's `cameras` map, or (the 2026
+// form) the request's own keys other than the envelope's. `what` names the values in the error.
+inline std::vector<std::pair<std::string, const Json*>> CameraEntries(const Json& body,
+                                                                      const std::string& what) {
+  std::vector<std::pair<std::string, const Json*>> out;
+  if (const auto it = body.find("cameras"); it != body.end()) {
+    if (!it->is_object()) Fail("bad_value", "cameras must be a map of camera to " + what);
+    for (const auto& [name, value] : it->items()) out.emplace_back(name, &value);
+    return out;
+  }
+  for (const auto& [name, value] : body.items()) {
+    if (name == "op" || name == "seq" || name == "session_id" || name == "force") continue;
+    out.emplace_back(name, &value);
+  }
+  return out;
+}
+
 }  // namespace urlab::net::request

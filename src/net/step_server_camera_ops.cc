@@ -1,7 +1,6 @@
 // The step server's camera latency operation (docs/protocol.md, "Emulated latency"):
 // set_camera_delay hands each named camera's delay to the camera subsystem
 // (world::CameraStreams::SetDelay); what a setting means is physics/latency.h.
-#include <set>
 #include <string>
 
 #include "net/latency_request.h"
@@ -48,11 +47,6 @@ StepServer::Outcome StepServer::SetCameraDelay(Request& r) {
   if (!cameras_ || cameras_->Streams().empty()) {
     Fail("unknown_camera", "this scene streams no camera (the scene's cameras: section)");
   }
-  // {cameras: {camera: setting}}, or the cameras as the request's own keys (the 2026 form).
-  const Json* map = &r.body;
-  if (const auto it = r.body.find("cameras"); it != r.body.end()) map = &*it;
-  static const std::set<std::string> kNotCameras = {"op", "seq", "session_id", "force", "cameras"};
-  if (!map->is_object()) Fail("bad_value", "cameras must map camera names to delay settings");
   // Every entry is checked before any is applied.
   struct Entry {
     std::string key;
@@ -60,12 +54,11 @@ StepServer::Outcome StepServer::SetCameraDelay(Request& r) {
     std::uint64_t seed;
   };
   std::vector<Entry> entries;
-  for (const auto& [name, value] : map->items()) {
-    if (map == &r.body && kNotCameras.count(name)) continue;
+  for (const auto& [name, value] : CameraEntries(r.body, "delay settings")) {
     std::size_t index = 0;
     const std::string key = CameraKey(*cameras_, name, &index);
     std::optional<std::uint64_t> seed;
-    const physics::LatencySetting s = LatencySettingFromRequest(value, "cameras." + name, &seed);
+    const physics::LatencySetting s = LatencySettingFromRequest(*value, "cameras." + name, &seed);
     // Each camera draws its own jitter from the run's seed unless the request gives one.
     entries.push_back(
         {key, s, seed ? *seed : world::CameraDelaySeed(session_.latency_seed(), index)});

@@ -15,16 +15,9 @@ using namespace request;
 StepServer::Outcome StepServer::SetCameraStreaming(Request& r) {
   const std::vector<world::CameraStreamInfo> none;
   const auto& streams = cameras_ ? cameras_->Streams() : none;
-  const Json* map = &r.body;
-  if (const auto it = r.body.find("cameras"); it != r.body.end()) {
-    if (!it->is_object()) Fail("bad_value", "cameras must be a map of camera to true or false");
-    map = &*it;
-  }
-  static const std::set<std::string> kNotCameras = {"op", "seq", "session_id", "force", "cameras"};
   std::vector<std::pair<std::size_t, bool>> changes;
-  for (const auto& [name, value] : map->items()) {
-    if (map == &r.body && kNotCameras.count(name)) continue;
-    const bool on = Bool(value, name.c_str());
+  for (const auto& [name, value] : CameraEntries(r.body, "true or false")) {
+    const bool on = Bool(*value, name.c_str());
     std::set<std::string> owners;
     std::vector<std::size_t> found;
     for (std::size_t i = 0; i < streams.size(); ++i) {
