@@ -75,6 +75,19 @@ configure() {  # configure DIR [cmake args...] (once; later runs keep the cache)
   fi
 }
 
+# ctest DIR [args...]: ctest with every failing test's output, then (on a failure) the failed
+# assertions alone, last: a long log's middle may be cut where it is shown.
+run_ctest() {
+  local dir=$1
+  shift
+  ctest --test-dir "$dir" --output-on-failure "$@" && return 0
+  local rc=$?
+  echo "== failed assertions and errors (from $dir/Testing/Temporary/LastTest.log):"
+  grep -E -B3 -A12 '(^|: )Failure$|^\[  FAILED  \] [A-Za-z]|Traceback \(most recent|Error: |^ERROR|Sanitizer' \
+    "$dir/Testing/Temporary/LastTest.log" | head -200 || true
+  return $rc
+}
+
 # Sanitizer builds at -O1 (what the sanitizers' documentation suggests): about 40% less compile
 # time than -O2 with UBSan's checks, stack traces keep their lines.
 SANITIZER_OPT="-O1 -g1 -DNDEBUG"
@@ -86,7 +99,7 @@ main_stage() {
     bash tools/install-mujoco-js.sh "$BUILD_DIR/mujoco-js" ||
       echo "mujoco-js not installed: the 3.x reference test will skip"
   fi
-  ctest --test-dir "$BUILD_DIR" --output-on-failure -j"$JOBS" --timeout 900
+  run_ctest "$BUILD_DIR" -j"$JOBS" --timeout 900
   # The viewer end to end on a virtual display (the viewer.xvfb ctest entry runs its unit tests
   # the same way): a window, the panel, a screenshot taken at t=0.5 s.
   xvfb-run -a -s "-screen 0 1280x1024x24" "$BUILD_DIR/urlab" view examples/scenes/two_arms.yaml \
@@ -106,7 +119,7 @@ tsan_stage() {
   # main stage only; the ones that load the server's threads (client, shared memory, hardening,
   # batched environments, latency) run here too.
   TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/tsan.supp" \
-    ctest --test-dir "$dir" -L 'core|physics|control|world|replay|ops|net|client' --output-on-failure \
+    run_ctest "$dir" -L 'core|physics|control|world|replay|ops|net|client' \
     -E 'python_examples_e2e|gait_e2e|gym_env_e2e|cluster_(batch_)?e2e|learn_reach_smoke|ports_e2e' \
     -j"$JOBS" --timeout 900
 }
@@ -125,7 +138,7 @@ asan_stage() {  # also CI's clang build and its build with assertions on
   [[ "$js" == /* ]] || js="$PWD/$js"
   URLAB_MUJOCO_JS="$js" \
     ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1" \
-    ctest --test-dir "$dir" -L 'core|mjcf|document|replay|control' --output-on-failure \
+    run_ctest "$dir" -L 'core|mjcf|document|replay|control' \
     -j"$JOBS" --timeout 900
 }
 
