@@ -206,7 +206,7 @@ TEST(OutputsCli, AFailedCameraVideoExitsOne) {
 }
 
 TEST(OutputsCli, AFailedViewerVideoExitsOne) {
-  if (RunCommand("command -v xvfb-run", nullptr) != 0) GTEST_SKIP() << "no xvfb-run";
+  if (RunCommand("command -v Xvfb", nullptr) != 0) GTEST_SKIP() << "no Xvfb";
   const std::string dir = testing::MakeTempDir("cli_out_view_video");
   testing::WriteTextFile(dir, "file.txt", "not a folder");
   const std::string video = dir + "/file.txt/window.mp4";

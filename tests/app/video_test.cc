@@ -282,8 +282,8 @@ TEST(RenderRecording, UnknownCameraIsAClearErrorAndWritesNothing) {
 }
 
 TEST(ViewScreenshot, AtTimeShowsTheStateAtThatTime) {
-  if (testing::RunCommand("command -v xvfb-run >/dev/null") != 0) {
-    GTEST_SKIP() << "xvfb-run is not installed";
+  if (testing::RunCommand("command -v Xvfb >/dev/null") != 0) {
+    GTEST_SKIP() << "Xvfb is not installed";
   }
   const std::string dir = testing::MakeTempDir("shot_at");
   const std::string xml = testing::WriteTextFile(dir, "pendulum.xml", kPendulumXml);
@@ -327,8 +327,8 @@ TEST(ViewScreenshot, AtTimeShowsTheStateAtThatTime) {
 }
 
 TEST(ReplayView, WatchesARecordingWithTheTimelineAtAnExactTime) {
-  if (testing::RunCommand("command -v xvfb-run >/dev/null") != 0) {
-    GTEST_SKIP() << "xvfb-run is not installed";
+  if (testing::RunCommand("command -v Xvfb >/dev/null") != 0) {
+    GTEST_SKIP() << "Xvfb is not installed";
   }
   const std::string dir = testing::MakeTempDir("replay_view");
   const std::string xml = testing::WriteTextFile(dir, "pendulum.xml", kPendulumXml);

@@ -7,7 +7,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <random>
 #include <sstream>
 
 namespace urlab::testing {
@@ -59,13 +58,9 @@ std::string SourcePath(const std::string& relative) {
 std::string UrlabBinary() { return URLAB_BINARY; }
 
 std::string XvfbRun(const std::string& screen) {
-  std::random_device random;
-  const unsigned first = 200 + random() % 20000;
-  // An authority file of our own: without -f, xvfb-run makes a temporary folder for one and, when
-  // removing it fails at the end, exits 5 in place of the command's exit status.
-  const std::string auth = WriteTextFile(MakeTempDir("xauth"), "Xauthority", "");
-  return "xvfb-run -a -n " + std::to_string(first) + " -f " + auth + " -s '-screen 0 " + screen +
-         "' ";
+  // Xvfb picks a free display number itself (xvfb-run -a can hand two runs started together one
+  // server, whose end then takes the other's display away).
+  return SourcePath("tests/support/with_xvfb.sh") + " " + screen + " ";
 }
 
 int RunCommand(const std::string& command, std::string* output) {

@@ -36,9 +36,8 @@ std::string TestData(const std::string& relative);
 std::string SourcePath(const std::string& relative);
 // Path of the built `urlab` binary.
 std::string UrlabBinary();
-// "xvfb-run -a -n N -s '-screen 0 SCREEN' ": a virtual display for one command. N, where the
-// search for a free display starts, is random, so that tests running at once do not race for
-// the same display number (xvfb-run -a checks, then starts: two at once can pick one number).
+// "tests/support/with_xvfb.sh SCREEN ": a private virtual display for one command (SCREEN as
+// WxHxDEPTH), whose number the server picks itself, so tests running at once never share one.
 std::string XvfbRun(const std::string& screen);
 // Runs a shell command, returns its exit code; stdout+stderr go to *output when given.
 int RunCommand(const std::string& command, std::string* output = nullptr);
