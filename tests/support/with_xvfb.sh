@@ -5,7 +5,8 @@
 # The server picks its own display number (-displayfd), taking the lock for it atomically, so any
 # number of these start at once: two test runs sharing the machine, two copies of ctest. xvfb-run
 # -a instead picks a number by looking for lock files first, and two of them started together can
-# end up on one server; when that server's own run ends, the other's windows fail to open.
+# end up on one server; when that server's own run ends, the other's windows fail to open. And
+# xvfb-run's server resets whenever its last window closes (see -noreset below).
 set -euo pipefail
 if [ $# -lt 2 ]; then
   echo "usage: with_xvfb.sh WxHxDEPTH COMMAND [ARGS...]" >&2
@@ -26,7 +27,10 @@ trap cleanup EXIT
 trap 'exit 143' TERM INT
 mkfifo "$dir/display"
 # No TCP; the local socket only. The server writes its display number once it accepts clients.
-Xvfb -displayfd 3 -screen 0 "$screen" -nolisten tcp 3>"$dir/display" 2>"$dir/xvfb.log" &
+# -noreset: by default an X server resets when its last client disconnects, and a window opened
+# during that reset fails ("Failed to open display"): a test suite that closes one window and
+# opens the next hits it now and then, more often on a busy machine.
+Xvfb -displayfd 3 -screen 0 "$screen" -nolisten tcp -noreset 3>"$dir/display" 2>"$dir/xvfb.log" &
 xvfb_pid=$!
 number=
 read -r -t 60 number <"$dir/display" || true
