@@ -100,9 +100,9 @@ main_stage() {
       echo "mujoco-js not installed: the 3.x reference test will skip"
   fi
   run_ctest "$BUILD_DIR" -j"$JOBS" --timeout 900
-  # The viewer end to end on a virtual display (the viewer.xvfb ctest entry runs its unit tests
-  # the same way): a window, the panel, a screenshot taken at t=0.5 s.
-  xvfb-run -a -s "-screen 0 1280x1024x24" "$BUILD_DIR/urlab" view examples/scenes/two_arms.yaml \
+  # The viewer end to end on a private virtual display (the viewer.xvfb ctest entry runs its unit
+  # tests the same way): a window, the panel, a screenshot taken at t=0.5 s.
+  tests/support/with_xvfb.sh 1280x1024x24 "$BUILD_DIR/urlab" view examples/scenes/two_arms.yaml \
     --no-network --debug-all --screenshot "$BUILD_DIR/viewer-smoke.png" --at 0.5
 }
 
