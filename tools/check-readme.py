@@ -12,12 +12,14 @@ check only means something against the build in ROOT/build: given another --buil
 (exit 77, ctest's skip code).
 """
 import argparse
+import fcntl
 import os
 import re
 import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 
 SKIP = 77
@@ -152,6 +154,14 @@ def main():
     if not lines or not snippets:
         print("README.md: no quick-start lines or no Python snippets found")
         return 1
+    # The README plays scenes on the default ports, which only one run can hold: a second check on
+    # this machine (another clone's ctest) waits here for the first to finish.
+    lock = open(os.path.join(tempfile.gettempdir(), "urlab-readme-default-ports.lock"), "w")
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        print("another README check holds the default ports: waiting for it", flush=True)
+        fcntl.flock(lock, fcntl.LOCK_EX)
     failures = []
     for line in lines:
         problem = run_line(line, root, args.timeout)
