@@ -112,10 +112,16 @@ int Info(const RecordingReader& r) {
   }
   std::printf("finished:    %s\n", r.finished() ? "yes" : ("NO: " + r.problem()).c_str());
   std::uint64_t markers = 0, gaps = 0, dropped = 0;
+  // Per command group: the steps whose command frame was raw (control_mode raw).
+  std::vector<std::uint64_t> raw_steps(t.command_groups.size(), 0);
   for (std::size_t c = 0; c < r.chunks().size(); ++c) {
     try {
       for (const replay::Record& rec : r.ReadChunk(c)) {
-        if (const auto* m = std::get_if<replay::Marker>(&rec)) {
+        if (const auto* f = std::get_if<replay::Frame>(&rec)) {
+          for (std::size_t g = 0; g < f->commands.raw.size() && g < raw_steps.size(); ++g) {
+            raw_steps[g] += f->commands.raw[g];
+          }
+        } else if (const auto* m = std::get_if<replay::Marker>(&rec)) {
           ++markers;
           std::printf("  jump at step %llu, t=%.6f: %s\n", static_cast<unsigned long long>(m->step),
                       m->time, m->text.c_str());
@@ -134,6 +140,14 @@ int Info(const RecordingReader& r) {
       "frames lost)\n",
       static_cast<unsigned long long>(markers), static_cast<unsigned long long>(gaps),
       static_cast<unsigned long long>(dropped));
+  if (!t.command_groups.empty()) {
+    std::string raw;
+    for (std::size_t g = 0; g < raw_steps.size(); ++g) {
+      raw += fmt::format("{}{} {} steps", g ? ", " : "", t.command_groups[g].name, raw_steps[g]);
+    }
+    std::printf("raw control: %s%s\n", raw.c_str(),
+                i.format_version < 3 ? " (format 2 does not record control_mode raw)" : "");
+  }
   return 0;
 }
 

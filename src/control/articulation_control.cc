@@ -232,6 +232,7 @@ void ControlSystem::ApplyControls(const mjModel* m, mjData* d, physics::AppliedC
     gains(frame.kv, &applied->kv);
     applied->seq[i] = frame.seq;
     applied->source[i] = static_cast<std::uint8_t>(all_[i]->EffectiveSource(global));
+    applied->raw[i] = frame.raw ? 1 : 0;
     offset += n;
   }
 }

@@ -72,7 +72,8 @@ const char* ActuatorKind(const mjModel* m, int id) {
 }
 
 Json Entities(world::Session& session, const std::vector<ArticulationTopics>& tables,
-              const world::CameraStreams* cameras, const Json& ours) {
+              const std::vector<FreeBodyEntry>& free_bodies, const world::CameraStreams* cameras,
+              const Json& ours) {
   const mjModel* m = session.engine().model();
   Json entities = Json::array();
   for (std::size_t i = 0; i < tables.size(); ++i) {
@@ -85,6 +86,7 @@ Json Entities(world::Session& session, const std::vector<ArticulationTopics>& ta
     e["actor_name"] = t.name;
     e["actor_id"] = i;
     e["name"] = t.name;
+    e["kind"] = "articulation";
     e["default_control_mode"] = controlled ? "ue_controller" : "raw";
     // The controller: its kind, its gains now (per-name maps, as configure_controller echoes
     // them) and what configure_controller takes (empty: it has no gains to set).
@@ -142,6 +144,39 @@ Json Entities(world::Session& session, const std::vector<ArticulationTopics>& ta
       }
     }
     entities.push_back(std::move(e));
+  }
+  for (const FreeBodyEntry& b : free_bodies) {
+    const std::string& name = b.name;
+    // Its body and joint: the name after "{name}_" (the whole name without that prefix) ->
+    // the name in the compiled model.
+    Json original = Json::object();
+    for (const std::string& full : {b.body_name, b.joint_name}) {
+      if (full.empty()) continue;
+      const std::string prefix = name + "_";
+      original[full.starts_with(prefix) ? full.substr(prefix.size()) : full] = full;
+    }
+    entities.push_back(Json{
+        {"prefix", name},
+        {"actor_name", name},
+        {"actor_id", entities.size()},
+        {"name", name},
+        {"kind", b.kind},  // prop, projectile or body
+        {"default_control_mode", "raw"},
+        {"controller", {{"kind", "none"}, {"params", Json::object()}, {"schema", Json::object()}}},
+        {"actuator_types", Json::object()},
+        {"original_names", std::move(original)},
+        {"camera_topics", Json::object()},
+        {"id", b.body},
+        {"body", b.body_name},
+        {"has_free_base", true},
+        {"free_joint", b.joint_name.empty() ? Json() : Json(b.joint_name)},
+        {"qpos_offset", 0},  // scene[name].qpos is the free joint's 7 values
+        {"qvel_offset", 0},
+        {"qpos_adr", b.qpos_adr},  // in the whole model (raw_joints)
+        {"qvel_adr", b.dof_adr},
+        {"joints", Json::array()},
+        {"actuators", Json::array()},
+        {"sensors", Json::array()}});
   }
   return entities;
 }

@@ -1,7 +1,8 @@
 #pragma once
 // What the 2026 dialect's hello_ok adds to ours (docs/protocol.md, "The 2026 dialect"): the
 // `entities` array (one element per articulation, with its identity, control mode, controller
-// and its schema, actuator kinds, original names, cameras as a map and the free-base fields),
+// and its schema, actuator kinds, original names, cameras as a map and the free-base fields;
+// then one per free body of no articulation, net/free_bodies.h),
 // `global_cameras`, and on request the `raw_joints` / `raw_actuators` tables of the compiled
 // model. Built from the step server's tables and the compiled model.
 // Thread: the step server's I/O thread (reads the controllers' gains through ops::Gains).
@@ -9,6 +10,7 @@
 
 #include <vector>
 
+#include "net/free_bodies.h"
 #include "net/msgpack_codec.h"
 #include "net/topic_table.h"
 #include "urlab/world/camera_streams.h"
@@ -17,9 +19,12 @@
 namespace urlab::net::dialect2026 {
 
 // The entities array; `ours` is hello's `articulations` array in our vocabulary (the same order
-// as `tables`), whose joints, actuators and sensors each element carries too.
+// as `tables`), whose joints, actuators and sensors each element carries too. The free bodies
+// follow the articulations: the same fields (no controller, actuators or cameras: empty), the
+// free base being the body itself, its state at offset 0 of `scene[name].qpos` / `.qvel`.
 Json Entities(world::Session& session, const std::vector<ArticulationTopics>& tables,
-              const world::CameraStreams* cameras, const Json& ours);
+              const std::vector<FreeBodyEntry>& free_bodies, const world::CameraStreams* cameras,
+              const Json& ours);
 // Cameras that belong to no articulation, as a map like camera_topics.
 Json GlobalCameras(const mjModel* m, const world::CameraStreams* cameras);
 // Every joint: {name (short), id, type (mjtJoint), qpos_adr, qvel_adr, range, body_id}.

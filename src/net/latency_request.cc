@@ -27,10 +27,18 @@ physics::LatencySetting LatencySettingFromRequest(const Json& v, const std::stri
       continue;
     }
     if (key == "clock") {
+      // Only simulated time: a delay counted on the wall clock would depend on the machine's
+      // speed and load, so the same seed could not give the same run, nor a recording replay it.
       if (!value.is_string() || value.get<std::string>() != "sim") {
-        Fail("bad_value", what +
-                              ".clock: only \"sim\" (delays count physics steps, so lockstep runs "
-                              "stay deterministic)");
+        const std::string given = value.is_string() ? "\"" + value.get<std::string>() + "\""
+                                                    : std::string(value.type_name());
+        Fail("bad_value",
+             what + ".clock " + given +
+                 ": only \"sim\" is served. Delays run on simulated time, so a lockstep run is "
+                 "the same for the same seed and a recording replays it bit for bit; a "
+                 "wall-clock delay would depend on the machine's speed and load. Leave clock "
+                 "out (or give \"sim\") and give the delay in simulated seconds (delay_s, "
+                 "jitter_s) or in physics steps (delay_steps, jitter_steps)");
       }
       continue;
     }

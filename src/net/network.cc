@@ -108,6 +108,7 @@ struct NetworkSubsystem::Impl {
 
   NetworkOptions options;
   std::vector<ArticulationTopics> tables;
+  std::vector<FreeBodyEntry> free_bodies;  // of no articulation: state/full's entities, scene
   std::unordered_map<std::string, Route> routes;  // inbound topic -> articulation and kind
   std::shared_ptr<physics::StateRing> ring;
   std::shared_ptr<Doorbell> bell = std::make_shared<Doorbell>();  // frames and command results
@@ -299,7 +300,7 @@ struct NetworkSubsystem::Impl {
       full_writer.Map(ObservationEntries(keys) + 1);
       full_writer.Key("op");
       full_writer.Str("state_full");
-      WriteObservationEntries(full_writer, tables, f, *full_state, false, keys);
+      WriteObservationEntries(full_writer, tables, f, *full_state, false, keys, &free_bodies);
       SendState(wire::kFullStateTopic, std::string_view(full_writer.data(), full_writer.size()));
     }
   }
@@ -570,6 +571,7 @@ void NetworkSubsystem::BeginPlay(world::Session& session) {
   impl_->model = session.engine().model();
   impl_->session = &session;
   impl_->tables = BuildTopicTables(session);
+  impl_->free_bodies = FindFreeBodies(session, impl_->tables);
   for (std::size_t i = 0; i < impl_->tables.size(); ++i) {
     impl_->routes[impl_->tables[i].control_topic] = {i, Impl::Kind::kControl};
     impl_->routes[impl_->tables[i].set_gains_topic] = {i, Impl::Kind::kSetGains};

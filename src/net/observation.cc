@@ -143,9 +143,26 @@ void WriteArticulations(Out& out, const std::vector<ArticulationTopics>& tables,
   }
 }
 
+// Free bodies: each one's free joint, {qpos [7], qvel [6]}.
+template <typename Out>
+void WriteFreeBodies(Out& out, const std::vector<FreeBodyEntry>* free_bodies,
+                     const physics::StateFrame& f, bool binary) {
+  out.Map(free_bodies ? free_bodies->size() : 0);
+  if (!free_bodies) return;
+  for (const FreeBodyEntry& b : *free_bodies) {
+    out.Key(b.name);
+    out.Map(2);
+    out.Key("qpos");
+    out.Doubles(f.qpos.data() + b.qpos_adr, 7, binary);
+    out.Key("qvel");
+    out.Doubles(f.qvel.data() + b.dof_adr, 6, binary);
+  }
+}
+
 template <typename Out>
 void WriteEntries(Out& out, const std::vector<ArticulationTopics>& tables,
-                  const physics::StateFrame& f, ObsLevel level, bool binary, ObsKeys keys) {
+                  const physics::StateFrame& f, ObsLevel level, bool binary, ObsKeys keys,
+                  const std::vector<FreeBodyEntry>* free_bodies) {
   out.Key("time");
   out.Double(f.time);
   out.Key("step");
@@ -163,13 +180,13 @@ void WriteEntries(Out& out, const std::vector<ArticulationTopics>& tables,
     out.Key("per_articulation");
     WriteArticulations(out, tables, f, level, binary, false);
     out.Key("entities");
-    out.Map(0);
+    WriteFreeBodies(out, free_bodies, f, binary);
   }
   if (keys != ObsKeys::kOurs) {
     out.Key("arts");
     WriteArticulations(out, tables, f, level, binary, true);
     out.Key("scene");
-    out.Map(0);
+    WriteFreeBodies(out, free_bodies, f, binary);
   }
 }
 
@@ -195,20 +212,22 @@ Json Array(const double* v, std::size_t n, bool binary) {
 
 void WriteObservationEntries(MsgpackWriter& out, const std::vector<ArticulationTopics>& tables,
                              const physics::StateFrame& f, ObsLevel level, bool binary,
-                             ObsKeys keys) {
-  WriteEntries(out, tables, f, level, binary, keys);
+                             ObsKeys keys, const std::vector<FreeBodyEntry>* free_bodies) {
+  WriteEntries(out, tables, f, level, binary, keys, free_bodies);
 }
 
 void AddObservation(Json* reply, const std::vector<ArticulationTopics>& tables,
-                    const physics::StateFrame& f, ObsLevel level, bool binary, ObsKeys keys) {
+                    const physics::StateFrame& f, ObsLevel level, bool binary, ObsKeys keys,
+                    const std::vector<FreeBodyEntry>* free_bodies) {
   JsonWriter w(reply, ObservationEntries(keys));
-  WriteEntries(w, tables, f, level, binary, keys);
+  WriteEntries(w, tables, f, level, binary, keys, free_bodies);
 }
 
 Json Observation(const std::vector<ArticulationTopics>& tables, const physics::StateFrame& f,
-                 ObsLevel level, bool binary, ObsKeys keys) {
+                 ObsLevel level, bool binary, ObsKeys keys,
+                 const std::vector<FreeBodyEntry>* free_bodies) {
   Json o = Json::object();
-  AddObservation(&o, tables, f, level, binary, keys);
+  AddObservation(&o, tables, f, level, binary, keys, free_bodies);
   return o;
 }
 

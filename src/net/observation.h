@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "net/free_bodies.h"
 #include "net/msgpack_codec.h"
 #include "net/topic_table.h"
 #include "urlab/physics/state_frame.h"
@@ -34,20 +35,24 @@ enum class ObsKeys { kOurs, k2026, kBoth };
 
 // The observation's top-level entries (time, step, sim_time, wall_time, paused, frame_id, then
 // per_articulation and entities and/or arts and scene), to be written inside a map the caller
-// opened; ObservationEntries says how many.
+// opened; ObservationEntries says how many. `entities` and `scene` map each of `free_bodies`
+// (net/free_bodies.h; none when null) to its free joint's {qpos [7], qvel [6]}.
 inline constexpr std::size_t kObservationEntries = 8;
 constexpr std::size_t ObservationEntries(ObsKeys keys) {
   return keys == ObsKeys::kBoth ? kObservationEntries + 2 : kObservationEntries;
 }
 void WriteObservationEntries(MsgpackWriter& out, const std::vector<ArticulationTopics>& tables,
                              const physics::StateFrame& f, ObsLevel level, bool binary,
-                             ObsKeys keys = ObsKeys::kOurs);
+                             ObsKeys keys = ObsKeys::kOurs,
+                             const std::vector<FreeBodyEntry>* free_bodies = nullptr);
 // Adds the same entries to the JSON object *reply.
 void AddObservation(Json* reply, const std::vector<ArticulationTopics>& tables,
                     const physics::StateFrame& f, ObsLevel level, bool binary,
-                    ObsKeys keys = ObsKeys::kOurs);
+                    ObsKeys keys = ObsKeys::kOurs,
+                    const std::vector<FreeBodyEntry>* free_bodies = nullptr);
 // The observation alone, as a JSON tree.
 Json Observation(const std::vector<ArticulationTopics>& tables, const physics::StateFrame& f,
-                 ObsLevel level, bool binary, ObsKeys keys = ObsKeys::kOurs);
+                 ObsLevel level, bool binary, ObsKeys keys = ObsKeys::kOurs,
+                 const std::vector<FreeBodyEntry>* free_bodies = nullptr);
 
 }  // namespace urlab::net

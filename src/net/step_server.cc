@@ -213,6 +213,7 @@ StepServer::StepServer(world::Session& session, const std::vector<ArticulationTo
                        std::shared_ptr<physics::StateSubscription> state, StepServerOptions options)
     : session_(session),
       tables_(tables),
+      free_bodies_(FindFreeBodies(session, tables)),
       state_(std::move(state)),
       options_(std::move(options)),
       mode_(options_.mode == "direct" ? "direct" : "live"),
@@ -285,7 +286,7 @@ void StepServer::Send(const Route& envelope, Json& reply, bool json,
   if (json) {
     if (frame) {
       AddObservation(&reply, tables_, *frame, observation->level, observation->binary,
-                     observation->keys);
+                     observation->keys, &free_bodies_);
     }
     BinaryToBase64(reply);  // bytes travel as <field>_base64 in JSON text
     text = reply.dump(-1, ' ', false, Json::error_handler_t::replace);
@@ -300,7 +301,7 @@ void StepServer::Send(const Route& envelope, Json& reply, bool json,
     }
     if (frame) {
       WriteObservationEntries(writer_, tables_, *frame, observation->level, observation->binary,
-                              observation->keys);
+                              observation->keys, &free_bodies_);
     }
     bytes = {reinterpret_cast<const std::uint8_t*>(writer_.data()), writer_.size()};
   }
@@ -836,7 +837,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
                    {"server_session", options_.server_session},
                    {"articulations", std::move(arts)},
                    {"batch", BatchHello()},
-                   {"entities", Json::object()},
+                   {"entities", FreeBodiesHello(free_bodies_)},
                    {"mjb", Json::binary(mjb_)}};
   if (const auto it = r.body.find("include_assets");
       it != r.body.end() && Bool(*it, "include_assets")) {
@@ -896,7 +897,8 @@ std::string StepServer::RouteOf(const Route& route) {
 }
 
 void StepServer::Hello2026(const Request& r, Json& reply) {
-  reply["entities"] = dialect2026::Entities(session_, tables_, cameras_, reply["articulations"]);
+  reply["entities"] =
+      dialect2026::Entities(session_, tables_, free_bodies_, cameras_, reply["articulations"]);
   reply["global_cameras"] = dialect2026::GlobalCameras(session_.engine().model(), cameras_);
   if (const auto it = r.body.find("raw_model"); it != r.body.end() && Bool(*it, "raw_model")) {
     reply["raw_model"] = true;

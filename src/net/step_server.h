@@ -348,6 +348,7 @@ class StepServer {
 
   world::Session& session_;
   const std::vector<ArticulationTopics>& tables_;
+  const std::vector<FreeBodyEntry> free_bodies_;  // of no articulation (net/free_bodies.h)
   std::shared_ptr<physics::StateSubscription> state_;
   StepServerOptions options_;
   std::optional<zmq::socket_t> socket_;

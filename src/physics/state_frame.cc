@@ -21,6 +21,7 @@ void CopyCommands(AppliedCommands* out, const AppliedCommands& in) {
   out->kv.assign(in.kv.begin(), in.kv.end());
   out->seq.assign(in.seq.begin(), in.seq.end());
   out->source.assign(in.source.begin(), in.source.end());
+  out->raw.assign(in.raw.begin(), in.raw.end());
 }
 
 void ApplyMeta(StateFrame* f, const FrameMeta& meta) {
@@ -63,6 +64,7 @@ AppliedCommands AppliedCommands::SizedFor(const std::vector<CommandGroupLayout>&
   c.kv.assign(n, std::numeric_limits<double>::quiet_NaN());
   c.seq.assign(layout.size(), 0);
   c.source.assign(layout.size(), 0);
+  c.raw.assign(layout.size(), 0);
   return c;
 }
 

@@ -35,9 +35,12 @@ enum FrameGroups : std::uint8_t {
   kGroupXfrc = 4,
   kGroupSensors = 8,
   kGroupCommands = 16,  // the applied command frames changed (always in a chunk's first frame)
+  // With kGroupCommands (format 3): one byte per command group, 1 where the frame was raw
+  // (control_mode raw: the targets were the controls). Absent: no group was raw.
+  kGroupRaw = 32,
 };
 constexpr std::uint8_t kAllGroups =
-    kGroupMocap | kGroupQfrc | kGroupXfrc | kGroupSensors | kGroupCommands;
+    kGroupMocap | kGroupQfrc | kGroupXfrc | kGroupSensors | kGroupCommands | kGroupRaw;
 
 template <typename T>
 void Put(std::string* out, T value) {
@@ -66,8 +69,8 @@ bool SameBits(const std::vector<double>& a, const std::vector<double>& b) {
 }
 
 bool SameCommands(const physics::AppliedCommands& a, const physics::AppliedCommands& b) {
-  return a.seq == b.seq && a.source == b.source && SameBits(a.targets, b.targets) &&
-         SameBits(a.kp, b.kp) && SameBits(a.kv, b.kv);
+  return a.seq == b.seq && a.source == b.source && a.raw == b.raw &&
+         SameBits(a.targets, b.targets) && SameBits(a.kp, b.kp) && SameBits(a.kv, b.kv);
 }
 
 // Limits on what a header may declare, so damaged bytes cannot ask for absurd allocations.
@@ -492,6 +495,9 @@ void ChunkEncoder::Add(const physics::StateFrame& f) {
   const bool commands = !tables_.command_groups.empty() && !f.commands.empty();
   if (commands && (!have_commands_ || !SameCommands(f.commands, commands_))) {
     groups |= kGroupCommands;
+    if (std::any_of(f.commands.raw.begin(), f.commands.raw.end(), [](auto r) { return r != 0; })) {
+      groups |= kGroupRaw;
+    }
   }
   Begin(kFrame);
   Put<double>(&out_, f.time);
@@ -528,7 +534,7 @@ void ChunkEncoder::Add(const physics::StateFrame& f) {
     xfrc_ = f.xfrc_applied;
   }
   if (groups & kGroupSensors) PutXor(f.sensordata, &sensordata_prev_);
-  if (groups & kGroupCommands) {  // per group seq and source, then targets, kp, kv
+  if (groups & kGroupCommands) {  // per group seq and source, then targets, kp, kv, raw
     for (std::size_t g = 0; g < f.commands.seq.size(); ++g) {
       Put<std::uint64_t>(&out_, f.commands.seq[g]);
       out_.push_back(static_cast<char>(f.commands.source[g]));
@@ -536,6 +542,9 @@ void ChunkEncoder::Add(const physics::StateFrame& f) {
     PutDoubles(&out_, f.commands.targets);
     PutDoubles(&out_, f.commands.kp);
     PutDoubles(&out_, f.commands.kv);
+    if (groups & kGroupRaw) {
+      for (std::uint8_t r : f.commands.raw) out_.push_back(static_cast<char>(r != 0 ? 1 : 0));
+    }
     commands_ = f.commands;
     have_commands_ = true;
   }
@@ -593,7 +602,8 @@ void ChunkEncoder::Add(const Gap& g) {
 
 // ---- DecodeChunk ----
 
-std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool sensordata) {
+std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool sensordata,
+                                std::uint32_t version) {
   std::vector<Record> records;
   Cursor c(raw, "chunk");
   const auto z = [](int n) { return std::vector<double>(static_cast<std::size_t>(n), 0.0); };
@@ -619,6 +629,10 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
           const auto groups = r.Get<std::uint8_t>();
           if (groups & ~kAllGroups) {
             throw std::runtime_error("unknown frame fields");
+          }
+          if ((groups & kGroupRaw) && version < 3) {
+            throw std::runtime_error("raw flags in a format " + std::to_string(version) +
+                                     " recording (they came with format 3)");
           }
           const auto unxor = [&](std::vector<double>* out, std::vector<double>* prev) {
             r.GetDoubles(out, prev->size());
@@ -668,7 +682,16 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
             r.GetDoubles(&commands.targets, commands.targets.size());
             r.GetDoubles(&commands.kp, commands.kp.size());
             r.GetDoubles(&commands.kv, commands.kv.size());
+            std::fill(commands.raw.begin(), commands.raw.end(), 0);
+            if (groups & kGroupRaw) {
+              for (std::uint8_t& flag : commands.raw) {
+                flag = r.Get<std::uint8_t>();
+                if (flag > 1) throw std::runtime_error("a raw flag that is neither 0 nor 1");
+              }
+            }
             have_commands = true;
+          } else if (groups & kGroupRaw) {
+            throw std::runtime_error("raw flags without command frames");
           }
           f.qfrc_applied = qfrc;
           f.xfrc_applied = xfrc;

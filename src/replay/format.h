@@ -119,7 +119,9 @@ class ChunkEncoder {
   std::vector<double> mocap_pos_, mocap_quat_, qfrc_, xfrc_;
 };
 
-// Decodes one chunk's raw payload. Throws std::runtime_error saying which record is bad.
-std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& tables, bool sensordata);
+// Decodes one chunk's raw payload, written in format `version` (raw flags from format 3). Throws
+// std::runtime_error saying which record is bad.
+std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& tables, bool sensordata,
+                                std::uint32_t version = kRecordingFormatVersion);
 
 }  // namespace urlab::replay::format

@@ -207,7 +207,7 @@ std::vector<Record> RecordingReader::ReadChunk(std::size_t index) const {
   try {
     return format::DecodeChunk(
         format::Decompress(stored, h.codec, h.raw_size, format::kMaxDataChunkRawBytes),
-        info_.tables, info_.sensordata);
+        info_.tables, info_.sensordata, info_.format_version);
   } catch (const std::exception& e) {
     throw RecordingError(Reason::kCorrupt, path_, name + ": " + e.what());
   }

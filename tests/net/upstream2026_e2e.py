@@ -14,7 +14,9 @@ get_contacts' n_contacts; set_qpos by target; set_twist (a silent success withou
 controller); option enums by name; editor operations answered unknown_op; a new hello on the
 same connection drives again at once; the same data from state/full (op state_full, arts).
 Then one server serves a 2026 client and one of ours at once, and a silent 2026 driver loses the
-lease after the timeout.
+lease after the timeout. Last, on the Go2 scene with a launcher: the free bodies of no
+articulation (its projectiles) are entities after the articulation, and their state is under
+`scene` in step replies and state/full.
 Usage: upstream2026_e2e.py URLAB_BINARY SOURCE_DIR
 """
 import math
@@ -276,6 +278,54 @@ def exercise(ctx, a, tmp, art, keyframe, free_base):
     return c
 
 
+def free_bodies(ctx, tmp):
+    """The launcher scene's projectiles in the handshake and under `scene`."""
+    global PROC
+    PROC, a = start_announced(URLAB, os.path.join(SOURCE, "examples", "scenes",
+                                                  "go2_launcher.yaml"),
+                              "--no-cameras", "--files-dir", tmp)
+    try:
+        c = Bridge(a["endpoints"]["rpc"], ctx)
+        sub = ctx.socket(zmq.SUB)
+        sub.setsockopt(zmq.LINGER, 0)
+        sub.setsockopt(zmq.SUBSCRIBE, b"state/full")
+        sub.connect(a["endpoints"]["state"])
+        hello = c.hello(raw_model=True)
+        entities = hello["entities"]
+        check(entities[0]["prefix"] == "dog", f"first entity {entities[0]['prefix']}")
+        bodies = entities[1:]
+        check(len(bodies) == 8, f"{len(bodies)} free bodies, want the launcher's pool of 8")
+        raw = {j["name"]: j for j in hello["raw_joints"]}
+        for i, e in enumerate(bodies):
+            check(e["actor_id"] == i + 1 and e["has_free_base"] is True and
+                  e["qpos_offset"] == 0 and e["qvel_offset"] == 0, f"free body {e}")
+            check(e["prefix"].startswith("cannon_"), f"free body name {e['prefix']}")
+            j = raw.get(e["free_joint"])
+            check(j is not None and j["type"] == 0 and j["body_id"] == e["id"],
+                  f"free joint {e['free_joint']} in raw_joints: {j}")
+        c.call("set_mode", mode="stepped")
+        c.call("set_control_source", source="zmq")
+        shot = c.call("fire_launcher", launcher="cannon")
+        name = bodies[shot["projectile"]]["prefix"]
+        r = c.call("step", n_steps=1)
+        check(set(r["scene"]) == {e["prefix"] for e in bodies}, f"scene keys {sorted(r['scene'])}")
+        s = r["scene"][name]
+        check(len(s["qpos"]) == 7 and len(s["qvel"]) == 6, f"scene[{name}] {s}")
+        check(s["qvel"][0] > 1.0, f"the launched projectile does not move: {s['qvel']}")
+        for _ in range(50):  # the subscription joins
+            r = c.call("step", n_steps=1)
+            if sub.poll(100):
+                break
+        snap = latest_state_full(sub, r["frame_id"])
+        check(snap["scene"][name] == r["scene"][name], "state/full scene differs from step")
+        sub.close(0)
+        c.close()
+        print(f"go2_launcher.yaml: {len(bodies)} free bodies in entities and scene")
+    finally:
+        PROC.terminate()
+        PROC.wait(timeout=30)
+
+
 def main():
     global PROC
     tmp = tempfile.mkdtemp(prefix="urlab_upstream2026_")
@@ -313,6 +363,7 @@ def main():
         finally:
             PROC.terminate()
             PROC.wait(timeout=30)
+    free_bodies(ctx, tmp)
     print("PASS")
 
 

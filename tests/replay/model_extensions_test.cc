@@ -171,7 +171,7 @@ std::string AsFormat1(const std::string& path, const std::string& out) {
   EXPECT_TRUE(info.extensions.empty());
   std::string payload = format::EncodeInfo(info);
   payload.resize(payload.size() - 8);  // the empty extensions section: its length only
-  const std::string key = "\"format_version\":2";
+  const std::string key = "\"format_version\":" + std::to_string(kRecordingFormatVersion);
   const std::size_t at = payload.find(key);
   EXPECT_NE(at, std::string::npos);
   payload.replace(at, key.size(), "\"format_version\":1");
@@ -188,24 +188,27 @@ std::string AsFormat1(const std::string& path, const std::string& out) {
 TEST_F(ModelExtensionsTest, Format1RecordingsAreStillReadAndOthersRefusedByVersion) {
   PhysicsEngine engine(physics::CompileXmlString(kXml));  // no extensions, as format 1 knew
   engine.SetPaused(true);
-  const std::string v2 = RecordRun(engine, "v2.urrec", 100, false);
-  const std::string v1 = AsFormat1(v2, dir_ + "/v1.urrec");
+  const std::string now = RecordRun(engine, "now.urrec", 100, false);
+  const std::string v1 = AsFormat1(now, dir_ + "/v1.urrec");
   const RecordingReader reader = RecordingReader::Open(v1);
   EXPECT_EQ(reader.info().format_version, 1u);
-  EXPECT_EQ(reader.info().model_hash, RecordingReader::Open(v2).info().model_hash);
+  EXPECT_EQ(reader.info().model_hash, RecordingReader::Open(now).info().model_hash);
   const ResimReport r = Resimulate(reader);
   EXPECT_TRUE(r.identical) << r.str();
 
-  std::string bytes = Slurp(v2);
-  bytes[8] = 3;
-  const std::string v3 = dir_ + "/v3.urrec";
-  std::ofstream(v3, std::ios::binary) << bytes;
+  std::string bytes = Slurp(now);
+  const std::uint32_t next = kRecordingFormatVersion + 1;
+  bytes[8] = static_cast<char>(next);
+  const std::string newer = dir_ + "/newer.urrec";
+  std::ofstream(newer, std::ios::binary) << bytes;
   try {
-    RecordingReader::Open(v3);
+    RecordingReader::Open(newer);
     FAIL() << "read a format this build does not know";
   } catch (const RecordingError& e) {
     EXPECT_EQ(e.reason(), RecordingError::Reason::kVersion);
-    EXPECT_NE(std::string(e.what()).find("format version 3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("format version " + std::to_string(next)),
+              std::string::npos)
+        << e.what();
   }
 }
 

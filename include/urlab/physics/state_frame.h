@@ -55,7 +55,10 @@ struct AppliedCommands {
   std::vector<double> kp, kv;        // gain overrides, same layout; NaN: the controller's own
   std::vector<std::uint64_t> seq;    // per group: the applied frame's publication number
   std::vector<std::uint8_t> source;  // per group: the control source it came from
-  // Sized for `layout`: zero targets, NaN gains, zero seq and source.
+  // Per group: 1 when the frame was raw (its targets were the actuators' controls as they are,
+  // the controller did not run: control::CommandFrame::raw), else 0.
+  std::vector<std::uint8_t> raw;
+  // Sized for `layout`: zero targets, NaN gains, zero seq, source and raw.
   static AppliedCommands SizedFor(const std::vector<CommandGroupLayout>& layout);
   bool empty() const { return seq.empty(); }
 };

@@ -17,12 +17,15 @@
 // - data chunks: records in order. Every data chunk normally starts with a full PhysicsState
 //   (a keyframe: seeking restores it), then frames (one per physics step: time, step, qpos,
 //   qvel, act, ctrl, and when they changed the mocap poses and applied forces; sensordata when
-//   recorded), markers where the state jumped (reset, restore, set state, options), the state
+//   recorded; when they changed, the command frames applied, with their raw flags from format 3),
+//   markers where the state jumped (reset, restore, set state, options), the state
 //   right after each jump, changed physics options, and gaps (frames the recorder's ring lost);
 // - an end chunk (totals) once the recording was finished and renamed into place.
 // Format 1 (before the extensions section: three header sections) is still read, as a model
 // without extensions; a recording of a model that had some replays without them (it diverges
-// where they act). Other versions are refused, naming the version.
+// where they act). Format 2 (before the raw flags: its command frames say nothing of
+// control_mode raw) is still read, every frame as not raw; its data chunks are format 3's for a
+// run that never stepped raw. Other versions are refused, naming the version.
 // A recorder writes "NAME.part" and renames it when finished; a crash leaves the .part file with
 // every chunk flushed before it (a chunk spans at most about a second). A truncated or damaged
 // chunk ends the readable prefix: the chunks before it stay readable, and the error names it.
@@ -44,7 +47,7 @@
 namespace urlab::replay {
 
 // The version written; kOldestRecordingFormatVersion..kRecordingFormatVersion are read.
-inline constexpr std::uint32_t kRecordingFormatVersion = 2;
+inline constexpr std::uint32_t kRecordingFormatVersion = 3;
 inline constexpr std::uint32_t kOldestRecordingFormatVersion = 1;
 
 // A file that is not a readable recording (bad magic, unsupported version, damaged or truncated
