@@ -107,8 +107,10 @@ std::uint64_t Batch::episode_steps(int env) const {
 void Batch::ResetEnv(Env& e, std::optional<std::uint64_t> seed) {
   // Randomised: the draw goes into the environment's own model first (nobody steps it now).
   if (options_.randomize) {
-    e.qpos_offsets.clear();
-    options_.randomize(e.index, seed, e.model->get(), &e.qpos_offsets);
+    BatchOptions::Draw draw;
+    options_.randomize(e.index, seed, e.model->get(), &draw);
+    e.qpos_offsets = std::move(draw.qpos_offsets);
+    e.latency.SetNoise(draw.noise);
   }
   // Through the command table like any reset: the core's divergence episode ends, its readers
   // see the discontinuity.

@@ -1,5 +1,7 @@
 #include "urlab/physics/env_latency.h"
 
+#include <cmath>
+
 namespace urlab::physics {
 
 namespace {
@@ -36,7 +38,26 @@ void EnvLatency::RestartControl(const mjData* d) {
   }
 }
 
-void EnvLatency::RestartObservation(const double* row) {
+void EnvLatency::SetNoise(const std::vector<Noise>& noise) {
+  noise_.clear();
+  for (const Noise& n : noise) {
+    if (n.stddev > 0 && !n.observed.empty()) noise_.push_back({n, n.seed});
+  }
+}
+
+void EnvLatency::AddNoise(double* row) {
+  for (NoiseState& n : noise_) {
+    for (int i : n.noise.observed) {  // Box-Muller, u1 in (0, 1] (as ObservationDelay)
+      const double u1 = 1.0 - UnitDouble(&n.state);
+      const double u2 = UnitDouble(&n.state);
+      row[i] += n.noise.stddev * std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+    }
+  }
+}
+
+void EnvLatency::RestartObservation(double* row) {
+  for (NoiseState& n : noise_) n.state = n.noise.seed;
+  AddNoise(row);
   for (Line& o : observation_) {
     o.line.Restart();
     Take(o.index, row, &o.scratch);
@@ -52,6 +73,7 @@ void EnvLatency::ApplyControl(const double* actions, mjData* d) {
 }
 
 void EnvLatency::Observe(double* row) {
+  AddNoise(row);
   for (Line& o : observation_) {
     Take(o.index, row, &o.scratch);
     Put(o.index, o.line.Push(o.scratch), row);

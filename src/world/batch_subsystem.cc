@@ -108,19 +108,22 @@ void BatchSubsystem::BeginPlay(Session& session) {
   timestep_ = m->opt.timestep;
   for (std::size_t i = 0; i < session.articulations().size(); ++i) {
     const Articulation& a = session.articulations()[i];
-    const physics::ArticulationLatency latency = session.Latency(a.name());
-    if (latency.control.empty() && latency.observation.empty()) continue;
-    LatencyTemplate t{.index = i, .latency = latency};
-    for (const physics::ActuatorView& v : a.bindings->actuators().all())
-      t.actuators.push_back(v.id);
+    std::vector<int> observed;
     for (const physics::JointView& j : a.bindings->joints().all()) {
-      for (int k = 0; k < j.qpos_size; ++k) t.observed.push_back(j.qpos_adr + k);
+      for (int k = 0; k < j.qpos_size; ++k) observed.push_back(j.qpos_adr + k);
     }
     for (const physics::JointView& j : a.bindings->joints().all()) {
-      for (int k = 0; k < j.dof_size; ++k) t.observed.push_back(m->nq + j.dof_adr + k);
+      for (int k = 0; k < j.dof_size; ++k) observed.push_back(m->nq + j.dof_adr + k);
     }
     for (const physics::SensorView& v : a.bindings->sensors().all()) {
-      for (int k = 0; k < v.dim; ++k) t.observed.push_back(m->nq + m->nv + v.adr + k);
+      for (int k = 0; k < v.dim; ++k) observed.push_back(m->nq + m->nv + v.adr + k);
+    }
+    observed_.push_back(observed);
+    const physics::ArticulationLatency latency = session.Latency(a.name());
+    if (latency.control.empty() && latency.observation.empty()) continue;
+    LatencyTemplate t{.index = i, .latency = latency, .observed = std::move(observed)};
+    for (const physics::ActuatorView& v : a.bindings->actuators().all()) {
+      t.actuators.push_back(v.id);
     }
     latency_.push_back(std::move(t));
   }
@@ -137,8 +140,8 @@ void BatchSubsystem::BeginPlay(Session& session) {
       draws_.push_back({options_.seed + static_cast<std::uint64_t>(w), 0});
     }
     batch_options_.randomize = [this](int j, std::optional<std::uint64_t> seed, mjModel* model,
-                                      std::vector<std::pair<int, double>>* offsets) {
-      Draw(Wire(j), seed, model, offsets);
+                                      physics::BatchOptions::Draw* draw) {
+      Draw(Wire(j), seed, model, draw);
     };
   }
   if (options_.envs > 1) {
@@ -210,27 +213,37 @@ bool BatchSubsystem::Diverged(const mjModel* m, const mjData* d) {
 }
 
 void BatchSubsystem::Draw(int env, std::optional<std::uint64_t> seed, mjModel* m,
-                          std::vector<std::pair<int, double>>* offsets) {
+                          physics::BatchOptions::Draw* draw) {
   // Environment `env` draws its n-th randomised reset from Randomizer::ResetSeed(base, n): base
   // is the run's seed + env until a reset gives a seed (batch_reset), which becomes the base.
   Stream& s = draws_[static_cast<std::size_t>(env)];
   if (seed) s = {*seed, 0};
   // No controller runs on a batch's actions (raw controls): the PD gains stay as they are.
-  Randomizer::Applied applied =
-      randomizer_->Apply(randomize_, Randomizer::ResetSeed(s.base, s.n++), m, false);
-  *offsets = std::move(applied.qpos_offsets);
+  const std::uint64_t draw_seed = Randomizer::ResetSeed(s.base, s.n++);
+  Randomizer::Applied applied = randomizer_->Apply(randomize_, draw_seed, m, false);
+  draw->qpos_offsets = std::move(applied.qpos_offsets);
+  // obs_noise: on the articulation's entries of the observation row, its stream derived from
+  // the draw's seed and the articulation (as Session::ResetRandomized seeds it).
+  draw->noise.clear();
+  for (const auto& [target, stddev] : applied.obs_noise) {
+    for (std::size_t i = 0; i < observed_.size(); ++i) {
+      if (session_->articulations()[i].name() != target) continue;
+      draw->noise.push_back({observed_[i], stddev, physics::DeriveSeed(draw_seed, 1000 + i)});
+    }
+  }
 }
 
 void BatchSubsystem::ResetEnv0(const mjModel* m, mjData* d, std::optional<std::uint64_t> seed) {
   if (seed) env0_rng_.seed(*seed);
-  std::vector<std::pair<int, double>> offsets;
+  physics::BatchOptions::Draw draw;
   if (randomizer_) {
     // The engine's own model: this runs as one of its commands (or StepHere), with the step
     // mutex held, as Session::ResetRandomized writes it under WithLockedData.
-    Draw(options_.engine_env, seed, const_cast<mjModel*>(m), &offsets);
+    Draw(options_.engine_env, seed, const_cast<mjModel*>(m), &draw);
+    env0_latency_.SetNoise(draw.noise);
   }
   physics::ResetBatchState(batch_options_, env0_rng_, m, d);
-  for (const auto& [adr, offset] : offsets) d->qpos[adr] += offset;
+  for (const auto& [adr, offset] : draw.qpos_offsets) d->qpos[adr] += offset;
   env0_steps_ = 0;
   env0_diverged_ = false;
   RestartEnv0Latency(d);

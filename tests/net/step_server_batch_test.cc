@@ -356,7 +356,8 @@ TEST_F(StepServerBatchTest, RandomizeDrawsAModelForEachEnvironmentAtEachReset) {
   const std::string scene =
       "seed: 3\narticulations:\n  - {name: pend, mjcf: pendulum.xml}\n"
       "randomize:\n  pend:\n    mass: {uniform: [0.5, 2.0]}\n"
-      "    damping: {uniform: [0.2, 3.0]}\n    qpos_noise: {uniform: [-0.2, 0.2]}\n";
+      "    damping: {uniform: [0.2, 3.0]}\n    qpos_noise: {uniform: [-0.2, 0.2]}\n"
+      "    obs_noise: {uniform: [0.01, 0.05]}\n";
   const auto batched = DriveRun(dir_, scene, 3, 30, 3);
   EXPECT_NE(Rows(batched, 1), Rows(batched, 0));
   EXPECT_NE(Rows(batched, 2), Rows(batched, 1));
@@ -384,6 +385,9 @@ TEST_F(StepServerBatchTest, RandomizeDrawsAModelForEachEnvironmentAtEachReset) {
   };
   const auto first = run({{"seeds", {11, 12, 11}}});
   EXPECT_EQ(Rows(first, 0), Rows(first, 2));  // seed 11 in environments 0 and 2
+  for (int env = 0; env < 3; ++env) {
+    EXPECT_NE(first[0][3 * env + 1], 0.0);  // at rest after the reset, observed with noise
+  }
   EXPECT_NE(Rows(first, 0), Rows(first, 1));
   const auto again = run({{"seeds", {12, 11, 11}}});
   EXPECT_EQ(Rows(again, 1), Rows(first, 0));  // seed 11 now in environment 1

@@ -70,9 +70,12 @@ struct BatchOptions {
   // noise; `seed` is the reset's seed when it was given one (Reset). Called by the thread that
   // resets the environment (the owner; a worker for an auto-reset), never for one environment
   // on two threads at once.
-  std::function<void(int env, std::optional<std::uint64_t> seed, mjModel* m,
-                     std::vector<std::pair<int, double>>* qpos_offsets)>
-      randomize;
+  // The draw may also set the observation noise of the episode (EnvLatency::Noise).
+  struct Draw {
+    std::vector<std::pair<int, double>> qpos_offsets;
+    std::vector<EnvLatency::Noise> noise;
+  };
+  std::function<void(int env, std::optional<std::uint64_t> seed, mjModel* m, Draw* draw)> randomize;
 };
 
 // The state an environment resets to: options.reset_state (or the keyframe, or the default

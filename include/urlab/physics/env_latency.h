@@ -18,6 +18,7 @@
 // Threading: none of its own; the thread stepping the environment, one at a time.
 #include <mujoco/mujoco.h>
 
+#include <cstdint>
 #include <vector>
 
 #include "urlab/physics/delay_line.h"
@@ -31,18 +32,32 @@ class EnvLatency {
     std::vector<int> observed;   // indices into the observation row
     DelaySpec control, observation;
   };
+  // Observation noise (a randomised `obs_noise`): Gaussian noise of standard deviation `stddev`
+  // added to the entries `observed` of every row that enters (the reset's and each step's,
+  // before its delay: a delayed value carries the noise of its measurement), drawn from `seed`
+  // (restarted with the observation lines), as ObservationDelay adds it.
+  struct Noise {
+    std::vector<int> observed;
+    double stddev = 0;
+    std::uint64_t seed = 0;
+  };
   // Sets the groups (inactive ones are dropped) and restarts nothing: call Restart before the
   // first step.
   void Configure(const std::vector<Group>& groups);
+  // Replaces the noise (entries of 0 are dropped); takes effect at the next RestartObservation.
+  void SetNoise(const std::vector<Noise>& noise);
   bool controls_delayed() const { return !control_.empty(); }
-  bool observations_delayed() const { return !observation_.empty(); }
-  // After a reset: `d` as the reset left it, `row` its observation row (both halves below).
-  void Restart(const mjData* d, const double* row) {
+  // True when observations are delayed or carry noise (the observed row differs from the state).
+  bool observations_delayed() const { return !observation_.empty() || !noise_.empty(); }
+  // After a reset: `d` as the reset left it, `row` its observation row, turned into the
+  // observed one in place (both halves below).
+  void Restart(const mjData* d, double* row) {
     RestartControl(d);
     RestartObservation(row);
   }
-  void RestartControl(const mjData* d);        // restarts and primes the control lines
-  void RestartObservation(const double* row);  // restarts the observation lines from `row`
+  void RestartControl(const mjData* d);  // restarts and primes the control lines
+  // Restarts the observation lines and the noise from `row` (tick 0), observed in place.
+  void RestartObservation(double* row);
   // Before a step: `actions` (the environment's action row) through the control lines into
   // d->ctrl (only the delayed groups' actuators are written).
   void ApplyControl(const double* actions, mjData* d);
@@ -55,7 +70,13 @@ class EnvLatency {
     DelayLine<std::vector<double>> line;
     std::vector<double> scratch;
   };
+  struct NoiseState {
+    Noise noise;
+    std::uint64_t state = 0;
+  };
+  void AddNoise(double* row);
   std::vector<Line> control_, observation_;
+  std::vector<NoiseState> noise_;
 };
 
 }  // namespace urlab::physics

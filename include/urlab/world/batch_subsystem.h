@@ -162,7 +162,7 @@ class BatchSubsystem : public Subsystem {
   // Domain randomisation: environment `env`'s next draw into `m` (its own model; the engine's
   // for environment 0), its position offsets in *offsets.
   void Draw(int env, std::optional<std::uint64_t> seed, mjModel* m,
-            std::vector<std::pair<int, double>>* offsets);
+            physics::BatchOptions::Draw* draw);
   // Environment 0's observed row after a step (`stepped`), or its reset state as tick 0.
   void ObserveEnv0(const mjModel* m, const mjData* d, bool stepped);
   static void TrueRow(const mjModel* m, const mjData* d, double* row);
@@ -186,9 +186,10 @@ class BatchSubsystem : public Subsystem {
   struct LatencyTemplate {
     std::size_t index = 0;  // the articulation's index (its seed stream)
     physics::ArticulationLatency latency;
-    std::vector<int> actuators, observed;
+    std::vector<int> observed, actuators;
   };
   std::vector<LatencyTemplate> latency_;
+  std::vector<std::vector<int>> observed_;  // per articulation: its observation row entries
   // Domain randomisation (null: none): each environment's stream of draws, touched only by the
   // thread resetting it (the iterating thread; the main thread in BeginPlay).
   struct Stream {
