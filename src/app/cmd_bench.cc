@@ -207,7 +207,10 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
       "shm_rtt_p50_us, zmq_python_n1, shm_python_n1), then a batched server (urlab run --envs N "
       "--threads 2, its own process) through the Python vector env at N = 1, 16, 64, 256 "
       "(batchN_python_ratio, batchN_server_ratio, batchN_server_env_steps_per_s; "
-      "batch64_ratio, python_overhead64 = 1 - Python rate / the server's own batched rate).");
+      "batch64_ratio, python_overhead64 = 1 - Python rate / the server's own batched rate), "
+      "beside parallel_ceiling (2 plain threads, each stepping its own mjData with no "
+      "synchronisation, over the bare loop: what 2 cores give at all) and batch64_of_ceiling "
+      "(the Python rate at N = 64 over that ceiling, same round).");
   static net::FleetBenchOptions fleet_args;
   static std::string fleet_scene;
 #ifdef URLAB_PYTHON_CLIENT_DIR

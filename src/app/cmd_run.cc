@@ -134,19 +134,6 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
                 ": several environments are driven through the step server, and the network is "
                 "off here");
   }
-  if (args.envs > 1) {
-    // Emulated latency and domain randomisation live in the engine's session: the environments
-    // of the batch would run without them, so such a scene is refused rather than half-served.
-    const std::string why = ": applies to the engine's own simulation only, and --envs " +
-                            std::to_string(args.envs) +
-                            " steps the others without it; remove it, or run without --envs";
-    for (const world::ArticulationConfig& a : scene.articulations) {
-      if (!a.latency.control.empty() || !a.latency.observation.empty()) {
-        throw InputError(a.where, "articulation '" + a.name + "': latency" + why);
-      }
-    }
-    if (!scene.randomize.empty()) throw InputError(scene.randomize_where, "randomize" + why);
-  }
   if (args.no_network || !scene.network.enabled) NetworkSourcesToUi(scene);
   if (!args.announce.empty()) {
     CheckOutputs({{args.announce, "--announce"}}, world::SceneInputFiles(scene));

@@ -4,7 +4,8 @@
 // per second through Python, the server's own rate (its physics thread's time on batch steps,
 // batch_info's busy_seconds), and their ratios to the bare single-thread loop of the same run.
 // batch64_ratio is the Python rate at N = 64 over the bare loop; python_overhead64 is
-// 1 - Python rate / server rate at N = 64.
+// 1 - Python rate / server rate at N = 64; batch64_of_ceiling is the Python rate at N = 64 over
+// the same round's rate of 2 independent threads stepping their own copies (CeilingRate).
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -225,15 +226,17 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
     ctx.Report("no Python client (--python-client): batched figures left out");
     return;
   }
-  constexpr int kThreads = 2;
+  constexpr int kThreads = kFleetBatchThreads;
   for (const int envs : {1, 16, 64, 256}) {
     BatchServer server(ctx.scene_path, envs, kThreads);
     // About as many environment steps per round as the other figures' steps.
     const int steps = std::clamp(ctx.steps_per_round() / envs * 4, 30, 4000);
     // Round by round: the bare loop, then the Python client; ratios to that round's bare rate.
-    std::vector<double> python_ratios, server_ratios, server_rates, overheads;
+    std::vector<double> python_ratios, server_ratios, server_rates, overheads, of_ceiling;
     for (int round = 0; round < o.rounds; ++round) {
       const double bare = ctx.BareRate(ctx.steps_per_round());
+      // At N = 64, also what the threads give at all in this round (CeilingRate).
+      const double ceiling = envs == 64 ? ctx.CeilingRate(kThreads, ctx.steps_per_round()) : 0;
       int status = 0;
       const std::string text = RunCaptured(
           {o.python, "-c", kBatchScript, o.python_client, server.rpc(), std::to_string(steps)},
@@ -246,6 +249,7 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
       server_ratios.push_back(server_rate / bare);
       server_rates.push_back(server_rate);
       overheads.push_back(1 - rate / server_rate);
+      if (ceiling > 0) of_ceiling.push_back(rate / ceiling);
     }
     const double ratio = Median(python_ratios);
     const std::string n = std::to_string(envs);
@@ -260,6 +264,11 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
     if (envs == 64) {
       out->push_back({"batch64_ratio", ratio});
       out->push_back({"python_overhead64", Median(overheads)});
+      out->push_back({"batch64_of_ceiling", Median(of_ceiling)});
+      ctx.Report(
+          Format("batched server, 64 envs: %.3f of %d independent threads' rate (the "
+                 "ceiling)",
+                 Median(of_ceiling), kThreads));
     }
   }
 }

@@ -315,6 +315,29 @@ double FleetContext::BareRate(int steps) {
   return steps / std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+double FleetContext::CeilingRate(int threads, int steps) {
+  std::vector<physics::DataPtr> datas;
+  for (int k = 0; k < threads; ++k) {
+    datas.push_back(physics::MakeData(m_));
+    mj_copyData(datas.back().get(), m_, d_);
+  }
+  std::atomic<bool> go{false};
+  std::vector<std::thread> workers;
+  for (int k = 0; k < threads; ++k) {
+    workers.emplace_back([&, k] {
+      while (!go.load(std::memory_order_acquire)) std::this_thread::yield();
+      mjData* d = datas[static_cast<std::size_t>(k)].get();
+      for (int i = 0; i < steps; ++i) mj_step(m_, d);
+    });
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(5));  // the threads reach the start
+  const auto t0 = Clock::now();
+  go.store(true, std::memory_order_release);
+  for (std::thread& t : workers) t.join();
+  const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  return static_cast<double>(threads) * steps / seconds;
+}
+
 double FleetContext::MedianRatio(const std::function<double()>& measure) {
   std::vector<double> ratios;
   for (int round = 0; round < options_.rounds; ++round) {
@@ -333,6 +356,19 @@ std::vector<std::pair<std::string, FigureProducer>> FleetFigureProducers() {
            rates.push_back(ctx.BareRate(ctx.steps_per_round()));
          }
          out->push_back({"bare_steps_per_s", Median(rates)});
+       }},
+      {"ceiling",
+       [](FleetContext& ctx, std::vector<FleetFigure>* out) {
+         // What kFleetBatchThreads cores give at all: independent threads over the bare loop.
+         const int k = kFleetBatchThreads;
+         const double ratio =
+             ctx.MedianRatio([&] { return ctx.CeilingRate(k, ctx.steps_per_round()); });
+         out->push_back({"parallel_ceiling", ratio});
+         ctx.Report(
+             Format("%d independent threads, each its own mjData, no synchronisation: "
+                    "%.3f of the bare single-thread loop (the ceiling of a batch on %d "
+                    "threads)",
+                    k, ratio, k));
        }},
       {"raw", RawFigures},
       {"zmq",

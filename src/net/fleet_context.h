@@ -34,6 +34,11 @@ class FleetContext {
 
   // Steps per second of `steps` bare mj_step calls (continuing from the bare copy's state).
   double BareRate(int steps);
+  // Aggregate steps per second of `threads` plain threads, each stepping `steps` times its own
+  // copy of the bare copy's state (its own mjData, the shared model only read), with no
+  // synchronisation between them (one start signal; the wall time runs from it to the last
+  // thread's end): what the machine's cores give at all, with no batch around them.
+  double CeilingRate(int threads, int steps);
   // Median over rounds of measure() / BareRate measured just before it (each round).
   double MedianRatio(const std::function<double()>& measure);
   void Report(const std::string& line) const {
@@ -47,6 +52,9 @@ class FleetContext {
   const mjModel* m_;
   mjData* d_;
 };
+
+// The stepping threads of the batched server's figures and of the ceiling.
+constexpr int kFleetBatchThreads = 2;
 
 // The batched server's figures (fleet_batch_bench.cc).
 void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out);

@@ -1050,8 +1050,9 @@ bool StepServer::StepHere(int n) {
   // reply waiting for a command must not be overtaken.
   physics::PhysicsEngine& engine = session_.engine();
   const double budget = std::chrono::duration<double>(kMaxStepHere).count();
-  const bool short_window = sync_step_seconds_ > 0 ? n * sync_step_seconds_ <= budget : n == 1;
-  if (!short_window || !pending_.empty() || !engine.paused()) return false;
+  if (!pending_.empty() || !engine.paused() || !sync_step_cost_.Affordable(n, budget)) {
+    return false;
+  }
   const auto start = Clock::now();
   try {
     engine.StepSync(n);
@@ -1059,9 +1060,7 @@ bool StepServer::StepHere(int n) {
     if (!engine.paused()) return false;  // the loop was unpaused meanwhile: it steps instead
     Fail("bad_value", e.what());
   }
-  const double per_step = std::chrono::duration<double>(Clock::now() - start).count() / n;
-  sync_step_seconds_ =
-      sync_step_seconds_ > 0 ? 0.8 * sync_step_seconds_ + 0.2 * per_step : per_step;
+  sync_step_cost_.Measured(std::chrono::duration<double>(Clock::now() - start).count() / n);
   return true;
 }
 

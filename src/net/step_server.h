@@ -43,6 +43,7 @@
 #include "net/network_files.h"
 #include "net/observation.h"
 #include "net/shm_transport.h"
+#include "net/step_cost.h"
 #include "net/topic_table.h"
 #include "urlab/ops/replay_sessions.h"
 #include "urlab/physics/state_frame.h"
@@ -277,12 +278,12 @@ class StepServer {
   // replies wait for commands, or while the loop runs: the physics thread steps it then.
   bool StepHere(int n);
   static constexpr auto kMaxStepHere = std::chrono::microseconds(2000);
-  double sync_step_seconds_ = 0;  // measured wall seconds per step of StepHere windows
+  StepCostEstimate sync_step_cost_;  // wall seconds per step of StepHere windows
   // A batch step, like StepHere: on this thread and the batch's workers (the physics thread
   // sleeps), for a window up to kMaxBatchHere at the measured cost; false: nothing done.
   bool BatchStepHere(world::BatchSubsystem& b, const std::shared_ptr<world::BatchStepJob>& job);
   static constexpr auto kMaxBatchHere = std::chrono::milliseconds(25);
-  double batch_step_seconds_ = 0;  // measured wall seconds per step of BatchStepHere windows
+  StepCostEstimate batch_step_cost_;  // wall seconds per step of batch windows (either thread)
   Outcome PuppetStep(Request& r);
   Outcome Reset(Request& r);
   Outcome Forward(Request& r);

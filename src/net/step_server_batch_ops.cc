@@ -199,9 +199,12 @@ StepServer::Outcome StepServer::BatchStep(Request& r) {
   }
   Outcome out;
   out.reply = Json{{"op", "batch_step_ok"}, {"envs", b.envs()}};
-  if (!BatchStepHere(b, job)) out.wait_for = b.SubmitStep(job, &out.steps);
-  out.on_applied = [this, job](Json& reply) {
+  const bool here = BatchStepHere(b, job);
+  if (!here) out.wait_for = b.SubmitStep(job, &out.steps);
+  out.on_applied = [this, job, here](Json& reply) {
     if (!job->out.complete) Fail("cancelled", "the batch step did not complete");
+    // The physics thread's windows teach the estimate too (their wall time on that thread).
+    if (!here) batch_step_cost_.Measured(job->out.seconds / job->n);
     batch_->NoteCompleted(job->out);
     AddResult(reply, job->out);
   };
@@ -213,17 +216,13 @@ bool StepServer::BatchStepHere(world::BatchSubsystem& b,
   // Like StepHere: only with nothing queued before it (a reply waiting for a command must not be
   // overtaken), and only a window this thread can afford at the measured cost per step.
   const double budget = std::chrono::duration<double>(kMaxBatchHere).count();
-  const bool affordable =
-      batch_step_seconds_ > 0 ? job->n * batch_step_seconds_ <= budget : job->n == 1;
-  if (!affordable || !pending_.empty()) return false;
+  if (!pending_.empty() || !batch_step_cost_.Affordable(job->n, budget)) return false;
   try {
     if (!b.StepHere(job)) return false;
   } catch (const std::exception& e) {
     Fail("bad_value", e.what());
   }
-  const double per_step = job->out.seconds / job->n;
-  batch_step_seconds_ =
-      batch_step_seconds_ > 0 ? 0.8 * batch_step_seconds_ + 0.2 * per_step : per_step;
+  batch_step_cost_.Measured(job->out.seconds / job->n);
   return true;
 }
 

@@ -11,14 +11,20 @@
 namespace urlab::physics {
 
 struct Batch::Env {
-  explicit Env(std::shared_ptr<Model> model)
-      : core(std::move(model),
+  explicit Env(std::shared_ptr<Model> m)
+      : model(m),
+        core(std::move(m),
              StepCore::Options{.reset_on_divergence = false, .log_command_failures = false}) {
     core.SetEventSink([this](const EngineEvent& e) {
       if (e.kind == EngineEventKind::kDivergence) diverged = true;
     });
   }
+  std::shared_ptr<Model> model;  // shared, or its own when randomising
   StepCore core;
+  int index = 0;
+  std::vector<std::pair<int, double>> qpos_offsets;  // the last draw's
+  EnvLatency latency;
+  std::vector<double> observed;  // the observed row, when its observations are delayed
   std::mt19937_64 rng;
   std::uint64_t episode_steps = 0;
   bool diverged = false;  // since the last reset
@@ -71,7 +77,12 @@ Batch::Batch(const Model& model, BatchOptions options) : options_(options) {
   if (options.max_episode_steps < 0) throw Error("batch: max_episode_steps must be 0 or more");
   model_ = std::make_shared<Model>(model.Copy());
   envs_.reserve(static_cast<std::size_t>(options.envs));
-  for (int i = 0; i < options.envs; ++i) envs_.push_back(std::make_unique<Env>(model_));
+  for (int i = 0; i < options.envs; ++i) {
+    envs_.push_back(
+        std::make_unique<Env>(options.randomize ? std::make_shared<Model>(model.Copy()) : model_));
+    envs_.back()->index = i;
+    if (options.latency) envs_.back()->latency.Configure(options.latency(i));
+  }
   int threads = options.threads;
   if (threads == 0) threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   part_ = [this](int) { StepPart(); };
@@ -93,14 +104,25 @@ std::uint64_t Batch::episode_steps(int env) const {
   return envs_[static_cast<std::size_t>(env)]->episode_steps;
 }
 
-void Batch::ResetEnv(Env& e) {
+void Batch::ResetEnv(Env& e, std::optional<std::uint64_t> seed) {
+  // Randomised: the draw goes into the environment's own model first (nobody steps it now).
+  if (options_.randomize) {
+    BatchOptions::Draw draw;
+    options_.randomize(e.index, seed, e.model->get(), &draw);
+    e.qpos_offsets = std::move(draw.qpos_offsets);
+    e.latency.SetNoise(draw.noise);
+  }
   // Through the command table like any reset: the core's divergence episode ends, its readers
   // see the discontinuity.
-  e.core.commands().Push(cmd::ResetCustom{
-      [this, &e](const mjModel* m, mjData* d) { ResetBatchState(options_, e.rng, m, d); },
-      "batch reset"});
+  e.core.commands().Push(cmd::ResetCustom{[this, &e](const mjModel* m, mjData* d) {
+                                            ResetBatchState(options_, e.rng, m, d);
+                                            for (const auto& [adr, offset] : e.qpos_offsets)
+                                              d->qpos[adr] += offset;
+                                          },
+                                          "batch reset"});
   e.core.SetPaused(false);  // clears an error latch
   e.core.ApplyPending();
+  RestartLatency(e);
   e.episode_steps = 0;
   e.diverged = false;
 }
@@ -109,7 +131,7 @@ void Batch::Reset(int env, std::optional<std::uint64_t> seed) {
   if (env < 0 || env >= envs()) throw Error("batch: no environment " + std::to_string(env));
   Env& e = *envs_[static_cast<std::size_t>(env)];
   if (seed) e.rng.seed(*seed);
-  ResetEnv(e);
+  ResetEnv(e, seed);
 }
 
 void Batch::ResetAll(std::optional<std::uint64_t> seed) {
@@ -119,7 +141,22 @@ void Batch::ResetAll(std::optional<std::uint64_t> seed) {
   }
 }
 
+void Batch::RestartLatency(Env& e) {
+  if (!e.latency.controls_delayed() && !e.latency.observations_delayed()) return;
+  e.observed.resize(static_cast<std::size_t>(observation_size()));
+  ObserveTrue(e, e.observed.data());
+  e.latency.Restart(e.core.data(), e.observed.data());
+}
+
 void Batch::ObserveEnv(const Env& e, double* out) const {
+  if (e.latency.observations_delayed()) {
+    mju_copy(out, e.observed.data(), observation_size());
+    return;
+  }
+  ObserveTrue(e, out);
+}
+
+void Batch::ObserveTrue(const Env& e, double* out) const {
   const mjModel* m = model();
   const mjData* d = e.core.data();
   mju_copy(out, d->qpos, m->nq);
@@ -138,7 +175,23 @@ bool Batch::diverged(int env) const {
   return e.diverged || e.core.error_latched();
 }
 
-void Batch::SetPhysicsOptions(const mjOption& opt) { model_->get()->opt = opt; }
+void Batch::SetPhysicsOptions(const mjOption& opt, bool keep_gravity) {
+  const auto set = [&](mjModel* m) {
+    mjtNum gravity[3];
+    mju_copy3(gravity, m->opt.gravity);
+    m->opt = opt;
+    if (keep_gravity) mju_copy3(m->opt.gravity, gravity);
+  };
+  set(model_->get());
+  if (options_.randomize) {
+    for (auto& e : envs_) set(e->model->get());
+  }
+}
+
+const mjModel* Batch::model(int env) const {
+  if (env < 0 || env >= envs()) throw Error("batch: no environment " + std::to_string(env));
+  return envs_[static_cast<std::size_t>(env)]->model->get();
+}
 
 void Batch::Observe(std::span<double> observations) const {
   const std::size_t row = static_cast<std::size_t>(observation_size());
@@ -159,8 +212,13 @@ void Batch::StepEnv(Env& e, const double* action, double* obs, std::uint8_t* don
   }
   mjData* d = e.core.data();
   mju_copy(d->ctrl, action, model()->nu);
+  if (e.latency.controls_delayed()) e.latency.ApplyControl(action, d);
   try {
     e.core.Advance({.force_step = true, .honour_error_latch = false});
+    if (e.latency.observations_delayed()) {
+      ObserveTrue(e, e.observed.data());
+      e.latency.Observe(e.observed.data());
+    }
   } catch (const std::exception& ex) {
     e.core.Fail(ex);
     e.error = ex.what();

@@ -8,7 +8,9 @@
 
 #include "urlab/control/articulation_control.h"
 #include "urlab/core/error.h"
+#include "urlab/physics/latency.h"
 #include "urlab/world/session.h"
+#include "world/randomizer.h"
 
 namespace urlab::world {
 
@@ -32,6 +34,28 @@ void AddSeconds(std::atomic<double>& to, double s) {
 }
 
 }  // namespace
+
+std::vector<physics::EnvLatency::Group> BatchSubsystem::LatencyGroups(int env) const {
+  // Environment `env` draws its jitter from the run's latency seed + env (environment 0: the
+  // seed itself, as the single-environment run), each articulation's channel from its own stream
+  // (physics::LatencySeed, as Session::SetLatency).
+  std::vector<physics::EnvLatency::Group> groups;
+  const std::uint64_t seed = latency_seed_ + static_cast<std::uint64_t>(env);
+  for (const LatencyTemplate& t : latency_) {
+    using physics::LatencyChannel;
+    physics::EnvLatency::Group g;
+    g.actuators = t.actuators;
+    g.observed = t.observed;
+    g.control =
+        physics::ResolveLatency(t.latency.control, timestep_,
+                                physics::LatencySeed(seed, t.index, LatencyChannel::kControl));
+    g.observation =
+        physics::ResolveLatency(t.latency.observation, timestep_,
+                                physics::LatencySeed(seed, t.index, LatencyChannel::kObservation));
+    groups.push_back(std::move(g));
+  }
+  return groups;
+}
 
 BatchSubsystem::BatchSubsystem(BatchSubsystemOptions options) : options_(options) {
   if (options_.envs < 1) {
@@ -78,6 +102,48 @@ void BatchSubsystem::BeginPlay(Session& session) {
     mj_resetData(model, d);
     for (const auto& [control, key] : keys) control->ResetToKeyframe(model, d, key);
   };
+  // Emulated latency (the scene's `latency:`, as set when play began): per articulation, its
+  // actuators and the entries of the observation row that are its state.
+  latency_seed_ = session.latency_seed();
+  timestep_ = m->opt.timestep;
+  for (std::size_t i = 0; i < session.articulations().size(); ++i) {
+    const Articulation& a = session.articulations()[i];
+    std::vector<int> observed;
+    for (const physics::JointView& j : a.bindings->joints().all()) {
+      for (int k = 0; k < j.qpos_size; ++k) observed.push_back(j.qpos_adr + k);
+    }
+    for (const physics::JointView& j : a.bindings->joints().all()) {
+      for (int k = 0; k < j.dof_size; ++k) observed.push_back(m->nq + j.dof_adr + k);
+    }
+    for (const physics::SensorView& v : a.bindings->sensors().all()) {
+      for (int k = 0; k < v.dim; ++k) observed.push_back(m->nq + m->nv + v.adr + k);
+    }
+    observed_.push_back(observed);
+    const physics::ArticulationLatency latency = session.Latency(a.name());
+    if (latency.control.empty() && latency.observation.empty()) continue;
+    LatencyTemplate t{.index = i, .latency = latency, .observed = std::move(observed)};
+    for (const physics::ActuatorView& v : a.bindings->actuators().all()) {
+      t.actuators.push_back(v.id);
+    }
+    latency_.push_back(std::move(t));
+  }
+  if (!latency_.empty()) {
+    batch_options_.latency = [this](int j) { return LatencyGroups(Wire(j)); };
+  }
+  // Domain randomisation (the scene's `randomize:`): every environment draws into a model of its
+  // own at each of its resets, from a stream of its own (Draw).
+  if (session.randomizes()) {
+    randomizer_ = session.randomizer();
+    randomize_ = session.scene_config().randomize;
+    randomize_gravity_ = !randomize_.gravity.empty();
+    for (int w = 0; w < options_.envs; ++w) {
+      draws_.push_back({options_.seed + static_cast<std::uint64_t>(w), 0});
+    }
+    batch_options_.randomize = [this](int j, std::optional<std::uint64_t> seed, mjModel* model,
+                                      physics::BatchOptions::Draw* draw) {
+      Draw(Wire(j), seed, model, draw);
+    };
+  }
   if (options_.envs > 1) {
     others_ = std::make_unique<physics::Batch>(engine.owned_model(), batch_options_);
     for (int j = 0; j < others_->envs(); ++j) others_->Reset(j, options_.seed + Wire(j));
@@ -88,10 +154,14 @@ void BatchSubsystem::BeginPlay(Session& session) {
   iteration_done_.assign(others, 0);
   ended_.assign(static_cast<std::size_t>(options_.envs), 0);
   env0_rng_.seed(options_.seed + static_cast<std::uint64_t>(options_.engine_env));
-  if (options_.reset_noise > 0) {
-    // Environment 0 starts like the others: the initial state plus its first noise.
+  env0_latency_.Configure(LatencyGroups(options_.engine_env));
+  if (options_.reset_noise > 0 || randomizer_) {
+    // Environment 0 starts like the others: the initial state plus its first noise and its first
+    // draw (the session's own first draw came from the same stream: it is drawn again).
     engine.ResetWith([this](const mjModel* model, mjData* d) { ResetEnv0(model, d, std::nullopt); },
                      "batch reset (environment 0)");
+  } else if (!latency_.empty()) {
+    engine.WithLockedData([this](mjModel*, mjData* d) { RestartEnv0Latency(d); });
   }
   control::ControlSystem* controls = &session.controls();
   physics::PhysicsEngine* e = &engine;
@@ -142,17 +212,80 @@ bool BatchSubsystem::Diverged(const mjModel* m, const mjData* d) {
   return AnyBad(d->qpos, m->nq) || AnyBad(d->qvel, m->nv) || AnyBad(d->qacc, m->nv);
 }
 
+void BatchSubsystem::Draw(int env, std::optional<std::uint64_t> seed, mjModel* m,
+                          physics::BatchOptions::Draw* draw) {
+  // Environment `env` draws its n-th randomised reset from Randomizer::ResetSeed(base, n): base
+  // is the run's seed + env until a reset gives a seed (batch_reset), which becomes the base.
+  Stream& s = draws_[static_cast<std::size_t>(env)];
+  if (seed) s = {*seed, 0};
+  // No controller runs on a batch's actions (raw controls): the PD gains stay as they are.
+  const std::uint64_t draw_seed = Randomizer::ResetSeed(s.base, s.n++);
+  Randomizer::Applied applied = randomizer_->Apply(randomize_, draw_seed, m, false);
+  draw->qpos_offsets = std::move(applied.qpos_offsets);
+  // obs_noise: on the articulation's entries of the observation row, its stream derived from
+  // the draw's seed and the articulation (as Session::ResetRandomized seeds it).
+  draw->noise.clear();
+  for (const auto& [target, stddev] : applied.obs_noise) {
+    for (std::size_t i = 0; i < observed_.size(); ++i) {
+      if (session_->articulations()[i].name() != target) continue;
+      draw->noise.push_back({observed_[i], stddev, physics::DeriveSeed(draw_seed, 1000 + i)});
+    }
+  }
+}
+
 void BatchSubsystem::ResetEnv0(const mjModel* m, mjData* d, std::optional<std::uint64_t> seed) {
   if (seed) env0_rng_.seed(*seed);
+  physics::BatchOptions::Draw draw;
+  if (randomizer_) {
+    // The engine's own model: this runs as one of its commands (or StepHere), with the step
+    // mutex held, as Session::ResetRandomized writes it under WithLockedData.
+    Draw(options_.engine_env, seed, const_cast<mjModel*>(m), &draw);
+    env0_latency_.SetNoise(draw.noise);
+  }
   physics::ResetBatchState(batch_options_, env0_rng_, m, d);
+  for (const auto& [adr, offset] : draw.qpos_offsets) d->qpos[adr] += offset;
   env0_steps_ = 0;
   env0_diverged_ = false;
+  RestartEnv0Latency(d);
+}
+
+void BatchSubsystem::RestartEnv0Latency(const mjData* d) {
+  // The controls the reset left prime the control lines now; the observation lines take the row
+  // right after the reset (after the command's mj_forward: its sensors) before the next step or
+  // gather (ObserveEnv0).
+  env0_latency_.RestartControl(d);
+  env0_restart_observation_ = env0_latency_.observations_delayed();
+}
+
+void BatchSubsystem::TrueRow(const mjModel* m, const mjData* d, double* row) {
+  mju_copy(row, d->qpos, m->nq);
+  mju_copy(row + m->nq, d->qvel, m->nv);
+  mju_copy(row + m->nq + m->nv, d->sensordata, m->nsensordata);
+}
+
+void BatchSubsystem::ObserveEnv0(const mjModel* m, const mjData* d, bool stepped) {
+  if (!env0_latency_.observations_delayed()) return;
+  env0_observed_.resize(static_cast<std::size_t>(observation_size()));
+  if (env0_restart_observation_) {
+    // The first step after a reset: the reset's state is tick 0 (d is still that state when
+    // called before the step).
+    env0_restart_observation_ = false;
+    TrueRow(m, d, env0_observed_.data());
+    env0_latency_.RestartObservation(env0_observed_.data());
+  }
+  if (!stepped) return;
+  TrueRow(m, d, env0_observed_.data());
+  env0_latency_.Observe(env0_observed_.data());
 }
 
 void BatchSubsystem::SyncOptions(const mjModel* m) {
-  // set_sim_options changes the engine's model: the other environments follow.
-  if (others_ && std::memcmp(&m->opt, &others_->model()->opt, sizeof(mjOption)) != 0) {
-    others_->SetPhysicsOptions(m->opt);
+  // set_sim_options changes the engine's model: the other environments follow (each keeps its
+  // own gravity when gravity is drawn per environment).
+  if (!others_) return;
+  mjOption opt = m->opt;
+  if (randomize_gravity_) mju_copy3(opt.gravity, others_->model()->opt.gravity);
+  if (std::memcmp(&opt, &others_->model()->opt, sizeof(mjOption)) != 0) {
+    others_->SetPhysicsOptions(opt, randomize_gravity_);
   }
 }
 
@@ -165,16 +298,17 @@ void BatchSubsystem::OnCommand(const physics::AppliedCommand& c) {
   window_ = 0;
 }
 
-void BatchSubsystem::ApplyControls(const mjModel*, mjData* d) {
+void BatchSubsystem::ApplyControls(const mjModel* m, mjData* d) {
   if (!armed_) return;
   // The first iteration that steps after the job was armed is its window's (the engine is paused
   // in direct mode: only step windows step), and so are the next n - 1.
   window_ = 1;
   // The engine's environment's actions are raw controls, over what its controllers wrote.
-  std::memcpy(d->ctrl,
-              armed_->actions.data() +
-                  static_cast<std::size_t>(options_.engine_env) * static_cast<std::size_t>(nu_),
-              sizeof(double) * static_cast<std::size_t>(nu_));
+  const double* row = armed_->actions.data() +
+                      static_cast<std::size_t>(options_.engine_env) * static_cast<std::size_t>(nu_);
+  std::memcpy(d->ctrl, row, sizeof(double) * static_cast<std::size_t>(nu_));
+  if (env0_restart_observation_) ObserveEnv0(m, d, /*stepped=*/false);  // the reset's tick 0
+  if (env0_latency_.controls_delayed()) env0_latency_.ApplyControl(row, d);
   // The other environments start stepping on the workers while this thread steps the engine's;
   // PostStep joins them (StepOthers).
   if (others_) {
@@ -227,9 +361,12 @@ void BatchSubsystem::Gather(const mjModel* m, const mjData* d, BatchResult& out)
   out.reset.resize(n, 0);
   const std::size_t e = static_cast<std::size_t>(options_.engine_env);
   double* engine_row = out.obs.data() + row * e;
-  mju_copy(engine_row, d->qpos, m->nq);
-  mju_copy(engine_row + m->nq, d->qvel, m->nv);
-  mju_copy(engine_row + m->nq + m->nv, d->sensordata, m->nsensordata);
+  if (env0_latency_.observations_delayed()) {
+    if (env0_restart_observation_) ObserveEnv0(m, d, /*stepped=*/false);  // reset, not stepped
+    mju_copy(engine_row, env0_observed_.data(), static_cast<int>(row));
+  } else {
+    TrueRow(m, d, engine_row);
+  }
   out.time[e] = d->time;
   out.episode_steps[e] = env0_steps_;
   for (int j = 0; others_ && j < others_->envs(); ++j) {
@@ -246,6 +383,7 @@ void BatchSubsystem::PostStep(const mjModel* m, mjData* d) {
   ++iterations_;
   ++env0_steps_;
   if (Diverged(m, d)) env0_diverged_ = true;
+  ObserveEnv0(m, d, /*stepped=*/true);
   StepOthers(job.actions, done_, skip_, /*begun=*/true);
   if (iterations_ < job.n) return;
   BatchResult& out = job.out;

@@ -58,8 +58,13 @@ std::string Randomizer::Check(const RandomizeConfig& config) const {
   return "";
 }
 
-Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64_t seed,
-                                      mjModel* m) const {
+std::uint64_t Randomizer::ResetSeed(std::uint64_t seed, std::uint64_t n) {
+  // "RAND": the draws' streams differ from the latency jitter's for the same scene seed.
+  return physics::DeriveSeed(seed ^ 0x52414E44u, n);
+}
+
+Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64_t seed, mjModel* m,
+                                      bool controllers) const {
   // The mass distribution before this reset (a previous draw's, or nominal).
   const bool inertial_was_drawn = !std::equal(mass_.begin(), mass_.end(), m->body_mass) ||
                                   !std::equal(inertia_.begin(), inertia_.end(), m->body_inertia) ||
@@ -75,7 +80,7 @@ Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64
   std::copy(biasprm_.begin(), biasprm_.end(), m->actuator_biasprm);
   std::copy_n(gravity_, 3, m->opt.gravity);
   for (const Target& t : targets_) {
-    if (!t.pd) continue;
+    if (!t.pd || !controllers) continue;
     for (std::size_t i = 0; i < t.nominal_gains.size(); ++i) {
       t.pd->SetGains(static_cast<int>(i), t.nominal_gains[i]);
     }
@@ -132,7 +137,7 @@ Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64
           }
         }
       } else if (p.key == "kp" || p.key == "kv") {
-        for (std::size_t i = 0; i < t.nominal_gains.size(); ++i) {
+        for (std::size_t i = 0; controllers && i < t.nominal_gains.size(); ++i) {
           control::PdGains g = t.pd->gains(static_cast<int>(i));
           (p.key == "kp" ? g.kp : g.kv) =
               (p.key == "kp" ? t.nominal_gains[i].kp : t.nominal_gains[i].kv) * v;

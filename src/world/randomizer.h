@@ -33,6 +33,10 @@ class Randomizer {
   // Records the nominal values of `m` (as compiled).
   Randomizer(const mjModel* m, std::vector<Target> targets);
 
+  // The seed of the n-th randomised reset of a simulation whose draws derive from `seed` (a
+  // session's: the scene's seed).
+  static std::uint64_t ResetSeed(std::uint64_t seed, std::uint64_t n);
+
   // "" when `config` names only known targets and parameters they take, else the problem.
   std::string Check(const RandomizeConfig& config) const;
 
@@ -46,7 +50,10 @@ class Randomizer {
   // z first, then the targets in their order, each in the parameter table's order) and writes
   // the draws into `m` and the controllers; when masses, inertias or armature changed, the
   // constants MuJoCo derives from them are recomputed (mj_setConst). Step mutex held.
-  Applied Apply(const RandomizeConfig& config, std::uint64_t seed, mjModel* m) const;
+  // `controllers` false: the PD gains are drawn (the same stream) but neither written nor put
+  // back (a model copy whose simulation runs no controller: a batch's environment).
+  Applied Apply(const RandomizeConfig& config, std::uint64_t seed, mjModel* m,
+                bool controllers = true) const;
 
  private:
   const Target* Find(const std::string& name) const;

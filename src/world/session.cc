@@ -422,8 +422,7 @@ Session::RandomizedReset Session::ResetRandomized(std::optional<std::uint64_t> s
   std::uint64_t s = 0;
   {
     std::lock_guard<std::mutex> lock(randomize_mutex_);
-    // "RAND": the draws' streams differ from the latency jitter's for the same scene seed.
-    s = seed ? *seed : physics::DeriveSeed(config_.seed ^ 0x52414E44u, randomized_resets_);
+    s = seed ? *seed : Randomizer::ResetSeed(config_.seed, randomized_resets_);
     ++randomized_resets_;
   }
   Randomizer::Applied applied;

@@ -7,9 +7,9 @@ autoreset, a reset command in the recorded environment), then stopped with SIGTE
 - `urlab replay FILE --check` re-simulates the recording bit for bit;
 - the recording is environment 2's: its last recorded qpos is, bit for bit, environment 2's last
   observation (and not environment 0's, which got other actions);
-- `--record-env 4` with `--envs 4` exits 1 before simulating, naming the flag; so does a scene
-  with `latency:` or `randomize:` (which the batch's environments would run without), naming
-  the file and line.
+- `--record-env 4` with `--envs 4` exits 1 before simulating, naming the flag;
+- a scene with `latency:` and `randomize:` runs with `--envs 2`, every environment observing
+  with the delay and drawing its own gravity.
 Usage: batch_record_env_e2e.py URLAB_BINARY SOURCE_DIR
 """
 import os
@@ -43,17 +43,32 @@ def main():
     if r.returncode != 1 or "--record-env" not in r.stderr:
         fail(f"--record-env {ENVS} of --envs {ENVS}: exit {r.returncode}\n{r.stderr}")
 
-    # Scene settings the batch's environments would run without: refused, naming the line.
-    for name, extra in (("latency", "    latency:\n      control: {delay_steps: 2}\n"),
-                        ("randomize", "randomize:\n  gravity:\n    z: {uniform: [-0.5, 0.5]}\n")):
-        other = os.path.join(tmp, f"{name}.yaml")
-        with open(other, "w") as f:
-            f.write(f"articulations:\n  - name: arm\n    mjcf: {model}\n{extra}")
-        r = subprocess.run([URLAB, "run", other, "--envs", "2", "--ports", "auto",
-                            "--no-cameras", "--duration", "5"],
-                           capture_output=True, text=True, timeout=120)
-        if r.returncode != 1 or f"{name}.yaml:" not in r.stderr or "--envs" not in r.stderr:
-            fail(f"a scene with {name}: and --envs 2: exit {r.returncode}\n{r.stderr}")
+    # A scene with latency: and randomize: serves every environment with them: each observes
+    # with the delay (the state it reset to until the first release) and draws its own gravity.
+    other = os.path.join(tmp, "latency.yaml")
+    with open(other, "w") as f:
+        f.write(f"seed: 2\narticulations:\n  - name: arm\n    mjcf: {model}\n"
+                "    latency:\n      observation: {delay_steps: 3}\n"
+                "randomize:\n  gravity:\n    z: {uniform: [-5, 5]}\n")
+    proc, announced = start_announced(URLAB, other, "--no-cameras", "--max-speed", "--envs", "2")
+    try:
+        envs = UrlabVectorEnv.over_batch(announced["endpoints"]["rpc"])
+        first, _ = envs.reset(seed=3)
+        first = np.array(first["qpos"])
+        nu = envs.single_action_space.shape[0]
+        after = [np.array(envs.step(np.full((2, nu), 0.5 * np.sin(0.2 * t)))[0]["qpos"])
+                 for t in range(60)]
+        envs.close()
+    finally:
+        proc.terminate()
+        proc.wait(timeout=60)
+    if not np.array_equal(after[0], first) or not np.array_equal(after[2], first):
+        fail(f"latency with --envs 2: the first observations are not the reset state\n"
+             f"{first}\n{after[0]}\n{after[2]}")
+    if np.array_equal(after[3], first):
+        fail("latency with --envs 2: the fourth observation is still the reset state")
+    if np.array_equal(after[-1][0], after[-1][1]):
+        fail(f"randomize with --envs 2: both environments moved alike\n{after[-1]}")
 
     proc, announced = start_announced(
         URLAB, scene, "--no-cameras", "--max-speed", "--envs", str(ENVS), "--threads", "2",

@@ -62,7 +62,8 @@ class StepServerBatchTest : public urlab::testing::MujocoTest {
     dir_ = urlab::testing::MakeTempDir("step_server_batch");
     urlab::testing::WriteTextFile(dir_, "pendulum.xml", kPendulumXml);
   }
-  void Play(world::BatchSubsystemOptions b, const std::string& mode = "direct") {
+  void Play(world::BatchSubsystemOptions b, const std::string& mode = "direct",
+            const std::string& scene = "articulations:\n  - {name: pend, mjcf: pendulum.xml}\n") {
     batch_ = &static_cast<world::BatchSubsystem&>(
         manager_.AddSubsystem(std::make_unique<world::BatchSubsystem>(b)));
     NetworkOptions o;
@@ -71,8 +72,7 @@ class StepServerBatchTest : public urlab::testing::MujocoTest {
     auto net = std::make_unique<NetworkSubsystem>(o);
     net->SetBatch(batch_);
     net_ = &static_cast<NetworkSubsystem&>(manager_.AddSubsystem(std::move(net)));
-    manager_.BeginPlay(world::ParseScene("articulations:\n  - {name: pend, mjcf: pendulum.xml}\n",
-                                         dir_ + "/scene.yaml"));
+    manager_.BeginPlay(world::ParseScene(scene, dir_ + "/scene.yaml"));
     ASSERT_FALSE(net_->endpoints().rpc.empty());
   }
   std::string rpc() const { return net_->endpoints().rpc; }
@@ -274,6 +274,126 @@ TEST_F(StepServerBatchTest, AReplayIsRefusedWhileEnvironmentsStepTogether) {
   EXPECT_EQ(r["code"], "bad_mode") << r.dump();
   EXPECT_NE(r["message"].get<std::string>().find("--envs"), std::string::npos) << r.dump();
   EXPECT_EQ(Step(c, {0, 0})["op"], "batch_step_ok");  // the batch goes on
+}
+
+// A run of its own of `scene` (the pendulum) with `envs` environments and the batch's seed
+// `seed` (`urlab run` gives it the scene's), driven for `steps` batch steps of one step each;
+// every environment gets the action 4 sin(0.3 k) at step k. Returns the observations after each
+// step (environment after environment).
+std::vector<std::vector<double>> DriveRun(const std::string& dir, const std::string& scene,
+                                          int envs, int steps, std::uint64_t seed) {
+  world::Manager manager;
+  auto* batch = &static_cast<world::BatchSubsystem&>(
+      manager.AddSubsystem(std::make_unique<world::BatchSubsystem>(
+          world::BatchSubsystemOptions{.envs = envs, .threads = 2, .seed = seed})));
+  NetworkOptions o;
+  o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
+  o.step_mode = "direct";
+  auto net = std::make_unique<NetworkSubsystem>(o);
+  net->SetBatch(batch);
+  auto* served = &static_cast<NetworkSubsystem&>(manager.AddSubsystem(std::move(net)));
+  manager.BeginPlay(world::ParseScene(scene, dir + "/scene.yaml"));
+  zmq::context_t ctx(1);
+  std::vector<std::vector<double>> path;
+  {
+    Client c(ctx, served->endpoints().rpc);
+    c.Hello();
+    for (int k = 0; k < steps; ++k) {
+      const std::vector<double> actions(static_cast<std::size_t>(envs), 4 * std::sin(0.3 * k));
+      const Json r = c.Op("batch_step", {{"actions", Packed(actions)}});
+      EXPECT_EQ(r["op"], "batch_step_ok") << r.dump();
+      path.push_back(Unpack<double>(r["obs"]));
+    }
+  }
+  manager.EndPlay();
+  return path;
+}
+
+// Environment `env`'s observation row (3 values) of every step of a path.
+std::vector<std::vector<double>> Rows(const std::vector<std::vector<double>>& path, int env) {
+  std::vector<std::vector<double>> out;
+  for (const auto& obs : path) {
+    out.emplace_back(obs.begin() + 3 * env, obs.begin() + 3 * env + 3);
+  }
+  return out;
+}
+
+TEST_F(StepServerBatchTest, LatencyDelaysEveryEnvironmentAndEnvironmentZeroIsTheSingleRun) {
+  const std::string plain = "seed: 5\narticulations:\n  - {name: pend, mjcf: pendulum.xml}\n";
+  // A fixed observation delay first: every environment observes the undelayed run's state of 3
+  // steps before (before any release: the state it started from).
+  const std::string fixed =
+      "seed: 5\narticulations:\n  - name: pend\n    mjcf: pendulum.xml\n    latency:\n"
+      "      observation: {delay_steps: 3}\n";
+  const auto undelayed = DriveRun(dir_, plain, 3, 40, 5);
+  const auto delayed = DriveRun(dir_, fixed, 3, 40, 5);
+  for (int env = 0; env < 3; ++env) {
+    const auto rows = Rows(delayed, env), truth = Rows(undelayed, env);
+    for (std::size_t k = 3; k < rows.size(); ++k) EXPECT_EQ(rows[k], truth[k - 3]) << k;
+    EXPECT_EQ(rows[1][0], 0.0);  // the reset state (at rest, no noise) until the first release
+  }
+  // Jitter on both channels: environment 0 of a batched run is the single-environment run (the
+  // same seed draws the same delays), bit for bit; the other environments draw their own.
+  const std::string jittered =
+      "seed: 5\narticulations:\n  - name: pend\n    mjcf: pendulum.xml\n    latency:\n"
+      "      control: {delay_steps: 2, jitter_steps: 2}\n"
+      "      observation: {delay_steps: 2, jitter_steps: 1}\n";
+  const auto batched = DriveRun(dir_, jittered, 3, 60, 5);
+  const auto single = DriveRun(dir_, jittered, 1, 60, 5);
+  EXPECT_EQ(Rows(batched, 0), Rows(single, 0));
+  EXPECT_NE(Rows(batched, 0), Rows(undelayed, 0));
+  EXPECT_NE(Rows(batched, 1), Rows(batched, 0));
+  EXPECT_NE(Rows(batched, 2), Rows(batched, 1));
+  // The same seed draws the same delays again.
+  EXPECT_EQ(DriveRun(dir_, jittered, 3, 60, 5), batched);
+  // Environment i draws from the seed + i: environment 1 of seed 5 is environment 0 of seed 6.
+  EXPECT_EQ(Rows(DriveRun(dir_, "seed: 6" + jittered.substr(7), 2, 60, 6), 0), Rows(batched, 1));
+}
+
+TEST_F(StepServerBatchTest, RandomizeDrawsAModelForEachEnvironmentAtEachReset) {
+  // The pendulum's mass and damping drawn at each reset: the same torques swing each environment
+  // differently. Environment 0 of a batched run is the single-environment run of the same seed.
+  const std::string scene =
+      "seed: 3\narticulations:\n  - {name: pend, mjcf: pendulum.xml}\n"
+      "randomize:\n  pend:\n    mass: {uniform: [0.5, 2.0]}\n"
+      "    damping: {uniform: [0.2, 3.0]}\n    qpos_noise: {uniform: [-0.2, 0.2]}\n"
+      "    obs_noise: {uniform: [0.01, 0.05]}\n";
+  const auto batched = DriveRun(dir_, scene, 3, 30, 3);
+  EXPECT_NE(Rows(batched, 1), Rows(batched, 0));
+  EXPECT_NE(Rows(batched, 2), Rows(batched, 1));
+  EXPECT_NE(batched[0][0], batched[0][3]);  // qpos_noise: they start apart
+  EXPECT_EQ(Rows(DriveRun(dir_, scene, 1, 30, 3), 0), Rows(batched, 0));
+  EXPECT_EQ(DriveRun(dir_, scene, 3, 30, 3), batched);  // the same seed, the same draws
+  const std::string other = "seed: 4" + scene.substr(7);
+  EXPECT_NE(Rows(DriveRun(dir_, other, 3, 30, 4), 0), Rows(batched, 0));
+  // Environment i draws from the seed + i: environment 1 of seed 3 is environment 0 of seed 4.
+  EXPECT_EQ(Rows(DriveRun(dir_, other, 3, 30, 4), 0), Rows(batched, 1));
+
+  // Each reset draws again; a reset seed restarts an environment's draws, whichever it is.
+  Play({.envs = 3, .threads = 2}, "direct", scene);
+  ASSERT_TRUE(manager_.session().randomizes());
+  Client c(ctx_, rpc());
+  c.Hello();
+  const auto run = [&](const Json& reset) {
+    const Json r0 = c.Op("batch_reset", reset);
+    EXPECT_EQ(r0["op"], "batch_reset_ok") << r0.dump();
+    std::vector<std::vector<double>> path{Unpack<double>(r0["obs"])};
+    for (int k = 0; k < 20; ++k) {
+      path.push_back(Unpack<double>(Step(c, {1.5, 1.5, 1.5})["obs"]));
+    }
+    return path;
+  };
+  const auto first = run({{"seeds", {11, 12, 11}}});
+  EXPECT_EQ(Rows(first, 0), Rows(first, 2));  // seed 11 in environments 0 and 2
+  for (int env = 0; env < 3; ++env) {
+    EXPECT_NE(first[0][3 * env + 1], 0.0);  // at rest after the reset, observed with noise
+  }
+  EXPECT_NE(Rows(first, 0), Rows(first, 1));
+  const auto again = run({{"seeds", {12, 11, 11}}});
+  EXPECT_EQ(Rows(again, 1), Rows(first, 0));  // seed 11 now in environment 1
+  EXPECT_EQ(Rows(again, 0), Rows(first, 1));  // seed 12 in environment 0 (the engine's)
+  const auto unseeded = run(Json::object());  // the streams go on: new draws
+  EXPECT_NE(Rows(unseeded, 1), Rows(again, 1));
 }
 
 TEST_F(StepServerBatchTest, OneEnvironmentIsTheEngineAlone) {

@@ -5,10 +5,14 @@
 // to a keyframe (or the model's default state) with noise drawn from its own seed, and may reset
 // itself when its episode ends (auto-reset).
 //
+// With BatchOptions::randomize every environment has a model of its own, drawn at each of its
+// resets; model() is then the copy they were made from (sizes and options are the same in all).
+//
 // Packed layouts (row-major, environment after environment, doubles):
 // - actions: N x nu, in actuator order (written to ctrl before the environment's step);
 // - observations: N x observation_size(), each row qpos (nq), qvel (nv), sensordata
-//   (nsensordata) as they are after the step (after the reset when it auto-reset);
+//   (nsensordata) as they are after the step (after the reset when it auto-reset), as observed
+//   through the environment's observation latency when it has one (BatchOptions::latency);
 // - done: N bytes, 1 when the environment's episode ended in this step (divergence, or
 //   max_episode_steps reached).
 //
@@ -30,6 +34,7 @@
 #include <span>
 #include <vector>
 
+#include "urlab/physics/env_latency.h"
 #include "urlab/physics/model.h"
 #include "urlab/physics/step_core.h"
 
@@ -55,6 +60,22 @@ struct BatchOptions {
   // session's initial state (every articulation in its initial keyframe). Called on the thread
   // that resets.
   std::function<void(const mjModel*, mjData*)> reset_state;
+  // Emulated latency (physics/env_latency.h): environment `env`'s groups, seeds resolved (null
+  // or empty groups: none). Asked once per environment when the batch is made; its control
+  // lines delay the actions on their way to ctrl, its observation lines the observations.
+  std::function<std::vector<EnvLatency::Group>(int env)> latency;
+  // Domain randomisation: each environment gets a model of its own (a copy; one shared model
+  // otherwise), and before each reset of environment `env` this draws into it and may add
+  // position offsets (qpos address, offset) that the reset applies after the reset state and its
+  // noise; `seed` is the reset's seed when it was given one (Reset). Called by the thread that
+  // resets the environment (the owner; a worker for an auto-reset), never for one environment
+  // on two threads at once.
+  // The draw may also set the observation noise of the episode (EnvLatency::Noise).
+  struct Draw {
+    std::vector<std::pair<int, double>> qpos_offsets;
+    std::vector<EnvLatency::Noise> noise;
+  };
+  std::function<void(int env, std::optional<std::uint64_t> seed, mjModel* m, Draw* draw)> randomize;
 };
 
 // The state an environment resets to: options.reset_state (or the keyframe, or the default
@@ -109,9 +130,12 @@ class Batch {
   void ObserveOne(int env, double* out) const;
   // True when environment `env` diverged (or its iteration threw) since its last reset.
   bool diverged(int env) const;
-  // Copies `opt` into the model the environments share (physics options changed elsewhere, e.g.
-  // on the simulation these environments mirror). Not during Step.
-  void SetPhysicsOptions(const mjOption& opt);
+  // Copies `opt` into the model the environments share, or into each one's own (physics options
+  // changed elsewhere, e.g. on the simulation these environments mirror); `keep_gravity`: each
+  // model keeps its gravity (drawn per environment). Not during Step.
+  void SetPhysicsOptions(const mjOption& opt, bool keep_gravity = false);
+  // Environment `env`'s model (its own when randomising, else the shared one).
+  const mjModel* model(int env) const;
   // Steps since environment `env` last reset.
   std::uint64_t episode_steps(int env) const;
   StepCore& env(int i);
@@ -119,8 +143,10 @@ class Batch {
  private:
   struct Env;
   void StepEnv(Env& e, const double* action, double* obs, std::uint8_t* done);
-  void ResetEnv(Env& e);
-  void ObserveEnv(const Env& e, double* out) const;
+  void ResetEnv(Env& e, std::optional<std::uint64_t> seed = std::nullopt);
+  void ObserveEnv(const Env& e, double* out) const;   // as observed (through its latency)
+  void ObserveTrue(const Env& e, double* out) const;  // the state itself
+  void RestartLatency(Env& e);                        // after a reset
 
   // The step under way between StepBegin and StepEnd (the workers read them).
   struct Pass {

@@ -45,9 +45,13 @@
 #include <vector>
 
 #include "urlab/physics/batch.h"
+#include "urlab/physics/latency.h"
+#include "urlab/world/randomize.h"
 #include "urlab/world/subsystem.h"
 
 namespace urlab::world {
+
+class Randomizer;  // src/world/randomizer.h
 
 struct BatchSubsystemOptions {
   int envs = 1;
@@ -152,6 +156,16 @@ class BatchSubsystem : public Subsystem {
   // Fills out's rows: environment 0 from `d`, the others from the batch.
   void Gather(const mjModel* m, const mjData* d, BatchResult& out);
   static bool Diverged(const mjModel* m, const mjData* d);
+  // Emulated latency: environment `env`'s groups (seeds resolved); environment 0's lines.
+  std::vector<physics::EnvLatency::Group> LatencyGroups(int env) const;
+  void RestartEnv0Latency(const mjData* d);
+  // Domain randomisation: environment `env`'s next draw into `m` (its own model; the engine's
+  // for environment 0), its position offsets in *offsets.
+  void Draw(int env, std::optional<std::uint64_t> seed, mjModel* m,
+            physics::BatchOptions::Draw* draw);
+  // Environment 0's observed row after a step (`stepped`), or its reset state as tick 0.
+  void ObserveEnv0(const mjModel* m, const mjData* d, bool stepped);
+  static void TrueRow(const mjModel* m, const mjData* d, double* row);
   // Environment e (not the engine's) is the batch's Other(e); the batch's j is environment
   // Wire(j).
   int Other(int e) const { return e < options_.engine_env ? e : e - 1; }
@@ -168,6 +182,26 @@ class BatchSubsystem : public Subsystem {
   std::unique_ptr<physics::Batch> others_;  // environments 1..N-1 (null when N == 1)
   int nu_ = 0, nq_ = 0, nv_ = 0, nsensordata_ = 0;
   std::vector<std::uint64_t> callbacks_;
+  // The articulations with a latency: their actuators, observation row entries and settings.
+  struct LatencyTemplate {
+    std::size_t index = 0;  // the articulation's index (its seed stream)
+    physics::ArticulationLatency latency;
+    std::vector<int> observed, actuators;
+  };
+  std::vector<LatencyTemplate> latency_;
+  std::vector<std::vector<int>> observed_;  // per articulation: its observation row entries
+  // Domain randomisation (null: none): each environment's stream of draws, touched only by the
+  // thread resetting it (the iterating thread; the main thread in BeginPlay).
+  struct Stream {
+    std::uint64_t base = 0;  // the run's seed + env, or the seed of its last seeded reset
+    std::uint64_t n = 0;     // randomised resets drawn from base
+  };
+  std::shared_ptr<const Randomizer> randomizer_;
+  RandomizeConfig randomize_;
+  bool randomize_gravity_ = false;
+  std::vector<Stream> draws_;
+  std::uint64_t latency_seed_ = 0;
+  double timestep_ = 0;
   std::atomic<bool> auto_reset_{true};
   std::atomic<std::uint64_t> env_steps_{0};
   std::atomic<double> busy_seconds_{0};
@@ -179,6 +213,9 @@ class BatchSubsystem : public Subsystem {
 
   // The iterating thread only (step mutex held).
   std::mt19937_64 env0_rng_;
+  physics::EnvLatency env0_latency_;
+  std::vector<double> env0_observed_;      // environment 0's observed row (delayed observations)
+  bool env0_restart_observation_ = false;  // reset since: its lines restart before the next use
   std::uint32_t env0_steps_ = 0;
   bool env0_diverged_ = false;
   std::shared_ptr<BatchStepJob> armed_;  // a window's job, armed by its Inspect command

@@ -150,6 +150,10 @@ class Session : public std::enable_shared_from_this<Session> {
   RandomDraws last_draws() const;
   // True when the scene has a `randomize:` section (every reset then draws).
   bool randomizes() const { return !config_.randomize.empty(); }
+  // The mechanism that draws `randomize:` (null before Build), for simulations kept beside this
+  // one that draw into models of their own (the environments of a batch,
+  // world/batch_subsystem.h).
+  std::shared_ptr<const Randomizer> randomizer() const { return randomizer_; }
 
   // ---- Host-driven mocap bodies (main thread) ----
   // Marks a mocap body of an articulation as driven by the host and sets its world pose; from the
