@@ -12,6 +12,7 @@
 
 #include "app/commands.h"
 #include "app/signals.h"
+#include "urlab/camera/scene_settings.h"
 #include "urlab/core/error.h"
 #include "urlab/core/files.h"
 #include "urlab/core/mujoco_handlers.h"
@@ -54,6 +55,7 @@ int main(int argc, char** argv) {
   // The scene sections subsystems own, registered from the top (src/world/scene_section.h):
   // world never includes the modules above it.
   urlab::viewer::RegisterSceneSections();
+  urlab::camera::RegisterSceneSections();
 
   CLI::App app{"URLab: MuJoCo robotics simulation runtime (scenes, control over ZeroMQ, replay)."};
   app.require_subcommand(1);

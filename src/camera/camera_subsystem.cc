@@ -50,7 +50,7 @@ std::string StreamName(const std::string& camera, const std::string& mode) {
 
 CameraOptions CameraOptionsFromScene(const world::SceneConfig& scene) {
   CameraOptions o;
-  o.config = scene.cameras;
+  o.config = CamerasOf(scene);
   const std::string& port = scene.network.camera_base_port;
   char* end = nullptr;
   const long p = std::strtol(port.c_str(), &end, 10);

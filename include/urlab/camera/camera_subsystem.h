@@ -20,6 +20,7 @@
 #include <string_view>
 #include <vector>
 
+#include "urlab/camera/scene_settings.h"
 #include "urlab/world/camera_streams.h"
 #include "urlab/world/scene_file.h"
 #include "urlab/world/subsystem.h"
@@ -27,7 +28,7 @@
 namespace urlab::camera {
 
 struct CameraOptions {
-  world::CamerasConfig config;
+  CamerasConfig config;
   int base_port = 5558;                      // 0: ephemeral ports on bind_host
   std::string bind_host = "*";               // sockets bind tcp://{bind_host}:{port}
   std::string advertise_host = "127.0.0.1";  // what discovery tells clients to connect to

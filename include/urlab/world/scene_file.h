@@ -130,36 +130,6 @@ struct LauncherConfig {
   SourceLocation where;
 };
 
-// How one camera streams; unset fields take the `cameras:` section's defaults.
-struct CameraSettings {
-  std::optional<int> width, height;
-  std::optional<double> rate;                     // frames per second
-  std::optional<std::vector<std::string>> modes;  // rgb | depth | segmentation | instance
-  // Emulated camera delay (physics/latency.h's keys; world::CameraStreams::SetDelay), drawn
-  // from the scene's seed.
-  std::optional<physics::LatencySetting> latency;
-  SourceLocation where;
-};
-
-// The scene's `cameras:` section (issue 11): the global streaming toggle, the defaults every
-// streamed camera takes, and per-camera settings keyed "{articulation}/{camera}" (naming a camera
-// there also streams it).
-struct CamerasConfig {
-  bool enabled = true;  // false: no camera renders or streams, whatever articulations ask
-  int width = 640, height = 480;
-  double rate = 30;
-  std::vector<std::string> modes = {"rgb"};
-  // Off-screen rendering (software rendering pays dearly for each: off by default).
-  bool shadows = false, reflections = false;
-  int samples = 0;
-  std::string gl = "auto";  // auto | egl | osmesa
-  std::map<std::string, CameraSettings> cameras;
-  SourceLocation where;
-};
-
-// The camera modes a scene may ask for, in wire order.
-inline constexpr const char* kCameraModes[] = {"rgb", "depth", "segmentation", "instance"};
-
 struct NetworkConfig {
   bool enabled = true;
   std::string state = "tcp://*:5555";
@@ -185,9 +155,8 @@ struct SceneConfig {
   std::map<std::string, std::string> size;     // <size> attributes (nconmax, njmax, nstack...)
   ControlSource control_source = ControlSource::kNetwork;
   NetworkConfig network;
-  CamerasConfig cameras;
-  // The sections subsystems own (`viewer:`, `cinematic:`), parsed by the parser each registered
-  // (src/world/scene_section.h) into its own settings type.
+  // The sections subsystems own (`viewer:`, `cinematic:`, `cameras:`), parsed by the parser each
+  // registered (src/world/scene_section.h) into its own settings type.
   SceneSections sections;
   std::string save_debug_xml;  // folder for scene_compiled.xml/.mjb ("" = off)
   // The run's seed (`seed:`; `urlab run --seed` overrides): every emulated delay's jitter draws
