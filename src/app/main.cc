@@ -18,6 +18,7 @@
 #include "urlab/core/mujoco_handlers.h"
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/core/version.h"
+#include "urlab/net/scene_settings.h"
 #include "urlab/physics/model.h"
 #include "urlab/viewer/scene_settings.h"
 
@@ -56,6 +57,7 @@ int main(int argc, char** argv) {
   // world never includes the modules above it.
   urlab::viewer::RegisterSceneSections();
   urlab::camera::RegisterSceneSections();
+  urlab::net::RegisterSceneSections();
 
   CLI::App app{"URLab: MuJoCo robotics simulation runtime (scenes, control over ZeroMQ, replay)."};
   app.require_subcommand(1);

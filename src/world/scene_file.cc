@@ -666,9 +666,9 @@ class Parser : public SectionReader {
       }
     }
     // The scene's own keys, and the sections registered subsystems parse.
-    std::set<std::string> keys = {"articulations",  "props", "terrain",        "launchers",
-                                  "options",        "size",  "control_source", "network",
-                                  "save_debug_xml", "seed",  "randomize"};
+    std::set<std::string> keys = {"articulations", "props",    "terrain",        "launchers",
+                                  "options",       "size",     "control_source", "save_debug_xml",
+                                  "seed",          "randomize"};
     keys.merge(SceneSectionNames());
     CheckKeys(root, "the scene", keys);
     const YAML::Node arts = root["articulations"];
@@ -705,51 +705,6 @@ class Parser : public SectionReader {
     if (const auto n = root["randomize"]) {
       s.randomize_where = At(n);
       s.randomize = Randomize(n, s);
-    }
-    if (const auto n = root["network"]) {
-      CheckKeys(n, "network",
-                {"enabled", "state", "control", "info", "rpc", "step_mode", "full_state",
-                 "camera_base_port", "files_dir", "max_queued_steps"});
-      if (n["enabled"]) s.network.enabled = Bool(n["enabled"], "network.enabled");
-      if (n["state"]) s.network.state = String(n["state"], "network.state");
-      if (n["control"]) s.network.control = String(n["control"], "network.control");
-      if (n["info"]) s.network.info = String(n["info"], "network.info");
-      if (n["rpc"]) s.network.rpc = String(n["rpc"], "network.rpc");
-      if (n["full_state"]) {
-        s.network.full_state = String(n["full_state"], "network.full_state");
-        if (s.network.full_state == "none") s.network.full_state.clear();
-        if (!s.network.full_state.empty() && s.network.full_state != "minimal" &&
-            s.network.full_state != "standard" && s.network.full_state != "full") {
-          throw InputError(At(n["full_state"]),
-                           "network.full_state must be minimal, standard, full or none");
-        }
-      }
-      if (n["step_mode"]) {
-        s.network.step_mode = String(n["step_mode"], "network.step_mode");
-        if (s.network.step_mode != "live" && s.network.step_mode != "direct") {
-          throw InputError(At(n["step_mode"]), "network.step_mode must be live or direct");
-        }
-      }
-      if (n["camera_base_port"]) {
-        // A TCP port: the first camera stream binds it, the next ones the ports above.
-        s.network.camera_base_port =
-            std::to_string(Whole(n["camera_base_port"], "network.camera_base_port", 1, 65535));
-      }
-      if (const auto d = n["files_dir"]) {
-        const std::string text = String(d, "network.files_dir");
-        if (text.empty()) Fail(d, "network.files_dir must name a folder (or leave it out)");
-        fs::path p(text);
-        if (p.is_relative()) p = fs::path(path()).parent_path() / p;
-        s.network.files_dir = fs::absolute(p).lexically_normal().string();
-        std::error_code ec;
-        if (fs::exists(s.network.files_dir, ec) && !fs::is_directory(s.network.files_dir, ec)) {
-          Fail(d, "network.files_dir: " + s.network.files_dir + " exists and is not a folder");
-        }
-      }
-      if (const auto q = n["max_queued_steps"]) {
-        s.network.max_queued_steps =
-            static_cast<std::size_t>(Whole(q, "network.max_queued_steps", 1, 10000000));
-      }
     }
     if (const auto n = root["save_debug_xml"]) {
       if (n.IsScalar() && (n.as<std::string>() == "true" || n.as<std::string>() == "false")) {

@@ -101,6 +101,7 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       {WithArm("viewer: {shadows: false}\n"), 4, "unknown key 'viewer' in the scene"},
       {WithArm("cinematic: {loop: false}\n"), 4, "unknown key 'cinematic' in the scene"},
       {WithArm("cameras: {width: 320}\n"), 4, "unknown key 'cameras' in the scene"},
+      {WithArm("network: {enabled: false}\n"), 4, "unknown key 'network' in the scene"},
       // impulse launchers
       {WithArm("launchers: {name: gun}\n"), 4, "launchers must be a list"},
       {WithArm("launchers:\n  - {pos: [0, 0, 1]}\n"), 5, "a launcher needs a name"},
@@ -120,12 +121,8 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       {WithArm("launchers:\n  - {name: gun, direction: [1, 0, 0]}\n"), 5,
        "unknown key 'direction' in launcher"},
       {WithArm("launchers:\n  - {name: a}\n"), 5, "the name 'a' is used twice"},
-      // newer keys: whole numbers, ports, key names (these were accepted or truncated)
-      {WithArm("network: {camera_base_port: abc}\n"), 4, "network.camera_base_port must be"},
-      {WithArm("network:\n  camera_base_port: -1\n"), 5,
-       "network.camera_base_port must be 1 to 65535, not -1"},
-      {WithArm("network: {camera_base_port: 99999}\n"), 4, "must be 1 to 65535, not 99999"},
-      {WithArm("network: {camera_base_port: 5558.5}\n"), 4, "whole number"},
+      // newer keys: whole numbers, key names (these were accepted or truncated; the network's
+      // ports: tests/net/scene_settings_test.cc)
       {WithArm("    input:\n      - {actuator: shoulder_motor, key: F13}\n"), 5,
        "unknown key 'F13'"},
       {WithArm("    input:\n      - {actuator: shoulder_motor, key: \"\"}\n"), 5, "an empty key"},
@@ -157,13 +154,11 @@ TEST_F(SceneFileTest, GoodValuesStillPass) {
   const world::SceneConfig s =
       world::ParseScene(WithArm("    controller: {type: pd, kp: 0, kv: 0, torque_limit: .inf}\n"
                                 "options: {timestep: 0.001, flag: {gravity: disable}}\n"
-                                "size: {nstack: 5000000, njmax: -1}\n"
-                                "network: {enabled: false}\n"),
+                                "size: {nstack: 5000000, njmax: -1}\n"),
                         dir_ + "/s.yaml");
   EXPECT_EQ(s.size.at("nstack"), "5000000");
   EXPECT_EQ(s.options.at("timestep"), "0.001");
   EXPECT_EQ(s.options.at("flag.gravity"), "disable");
-  EXPECT_FALSE(s.network.enabled);  // network: is parsed and used: not refused
   const world::SceneConfig t =
       world::ParseScene(WithArm("    control_source: input\n    twist: {max_vx: 2, yaw_gain: 1}\n"
                                 "    input:\n      - {actuator: shoulder, key: J, scale: -0.5}\n"

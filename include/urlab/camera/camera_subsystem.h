@@ -39,8 +39,9 @@ struct CameraOptions {
   int render_nice = 5;  // added to the render thread's nice value
 };
 
-// The scene's `cameras:` section and network.camera_base_port; throws InputError for a port that
-// is not a number.
+// The scene's `cameras:` section. The ports (base_port, reserved_ports) are the network's
+// settings (`network.camera_base_port` and its endpoints): the caller sets them (the app from
+// net::NetworkOf, a test or bench its own).
 CameraOptions CameraOptionsFromScene(const world::SceneConfig& scene);
 
 struct CameraCounters {

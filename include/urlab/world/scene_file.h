@@ -3,13 +3,13 @@
 // options, control source, controller and initial keyframe, Quick Convert props (a mesh, its
 // pose, scale, mode, mass or density, friction and decomposition settings), terrain
 // (meshes sampled into a heightfield, or a PNG height map), impulse launchers, plus scene-wide
-// option overrides,
-// network endpoints and the debug-XML switch; the sections a subsystem owns (`viewer:`,
-// `cinematic:`) go to the parser it registered (src/world/scene_section.h). Unknown keys,
+// option overrides, the seed, domain randomisation and the debug-XML switch; the sections a
+// subsystem owns (`viewer:`, `cinematic:`, `cameras:`, `network:`) go to the parser it registered
+// (src/world/scene_section.h). Unknown keys,
 // duplicate keys, keys that are not
 // strings, wrong types and numbers out of range (gains, torque limits, hold/blend times, options
 // checked against the MJCF grammar, size fields), fractions where a whole number is meant
-// (pixels, samples, ports) and names outside the scene name character set
+// (gamepad indices, pool sizes) and names outside the scene name character set
 // (world/scene_names.h) are InputErrors with file and line; sections of features that do not
 // exist yet (recording, lights...) are refused as "not supported yet". Thread: any (pure
 // parsing).
@@ -130,21 +130,6 @@ struct LauncherConfig {
   SourceLocation where;
 };
 
-struct NetworkConfig {
-  bool enabled = true;
-  std::string state = "tcp://*:5555";
-  std::string control = "tcp://127.0.0.1:5556";
-  std::string info = "tcp://*:5557";
-  std::string rpc = "tcp://127.0.0.1:5559";  // the step server (request/reply)
-  std::string step_mode = "live";            // live | direct (lockstep)
-  std::string full_state = "standard";       // state/full level: minimal|standard|full|none
-  std::string camera_base_port = "5558";     // a port number 1..65535 (checked when parsed)
-  // The folder whose files step-server clients name (absolute; relative in the scene: to the
-  // scene file's folder). "" : recordings/ in the working folder of the run.
-  std::string files_dir;
-  std::size_t max_queued_steps = 100000;  // lockstep steps one client may queue
-};
-
 struct SceneConfig {
   std::string path;  // the scene file
   std::vector<ArticulationConfig> articulations;
@@ -154,9 +139,8 @@ struct SceneConfig {
   std::map<std::string, std::string> options;  // manager overrides: only the fields set
   std::map<std::string, std::string> size;     // <size> attributes (nconmax, njmax, nstack...)
   ControlSource control_source = ControlSource::kNetwork;
-  NetworkConfig network;
-  // The sections subsystems own (`viewer:`, `cinematic:`, `cameras:`), parsed by the parser each
-  // registered (src/world/scene_section.h) into its own settings type.
+  // The sections subsystems own (`viewer:`, `cinematic:`, `cameras:`, `network:`), parsed by the
+  // parser each registered (src/world/scene_section.h) into its own settings type.
   SceneSections sections;
   std::string save_debug_xml;  // folder for scene_compiled.xml/.mjb ("" = off)
   // The run's seed (`seed:`; `urlab run --seed` overrides): every emulated delay's jitter draws
