@@ -147,7 +147,9 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
         throw InputError(a.where, "articulation '" + a.name + "': latency" + why);
       }
     }
-    if (!scene.randomize.empty()) throw InputError(scene.randomize_where, "randomize" + why);
+    if (const world::RandomizeSettings& r = world::RandomizeOf(scene); !r.config.empty()) {
+      throw InputError(r.where, "randomize" + why);
+    }
   }
   if (args.no_network || !network_settings.enabled) NetworkSourcesToUi(scene);
   if (!args.announce.empty()) {

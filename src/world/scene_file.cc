@@ -568,62 +568,6 @@ class Parser : public SectionReader {
     return a;
   }
 
-  // A range: {uniform: [low, high]}, {normal: [mean, std]} or {log_uniform: [low, high]}.
-  RandomRange Range2(const YAML::Node& n, const std::string& where) const {
-    const auto entries = Entries(n, where);
-    if (entries.size() != 1) {
-      Fail(n, where +
-                  " must be one of {uniform: [low, high]}, {normal: [mean, std]}, "
-                  "{log_uniform: [low, high]}");
-    }
-    const auto& [dist, v] = entries.front();
-    const std::vector<double> ab = Numbers(v, where + "." + dist, 2);
-    RandomRange r;
-    const std::string problem = MakeRange(dist, ab[0], ab[1], &r);
-    if (!problem.empty()) Fail(v, where + ": " + problem);
-    return r;
-  }
-
-  // `randomize:`: gravity components, and per articulation or prop its parameters (the table of
-  // world/randomize.h). Names are checked against the scene's articulations and props.
-  RandomizeConfig Randomize(const YAML::Node& n, const SceneConfig& s) const {
-    RandomizeConfig c;
-    for (const auto& [name, v] : Entries(n, "randomize")) {
-      const std::string where = "randomize." + name;
-      if (name == "gravity") {
-        CheckKeys(v, where, {"x", "y", "z"});
-        for (const auto& [axis, r] : Entries(v, where))
-          c.gravity[axis] = Range2(r, where + "." + axis);
-        continue;
-      }
-      const ArticulationConfig* art = nullptr;
-      for (const auto& a : s.articulations) {
-        if (a.name == name) art = &a;
-      }
-      bool prop = false;
-      for (const auto& p : s.props) prop |= p.spec.name == name;
-      if (!art && !prop) {
-        Fail(v, where + ": no articulation or prop '" + name + "' in the scene (or 'gravity')");
-      }
-      auto& params = c.targets[name];
-      for (const auto& [key, r] : Entries(v, where)) {
-        if (!IsRandomParam(key, prop)) {
-          std::string known;
-          for (const RandomParamInfo& p : RandomParams()) {
-            if (!prop || p.props) known += (known.empty() ? "" : ", ") + std::string(p.key);
-          }
-          Fail(r, where + ": unknown parameter '" + key + "' (expected one of: " + known + ")");
-        }
-        if ((key == "kp" || key == "kv") && art && art->controller.type != "pd" &&
-            art->controller.type != "gait") {
-          Fail(r, where + "." + key + " needs a PD controller (controller type pd or gait)");
-        }
-        params[key] = Range2(r, where + "." + key);
-      }
-    }
-    return c;
-  }
-
   physics::ArticulationLatency Latency(const YAML::Node& n, const std::string& where) const {
     CheckKeys(n, where, {"control", "observation"});
     physics::ArticulationLatency l;
@@ -666,9 +610,9 @@ class Parser : public SectionReader {
       }
     }
     // The scene's own keys, and the sections registered subsystems parse.
-    std::set<std::string> keys = {"articulations", "props",    "terrain",        "launchers",
-                                  "options",       "size",     "control_source", "save_debug_xml",
-                                  "seed",          "randomize"};
+    std::set<std::string> keys = {"articulations",  "props",          "terrain",
+                                  "launchers",      "options",        "size",
+                                  "control_source", "save_debug_xml", "seed"};
     keys.merge(SceneSectionNames());
     CheckKeys(root, "the scene", keys);
     const YAML::Node arts = root["articulations"];
@@ -701,10 +645,6 @@ class Parser : public SectionReader {
       const double v = Number(n, "seed", Range{0, 9007199254740992.0});
       if (v != std::floor(v)) Fail(n, "seed must be a whole number, not " + n.Scalar());
       s.seed = static_cast<std::uint64_t>(v);
-    }
-    if (const auto n = root["randomize"]) {
-      s.randomize_where = At(n);
-      s.randomize = Randomize(n, s);
     }
     if (const auto n = root["save_debug_xml"]) {
       if (n.IsScalar() && (n.as<std::string>() == "true" || n.as<std::string>() == "false")) {

@@ -136,6 +136,9 @@ physics::LatencySetting SectionReader::LatencyEntry(const YAML::Node& n,
 namespace {
 
 struct Table {
+  Table() {
+    for (const SectionSpec& spec : {RandomizeSection()}) specs.emplace(spec.name, spec);
+  }
   std::shared_mutex mutex;
   std::map<std::string, SectionSpec> specs;
 };

@@ -108,6 +108,10 @@ struct SectionSpec {
   SectionCompiledCheck check_compiled = nullptr;  // none: nothing to check after compiling
 };
 
+// World's own sections, in the table from the start (not registered from the top: world reads
+// them itself): `randomize:` (src/world/randomize_section.cc).
+SectionSpec RandomizeSection();
+
 // Adds `spec` to the table (a name registered again keeps its first parser). World's own
 // sections (`randomize:`, world/randomize_settings.h) are in the table from the start.
 void RegisterSceneSection(const SectionSpec& spec);

@@ -3,9 +3,9 @@
 // options, control source, controller and initial keyframe, Quick Convert props (a mesh, its
 // pose, scale, mode, mass or density, friction and decomposition settings), terrain
 // (meshes sampled into a heightfield, or a PNG height map), impulse launchers, plus scene-wide
-// option overrides, the seed, domain randomisation and the debug-XML switch; the sections a
-// subsystem owns (`viewer:`, `cinematic:`, `cameras:`, `network:`) go to the parser it registered
-// (src/world/scene_section.h). Unknown keys,
+// option overrides, the seed and the debug-XML switch; the sections a subsystem owns (`viewer:`,
+// `cinematic:`, `cameras:`, `network:`) go to the parser it registered, and world's own
+// `randomize:` to its parser in the same table (src/world/scene_section.h). Unknown keys,
 // duplicate keys, keys that are not
 // strings, wrong types and numbers out of range (gains, torque limits, hold/blend times, options
 // checked against the MJCF grammar, size fields), fractions where a whole number is meant
@@ -28,7 +28,6 @@
 #include "urlab/core/error.h"
 #include "urlab/physics/latency.h"
 #include "urlab/world/launchers.h"
-#include "urlab/world/randomize.h"
 #include "urlab/world/scene_sections.h"
 
 namespace urlab::world {
@@ -139,16 +138,14 @@ struct SceneConfig {
   std::map<std::string, std::string> options;  // manager overrides: only the fields set
   std::map<std::string, std::string> size;     // <size> attributes (nconmax, njmax, nstack...)
   ControlSource control_source = ControlSource::kNetwork;
-  // The sections subsystems own (`viewer:`, `cinematic:`, `cameras:`, `network:`), parsed by the
-  // parser each registered (src/world/scene_section.h) into its own settings type.
+  // The sections subsystems own (`viewer:`, `cinematic:`, `cameras:`, `network:`; world's own
+  // `randomize:`, world/randomize_settings.h), parsed by the parser each registered
+  // (src/world/scene_section.h) into its own settings type.
   SceneSections sections;
   std::string save_debug_xml;  // folder for scene_compiled.xml/.mjb ("" = off)
   // The run's seed (`seed:`; `urlab run --seed` overrides): every emulated delay's jitter draws
   // from it.
   std::uint64_t seed = 0;
-  // Domain randomisation (`randomize:`), drawn at every reset (world/randomize.h).
-  RandomizeConfig randomize;
-  SourceLocation randomize_where;
 };
 
 // Parses a scene file. Relative MJCF paths resolve against the scene file's folder.
