@@ -121,20 +121,22 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   world::Manager manager(options);
   // Loading and compiling: a signal ends the process at once (nothing runs, nothing is written).
   world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
+  net::NetworkConfig& network_settings = net::EditNetwork(scene);  // the command line changes it
   if (!args.files_dir.empty()) {
-    scene.network.files_dir = std::filesystem::absolute(args.files_dir).lexically_normal().string();
+    network_settings.files_dir =
+        std::filesystem::absolute(args.files_dir).lexically_normal().string();
   }
   if (args.seed) scene.seed = *args.seed;
-  ChooseNetworkPorts(scene.network, args.ports, args.port_base);
-  if (!args.step_mode.empty()) scene.network.step_mode = args.step_mode;
+  ChooseNetworkPorts(network_settings, args.ports, args.port_base);
+  if (!args.step_mode.empty()) network_settings.step_mode = args.step_mode;
   // Several environments step only together, in lockstep: the run waits for batch steps.
-  if (args.envs > 1) scene.network.step_mode = "direct";
-  if (args.envs > 1 && (args.no_network || !scene.network.enabled)) {
+  if (args.envs > 1) network_settings.step_mode = "direct";
+  if (args.envs > 1 && (args.no_network || !network_settings.enabled)) {
     throw Error("--envs " + std::to_string(args.envs) +
                 ": several environments are driven through the step server, and the network is "
                 "off here");
   }
-  if (args.no_network || !scene.network.enabled) NetworkSourcesToUi(scene);
+  if (args.no_network || !network_settings.enabled) NetworkSourcesToUi(scene);
   if (!args.announce.empty()) {
     CheckOutputs({{args.announce, "--announce"}}, world::SceneInputFiles(scene));
   }
@@ -161,7 +163,10 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   if (!args.no_cameras || !args.video.empty()) {
     // Added before the network, whose discovery and step server read its streams.
     auto cam_options = camera::CameraOptionsFromScene(scene);
-    cam_options.publish = !args.no_network && scene.network.enabled;
+    // The cameras' ports are the network section's: the first one, and the endpoints' to skip.
+    cam_options.base_port = network_settings.camera_base_port;
+    cam_options.reserved_ports = net::EndpointPorts(network_settings);
+    cam_options.publish = !args.no_network && network_settings.enabled;
     if (args.ports == "auto") cam_options.base_port = 0;  // ephemeral ports
     auto sub = std::make_unique<camera::CameraSubsystem>(std::move(cam_options));
     cameras = sub.get();
@@ -169,14 +174,14 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   }
   net::NetworkSubsystem* network_sub = nullptr;
   net::NetworkOptions network_options;
-  if (!args.no_network && scene.network.enabled) {
+  if (!args.no_network && network_settings.enabled) {
     // An idle recorder costs the physics thread nothing; the step server's recording operations
     // use it (added first: it begins before the network and ends after it).
     if (!recorder) {  // --record made one already
       recorder = &static_cast<replay::RecorderSubsystem&>(
           manager.AddSubsystem(std::make_unique<replay::RecorderSubsystem>()));
     }
-    net::NetworkOptions net_options = net::NetworkOptionsFromScene(scene.network);
+    net::NetworkOptions net_options = net::NetworkOptionsFromScene(network_settings);
     // A headless run whose port is taken stops before simulating: a client would otherwise
     // drive whichever simulator holds the port. A window's user sees the log line instead.
     net_options.require_bind = !args.view && !args.allow_no_network;

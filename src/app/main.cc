@@ -12,11 +12,13 @@
 
 #include "app/commands.h"
 #include "app/signals.h"
+#include "urlab/camera/scene_settings.h"
 #include "urlab/core/error.h"
 #include "urlab/core/files.h"
 #include "urlab/core/mujoco_handlers.h"
 #include "urlab/core/mujoco_hints.h"
 #include "urlab/core/version.h"
+#include "urlab/net/scene_settings.h"
 #include "urlab/physics/model.h"
 #include "urlab/viewer/scene_settings.h"
 
@@ -54,6 +56,8 @@ int main(int argc, char** argv) {
   // The scene sections subsystems own, registered from the top (src/world/scene_section.h):
   // world never includes the modules above it.
   urlab::viewer::RegisterSceneSections();
+  urlab::camera::RegisterSceneSections();
+  urlab::net::RegisterSceneSections();
 
   CLI::App app{"URLab: MuJoCo robotics simulation runtime (scenes, control over ZeroMQ, replay)."};
   app.require_subcommand(1);

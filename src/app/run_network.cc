@@ -27,7 +27,7 @@ std::string WithPort(const std::string& endpoint, const std::string& port) {
 
 }  // namespace
 
-void ChooseNetworkPorts(world::NetworkConfig& n, const std::string& ports, int port_base) {
+void ChooseNetworkPorts(net::NetworkConfig& n, const std::string& ports, int port_base) {
   if (ports == "auto") {
     for (std::string* e : {&n.state, &n.control, &n.info, &n.rpc}) *e = WithPort(*e, "*");
     return;
@@ -36,7 +36,7 @@ void ChooseNetworkPorts(world::NetworkConfig& n, const std::string& ports, int p
   n.state = WithPort(n.state, std::to_string(port_base));
   n.control = WithPort(n.control, std::to_string(port_base + 1));
   n.info = WithPort(n.info, std::to_string(port_base + 2));
-  n.camera_base_port = std::to_string(port_base + 3);
+  n.camera_base_port = port_base + 3;
   n.rpc = WithPort(n.rpc, std::to_string(port_base + 4));
 }
 

@@ -18,7 +18,7 @@ namespace urlab::app {
 // from N+3 upward and the step server N+4 (the defaults are N = 5555). ipc:// and other
 // transports, and empty endpoints, are left as they are. "scene" with port_base 0: unchanged.
 // (With "auto" the caller gives the cameras ephemeral ports: CameraOptions::base_port = 0.)
-void ChooseNetworkPorts(world::NetworkConfig& network, const std::string& ports, int port_base);
+void ChooseNetworkPorts(net::NetworkConfig& network, const std::string& ports, int port_base);
 
 // The scene's name: the scene file's stem ("arm" for scenes/arm.yaml).
 std::string SceneName(const std::string& scene_path);

@@ -162,19 +162,20 @@ CameraBenchResult RunCameraBench(const world::SceneConfig& scene_in, const Camer
   // 2. Latency through the camera subsystem and ZeroMQ, the simulation running in real time.
   {
     world::SceneConfig s = scene;
-    s.cameras.enabled = true;
-    s.cameras.width = o.width;
-    s.cameras.height = o.height;
-    s.cameras.rate = o.rate;
-    s.cameras.modes = {"rgb"};
+    CamerasConfig& cameras = EditCameras(s);
+    cameras.enabled = true;
+    cameras.width = o.width;
+    cameras.height = o.height;
+    cameras.rate = o.rate;
+    cameras.modes = {"rgb"};
     for (auto& a : s.articulations) {
       a.all_cameras = false;
       a.cameras.clear();
     }
-    s.cameras.cameras.clear();
-    s.cameras.cameras[target.articulation + "/" + target.camera] = {};
+    cameras.cameras.clear();
+    cameras.cameras[target.articulation + "/" + target.camera] = {};
     CameraOptions co;
-    co.config = s.cameras;
+    co.config = cameras;
     co.base_port = 0;  // ephemeral
     co.bind_host = "127.0.0.1";
     world::Manager manager;

@@ -22,13 +22,12 @@ std::vector<std::pair<std::string, int>> CamerasOf(const world::Session& session
 
 }  // namespace
 
-std::vector<PlannedCamera> PlanCameras(const world::Session& session,
-                                       const world::CamerasConfig& config) {
+std::vector<PlannedCamera> PlanCameras(const world::Session& session, const CamerasConfig& config) {
   std::vector<PlannedCamera> plan;
   if (!config.enabled) return plan;
   for (const world::Articulation& art : session.articulations()) {
     const auto cams = CamerasOf(session, art);
-    auto settings_of = [&](const std::string& cam) -> const world::CameraSettings* {
+    auto settings_of = [&](const std::string& cam) -> const CameraSettings* {
       auto it = config.cameras.find(art.name() + "/" + cam);
       return it == config.cameras.end() ? nullptr : &it->second;
     };
@@ -58,7 +57,7 @@ std::vector<PlannedCamera> PlanCameras(const world::Session& session,
       p.articulation = art.name();
       p.camera = name;
       p.camera_id = id;
-      const world::CameraSettings* s = settings_of(name);
+      const CameraSettings* s = settings_of(name);
       p.width = s && s->width ? *s->width : config.width;
       p.height = s && s->height ? *s->height : config.height;
       p.rate = s && s->rate ? *s->rate : config.rate;

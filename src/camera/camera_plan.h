@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "urlab/world/scene_file.h"
+#include "urlab/camera/scene_settings.h"
 #include "urlab/world/session.h"
 
 namespace urlab::camera::internal {
@@ -21,8 +21,7 @@ struct PlannedCamera {
 };
 
 // Throws InputError (the scene file's line) for a camera the articulation's MJCF lacks.
-std::vector<PlannedCamera> PlanCameras(const world::Session& session,
-                                       const world::CamerasConfig& config);
+std::vector<PlannedCamera> PlanCameras(const world::Session& session, const CamerasConfig& config);
 
 // Per geom of the compiled scene, the index of the articulation owning its body (-1: none).
 std::vector<int> GeomArticulations(const world::Session& session);

@@ -50,22 +50,7 @@ std::string StreamName(const std::string& camera, const std::string& mode) {
 
 CameraOptions CameraOptionsFromScene(const world::SceneConfig& scene) {
   CameraOptions o;
-  o.config = scene.cameras;
-  const std::string& port = scene.network.camera_base_port;
-  char* end = nullptr;
-  const long p = std::strtol(port.c_str(), &end, 10);
-  if (port.empty() || *end != '\0' || p < 1 || p > 65535) {
-    throw InputError({scene.path, 0},
-                     "network.camera_base_port must be a TCP port number, not '" + port + "'");
-  }
-  o.base_port = static_cast<int>(p);
-  for (const std::string& e :
-       {scene.network.state, scene.network.control, scene.network.info, scene.network.rpc}) {
-    const auto colon = e.rfind(':');
-    if (colon == std::string::npos) continue;
-    const int used = std::atoi(e.c_str() + colon + 1);
-    if (used > 0) o.reserved_ports.push_back(used);
-  }
+  o.config = CamerasOf(scene);
   return o;
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "render/video_writer.h"
+#include "urlab/camera/scene_settings.h"
 #include "urlab/core/error.h"
 
 namespace urlab::camera {
@@ -18,7 +19,7 @@ void RequestVideoCamera(world::SceneConfig& scene, const std::string& camera) {
   bool found = false;
   for (const auto& a : scene.articulations) found = found || a.name == art;
   if (!found) throw InputError({scene.path, 0}, "--video: no articulation '" + art + "'");
-  world::CamerasConfig& c = scene.cameras;
+  CamerasConfig& c = EditCameras(scene);
   if (!c.enabled) {
     // Streaming is off: this camera alone renders.
     c.enabled = true;
@@ -28,7 +29,7 @@ void RequestVideoCamera(world::SceneConfig& scene, const std::string& camera) {
       a.cameras.clear();
     }
   }
-  world::CameraSettings& s = c.cameras[camera];
+  CameraSettings& s = c.cameras[camera];
   std::vector<std::string> modes = s.modes ? *s.modes : c.modes;
   if (std::find(modes.begin(), modes.end(), "rgb") == modes.end()) modes.push_back("rgb");
   s.modes = modes;

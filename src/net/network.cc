@@ -80,7 +80,7 @@ wire::Drop ControlDrop(ops::TargetsFault fault) {
 
 }  // namespace
 
-NetworkOptions NetworkOptionsFromScene(const world::NetworkConfig& config) {
+NetworkOptions NetworkOptionsFromScene(const NetworkConfig& config) {
   NetworkOptions o;
   o.state = config.state;
   o.control = config.control;

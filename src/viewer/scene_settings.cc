@@ -9,7 +9,8 @@ namespace urlab::viewer {
 namespace {
 
 // viewer: {shadows, reflections, skybox, render_scale}.
-std::any ParseQuality(const world::SectionReader& r, const YAML::Node& n) {
+std::any ParseQuality(const world::SectionReader& r, const YAML::Node& n,
+                      const world::SceneConfig&) {
   if (!n.IsMap()) r.Fail(n, "viewer must be a map {shadows, reflections, skybox, render_scale}");
   struct Flag {
     const char* key;
@@ -32,7 +33,8 @@ std::any ParseQuality(const world::SectionReader& r, const YAML::Node& n) {
 }
 
 // cinematic: {orbit_period, orbit_elevation, orbit_distance, loop, path: [{t, pos, look_at}]}.
-std::any ParseCinematic(const world::SectionReader& r, const YAML::Node& n) {
+std::any ParseCinematic(const world::SectionReader& r, const YAML::Node& n,
+                        const world::SceneConfig&) {
   if (!n.IsMap()) r.Fail(n, "cinematic must be a map");
   struct Number {
     const char* key;

@@ -134,7 +134,7 @@ void BatchSubsystem::BeginPlay(Session& session) {
   // own at each of its resets, from a stream of its own (Draw).
   if (session.randomizes()) {
     randomizer_ = session.randomizer();
-    randomize_ = session.scene_config().randomize;
+    randomize_ = RandomizeOf(session.scene_config()).config;
     randomize_gravity_ = !randomize_.gravity.empty();
     for (int w = 0; w < options_.envs; ++w) {
       draws_.push_back({options_.seed + static_cast<std::uint64_t>(w), 0});

@@ -32,8 +32,8 @@ bool Contains(const std::vector<std::string>& v, const std::string& x) {
   return std::find(v.begin(), v.end(), x) != v.end();
 }
 
-void CheckCameras(const SceneConfig& scene, const ArticulationConfig& config, const mjModel* m,
-                  const std::string& prefix, Diagnostics& sink) {
+void CheckCameras(const ArticulationConfig& config, const mjModel* m, const std::string& prefix,
+                  Diagnostics& sink) {
   const std::vector<std::string> cams = ShortNames(m, mjOBJ_CAMERA, m->ncam, prefix);
   auto require = [&](const std::string& cam, const SourceLocation& where, const std::string& what) {
     if (Contains(cams, cam)) return;
@@ -42,11 +42,6 @@ void CheckCameras(const SceneConfig& scene, const ArticulationConfig& config, co
   };
   for (const std::string& cam : config.cameras)
     require(cam, config.where, config.name + ".cameras");
-  for (const auto& [key, settings] : scene.cameras.cameras) {
-    const auto slash = key.find('/');
-    if (key.substr(0, slash) != config.name) continue;
-    require(key.substr(slash + 1), settings.where, "cameras.streams." + key);
-  }
 }
 
 void CheckTwist(const ArticulationConfig& config, const mjcf::ArticulationLayout& layout,
@@ -97,7 +92,7 @@ void CheckInput(const SceneConfig& scene, const ArticulationConfig& config, cons
 void CheckArticulationBindings(const SceneConfig& scene, const ArticulationConfig& config,
                                const mjcf::ArticulationLayout& layout, const mjModel* m,
                                Diagnostics& sink) {
-  CheckCameras(scene, config, m, layout.prefix, sink);
+  CheckCameras(config, m, layout.prefix, sink);
   CheckTwist(config, layout, m, sink);
   CheckInput(scene, config, m, layout.prefix, sink);
 }

@@ -5,6 +5,7 @@
 #include "urlab/world/controller_factory.h"
 #include "urlab/world/names.h"
 #include "world/binding_checks.h"
+#include "world/scene_section.h"
 
 namespace urlab::world {
 
@@ -122,6 +123,8 @@ void CheckCompiledScene(const SceneConfig& scene, const CompiledScene& compiled,
     }
     CheckController(a, m, prefix, sink);
   }
+  // What the subsystems' sections name (the cameras of `cameras.streams`, ...).
+  CheckSceneSections(scene, compiled, sink);
 }
 
 CompiledScene BuildCheckedScene(const SceneConfig& scene) {

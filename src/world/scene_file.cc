@@ -41,7 +41,6 @@ constexpr std::pair<const char*, const char*> kNotYetSupported[] = {
 };
 
 using Range = NumberRange;
-constexpr Range kFinite{-std::numeric_limits<double>::max(), std::numeric_limits<double>::max()};
 constexpr Range kNonNegativeFinite{0, std::numeric_limits<double>::max()};
 constexpr Range kNonNegative{0, kInf};  // inf allowed (e.g. an unlimited torque)
 
@@ -569,163 +568,12 @@ class Parser : public SectionReader {
     return a;
   }
 
-  // A range: {uniform: [low, high]}, {normal: [mean, std]} or {log_uniform: [low, high]}.
-  RandomRange Range2(const YAML::Node& n, const std::string& where) const {
-    const auto entries = Entries(n, where);
-    if (entries.size() != 1) {
-      Fail(n, where +
-                  " must be one of {uniform: [low, high]}, {normal: [mean, std]}, "
-                  "{log_uniform: [low, high]}");
-    }
-    const auto& [dist, v] = entries.front();
-    const std::vector<double> ab = Numbers(v, where + "." + dist, 2);
-    RandomRange r;
-    const std::string problem = MakeRange(dist, ab[0], ab[1], &r);
-    if (!problem.empty()) Fail(v, where + ": " + problem);
-    return r;
-  }
-
-  // `randomize:`: gravity components, and per articulation or prop its parameters (the table of
-  // world/randomize.h). Names are checked against the scene's articulations and props.
-  RandomizeConfig Randomize(const YAML::Node& n, const SceneConfig& s) const {
-    RandomizeConfig c;
-    for (const auto& [name, v] : Entries(n, "randomize")) {
-      const std::string where = "randomize." + name;
-      if (name == "gravity") {
-        CheckKeys(v, where, {"x", "y", "z"});
-        for (const auto& [axis, r] : Entries(v, where))
-          c.gravity[axis] = Range2(r, where + "." + axis);
-        continue;
-      }
-      const ArticulationConfig* art = nullptr;
-      for (const auto& a : s.articulations) {
-        if (a.name == name) art = &a;
-      }
-      bool prop = false;
-      for (const auto& p : s.props) prop |= p.spec.name == name;
-      if (!art && !prop) {
-        Fail(v, where + ": no articulation or prop '" + name + "' in the scene (or 'gravity')");
-      }
-      auto& params = c.targets[name];
-      for (const auto& [key, r] : Entries(v, where)) {
-        if (!IsRandomParam(key, prop)) {
-          std::string known;
-          for (const RandomParamInfo& p : RandomParams()) {
-            if (!prop || p.props) known += (known.empty() ? "" : ", ") + std::string(p.key);
-          }
-          Fail(r, where + ": unknown parameter '" + key + "' (expected one of: " + known + ")");
-        }
-        if ((key == "kp" || key == "kv") && art && art->controller.type != "pd" &&
-            art->controller.type != "gait") {
-          Fail(r, where + "." + key + " needs a PD controller (controller type pd or gait)");
-        }
-        params[key] = Range2(r, where + "." + key);
-      }
-    }
-    return c;
-  }
-
-  // One delay setting: the keys of physics/latency.h (delay_steps | delay, jitter_steps |
-  // jitter, rate_hz).
-  physics::LatencySetting LatencyEntry(const YAML::Node& n, const std::string& where) const {
-    if (!n.IsMap()) Fail(n, where + " must be a mapping (delay_steps, delay, jitter_steps, ...)");
-    physics::LatencySetting s;
-    bool delay = false, jitter = false;
-    for (const auto& [key, v] : Entries(n, where)) {
-      const bool is_delay = key == "delay" || key == "delay_steps";
-      const bool is_jitter = key == "jitter" || key == "jitter_steps";
-      if ((is_delay && delay) || (is_jitter && jitter)) {
-        Fail(v, where + ": give the " + (is_delay ? "delay" : "jitter") +
-                    " in steps or in seconds, not both");
-      }
-      delay |= is_delay;
-      jitter |= is_jitter;
-      const double value = Number(v, where + "." + key, kFinite);
-      const std::string problem = physics::SetLatencyKey(&s, key, value);
-      if (!problem.empty()) Fail(v, where + ": " + problem);
-    }
-    return s;
-  }
-
   physics::ArticulationLatency Latency(const YAML::Node& n, const std::string& where) const {
     CheckKeys(n, where, {"control", "observation"});
     physics::ArticulationLatency l;
     if (n["control"]) l.control = LatencyEntry(n["control"], where + ".control");
     if (n["observation"]) l.observation = LatencyEntry(n["observation"], where + ".observation");
     return l;
-  }
-
-  std::vector<std::string> Names(const YAML::Node& n, const std::string& what) const {
-    if (!n.IsSequence()) Fail(n, what + " must be a list of names");
-    std::vector<std::string> out;
-    for (const auto& v : n) out.push_back(String(v, what));
-    return out;
-  }
-
-  int Pixels(const YAML::Node& n, const std::string& what) const { return Whole(n, what, 1, 8192); }
-
-  std::vector<std::string> Modes(const YAML::Node& n, const std::string& what) const {
-    std::vector<std::string> modes =
-        n.IsScalar() ? std::vector<std::string>{String(n, what)} : Names(n, what);
-    if (modes.empty()) Fail(n, what + " must name at least one mode");
-    std::set<std::string> seen;
-    for (const auto& m : modes) {
-      if (std::find_if(std::begin(kCameraModes), std::end(kCameraModes),
-                       [&](const char* k) { return m == k; }) == std::end(kCameraModes)) {
-        Fail(n, what + ": unknown mode '" + m + "' (expected rgb, depth, segmentation, instance)");
-      }
-      if (!seen.insert(m).second) Fail(n, what + ": mode '" + m + "' is listed twice");
-    }
-    return modes;
-  }
-
-  CamerasConfig Cameras(const YAML::Node& n) const {
-    CamerasConfig c;
-    c.where = At(n);
-    if (!n.IsMap()) Fail(n, "cameras must be a mapping");
-    CheckKeys(n, "cameras",
-              {"enabled", "width", "height", "rate", "modes", "shadows", "reflections", "samples",
-               "gl", "streams"});
-    if (n["enabled"]) c.enabled = Bool(n["enabled"], "cameras.enabled");
-    if (n["width"]) c.width = Pixels(n["width"], "cameras.width");
-    if (n["height"]) c.height = Pixels(n["height"], "cameras.height");
-    if (n["rate"]) c.rate = Number(n["rate"], "cameras.rate", Range{0, 1000, true});
-    if (n["modes"]) c.modes = Modes(n["modes"], "cameras.modes");
-    if (n["shadows"]) c.shadows = Bool(n["shadows"], "cameras.shadows");
-    if (n["reflections"]) c.reflections = Bool(n["reflections"], "cameras.reflections");
-    if (n["samples"]) c.samples = Whole(n["samples"], "cameras.samples", 0, 16);
-    if (n["gl"]) {
-      c.gl = String(n["gl"], "cameras.gl");
-      if (c.gl != "auto" && c.gl != "egl" && c.gl != "osmesa") {
-        Fail(n["gl"], "cameras.gl must be auto, egl or osmesa");
-      }
-    }
-    if (const auto streams = n["streams"]) {
-      if (!streams.IsMap())
-        Fail(streams, "cameras.streams must map \"articulation/camera\" to settings");
-      for (const auto& [key, v] : Entries(streams, "cameras.streams")) {
-        const std::string what = "cameras.streams." + key;
-        if (std::count(key.begin(), key.end(), '/') != 1 || key.front() == '/' ||
-            key.back() == '/') {
-          Fail(v, what + ": the key must be \"articulation/camera\"");
-        }
-        CameraSettings cs;
-        cs.where = At(v);
-        if (!v.IsNull()) {
-          if (!v.IsMap()) {
-            Fail(v, what + " must be a mapping (width, height, rate, modes, latency)");
-          }
-          CheckKeys(v, what, {"width", "height", "rate", "modes", "latency"});
-          if (v["width"]) cs.width = Pixels(v["width"], what + ".width");
-          if (v["height"]) cs.height = Pixels(v["height"], what + ".height");
-          if (v["rate"]) cs.rate = Number(v["rate"], what + ".rate", Range{0, 1000, true});
-          if (v["modes"]) cs.modes = Modes(v["modes"], what + ".modes");
-          if (v["latency"]) cs.latency = LatencyEntry(v["latency"], what + ".latency");
-        }
-        c.cameras[key] = cs;
-      }
-    }
-    return c;
   }
 
   // The list section `key` of entries parsed by `parse` into `out`; each name (spec.name) must be
@@ -762,9 +610,9 @@ class Parser : public SectionReader {
       }
     }
     // The scene's own keys, and the sections registered subsystems parse.
-    std::set<std::string> keys = {"articulations",  "props",   "terrain",        "launchers",
-                                  "options",        "size",    "control_source", "network",
-                                  "save_debug_xml", "cameras", "seed",           "randomize"};
+    std::set<std::string> keys = {"articulations",  "props",          "terrain",
+                                  "launchers",      "options",        "size",
+                                  "control_source", "save_debug_xml", "seed"};
     keys.merge(SceneSectionNames());
     CheckKeys(root, "the scene", keys);
     const YAML::Node arts = root["articulations"];
@@ -798,67 +646,6 @@ class Parser : public SectionReader {
       if (v != std::floor(v)) Fail(n, "seed must be a whole number, not " + n.Scalar());
       s.seed = static_cast<std::uint64_t>(v);
     }
-    if (const auto n = root["randomize"]) {
-      s.randomize_where = At(n);
-      s.randomize = Randomize(n, s);
-    }
-    for (const auto& [key, node] : Entries(root, "the scene")) {
-      if (const SectionParser parse = FindSceneSection(key))
-        s.sections.Set(key, parse(*this, node));
-    }
-    if (root["cameras"]) s.cameras = Cameras(root["cameras"]);
-    for (const auto& [key, settings] : s.cameras.cameras) {
-      const std::string art = key.substr(0, key.find('/'));
-      if (!names.count(art)) {
-        throw InputError(settings.where,
-                         "cameras.streams." + key + ": no articulation '" + art + "' in the scene");
-      }
-    }
-    if (const auto n = root["network"]) {
-      CheckKeys(n, "network",
-                {"enabled", "state", "control", "info", "rpc", "step_mode", "full_state",
-                 "camera_base_port", "files_dir", "max_queued_steps"});
-      if (n["enabled"]) s.network.enabled = Bool(n["enabled"], "network.enabled");
-      if (n["state"]) s.network.state = String(n["state"], "network.state");
-      if (n["control"]) s.network.control = String(n["control"], "network.control");
-      if (n["info"]) s.network.info = String(n["info"], "network.info");
-      if (n["rpc"]) s.network.rpc = String(n["rpc"], "network.rpc");
-      if (n["full_state"]) {
-        s.network.full_state = String(n["full_state"], "network.full_state");
-        if (s.network.full_state == "none") s.network.full_state.clear();
-        if (!s.network.full_state.empty() && s.network.full_state != "minimal" &&
-            s.network.full_state != "standard" && s.network.full_state != "full") {
-          throw InputError(At(n["full_state"]),
-                           "network.full_state must be minimal, standard, full or none");
-        }
-      }
-      if (n["step_mode"]) {
-        s.network.step_mode = String(n["step_mode"], "network.step_mode");
-        if (s.network.step_mode != "live" && s.network.step_mode != "direct") {
-          throw InputError(At(n["step_mode"]), "network.step_mode must be live or direct");
-        }
-      }
-      if (n["camera_base_port"]) {
-        // A TCP port: the first camera stream binds it, the next ones the ports above.
-        s.network.camera_base_port =
-            std::to_string(Whole(n["camera_base_port"], "network.camera_base_port", 1, 65535));
-      }
-      if (const auto d = n["files_dir"]) {
-        const std::string text = String(d, "network.files_dir");
-        if (text.empty()) Fail(d, "network.files_dir must name a folder (or leave it out)");
-        fs::path p(text);
-        if (p.is_relative()) p = fs::path(path()).parent_path() / p;
-        s.network.files_dir = fs::absolute(p).lexically_normal().string();
-        std::error_code ec;
-        if (fs::exists(s.network.files_dir, ec) && !fs::is_directory(s.network.files_dir, ec)) {
-          Fail(d, "network.files_dir: " + s.network.files_dir + " exists and is not a folder");
-        }
-      }
-      if (const auto q = n["max_queued_steps"]) {
-        s.network.max_queued_steps =
-            static_cast<std::size_t>(Whole(q, "network.max_queued_steps", 1, 10000000));
-      }
-    }
     if (const auto n = root["save_debug_xml"]) {
       if (n.IsScalar() && (n.as<std::string>() == "true" || n.as<std::string>() == "false")) {
         if (Bool(n, "save_debug_xml")) {
@@ -869,6 +656,11 @@ class Parser : public SectionReader {
         if (p.is_relative()) p = fs::path(path()).parent_path() / p;
         s.save_debug_xml = p.lexically_normal().string();
       }
+    }
+    // The sections subsystems own, each given the scene's own keys parsed above.
+    for (const auto& [key, node] : Entries(root, "the scene")) {
+      if (const SectionParser parse = FindSceneSection(key))
+        s.sections.Set(key, parse(*this, node, s));
     }
     return s;
   }

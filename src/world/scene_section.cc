@@ -5,6 +5,7 @@
 #include <shared_mutex>
 
 #include "urlab/document/element.h"
+#include "urlab/world/scene_file.h"
 
 namespace urlab::world {
 
@@ -104,11 +105,42 @@ std::string SectionReader::String(const YAML::Node& n, const std::string& what) 
   return n.as<std::string>();
 }
 
+std::vector<std::string> SectionReader::Names(const YAML::Node& n, const std::string& what) const {
+  if (!n.IsSequence()) Fail(n, what + " must be a list of names");
+  std::vector<std::string> out;
+  for (const auto& v : n) out.push_back(String(v, what));
+  return out;
+}
+
+physics::LatencySetting SectionReader::LatencyEntry(const YAML::Node& n,
+                                                    const std::string& where) const {
+  if (!n.IsMap()) Fail(n, where + " must be a mapping (delay_steps, delay, jitter_steps, ...)");
+  physics::LatencySetting s;
+  bool delay = false, jitter = false;
+  for (const auto& [key, v] : Entries(n, where)) {
+    const bool is_delay = key == "delay" || key == "delay_steps";
+    const bool is_jitter = key == "jitter" || key == "jitter_steps";
+    if ((is_delay && delay) || (is_jitter && jitter)) {
+      Fail(v, where + ": give the " + (is_delay ? "delay" : "jitter") +
+                  " in steps or in seconds, not both");
+    }
+    delay |= is_delay;
+    jitter |= is_jitter;
+    const double value = Number(v, where + "." + key, kFiniteNumber);
+    const std::string problem = physics::SetLatencyKey(&s, key, value);
+    if (!problem.empty()) Fail(v, where + ": " + problem);
+  }
+  return s;
+}
+
 namespace {
 
 struct Table {
+  Table() {
+    for (const SectionSpec& spec : {RandomizeSection()}) specs.emplace(spec.name, spec);
+  }
   std::shared_mutex mutex;
-  std::map<std::string, SectionParser> parsers;
+  std::map<std::string, SectionSpec> specs;
 };
 Table& TheTable() {
   static Table table;
@@ -120,22 +152,36 @@ Table& TheTable() {
 void RegisterSceneSection(const SectionSpec& spec) {
   Table& t = TheTable();
   const std::unique_lock lock(t.mutex);
-  t.parsers.emplace(spec.name, spec.parse);
+  t.specs.emplace(spec.name, spec);
 }
 
 SectionParser FindSceneSection(const std::string& name) {
   Table& t = TheTable();
   const std::shared_lock lock(t.mutex);
-  const auto it = t.parsers.find(name);
-  return it == t.parsers.end() ? nullptr : it->second;
+  const auto it = t.specs.find(name);
+  return it == t.specs.end() ? nullptr : it->second.parse;
 }
 
 std::set<std::string> SceneSectionNames() {
   Table& t = TheTable();
   const std::shared_lock lock(t.mutex);
   std::set<std::string> out;
-  for (const auto& [name, parse] : t.parsers) out.insert(name);
+  for (const auto& [name, spec] : t.specs) out.insert(name);
   return out;
+}
+
+void CheckSceneSections(const SceneConfig& scene, const CompiledScene& compiled,
+                        Diagnostics& sink) {
+  std::vector<std::pair<SectionCompiledCheck, const std::any*>> checks;
+  {
+    Table& t = TheTable();
+    const std::shared_lock lock(t.mutex);
+    for (const auto& [name, spec] : t.specs) {
+      const std::any* settings = scene.sections.Find(name);
+      if (spec.check_compiled && settings) checks.emplace_back(spec.check_compiled, settings);
+    }
+  }
+  for (const auto& [check, settings] : checks) check(*settings, scene, compiled, sink);
 }
 
 }  // namespace urlab::world

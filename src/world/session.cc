@@ -162,8 +162,9 @@ void Session::BuildRandomizer() {
     targets.push_back(std::move(t));
   }
   auto r = std::make_shared<Randomizer>(m, std::move(targets));
-  const std::string problem = r->Check(config_.randomize);
-  if (!problem.empty()) throw InputError(config_.randomize_where, "randomize: " + problem);
+  const RandomizeSettings& randomize = RandomizeOf(config_);
+  const std::string problem = r->Check(randomize.config);
+  if (!problem.empty()) throw InputError(randomize.where, "randomize: " + problem);
   randomizer_ = std::move(r);
 }
 
@@ -414,7 +415,7 @@ std::uint64_t Session::latency_seed() const {
 
 Session::RandomizedReset Session::ResetRandomized(std::optional<std::uint64_t> seed,
                                                   const RandomizeConfig* config) {
-  const RandomizeConfig& c = config ? *config : config_.randomize;
+  const RandomizeConfig& c = config ? *config : RandomizeOf(config_).config;
   if (config) {
     const std::string problem = randomizer_->Check(*config);
     if (!problem.empty()) throw Error("randomize: " + problem);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "mujoco_test.h"
+#include "urlab/camera/scene_settings.h"
 #include "urlab/core/error.h"
 #include "urlab/world/manager.h"
 
@@ -18,6 +19,7 @@ namespace {
 
 class CameraSubsystemTest : public testing::MujocoTest {
  protected:
+  void SetUp() override { RegisterSceneSections(); }  // the scenes here have `cameras:`
   world::SceneConfig Scene(const std::string& extra_yaml) {
     return world::ParseScene("articulations:\n  - name: rig\n    mjcf: " +
                                  testing::TestData("cameras/rig.xml") + "\n" + extra_yaml,

@@ -212,11 +212,12 @@ TEST_F(RandomizeTest, ThousandResetsFollowEachConfiguredDistribution) {
     for (const auto& [key, v] : r.draws.targets.at("arm")) drawn[key].push_back(v);
     drawn["gravity.z"].push_back(r.draws.gravity.at("z"));
   }
-  std::map<std::string, world::RandomRange> want = scene.randomize.targets.at("arm");
+  std::map<std::string, world::RandomRange> want =
+      world::RandomizeOf(scene).config.targets.at("arm");
   want["qpos_noise.hinge"] = want.at("qpos_noise");
   want["qpos_noise.wrist"] = want.at("qpos_noise");
   want.erase("qpos_noise");
-  want["gravity.z"] = scene.randomize.gravity.at("z");
+  want["gravity.z"] = world::RandomizeOf(scene).config.gravity.at("z");
   ASSERT_EQ(drawn.size(), want.size());
   // 1.63 / sqrt(n): the 1 % critical value; the seed is fixed, so this is a fixed outcome.
   const double critical = 1.63 / std::sqrt(1000.0);

@@ -92,22 +92,16 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       // features that do not exist yet
       {WithArm("props:\n  - {mesh: box.obj}\n"), 5, "a prop needs a name"},
       {WithArm("terrain: {file: h.png}\n"), 4, "terrain must be a list"},
-      // cameras (issue 11)
-      {WithArm("cameras: []\n"), 4, "cameras must be a mapping"},
-      {WithArm("cameras: {modes: [rgb, infrared]}\n"), 4, "unknown mode 'infrared'"},
-      {WithArm("cameras: {modes: [rgb, rgb]}\n"), 4, "listed twice"},
-      {WithArm("cameras: {width: 0}\n"), 4, "cameras.width must be 1 to 8192"},
-      {WithArm("cameras: {rate: 0}\n"), 4, "cameras.rate must be > 0"},
-      {WithArm("cameras: {gl: glx}\n"), 4, "cameras.gl must be auto, egl or osmesa"},
-      {WithArm("cameras: {fps: 30}\n"), 4, "unknown key 'fps' in cameras"},
-      {WithArm("cameras:\n  streams:\n    ghost/head: {rate: 5}\n"), 6, "no articulation 'ghost'"},
-      {WithArm("cameras:\n  streams:\n    head: {rate: 5}\n"), 6, "\"articulation/camera\""},
-      {WithArm("cameras:\n  streams:\n    a/head: {zoom: 5}\n"), 6, "unknown key 'zoom'"},
+      // an articulation's own cameras (the `cameras:` section is the camera module's:
+      // tests/camera/scene_settings_test.cc)
       {WithArm("    cameras: maybe\n"), 4, "true, false or a list of camera names"},
       {WithArm("recording: {file: r.bin}\n"), 4, "'recording:' is not a scene section"},
-      // a section no subsystem registered (the viewer's, in a program without the viewer)
+      // a section no subsystem registered (the viewer's and the cameras', in a program without
+      // them)
       {WithArm("viewer: {shadows: false}\n"), 4, "unknown key 'viewer' in the scene"},
       {WithArm("cinematic: {loop: false}\n"), 4, "unknown key 'cinematic' in the scene"},
+      {WithArm("cameras: {width: 320}\n"), 4, "unknown key 'cameras' in the scene"},
+      {WithArm("network: {enabled: false}\n"), 4, "unknown key 'network' in the scene"},
       // impulse launchers
       {WithArm("launchers: {name: gun}\n"), 4, "launchers must be a list"},
       {WithArm("launchers:\n  - {pos: [0, 0, 1]}\n"), 5, "a launcher needs a name"},
@@ -127,16 +121,8 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
       {WithArm("launchers:\n  - {name: gun, direction: [1, 0, 0]}\n"), 5,
        "unknown key 'direction' in launcher"},
       {WithArm("launchers:\n  - {name: a}\n"), 5, "the name 'a' is used twice"},
-      // newer keys: whole numbers, ports, key names (these were accepted or truncated)
-      {WithArm("network: {camera_base_port: abc}\n"), 4, "network.camera_base_port must be"},
-      {WithArm("network:\n  camera_base_port: -1\n"), 5,
-       "network.camera_base_port must be 1 to 65535, not -1"},
-      {WithArm("network: {camera_base_port: 99999}\n"), 4, "must be 1 to 65535, not 99999"},
-      {WithArm("network: {camera_base_port: 5558.5}\n"), 4, "whole number"},
-      {WithArm("cameras: {width: 640.5}\n"), 4, "cameras.width must be a whole number, not 640.5"},
-      {WithArm("cameras:\n  height: 479.9\n"), 5, "cameras.height must be a whole number"},
-      {WithArm("cameras: {samples: 2.5}\n"), 4, "cameras.samples must be a whole number"},
-      {WithArm("cameras:\n  streams:\n    a/head: {width: 10.5}\n"), 6, "whole number"},
+      // newer keys: whole numbers, key names (these were accepted or truncated; the network's
+      // ports: tests/net/scene_settings_test.cc)
       {WithArm("    input:\n      - {actuator: shoulder_motor, key: F13}\n"), 5,
        "unknown key 'F13'"},
       {WithArm("    input:\n      - {actuator: shoulder_motor, key: \"\"}\n"), 5, "an empty key"},
@@ -168,13 +154,11 @@ TEST_F(SceneFileTest, GoodValuesStillPass) {
   const world::SceneConfig s =
       world::ParseScene(WithArm("    controller: {type: pd, kp: 0, kv: 0, torque_limit: .inf}\n"
                                 "options: {timestep: 0.001, flag: {gravity: disable}}\n"
-                                "size: {nstack: 5000000, njmax: -1}\n"
-                                "network: {enabled: false}\n"),
+                                "size: {nstack: 5000000, njmax: -1}\n"),
                         dir_ + "/s.yaml");
   EXPECT_EQ(s.size.at("nstack"), "5000000");
   EXPECT_EQ(s.options.at("timestep"), "0.001");
   EXPECT_EQ(s.options.at("flag.gravity"), "disable");
-  EXPECT_FALSE(s.network.enabled);  // network: is parsed and used: not refused
   const world::SceneConfig t =
       world::ParseScene(WithArm("    control_source: input\n    twist: {max_vx: 2, yaw_gain: 1}\n"
                                 "    input:\n      - {actuator: shoulder, key: J, scale: -0.5}\n"
@@ -220,22 +204,14 @@ TEST_F(SceneFileTest, GoodValuesStillPass) {
   EXPECT_EQ(l.launchers[0].where.line, 5);
 }
 
-TEST_F(SceneFileTest, CamerasSectionAndArticulationCameras) {
-  const world::SceneConfig s = world::ParseScene(
-      WithArm("    cameras: [head, wrist]\n"
-              "cameras:\n  enabled: true\n  width: 320\n  height: 240\n  rate: 15\n"
-              "  modes: depth\n  streams:\n    a/head: {width: 64, modes: [rgb, instance]}\n"),
-      dir_ + "/s.yaml");
+TEST_F(SceneFileTest, ArticulationCameras) {
+  const world::SceneConfig s =
+      world::ParseScene(WithArm("    cameras: [head, wrist]\n"), dir_ + "/s.yaml");
   EXPECT_EQ(s.articulations[0].cameras, (std::vector<std::string>{"head", "wrist"}));
   EXPECT_FALSE(s.articulations[0].all_cameras);
-  EXPECT_EQ(s.cameras.width, 320);
-  EXPECT_EQ(s.cameras.rate, 15);
-  EXPECT_EQ(s.cameras.modes, std::vector<std::string>{"depth"});
-  const world::CameraSettings& head = s.cameras.cameras.at("a/head");
-  EXPECT_EQ(head.width, 64);
-  EXPECT_FALSE(head.height.has_value());
-  EXPECT_EQ(*head.modes, (std::vector<std::string>{"rgb", "instance"}));
-  EXPECT_EQ(head.where.line, 12);
+  EXPECT_TRUE(world::ParseScene(WithArm("    cameras: true\n"), dir_ + "/t.yaml")
+                  .articulations[0]
+                  .all_cameras);
 }
 
 TEST_F(SceneFileTest, ScenePathsMustBeRegularFiles) {

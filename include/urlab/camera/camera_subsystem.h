@@ -20,6 +20,7 @@
 #include <string_view>
 #include <vector>
 
+#include "urlab/camera/scene_settings.h"
 #include "urlab/world/camera_streams.h"
 #include "urlab/world/scene_file.h"
 #include "urlab/world/subsystem.h"
@@ -27,7 +28,7 @@
 namespace urlab::camera {
 
 struct CameraOptions {
-  world::CamerasConfig config;
+  CamerasConfig config;
   int base_port = 5558;                      // 0: ephemeral ports on bind_host
   std::string bind_host = "*";               // sockets bind tcp://{bind_host}:{port}
   std::string advertise_host = "127.0.0.1";  // what discovery tells clients to connect to
@@ -38,8 +39,9 @@ struct CameraOptions {
   int render_nice = 5;  // added to the render thread's nice value
 };
 
-// The scene's `cameras:` section and network.camera_base_port; throws InputError for a port that
-// is not a number.
+// The scene's `cameras:` section. The ports (base_port, reserved_ports) are the network's
+// settings (`network.camera_base_port` and its endpoints): the caller sets them (the app from
+// net::NetworkOf, a test or bench its own).
 CameraOptions CameraOptionsFromScene(const world::SceneConfig& scene);
 
 struct CameraCounters {

@@ -20,6 +20,7 @@
 #include <string_view>
 #include <vector>
 
+#include "urlab/net/scene_settings.h"
 #include "urlab/wire/wire.h"
 #include "urlab/world/scene_file.h"
 #include "urlab/world/subsystem.h"
@@ -69,7 +70,7 @@ struct NetworkOptions {
 };
 
 // The endpoints a scene file's `network:` section names (docs/protocol.md's defaults otherwise).
-NetworkOptions NetworkOptionsFromScene(const world::NetworkConfig& config);
+NetworkOptions NetworkOptionsFromScene(const NetworkConfig& config);
 
 // Counts of what the network did, readable from any thread.
 struct NetworkCounters {

@@ -18,8 +18,9 @@ void CheckSceneConfig(const SceneConfig& scene, Diagnostics& sink);
 // a single model's wrong-length key; composition fills keys after compiling, so this is checked
 // here), its controller names only joints, actuators and keyframes it has
 // (world::CheckController), and what its entry names besides exists in its MJCF: the cameras of
-// `cameras:` and `cameras.streams`, a free base for `twist:`, its own actuators for `input:`
-// bindings (src/world/binding_checks.h).
+// its `cameras:` list, a free base for `twist:`, its own actuators for `input:` bindings
+// (src/world/binding_checks.h); then each registered section's own check (the cameras of
+// `cameras.streams`: src/world/scene_section.h).
 void CheckCompiledScene(const SceneConfig& scene, const CompiledScene& compiled, Diagnostics& sink);
 
 // CheckSceneConfig (throws the first error), BuildScene, CheckCompiledScene (throws the first

@@ -3,13 +3,13 @@
 // options, control source, controller and initial keyframe, Quick Convert props (a mesh, its
 // pose, scale, mode, mass or density, friction and decomposition settings), terrain
 // (meshes sampled into a heightfield, or a PNG height map), impulse launchers, plus scene-wide
-// option overrides,
-// network endpoints and the debug-XML switch; the sections a subsystem owns (`viewer:`,
-// `cinematic:`) go to the parser it registered (src/world/scene_section.h). Unknown keys,
+// option overrides, the seed and the debug-XML switch; the sections a subsystem owns (`viewer:`,
+// `cinematic:`, `cameras:`, `network:`) go to the parser it registered, and world's own
+// `randomize:` to its parser in the same table (src/world/scene_section.h). Unknown keys,
 // duplicate keys, keys that are not
 // strings, wrong types and numbers out of range (gains, torque limits, hold/blend times, options
 // checked against the MJCF grammar, size fields), fractions where a whole number is meant
-// (pixels, samples, ports) and names outside the scene name character set
+// (gamepad indices, pool sizes) and names outside the scene name character set
 // (world/scene_names.h) are InputErrors with file and line; sections of features that do not
 // exist yet (recording, lights...) are refused as "not supported yet". Thread: any (pure
 // parsing).
@@ -28,7 +28,6 @@
 #include "urlab/core/error.h"
 #include "urlab/physics/latency.h"
 #include "urlab/world/launchers.h"
-#include "urlab/world/randomize.h"
 #include "urlab/world/scene_sections.h"
 
 namespace urlab::world {
@@ -130,51 +129,6 @@ struct LauncherConfig {
   SourceLocation where;
 };
 
-// How one camera streams; unset fields take the `cameras:` section's defaults.
-struct CameraSettings {
-  std::optional<int> width, height;
-  std::optional<double> rate;                     // frames per second
-  std::optional<std::vector<std::string>> modes;  // rgb | depth | segmentation | instance
-  // Emulated camera delay (physics/latency.h's keys; world::CameraStreams::SetDelay), drawn
-  // from the scene's seed.
-  std::optional<physics::LatencySetting> latency;
-  SourceLocation where;
-};
-
-// The scene's `cameras:` section (issue 11): the global streaming toggle, the defaults every
-// streamed camera takes, and per-camera settings keyed "{articulation}/{camera}" (naming a camera
-// there also streams it).
-struct CamerasConfig {
-  bool enabled = true;  // false: no camera renders or streams, whatever articulations ask
-  int width = 640, height = 480;
-  double rate = 30;
-  std::vector<std::string> modes = {"rgb"};
-  // Off-screen rendering (software rendering pays dearly for each: off by default).
-  bool shadows = false, reflections = false;
-  int samples = 0;
-  std::string gl = "auto";  // auto | egl | osmesa
-  std::map<std::string, CameraSettings> cameras;
-  SourceLocation where;
-};
-
-// The camera modes a scene may ask for, in wire order.
-inline constexpr const char* kCameraModes[] = {"rgb", "depth", "segmentation", "instance"};
-
-struct NetworkConfig {
-  bool enabled = true;
-  std::string state = "tcp://*:5555";
-  std::string control = "tcp://127.0.0.1:5556";
-  std::string info = "tcp://*:5557";
-  std::string rpc = "tcp://127.0.0.1:5559";  // the step server (request/reply)
-  std::string step_mode = "live";            // live | direct (lockstep)
-  std::string full_state = "standard";       // state/full level: minimal|standard|full|none
-  std::string camera_base_port = "5558";     // a port number 1..65535 (checked when parsed)
-  // The folder whose files step-server clients name (absolute; relative in the scene: to the
-  // scene file's folder). "" : recordings/ in the working folder of the run.
-  std::string files_dir;
-  std::size_t max_queued_steps = 100000;  // lockstep steps one client may queue
-};
-
 struct SceneConfig {
   std::string path;  // the scene file
   std::vector<ArticulationConfig> articulations;
@@ -184,18 +138,14 @@ struct SceneConfig {
   std::map<std::string, std::string> options;  // manager overrides: only the fields set
   std::map<std::string, std::string> size;     // <size> attributes (nconmax, njmax, nstack...)
   ControlSource control_source = ControlSource::kNetwork;
-  NetworkConfig network;
-  CamerasConfig cameras;
-  // The sections subsystems own (`viewer:`, `cinematic:`), parsed by the parser each registered
+  // The sections subsystems own (`viewer:`, `cinematic:`, `cameras:`, `network:`; world's own
+  // `randomize:`, world/randomize_settings.h), parsed by the parser each registered
   // (src/world/scene_section.h) into its own settings type.
   SceneSections sections;
   std::string save_debug_xml;  // folder for scene_compiled.xml/.mjb ("" = off)
   // The run's seed (`seed:`; `urlab run --seed` overrides): every emulated delay's jitter draws
   // from it.
   std::uint64_t seed = 0;
-  // Domain randomisation (`randomize:`), drawn at every reset (world/randomize.h).
-  RandomizeConfig randomize;
-  SourceLocation randomize_where;
 };
 
 // Parses a scene file. Relative MJCF paths resolve against the scene file's folder.

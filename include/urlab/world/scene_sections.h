@@ -29,6 +29,11 @@ class SceneSections {
     if (!v.has_value() || !std::any_cast<T>(&v)) v = T{};
     return *std::any_cast<T>(&v);
   }
+  // The settings of `name` as stored, nullptr when the scene has no such section.
+  const std::any* Find(const std::string& name) const {
+    const auto it = values_.find(name);
+    return it == values_.end() ? nullptr : &it->second;
+  }
   void Set(const std::string& name, std::any settings) { values_[name] = std::move(settings); }
   bool Has(const std::string& name) const { return values_.count(name) != 0; }
 

@@ -27,6 +27,7 @@
 #include "urlab/physics/observation_delay.h"
 #include "urlab/physics/views.h"
 #include "urlab/world/randomize.h"
+#include "urlab/world/randomize_settings.h"
 #include "urlab/world/scene.h"
 #include "urlab/world/scene_file.h"
 
@@ -149,7 +150,7 @@ class Session : public std::enable_shared_from_this<Session> {
   // The draws of the last randomised reset (empty before one).
   RandomDraws last_draws() const;
   // True when the scene has a `randomize:` section (every reset then draws).
-  bool randomizes() const { return !config_.randomize.empty(); }
+  bool randomizes() const { return !RandomizeOf(config_).config.empty(); }
   // The mechanism that draws `randomize:` (null before Build), for simulations kept beside this
   // one that draw into models of their own (the environments of a batch,
   // world/batch_subsystem.h).
