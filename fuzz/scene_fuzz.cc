@@ -7,7 +7,8 @@
 // to robot.xml in a private temporary folder next to the scene (which also holds arm.xml, a
 // small valid arm), so a scene names `mjcf: robot.xml` or `mjcf: arm.xml`. Articulations whose
 // MJCF lies outside that folder are not read (the input is skipped). Any input must load or fail
-// with urlab::Error (InputError, CompileError, MujocoError...); never crash or leak.
+// with urlab::Error (InputError, CompileError, MujocoError...); never crash or leak. The scene
+// sections the urlab CLI registers (viewer:, cinematic:, cameras:, network:) are registered too.
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -15,12 +16,15 @@
 #include <vector>
 
 #include "fuzz_support.h"
+#include "urlab/camera/scene_settings.h"
 #include "urlab/core/diagnostics.h"
 #include "urlab/core/error.h"
 #include "urlab/mjcf/bridge.h"
 #include "urlab/mjcf/compose.h"
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/writer.h"
+#include "urlab/net/scene_settings.h"
+#include "urlab/viewer/scene_settings.h"
 #include "urlab/world/scene.h"
 #include "urlab/world/scene_checks.h"
 #include "urlab/world/scene_file.h"
@@ -33,6 +37,9 @@ constexpr std::size_t kMaxArticulations = 8;
 const std::string& Dir() {
   static const std::string dir = [] {
     urlab::fuzz::QuietStart();
+    urlab::viewer::RegisterSceneSections();
+    urlab::camera::RegisterSceneSections();
+    urlab::net::RegisterSceneSections();
     urlab::fuzz::WriteText(urlab::fuzz::TempDir() + "/arm.xml", urlab::fuzz::kArmXml);
     return urlab::fuzz::TempDir();
   }();
