@@ -66,7 +66,14 @@ std::string SerializeExtensions(const SoftwareModelSpec& e) {
                             {"gravcomp", gravcomp},
                             {"deadband_springs", springs},
                             {"site_equalities", equalities}};
-  return j.dump();
+  try {
+    return j.dump();
+  } catch (const nlohmann::json::type_error& error) {
+    // MuJoCo takes any bytes as a name; the extensions' text is JSON, which must be UTF-8.
+    throw Error(std::string("a software sensor, passive force or site equality refers to a name "
+                            "that is not UTF-8 text (") +
+                error.what() + ")");
+  }
 }
 
 SoftwareModelSpec ParseExtensions(std::string_view text) {

@@ -151,6 +151,19 @@ TEST_F(OwnedModelTest, TheHashCoversTheExtensions) {
   EXPECT_THROW(physics::ParseExtensions("not json"), Error);
 }
 
+TEST_F(OwnedModelTest, ExtensionNamesThatAreNotUtf8AreAnErrorNotACrash) {
+  // (Found by fuzz_scene: a site name with a stray byte made the JSON dump throw past every
+  // handler and end the process.)
+  physics::SoftwareModelSpec spec;
+  spec.site_equalities.push_back({"weld", "grip\xA4", "target"});
+  try {
+    (void)physics::SerializeExtensions(spec);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not UTF-8"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(OwnedModelTest, RegistrationEndsWithTheModelAndSurvivesMoves) {
   const int before = physics::RegisteredSoftwareSensorModels();
   {
