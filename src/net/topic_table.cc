@@ -1,5 +1,6 @@
 #include "net/topic_table.h"
 
+#include "urlab/physics/free_base.h"
 #include "urlab/wire/wire.h"
 #include "urlab/world/names.h"
 
@@ -18,6 +19,7 @@ std::vector<ArticulationTopics> BuildTopicTables(world::Session& session) {
     t.twist_topic = wire::TwistTopic(t.name);
     t.actions_topic = wire::ActionsTopic(t.name);
     const physics::ArticulationBindings& b = *a.bindings;
+    t.free_joint = physics::FreeBaseIndex(b);
     for (std::size_t i = 0; i < b.joints().size(); ++i) {
       const physics::JointView& j = b.joints().all()[i];
       const std::string& short_name = b.joints().short_names()[i];
@@ -28,7 +30,6 @@ std::vector<ArticulationTopics> BuildTopicTables(world::Session& session) {
       e.type = j.type;
       e.qpos_adr = j.qpos_adr;
       e.dof_adr = j.dof_adr;
-      if (j.type == mjJNT_FREE && t.free_joint < 0) t.free_joint = static_cast<int>(i);
       for (int k = 0; k < j.qpos_size; ++k) t.qpos_adrs.push_back(j.qpos_adr + k);
       for (int k = 0; k < j.dof_size; ++k) t.dof_adrs.push_back(j.dof_adr + k);
       t.joint_names.push_back(short_name);

@@ -9,6 +9,7 @@
 #include "ops/value_ranges.h"
 #include "urlab/ops/error.h"
 #include "urlab/ops/simulation.h"
+#include "urlab/physics/free_base.h"
 
 namespace urlab::ops {
 
@@ -16,13 +17,14 @@ std::uint64_t SetQpos(world::Session& session, std::string_view articulation,
                       const std::vector<double>& qpos) {
   const world::Articulation& a = RequireArticulation(session, articulation);
   CheckRanges(qpos, "qpos");
-  // The articulation's qpos addresses in joint order, and its free base (the first free joint).
+  // The articulation's qpos addresses in joint order, and its free base's.
   std::vector<int> adrs;
-  int free_adr = -1;
   for (const physics::JointView& j : a.bindings->joints().all()) {
-    if (j.type == mjJNT_FREE && free_adr < 0) free_adr = j.qpos_adr;
     for (int k = 0; k < j.qpos_size; ++k) adrs.push_back(j.qpos_adr + k);
   }
+  const int base = physics::FreeBaseIndex(*a.bindings);
+  const int free_adr =
+      base < 0 ? -1 : a.bindings->joints().all()[static_cast<std::size_t>(base)].qpos_adr;
   if (adrs.empty()) Fail("no_joints", a.name() + " has no joints");
   physics::cmd::SetState state;
   if (free_adr >= 0 && qpos.size() == 7 && adrs.size() != 7) {

@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "urlab/physics/free_base.h"
+
 namespace urlab::world {
 
 namespace {
@@ -46,11 +48,7 @@ void CheckCameras(const ArticulationConfig& config, const mjModel* m, const std:
 
 void CheckTwist(const ArticulationConfig& config, const mjcf::ArticulationLayout& layout,
                 const mjModel* m, Diagnostics& sink) {
-  if (!config.twist_given) return;
-  for (const std::string& joint : layout.joints) {
-    const int j = mj_name2id(m, mjOBJ_JOINT, joint.c_str());
-    if (j >= 0 && m->jnt_type[j] == mjJNT_FREE) return;
-  }
+  if (!config.twist_given || physics::FreeBaseJoint(m, layout.prefix) >= 0) return;
   sink.Error(config.where, config.name +
                                ": twist needs a free base (a freejoint on the root body); " +
                                config.mjcf + " has none, so nothing could drive it");

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "urlab/control/gait.h"
+#include "urlab/physics/free_base.h"
 #include "urlab/world/names.h"
 
 namespace urlab::world {
@@ -180,8 +181,8 @@ void InstallController(const ArticulationConfig& config, control::ArticulationCo
 
 void InstallTwist(const ArticulationConfig& config, const physics::ArticulationBindings& bindings,
                   control::ArticulationControl& control, const mjModel* m) {
-  for (const physics::JointView& j : bindings.joints().all()) {
-    if (j.type != mjJNT_FREE) continue;
+  if (const int base = physics::FreeBaseIndex(bindings); base >= 0) {
+    const physics::JointView& j = bindings.joints().all()[static_cast<std::size_t>(base)];
     auto* gait = dynamic_cast<control::GaitController*>(control.controller());
     control::TwistSettings settings = config.twist;
     if (!config.twist_mode_given) {

@@ -3,6 +3,8 @@
 // mocap body, a keyframe, behind the network subsystem (step server and topics on ephemeral
 // loopback ports), so a test reaches one operation through the step server, through a topic and
 // directly (the call the viewer's panel and the CLI make), and compares what each path answers.
+// The ball (with its cap, two bodies) outnumbers the hinged link, so the ball's free joint is the
+// articulation's free base (physics/free_base.h): set_twist and the 7-value qpos shortcut reach it.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -34,6 +36,7 @@ inline constexpr const char* kArmXml = R"(<mujoco model="arm">
     <body name="ball" pos="0.5 0 0.049">
       <freejoint name="ball_free"/>
       <geom name="ball_geom" type="sphere" size="0.05" mass="0.1"/>
+      <body name="ball_cap"><geom size="0.01" mass="0.001" contype="0" conaffinity="0"/></body>
     </body>
     <body name="target" mocap="true" pos="0 0 2">
       <geom type="sphere" size="0.05" contype="0" conaffinity="0"/>

@@ -171,6 +171,23 @@ TEST_F(SceneChecksTest, CamerasTwistAndInputBindingsAreCheckedAgainstTheCompiled
   EXPECT_TRUE(ok.ok()) << (ok.diagnostics.errors().empty() ? "" : ok.diagnostics.errors()[0].str());
 }
 
+TEST_F(SceneChecksTest, ALooseObjectInAFixedArmsFileIsNotAFreeBaseForTwist) {
+  // The ball's free joint used to count as the arm's free base: `twist:` passed and drove the
+  // ball (physics/free_base.h).
+  testing::WriteTextFile(dir_, "arm_and_ball.xml", R"(<mujoco>
+  <worldbody>
+    <body name="link"><joint name="hinge"/><geom size="0.1" mass="1"/>
+      <body name="tip" pos="0 0 0.3"><joint name="wrist"/><geom size="0.05" mass="1"/></body>
+    </body>
+    <body name="ball" pos="1 0 0.1"><freejoint name="ball_free"/><geom size="0.05"/></body>
+  </worldbody>
+</mujoco>
+)");
+  const auto errors = ValidateErrors(
+      "articulations:\n  - name: a\n    mjcf: arm_and_ball.xml\n    twist: {max_vx: 1}\n");
+  EXPECT_TRUE(AnyContains(errors, "s.yaml:2: a: twist needs a free base")) << Joined(errors);
+}
+
 TEST_F(SceneChecksTest, ValidateStartsNothingAndWritesNothing) {
   const std::string yaml =
       "articulations:\n  - {name: a, mjcf: " + kArm + "}\nsave_debug_xml: debug_out\n";
