@@ -9,7 +9,8 @@ gymnasium's step_async/step_wait), real `urlab run --envs N` processes:
 - recv() gives one server's environments at a time, in the order sent, infos["env_id"] their
   indices; step_async + step_wait is step();
 - misuse is refused with a clear error: a second send() to a server before its recv(), step()
-  or reset() while a send() waits, recv() with nothing sent, env_id that is not whole servers'.
+  or reset() while a send() waits, recv() with nothing sent, env_id that is not whole servers';
+- close() with sends in flight leaves the servers usable (the next vector env takes over).
 Usage: batch_async_e2e.py URLAB_BINARY SOURCE_DIR
 """
 import os
@@ -72,8 +73,9 @@ def main():
         f.write(f"articulations:\n  - name: arm\n    mjcf: {model}\n")
     rpcs = [server(scene, 4), server(scene, 4)]
 
-    def make():
-        return UrlabVectorEnv.over_batch(rpcs, max_episode_steps=EPISODE, reward_fn=reward_fn)
+    def make(shared_memory=True):
+        return UrlabVectorEnv.over_batch(rpcs, max_episode_steps=EPISODE, reward_fn=reward_fn,
+                                         shared_memory=shared_memory)
 
     # The synchronous reference.
     envs = make()
@@ -123,17 +125,35 @@ def main():
     expect_error(ValueError, lambda: envs.send(np.zeros((4, 2)), [4, 5, 6, 8]), "no env 8")
     expect_error(ValueError, lambda: envs.send(np.zeros((3, 2)), halves[1]), "actions' shape")
 
-    # step_async + step_wait is step().
+    # step_async + step_wait is step(), over shared memory and over ZeroMQ.
+    envs.close()
+    for shm in (True, False):
+        envs = make(shared_memory=shm)
+        check(envs.envs[0].client.transport == ("shm" if shm else "zmq"), f"transport, shm={shm}")
+        obs, _ = envs.reset(seed=3)
+        for t in range(STEPS):
+            envs.step_async(actions_for(t, 8, 2))
+            obs, rewards, terminated, truncated, infos = envs.step_wait()
+            want_obs, want_rew, want_term, want_trunc = ref[t + 1]
+            check(np.array_equal(np.concatenate([obs["qpos"], obs["qvel"]], axis=1), want_obs)
+                  and np.array_equal(rewards, want_rew) and np.array_equal(terminated, want_term)
+                  and np.array_equal(truncated, want_trunc),
+                  f"step_async/step_wait (shm={shm}), step {t} differs")
+            check(infos["time"].shape == (8,) and infos["_time"].all() and "env_id" not in infos,
+                  f"step_wait infos {sorted(infos)}")
+        if shm:
+            envs.close()
+    # close() with sends in flight (over ZeroMQ here) takes their replies before saying bye: the
+    # servers stay usable, and the next vector env gets their leases at once.
+    envs.send(actions_for(0, 8, 2))
+    envs.close()
+    envs = make()
     obs, _ = envs.reset(seed=3)
-    for t in range(STEPS):
-        envs.step_async(actions_for(t, 8, 2))
-        obs, rewards, terminated, truncated, infos = envs.step_wait()
-        want_obs, want_rew, want_term, want_trunc = ref[t + 1]
-        check(np.array_equal(np.concatenate([obs["qpos"], obs["qvel"]], axis=1), want_obs) and
-              np.array_equal(rewards, want_rew) and np.array_equal(terminated, want_term) and
-              np.array_equal(truncated, want_trunc), f"step_async/step_wait, step {t} differs")
-        check(infos["time"].shape == (8,) and infos["_time"].all() and "env_id" not in infos,
-              f"step_wait infos {sorted(infos)}")
+    check(np.array_equal(np.concatenate([obs["qpos"], obs["qvel"]], axis=1), ref[0][0]),
+          "after a close with sends in flight, the reset differs")
+    obs, *_ = envs.step(actions_for(0, 8, 2))
+    check(np.array_equal(np.concatenate([obs["qpos"], obs["qvel"]], axis=1), ref[1][0]),
+          "after a close with sends in flight, the first step differs")
     envs.close()
 
     for p in PROCS:

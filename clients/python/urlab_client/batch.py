@@ -442,5 +442,16 @@ class BatchBackend:
         return view, rewards, terminated, truncated, infos
 
     def close(self):
+        # Replies still owed to send() are taken first: a client has one request in flight at a
+        # time (over ZeroMQ the bye could not be sent, and the lease would stay taken).
+        while self._in_flight:
+            k, renewed, failed, *_ = self._in_flight.popleft()
+            client = self.clients[k]
+            if failed or client.client is None:
+                continue
+            try:
+                client.receive_reset() if renewed else client.receive_step()
+            except (UrlabError,) + LOST:
+                pass
         for c in self.clients:
             c.close()
