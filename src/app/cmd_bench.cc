@@ -209,8 +209,14 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
       "(batchN_python_ratio, batchN_server_ratio, batchN_server_env_steps_per_s; "
       "batch64_ratio, python_overhead64 = 1 - Python rate / the server's own batched rate), "
       "beside parallel_ceiling (2 plain threads, each stepping its own mjData with no "
-      "synchronisation, over the bare loop: what 2 cores give at all) and batch64_of_ceiling "
-      "(the Python rate at N = 64 over that ceiling, same round).");
+      "synchronisation, over the bare loop: what 2 cores give at all), parallel_ceiling64 (the "
+      "same with 32 mjData per thread stepped in turn: what 2 cores give to 64 simulations) and "
+      "batch64_of_ceiling "
+      "(the Python rate at N = 64 over that ceiling, same round); batch64_ratio is the "
+      "synchronous step() over that one server. Then the same 64 environments as two servers "
+      "of 32 with one thread each, through one vector env: batch2x32_sync_ratio (step()) and "
+      "batch2x32_async_ratio (send/recv: one server steps while Python handles the other's "
+      "reply).");
   static net::FleetBenchOptions fleet_args;
   static std::string fleet_scene;
 #ifdef URLAB_PYTHON_CLIENT_DIR

@@ -3,9 +3,11 @@
 // (UrlabVectorEnv.over_batch, shared memory) at N = 1, 16, 64, 256: aggregate environment steps
 // per second through Python, the server's own rate (its physics thread's time on batch steps,
 // batch_info's busy_seconds), and their ratios to the bare single-thread loop of the same run.
-// batch64_ratio is the Python rate at N = 64 over the bare loop; python_overhead64 is
-// 1 - Python rate / server rate at N = 64; batch64_of_ceiling is the Python rate at N = 64 over
-// the same round's rate of 2 independent threads stepping their own copies (CeilingRate).
+// batch64_ratio is the Python rate at N = 64 over the bare loop (synchronous step() over one
+// server); python_overhead64 is 1 - Python rate / server rate at N = 64; batch64_of_ceiling is
+// the Python rate at N = 64 over the same round's rate of 2 independent threads stepping their
+// own copies (CeilingRate). Then the same 64 environments as two servers of 32 with one thread
+// each: batch2x32_sync_ratio (step()) and batch2x32_async_ratio (send/recv, pipelined).
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -55,6 +57,45 @@ elapsed = time.perf_counter() - t0
 after = client.call("batch_info")
 server = (after["env_steps"] - before["env_steps"]) / (after["busy_seconds"] - before["busy_seconds"])
 print("rate=%f server=%f transport=%s" % (steps * n / elapsed, server, client.transport))
+env.close()
+)PY";
+
+// The same 64 environments as two servers of 32 (one stepping thread each: 2 threads in all),
+// one vector env over both, driven first synchronously (step: both servers step, then Python
+// handles both replies) and then asynchronously (send/recv: one server steps its half while
+// Python handles the other's reply). Prints both aggregate rates.
+constexpr const char* kAsyncScript = R"PY(
+import sys, time
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+from urlab_client import UrlabVectorEnv
+endpoints, steps = sys.argv[2].split(","), int(sys.argv[3])
+env = UrlabVectorEnv.over_batch(endpoints)
+n, nu = env.num_envs, env.single_action_space.shape[0]
+low = np.where(np.isfinite(env.single_action_space.low), env.single_action_space.low, -1.0)
+high = np.where(np.isfinite(env.single_action_space.high), env.single_action_space.high, 1.0)
+actions = np.random.default_rng(0).uniform(low, high, size=(8, n, nu))
+env.reset(seed=0)
+for i in range(10):
+    env.step(actions[i % 8])
+t0 = time.perf_counter()
+for i in range(steps):
+    env.step(actions[i % 8])
+sync = steps * n / (time.perf_counter() - t0)
+env.reset(seed=0)
+env.send(actions[0])
+for i in range(10 * len(endpoints)):
+    obs, rewards, terminated, truncated, infos = env.recv()
+    env.send(actions[i % 8][infos["env_id"]], infos["env_id"])
+done, t0 = 0, time.perf_counter()
+for i in range(steps * len(endpoints)):
+    obs, rewards, terminated, truncated, infos = env.recv()
+    done += len(infos["env_id"])
+    env.send(actions[i % 8][infos["env_id"]], infos["env_id"])
+for _ in endpoints:
+    obs, rewards, terminated, truncated, infos = env.recv()
+    done += len(infos["env_id"])
+print("sync=%f async=%f" % (sync, done / (time.perf_counter() - t0)))
 env.close()
 )PY";
 
@@ -262,6 +303,7 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
                envs, std::min(kThreads, envs), ratio, Median(server_rates), Median(server_ratios),
                Median(overheads)));
     if (envs == 64) {
+      // batch64_ratio: the synchronous Python vector env over this one server of 64.
       out->push_back({"batch64_ratio", ratio});
       out->push_back({"python_overhead64", Median(overheads)});
       out->push_back({"batch64_of_ceiling", Median(of_ceiling)});
@@ -271,6 +313,29 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
                  Median(of_ceiling), kThreads));
     }
   }
+  // The same 64 environments as two servers of 32 with one stepping thread each.
+  BatchServer a(ctx.scene_path, 32, 1), b(ctx.scene_path, 32, 1);
+  const int steps = std::clamp(ctx.steps_per_round() / 64 * 4, 30, 4000);
+  std::vector<double> sync_ratios, async_ratios;
+  for (int round = 0; round < o.rounds; ++round) {
+    const double bare = ctx.BareRate(ctx.steps_per_round());
+    int status = 0;
+    const std::string text = RunCaptured({o.python, "-c", kAsyncScript, o.python_client,
+                                          a.rpc() + "," + b.rpc(), std::to_string(steps)},
+                                         &status);
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+      throw Error("bench fleet: the Python asynchronous batched client failed (" + text + ")");
+    }
+    sync_ratios.push_back(Field(text, "sync") / bare);
+    async_ratios.push_back(Field(text, "async") / bare);
+  }
+  out->push_back({"batch2x32_sync_ratio", Median(sync_ratios)});
+  out->push_back({"batch2x32_async_ratio", Median(async_ratios)});
+  ctx.Report(
+      Format("64 envs as 2 batched servers of 32, 1 thread each: Python vector env %.3f of bare "
+             "with step() (synchronous), %.3f with send/recv (one server steps while Python "
+             "handles the other's reply)",
+             Median(sync_ratios), Median(async_ratios)));
 }
 
 }  // namespace urlab::net

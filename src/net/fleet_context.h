@@ -37,8 +37,11 @@ class FleetContext {
   // Aggregate steps per second of `threads` plain threads, each stepping `steps` times its own
   // copy of the bare copy's state (its own mjData, the shared model only read), with no
   // synchronisation between them (one start signal; the wall time runs from it to the last
-  // thread's end): what the machine's cores give at all, with no batch around them.
-  double CeilingRate(int threads, int steps);
+  // thread's end): what the machine's cores give at all, with no batch around them. With
+  // `copies` > 1 each thread steps that many copies in turn (`steps` in all): what the cores give
+  // to that many separate simulations per thread (each one's data leaves the caches before its
+  // next step), still with no batch around them.
+  double CeilingRate(int threads, int steps, int copies = 1);
   // Median over rounds of measure() / BareRate measured just before it (each round).
   double MedianRatio(const std::function<double()>& measure);
   void Report(const std::string& line) const {

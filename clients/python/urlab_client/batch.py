@@ -10,11 +10,12 @@ docs/network.md, "Batched environments").
 BatchClient speaks the operations to one server; BatchBackend is UrlabVectorEnv's backend over
 one or more batched servers (N servers x M environments): one request per server per step, sent
 to every server before the replies are gathered, with numpy arrays in and out and no loop over
-environments in Python. Actions are the model's controls (ctrl, actuator order) bounded by each
-actuator's ctrlrange; the observation is {"qpos", "qvel", "sensordata"} of the whole model, views
-on the reply's packed array (read-only; .copy() one to modify it).
+environments in Python; send()/recv() are the same steps asynchronously (one server's reply at
+a time, UrlabVectorEnv.send/recv). Actions are the model's controls (ctrl, actuator order)
+bounded by each actuator's ctrlrange; the observation is {"qpos", "qvel", "sensordata"} of the
+whole model, views on the reply's packed array (read-only; .copy() one to modify it).
 """
-from collections import OrderedDict
+from collections import OrderedDict, deque
 
 import numpy as np
 import zmq
@@ -160,6 +161,7 @@ class BatchBackend:
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
         self._elapsed = np.zeros(self.num_envs, dtype=np.int64)
         self._lost = [False] * len(self.clients)
+        self._in_flight = deque()  # send()'s requests not received yet, oldest first
 
     @classmethod
     def connect(cls, endpoints, require=None, n_steps=1, replace=None, reward_fn=None,
@@ -210,6 +212,7 @@ class BatchBackend:
 
     # ---- gymnasium's vector API (UrlabVectorEnv calls these)
     def reset(self, seed=None, options=None):
+        self._check_idle("reset")
         n = self.num_envs
         if seed is None:
             seeds = [None] * n
@@ -249,6 +252,7 @@ class BatchBackend:
         return self._view(self._obs), _infos(n, time=time)
 
     def step(self, actions):
+        self._check_idle("step")
         n = self.num_envs
         actions = np.asarray(actions, dtype=np.float64)
         if actions.shape != (n, self.nu):
@@ -323,6 +327,131 @@ class BatchBackend:
         self._autoreset = terminated | truncated
         return obs, rewards, terminated, truncated, infos
 
+    # ---- Asynchronous stepping, EnvPool's send/recv (UrlabVectorEnv.send, recv)
+    def _check_idle(self, what):
+        if self._in_flight:
+            raise RuntimeError(f"{what}() while {len(self._in_flight)} send() request(s) wait "
+                               "for recv()")
+
+    def _servers_of(self, env_id):
+        """The servers whose environments env_id lists (whole servers, in their order)."""
+        if env_id is None:
+            return list(range(len(self.clients)))
+        ids = np.asarray(env_id, dtype=np.int64).ravel()
+        ks, at = [], 0
+        while at < ids.size:
+            k = int(np.searchsorted(self.offsets, ids[at], side="right")) - 1
+            s = self._slice(k) if 0 <= k < len(self.clients) else None
+            if s is None or ids[at] != s.start or \
+                    not np.array_equal(ids[at:at + self.counts[k]], np.arange(s.start, s.stop)):
+                raise ValueError("env_id must list whole servers' environments in order (as "
+                                 f"recv() gives them in infos['env_id']); got {ids.tolist()}")
+            ks.append(k)
+            at += self.counts[k]
+        if len(set(ks)) != len(ks):
+            raise ValueError(f"env_id lists a server twice: {ids.tolist()}")
+        return ks
+
+    def send(self, actions, env_id=None):
+        """Sends a step to the servers of env_id (None: all) and returns without waiting; their
+        replies come back one server at a time from recv(), in the order sent. At most one
+        request per server is in flight."""
+        ks = self._servers_of(env_id)
+        rows = sum(self.counts[k] for k in ks)
+        actions = np.asarray(actions, dtype=np.float64)
+        if actions.shape != (rows, self.nu):
+            raise ValueError(f"actions of shape {actions.shape}, expected {(rows, self.nu)}")
+        busy = {entry[0] for entry in self._in_flight}
+        for k in ks:
+            if k in busy:
+                raise RuntimeError(f"server {k} has a step in flight already: recv() it first")
+        at = 0
+        for k in ks:
+            a = actions[at:at + self.counts[k]]
+            at += self.counts[k]
+            resetting = self._autoreset[self._slice(k)].copy()
+            renewed, failed = False, False
+            try:
+                if self._lost[k]:  # its environments were truncated: back at their autoreset
+                    self._renew(k)
+                    self.clients[k].send_reset()
+                    renewed = True
+                else:
+                    self.clients[k].send_step(a, resetting)
+            except LOST:
+                failed = True
+            self._in_flight.append((k, renewed, failed, a, resetting))
+
+    def recv(self):
+        """The oldest send()'s reply for one server: (obs, rewards, terminated, truncated, infos)
+        over that server's environments only, infos["env_id"] their indices in the vector env;
+        the same autoreset and flags as step() gives those environments."""
+        if not self._in_flight:
+            raise RuntimeError("recv() with no send() waiting for its reply")
+        k, renewed, failed, actions, resetting = self._in_flight.popleft()
+        n, s = self.num_envs, self._slice(k)
+        m = self.counts[k]
+        truncated_all = np.zeros(n, dtype=bool)
+        lost_all = np.zeros(n, dtype=bool)
+        done = np.zeros(m, dtype=bool)
+        time = np.zeros(m)
+        obs = None
+        if not failed:
+            try:
+                r = self.clients[k].receive_reset() if renewed else self.clients[k].receive_step()
+                obs, done, time = r["obs"], r["done"].copy(), r["time"].copy()
+                if renewed:
+                    resetting = np.ones(m, dtype=bool)
+            except LOST:
+                failed = True
+            except UrlabError as e:
+                if e.code not in ("session_expired", "shutting_down"):
+                    raise
+                failed = True
+        if failed:
+            self._lose(k, truncated_all, lost_all)
+            obs = self._obs[s].copy()
+        if not self._obs.flags.writeable:  # a reply's own array after step()
+            self._obs = self._obs.copy()
+        self._obs[s] = obs
+        truncated, lost = truncated_all[s], lost_all[s]
+        elapsed = self._elapsed[s]  # a view: updated in place
+        elapsed += 1
+        any_reset = bool(resetting.any())
+        if any_reset:
+            elapsed[resetting] = 0
+        view = self._view(obs)  # the reply's own array: later replies leave it as it is
+        infos = _infos(m, time=time, env_id=np.arange(s.start, s.stop))
+        rewards = np.zeros(m)
+        if self.reward_fn is not None:
+            rewards = np.asarray(self.reward_fn(view, actions, infos), dtype=np.float64)
+        terminated = np.zeros(m, dtype=bool)
+        if self.terminated_fn is not None:
+            terminated = np.asarray(self.terminated_fn(view, infos), dtype=bool).copy()
+        truncated |= done
+        if self.max_episode_steps is not None:
+            truncated |= elapsed >= self.max_episode_steps
+        if any_reset:
+            rewards[resetting] = 0
+            terminated[resetting] = False
+            truncated[resetting & ~lost] = False
+        if lost.any():
+            infos["server_lost"] = lost
+            infos["_server_lost"] = lost.copy()
+        self._autoreset[s] = terminated | truncated
+        return view, rewards, terminated, truncated, infos
+
     def close(self):
+        # Replies still owed to send() are taken first: a client has one request in flight at a
+        # time (over ZeroMQ the bye could not be sent, and the lease would stay taken).
+        while self._in_flight:
+            k, renewed, failed, *_ = self._in_flight.popleft()
+            client = self.clients[k]
+            if failed or client.client is None:
+                continue
+            try:
+                client.receive_reset() if renewed else client.receive_step()
+            except (UrlabError,) + LOST:
+                pass
         for c in self.clients:
             c.close()

@@ -17,6 +17,18 @@ vector envs (a gymnasium.vector.VectorEnv when gymnasium is importable).
   (infos["server_lost"]); with a `replace(i)` callback (urlab_client.cluster gives one) the
   sub-environment comes back, connected to a replacement server, at its autoreset.
 
+- Over batched servers, stepping can be asynchronous (EnvPool's send/recv): send(actions,
+  env_id) sends a step for whole servers' environments and returns; recv() returns one server's
+  reply (oldest first) with infos["env_id"]; step_async/step_wait are step() in two halves.
+  Each environment's trajectory is the one step() gives it; the servers step while Python works:
+
+      envs = UrlabVectorEnv.over_batch([endpoint_a, endpoint_b])   # two servers of N/2
+      envs.reset(seed=0)
+      envs.send(actions)                                           # every environment
+      while training:
+          obs, rewards, terminated, truncated, infos = envs.recv()  # one server's half
+          envs.send(policy(obs), infos["env_id"])                   # the other half steps now
+
 Backends: `_ServerBackend` drives one UrlabEnv per server (`over_servers`).
 `urlab_client.batch.BatchBackend` drives batched servers (`over_batch`: `urlab run --envs N`,
 many environments in one process, one request per server per step, numpy arrays in and out
@@ -257,6 +269,58 @@ class UrlabVectorEnv(_VectorBase):
                 self._lose(i, truncated, infos)
         self._autoreset = terminated | truncated
         return _stack(self._last_obs), rewards, terminated, truncated, _batch_infos(infos)
+
+    # ---- Asynchronous stepping over batched servers (EnvPool's send/recv; gymnasium's
+    # step_async/step_wait). Between send() and recv() the servers step while Python works:
+    # with two servers of N/2 environments, one steps its half while Python handles the other's.
+    def _require_batched(self, what):
+        if not self._batched:
+            raise NotImplementedError(f"{what}() needs a vector env over batched servers "
+                                      "(UrlabVectorEnv.over_batch)")
+
+    def send(self, actions, env_id=None):
+        """Sends a step for the environments env_id (whole servers' environments, in order, as
+        recv() gave them in infos["env_id"]; None: every environment) and returns at once.
+        actions: (len(env_id), nu). At most one send() per server waits for its recv()."""
+        self._require_batched("send")
+        self._backend.send(actions, env_id)
+
+    def recv(self):
+        """The replies to send(), one server at a time in the order sent: (obs, rewards,
+        terminated, truncated, infos) over that server's environments, infos["env_id"] their
+        indices. Autoreset and flags are step()'s, environment by environment."""
+        self._require_batched("recv")
+        return self._backend.recv()
+
+    def step_async(self, actions):
+        """gymnasium's first half of step(): sends every environment's action, returns at once."""
+        self._require_batched("step_async")
+        self._backend.send(actions, None)
+
+    def step_wait(self):
+        """The second half: step()'s result for the actions step_async sent."""
+        self._require_batched("step_wait")
+        parts = [self._backend.recv() for _ in range(len(self._backend.clients))]
+        order = np.argsort([int(p[4]["env_id"][0]) for p in parts], kind="stable")
+        parts = [parts[i] for i in order]
+        obs = OrderedDict((key, np.concatenate([p[0][key] for p in parts])) for key in parts[0][0])
+        rewards, terminated, truncated = (np.concatenate([p[j] for p in parts]) for j in (1, 2, 3))
+        infos = {}
+        keys = [k for p in parts for k in p[4] if not k.startswith("_") and k != "env_id"]
+        for key in dict.fromkeys(keys):
+            values, masks = [], []
+            for p in parts:
+                m = len(p[1])
+                if key in p[4]:
+                    values.append(np.asarray(p[4][key]))
+                    masks.append(np.asarray(p[4]["_" + key], dtype=bool))
+                else:
+                    values.append(np.zeros(m, dtype=np.asarray(
+                        next(q[4][key] for q in parts if key in q[4])).dtype))
+                    masks.append(np.zeros(m, dtype=bool))
+            infos[key] = np.concatenate(values)
+            infos["_" + key] = np.concatenate(masks)
+        return obs, rewards, terminated, truncated, infos
 
     def _lose(self, i, truncated, infos):
         """Sub-environment i's server is gone: its episode ends as truncated, with its last
