@@ -7,7 +7,6 @@
 #include <filesystem>
 
 #include "wire/request_limits.h"
-#include "wire/shm_wait.h"
 
 namespace urlab::net {
 
@@ -15,6 +14,11 @@ namespace {
 
 // How often channels are checked for a client gone (a system call each).
 constexpr auto kSweepPeriod = std::chrono::milliseconds(200);
+// The I/O thread spins for the next request for this many of the client's recent think times,
+// within these bounds (beyond, it sleeps and the client's request wakes it).
+constexpr int kThinkFactor = 3;
+constexpr auto kMinExpect = std::chrono::microseconds(30);
+constexpr auto kMaxExpect = std::chrono::microseconds(1000);
 
 }  // namespace
 
@@ -79,12 +83,8 @@ bool ShmTransport::Reply(std::uint64_t channel, std::span<const std::uint8_t> by
   const auto it = channels_.find(channel);
   if (it == channels_.end()) return false;
   if (!it->second.channel.WriteReply(bytes)) return false;
-  Channel& c = it->second;
-  c.last_reply = now;
-  c.answered = true;
-  // Spin for the next request about as long as this client recently took to send it, within
-  // the channel's wait policy (a long think time is spun for only on a core nobody needs).
-  c.expect_until = now + wire::SpinBudget(c.think, wire::SpareCore);
+  it->second.last_reply = now;
+  it->second.answered = true;
   return true;
 }
 
@@ -97,7 +97,9 @@ bool ShmTransport::RequestWaiting() const {
 
 bool ShmTransport::Expecting(Clock::time_point now) const {
   for (const auto& [id, c] : channels_) {
-    if (c.answered && now < c.expect_until) return true;
+    if (!c.answered || c.last_reply == Clock::time_point{}) continue;
+    const auto window = std::clamp<Clock::duration>(c.think * kThinkFactor, kMinExpect, kMaxExpect);
+    if (now - c.last_reply < window) return true;
   }
   return false;
 }

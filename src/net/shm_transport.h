@@ -57,8 +57,7 @@ class ShmTransport {
   // True when a channel has a request not yet taken.
   bool RequestWaiting() const;
   // True while a client is expected to send its next request soon (the I/O thread spins rather
-  // than sleeps): within the spin budget (wire/shm_wait.h) of its recent think time, counted
-  // from the last reply.
+  // than sleeps): within a few times its recent think time after the last reply.
   bool Expecting(Clock::time_point now) const;
   // Before sleeping in poll: tells every client so (they wake the server); returns true when a
   // request arrived meanwhile (then do not sleep, and call Awake).
@@ -76,9 +75,8 @@ class ShmTransport {
     std::string session;
     wire::ShmChannel channel;
     Clock::time_point offered, last_reply{}, last_request{};
-    Clock::duration think{};           // smoothed time from a reply to the next request
-    Clock::time_point expect_until{};  // spin for the next request until then (set at Reply)
-    bool answered = true;              // the last request taken was answered
+    Clock::duration think{};  // smoothed time from a reply to the next request
+    bool answered = true;     // the last request taken was answered
   };
   std::string folder_;
   ShmOptions options_;

@@ -1,16 +1,15 @@
 #pragma once
-// The wait policy of the shared-memory channel (wire/shm_channel.h): how long a side waiting for
-// its partner spins before it sleeps. A wake-up from sleep costs tens of microseconds on a
-// virtual machine whose CPU idles (the hypervisor has to wake it), a few when it is busy; a spin
-// hand-over well under one. So a waiter spins about as long as its partner is expected to take,
-// then sleeps, by these rules (SpinBudget):
+// The wait policy of the shared-memory channel's clients (wire/shm_channel.h): how long a
+// client waiting for its server spins before it sleeps. A wake-up from sleep costs tens of
+// microseconds on a virtual machine whose CPU idles (the hypervisor has to wake it), a few when
+// it is busy; a spin hand-over well under one. So a waiter spins about as long as its partner is
+// expected to take, then sleeps, by these rules (SpinBudget):
 //  - a short expected wait (up to kShortWait) is spun for three times over, at least kMinSpin:
 //    the spin costs less than the wake-up it saves;
 //  - a longer one, up to kMaxSpin, is spun for (expected x 5/4 + kSlack, at most kMaxSpin) only
 //    when a core is free for the spinner (SpareCore: no more runnable threads on the machine
 //    than cores). A spinner without a core of its own takes it from the threads it waits for:
-//    a driver gathering from two servers on two cores, or a server spinning for the next
-//    request while its client computes it;
+//    a driver gathering from two batched servers on two cores;
 //  - a wait expected beyond kMaxSpin gets kMinSpin: the wake-up is small beside the wait, and
 //    an idle peer must not burn a core.
 // An expectation of zero or less (nothing learnt yet) gets kMinSpin. The spin loops themselves
