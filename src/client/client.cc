@@ -10,6 +10,7 @@
 #include <zmq_addon.hpp>
 
 #include "wire/shm_channel.h"
+#include "wire/shm_wait.h"
 
 namespace urlab::client {
 
@@ -215,26 +216,28 @@ struct StepClient::Impl {
   std::string hello;
   std::uint64_t seq = 0;
   std::chrono::milliseconds timeout{10000};
-  std::optional<wire::ShmChannel> channel;               // after hello, when the server offered one
-  Clock::duration rtt = std::chrono::microseconds(100);  // recent round trips (spin budget)
+  std::optional<wire::ShmChannel> channel;  // after hello, when the server offered one
+  wire::ShmRoundTrips round_trips;          // what the next round trip is expected to take
 
   Json Request(Json request) {
     request["seq"] = ++seq;
     if (!session.empty()) request["session_id"] = session;
     const std::vector<std::uint8_t> bytes = Json::to_msgpack(request);
     if (channel && request.value("op", "") != "hello") {
-      // Spin about as long as the server took recently, then sleep on the reply word.
+      // Spin about as long as the server is expected to take (the channel's wait policy), then
+      // sleep on the reply word.
+      const std::string op = request.value("op", "");
+      const int steps = op == "step" || op == "batch_step" ? request.value("n_steps", 1) : 0;
       const auto t0 = Clock::now();
       channel->SendRequest(bytes);
       std::span<const std::uint8_t> reply;
       try {
-        reply = channel->WaitReply(
-            timeout, std::clamp<Clock::duration>(2 * rtt, std::chrono::microseconds(20),
-                                                 std::chrono::milliseconds(2)));
+        reply = channel->WaitReply(timeout,
+                                   wire::SpinBudget(round_trips.Expected(steps), wire::SpareCore));
       } catch (const wire::ShmError& e) {
         throw std::runtime_error(std::string("urlab client: ") + e.what());
       }
-      rtt = (rtt * 3 + (Clock::now() - t0)) / 4;
+      round_trips.Took(steps, Clock::now() - t0);
       return Decode(reply.data(), reply.size());
     }
     socket.send(zmq::buffer(bytes));

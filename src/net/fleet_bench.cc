@@ -23,6 +23,7 @@
 #include "urlab/physics/model.h"
 #include "urlab/world/manager.h"
 #include "wire/shm_channel.h"
+#include "wire/shm_wait.h"
 
 namespace urlab::net {
 
@@ -87,14 +88,16 @@ class LeanClient {
     writer_.Clear();
     writer_.Value(request);
     if (channel_) {
+      // The client's wait policy (as urlab::client::StepClient's): spin about as long as the
+      // server is expected to take, then sleep.
+      const int steps = request.value("op", "") == "step" ? request.value("n_steps", 1) : 0;
       const auto t0 = Clock::now();
       channel_->SendRequest(
           {reinterpret_cast<const std::uint8_t*>(writer_.data()), writer_.size()});
       const auto reply =
           channel_->WaitReply(std::chrono::seconds(20),
-                              std::clamp<Clock::duration>(2 * rtt_, std::chrono::microseconds(20),
-                                                          std::chrono::milliseconds(2)));
-      rtt_ = (rtt_ * 3 + (Clock::now() - t0)) / 4;
+                              wire::SpinBudget(round_trips_.Expected(steps), wire::SpareCore));
+      round_trips_.Took(steps, Clock::now() - t0);
       reply_ = reply.data();
       reply_size_ = reply.size();
     } else {
@@ -121,7 +124,7 @@ class LeanClient {
   zmq::message_t message_;
   const std::uint8_t* reply_ = nullptr;
   std::size_t reply_size_ = 0;
-  Clock::duration rtt_ = std::chrono::microseconds(100);
+  wire::ShmRoundTrips round_trips_;
 };
 
 // Lockstep steps per second with n steps per request.

@@ -10,6 +10,8 @@ ephemeral ports, Python clients in their own processes), killed with SIGKILL on 
    not a timeout, and nothing is left in /dev/shm.
 3. A server stopped with SIGINT removes the file of an offer not taken; one killed with SIGKILL
    leaves it, and the next server removes it when it starts.
+First, the Python client's wait policy (urlab_client.shm.spin_budget) against the C++ one's
+table (tests/net/shm_wait_test.cc).
 Usage: shm_e2e.py URLAB_BINARY SOURCE_DIR
 """
 import glob
@@ -27,7 +29,7 @@ sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 import msgpack  # noqa: E402
 import zmq  # noqa: E402
 from urlab_client import StepClient  # noqa: E402
-from urlab_client.shm import ShmError, available  # noqa: E402
+from urlab_client.shm import ShmError, available, spare_core, spin_budget  # noqa: E402
 from urlab_process import arm_scene, fail, start_urlab  # noqa: E402
 
 CLIENT = r"""
@@ -57,10 +59,31 @@ def wait_for(what, condition, proc, seconds=20):
     fail(what, proc)
 
 
+def check_wait_policy():
+    """The Python client's wait policy is the C++ one's (tests/net/shm_wait_test.cc's table):
+    seconds expected -> spin with a free core, without one, whether the cores are asked."""
+    table = [(0, 30e-6, 30e-6, False), (5e-6, 30e-6, 30e-6, False),
+             (46e-6, 138e-6, 138e-6, False), (100e-6, 300e-6, 300e-6, False),
+             (600e-6, 800e-6, 30e-6, True), (1e-3, 1.3e-3, 30e-6, True),
+             (2.5e-3, 3e-3, 30e-6, True), (3e-3, 3e-3, 30e-6, True),
+             (3.001e-3, 30e-6, 30e-6, False), (40e-3, 30e-6, 30e-6, False)]
+    for expected, spare, busy, asks in table:
+        asked = []
+        got = (spin_budget(expected, lambda: asked.append(1) or True),
+               spin_budget(expected, lambda: asked.append(1) or False))
+        if abs(got[0] - spare) > 1e-9 or abs(got[1] - busy) > 1e-9 or bool(asked) != asks:
+            fail(f"spin_budget({expected}): {got}, asked {len(asked)}; expected "
+                 f"{(spare, busy)}, asked {asks}")
+    if spare_core() not in (True, False):
+        fail("spare_core() is not a bool")
+    print("the wait policy: the same table as the C++ one")
+
+
 def main():
     if not available() or not os.path.isdir("/dev/shm"):
         print("SKIP: shared memory needs Linux x86_64 and /dev/shm")
         return
+    check_wait_policy()
     tmp = tempfile.mkdtemp(prefix="urlab_shm_")
     scene = arm_scene(tmp, ephemeral_ports=True)
 

@@ -21,7 +21,10 @@ truncated and reconnects each sub-environment to its slot's new server at its au
 Batched servers: `ServerPool(..., envs_per_server=16)` starts each server with `--envs 16`
 (many environments in one process, urlab_client.batch) and `pool.batch_vector_env()` returns a
 vector env over all of them (n servers x 16 environments); a lost server's environments end
-truncated and come back on its slot's replacement at their autoreset.
+truncated and come back on its slot's replacement at their autoreset. Each steps on its share of
+its machine's cores (`--threads`: the cores over the pool's servers on that machine), and a worker
+hosting a server pauses its statistical profiler (CPU the server needs, spent on sampling a
+thread that only waits).
 
 Reaching the servers: the announced endpoints are the ones bound. A scene binding loopback
 (`tcp://127.0.0.1:*`, the default of `--ports auto` for the step server) is reachable only on the
@@ -89,10 +92,52 @@ def start_server(urlab, scene, args=(), announce_timeout=120.0, log_dir=None, co
         time.sleep(0.05)
 
 
-def _serve(slot, variable, stop, urlab, scene, args):
-    """A Dask task: one URLab server for `slot`, until the pool's stop event is set."""
+def _cores():
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def server_threads(cores, servers_here):
+    """The stepping threads of each batched server when `servers_here` of them share `cores`
+    (`urlab run --threads` defaults to every core, which would oversubscribe them): an even
+    share, at least one."""
+    return max(1, int(cores) // max(1, int(servers_here)))
+
+
+# The worker's statistical profiler samples every thread's stack 100 times a second on the
+# worker's event loop: CPU taken from the server beside it, for nothing (a server is not a
+# computation). It is paused while the worker hosts a server.
+_PROFILER = ("profile", "profile-cycle")
+_hosting = {"servers": 0}
+
+
+def _host(worker, delta):
+    """Counts the servers this worker process hosts; pauses its profiler while there are any
+    and resumes it after the last (on the worker's event loop: Tornado's callbacks are not
+    thread-safe)."""
+    import threading
+    lock = _hosting.setdefault("lock", threading.Lock())
+    with lock:
+        before = _hosting["servers"]
+        _hosting["servers"] = after = before + delta
+    if (before == 0) == (after == 0):
+        return
+    for name in _PROFILER:
+        callback = getattr(worker, "periodic_callbacks", {}).get(name)
+        if callback is not None:
+            worker.loop.add_callback(callback.stop if after else callback.start)
+
+
+def _serve(slot, variable, stop, urlab, scene, args, servers_here=None):
+    """A Dask task: one URLab server for `slot`, until the pool's stop event is set.
+    servers_here: for a batched server started without --threads, the pool's servers on this
+    host (the server then steps on its share of the cores)."""
     import distributed
     worker = distributed.get_worker()
+    if servers_here is not None and "--threads" not in args:
+        args = [*args, "--threads", str(server_threads(_cores(), servers_here))]
     proc, info = start_server(urlab, scene, args)
     host = urlparse(worker.address).hostname
     info["endpoints"] = {k: _reachable(v, host) for k, v in info["endpoints"].items()}
@@ -101,11 +146,13 @@ def _serve(slot, variable, stop, urlab, scene, args):
     distributed.get_client().set_metadata(variable, info)
     distributed.secede()  # a server is not a computation: free the worker's thread
     event = distributed.Event(stop)
+    _host(worker, +1)
     try:
         while proc.poll() is None:
             if event.wait(timeout=0.5):
                 break
     finally:
+        _host(worker, -1)
         if proc.poll() is None:
             proc.terminate()
             try:
@@ -124,7 +171,9 @@ class ServerPool:
     arguments (default: --no-cameras --max-speed). spread: place the slots round robin over the
     workers present now (a slot still moves to another worker when its own dies).
     envs_per_server: each server holds that many environments (`urlab run --envs M`, stepped
-    by `threads` threads; see batch_vector_env)."""
+    by `threads` threads; see batch_vector_env). threads None: each server steps on its share of
+    its host's cores (the cores over the pool's servers placed on that host, at least 1), so
+    that servers sharing a machine do not oversubscribe it."""
 
     def __init__(self, client, scene, n, urlab="urlab", args=("--no-cameras", "--max-speed"),
                  spread=True, name=None, envs_per_server=None, threads=None):
@@ -141,15 +190,25 @@ class ServerPool:
         self.name = name or f"urlab-{uuid.uuid4().hex[:8]}"
         self._stop = f"{self.name}-stop"
         self._variables = [f"{self.name}-slot-{i}" for i in range(self.n)]
-        workers = sorted(client.scheduler_info()["workers"]) if spread else []
+        info = client.scheduler_info()["workers"]
+        workers = sorted(info) if spread else []
+        # The pool's servers per host (round robin over the workers), for --threads.
+        per_host = {}
+        for i in range(self.n):
+            host = info[workers[i % len(workers)]].get("host") if workers else None
+            per_host[host] = per_host.get(host, 0) + 1
         self.futures = []
         for i in range(self.n):
             placement = {}
+            host = None
             if workers:
                 placement = {"workers": [workers[i % len(workers)]], "allow_other_workers": True}
+                host = info[workers[i % len(workers)]].get("host")
+            auto = workers and envs_per_server is not None and threads is None
+            share = per_host[host] if auto else None
             self.futures.append(client.submit(
                 _serve, i, self._variables[i], self._stop, self.urlab, self.scene, self.args,
-                key=f"{self.name}-serve-{i}", pure=False, retries=5, **placement))
+                share, key=f"{self.name}-serve-{i}", pure=False, retries=5, **placement))
         self._closed = False
 
     def announced(self, i, timeout=180.0, not_session=None):

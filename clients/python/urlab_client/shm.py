@@ -3,8 +3,9 @@
 One file mapped by the server and this client: the request and reply bytes are the same msgpack
 as over ZeroMQ. The client writes a request and its sequence number, sends one datagram to the
 server's wake socket only if the server said it sleeps, then spins on the reply's sequence word
-for about as long as the last round trip took and, after that, sleeps on it with a futex
-(through ctypes), checking every 50 ms that the server still holds its lock on the file.
+for about as long as the recent round trips took (spin_budget: the channel's wait policy, the
+same rules as src/wire/shm_wait.h) and, after that, sleeps on it with a futex (through ctypes),
+checking every 50 ms that the server still holds its lock on the file.
 
 Linux on x86_64 only (the futex system call number and the fence below are x86_64's); elsewhere
 available() is False and the client stays on ZeroMQ.
@@ -34,6 +35,41 @@ _FUTEX_WAIT = 0
 _SLICE = 0.05  # seconds asleep on the reply word between liveness checks
 _F_OFD_GETLK, _F_OFD_SETLK = 36, 37
 _F_WRLCK, _F_UNLCK = 1, 2
+
+
+# The wait policy (src/wire/shm_wait.h: the same rules and numbers), in seconds.
+MIN_SPIN, SHORT_WAIT, SLACK, MAX_SPIN = 30e-6, 100e-6, 50e-6, 3e-3
+
+
+def spin_budget(expected, spare_core):
+    """How long to spin for a partner expected to take `expected` seconds before sleeping: a
+    short wait (up to SHORT_WAIT) three times over; a longer one up to MAX_SPIN (expected x 5/4 +
+    SLACK) only when spare_core() says a core is free for the spinner (else it would take the
+    core of the servers it waits for); beyond MAX_SPIN, or nothing expected yet, MIN_SPIN."""
+    if expected <= 0 or expected > MAX_SPIN:
+        return MIN_SPIN
+    if expected <= SHORT_WAIT:
+        return max(MIN_SPIN, 3 * expected)
+    if not spare_core():
+        return MIN_SPIN
+    return min(MAX_SPIN, expected * 1.25 + SLACK)
+
+
+_loadavg = None
+_CORES = os.cpu_count() or 1
+
+
+def spare_core():
+    """True when the machine has no more runnable threads (this one among them) than CPUs
+    (/proc/loadavg's "runnable/total"); False when it cannot tell."""
+    global _loadavg
+    try:
+        if _loadavg is None:
+            _loadavg = os.open("/proc/loadavg", os.O_RDONLY | os.O_CLOEXEC)
+        runnable = int(os.pread(_loadavg, 128, 0).split()[3].split(b"/")[0])
+    except (OSError, ValueError, IndexError):
+        return False
+    return runnable <= _CORES
 
 
 class ShmError(ConnectionError):
@@ -173,14 +209,10 @@ class ShmChannel:
         start = self._posted
         rep_seq = self._rep_seq
         if rep_seq.value != seq:
-            # Spin about as long as the server took recently, then sleep on the word.
-            # A turn that took long means this process lost its core (a busy machine): then
-            # spinning only delays the server, so sleep at once.
-            # A server that takes milliseconds (a batch of environments) is not spun for: the
-            # wake-up costs little beside the wait, and a spinning client takes a core from the
-            # threads stepping the batch.
-            spin = min(max(2 * self._rtt, 50e-6), 2e-3) if self._rtt < 1e-3 else 20e-6
-            spin_until = start + spin
+            # Spin about as long as the server took recently, then sleep on the word (the wait
+            # policy: spin_budget). A turn that took long means this process lost its core (a
+            # busy machine): then spinning only delays the server, so sleep at once.
+            spin_until = start + spin_budget(self._rtt, spare_core)
             now = start
             turns = 0
             while rep_seq.value != seq:
