@@ -132,9 +132,10 @@ int Render(const RenderArgs& args) {
     throw Error(args.video + ": cannot move the video into place: " + ec.message());
   }
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();
-  std::printf("wrote %s: %llu frames at %d frames/s (%.3f s of the recording) in %.1f s\n",
-              args.video.c_str(), static_cast<unsigned long long>(frames), args.fps,
-              static_cast<double>(frames) / static_cast<double>(args.fps), wall);
+  std::printf(
+      "wrote %s: %llu frames at %d frames/s (t = 0 to %.3f s of %.3f s recorded) in %.1f s\n",
+      args.video.c_str(), static_cast<unsigned long long>(frames), args.fps,
+      static_cast<double>(frames - 1) / static_cast<double>(args.fps), sampler.duration(), wall);
   return 0;
 }
 
