@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 
 #include <chrono>
+#include <fstream>
 #include <string>
 #include <thread>
 
@@ -44,6 +45,16 @@ class UrlabProcess {
     }
     return true;
   }
+  // True once the process catches `sig` (its handler is installed: /proc/PID/status, SigCgt);
+  // false after `limit` or when it ended. A signal sent before that would kill it by default.
+  bool WaitForHandler(int sig, std::chrono::seconds limit = std::chrono::seconds(60)) {
+    const auto start = Clock::now();
+    while (!Catches(sig)) {
+      if (Clock::now() - start > limit || Ended()) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return true;
+  }
   void Signal(int sig) { kill(pid_, sig); }
   // Exit code (128+N when killed by signal N), or -1 after `limit`.
   int Wait(std::chrono::milliseconds limit) {
@@ -57,6 +68,16 @@ class UrlabProcess {
   std::string output() const { return ReadTextFile(log_); }
 
  private:
+  bool Catches(int sig) const {
+    std::ifstream status("/proc/" + std::to_string(pid_) + "/status");
+    std::string line;
+    while (std::getline(status, line)) {
+      if (line.rfind("SigCgt:", 0) == 0) {
+        return (std::stoull(line.substr(7), nullptr, 16) >> (sig - 1)) & 1u;
+      }
+    }
+    return false;
+  }
   bool Ended() {
     if (done_) return true;
     int status = 0;
