@@ -60,12 +60,14 @@ std::string RecordBusyRun(PhysicsEngine& engine, Recorder& recorder, const std::
   engine.SetAsFastAsPossible(true);
   engine.Start();
   recorder.Start(options);
-  // Each phase lasts at least `kPhaseSteps` steps (the tests need a few hundred frames in each
-  // phase; a loaded machine steps slowly, so the wait is on the steps, not on the clock).
+  // Each phase lasts until the recorder's writer has taken at least `kPhaseSteps` more frames:
+  // the tests need a few hundred frames in each phase, and chunks, which the writer starts with
+  // keyframes it asks of the running engine. (Waiting on the engine's steps alone let a starved
+  // writer ask only after the engine had stopped: one chunk.)
   constexpr std::uint64_t kPhaseSteps = 300;
   const auto phase = [&] {
-    const std::uint64_t from = engine.step_count();
-    EXPECT_TRUE(WaitFor([&] { return engine.step_count() >= from + kPhaseSteps; }));
+    const std::uint64_t from = recorder.status().frames;
+    EXPECT_TRUE(WaitFor([&] { return recorder.status().frames >= from + kPhaseSteps; }));
   };
   phase();
   const int box = mj_name2id(m, mjOBJ_BODY, "box");
