@@ -217,7 +217,10 @@ TEST_F(CliBadInputTest, SignalsDuringALongCompileStopAtOnce) {
   const std::string model = "/usr/share/mujoco/model/composite/particle.xml";
   for (const auto& [sig, code] : {std::pair{SIGINT, 130}, {SIGTERM, 143}, {SIGHUP, 129}}) {
     Process p("validate " + model, dir_ + "/v" + std::to_string(sig) + ".txt");
+    // Signalled inside the compile: its handler is in place and it has worked a while (processor
+    // time, whatever the machine's load; the compile takes seconds of it).
     ASSERT_TRUE(p.WaitForHandler(sig)) << p.output();
+    ASSERT_TRUE(p.WaitForCpu(std::chrono::milliseconds(300))) << p.output();
     p.Signal(sig);
     // Stopped inside the compile: it never reports the model OK (the bound only ends a hang).
     EXPECT_EQ(p.Wait(std::chrono::seconds(60)), code) << p.output();
