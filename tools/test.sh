@@ -164,6 +164,14 @@ install_stage() {
     -DCMAKE_PREFIX_PATH="$prefix" "${LAUNCHER[@]}" >/dev/null
   cmake --build "$example" -j"$JOBS"
   "$example/urlab_find_package_example" examples/models/pendulum_arm.xml
+  # It registers no subsystem's scene sections: a scene with `cameras:` is refused at that line,
+  # naming the registration a program adds to parse it (README, "Install").
+  if "$example/urlab_find_package_example" examples/scenes/go2_camera.yaml 2>"$example/err.txt"; then
+    echo "the example accepted a scene with a section it did not register" >&2
+    return 1
+  fi
+  grep -F "'cameras:' is a section of urlab::camera (call urlab::camera::RegisterSceneSections())" \
+    "$example/err.txt"
   "$example/urlab_client_only_example"
   # A client program links the wire format and ZeroMQ only: neither MuJoCo's model code nor
   # assimp, Embree or a renderer (GL, EGL, OSMesa) may reach it.

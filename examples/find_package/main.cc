@@ -2,6 +2,13 @@
 // steps it for one simulated second on this thread, and prints where each articulation's first
 // body ended up, in MuJoCo and in Unreal coordinates. Built against the installed package:
 // see CMakeLists.txt beside this file.
+//
+// Scene sections: this program links urlab::world, which parses the scene's own keys. The
+// `urlab` tool's subsystem sections are parsed by their modules once registered before the first
+// scene is read: urlab::net::RegisterSceneSections() (`network:`, link urlab::net),
+// urlab::camera::RegisterSceneSections() (`cameras:`, urlab::camera) and
+// urlab::viewer::RegisterSceneSections() (`viewer:`, `cinematic:`, urlab::viewer). Registering
+// none, it refuses a scene with one of them at its line, naming the registration to add.
 #include <array>
 #include <cstdio>
 #include <exception>

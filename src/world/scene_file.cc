@@ -40,6 +40,16 @@ constexpr std::pair<const char*, const char*> kNotYetSupported[] = {
     {"lights", "scene lights are not supported; put <light> elements in an articulation's MJCF"},
 };
 
+// Sections of the `urlab` tool's subsystems, which live above world and register their parsers
+// (scene_section.h): a program built on the libraries parses one once it links the module and
+// registers it; until then the key is refused naming the registration, not as an unknown key.
+constexpr std::pair<const char*, const char*> kSubsystemSections[] = {
+    {"network", "urlab::net (call urlab::net::RegisterSceneSections())"},
+    {"cameras", "urlab::camera (call urlab::camera::RegisterSceneSections())"},
+    {"viewer", "urlab::viewer (call urlab::viewer::RegisterSceneSections())"},
+    {"cinematic", "urlab::viewer (call urlab::viewer::RegisterSceneSections())"},
+};
+
 using Range = NumberRange;
 constexpr Range kNonNegativeFinite{0, std::numeric_limits<double>::max()};
 constexpr Range kNonNegative{0, kInf};  // inf allowed (e.g. an unlimited torque)
@@ -598,6 +608,7 @@ class Parser : public SectionReader {
     SceneConfig s;
     s.path = path();
     if (!root || root.IsNull()) throw InputError({path(), 0}, "the scene file is empty");
+    const std::set<std::string> registered = SceneSectionNames();
     if (root.IsMap()) {
       for (const auto& kv : root) {
         if (!kv.first.IsScalar()) continue;  // reported by CheckKeys
@@ -607,13 +618,20 @@ class Parser : public SectionReader {
                                "; remove the section");
           }
         }
+        for (const auto& [key, owner] : kSubsystemSections) {
+          if (kv.first.Scalar() == key && !registered.contains(key)) {
+            Fail(kv.first, "'" + std::string(key) + ":' is a section of " + owner +
+                               ", which this program did not register; register it before "
+                               "parsing scenes, or remove the section");
+          }
+        }
       }
     }
     // The scene's own keys, and the sections registered subsystems parse.
     std::set<std::string> keys = {"articulations",  "props",          "terrain",
                                   "launchers",      "options",        "size",
                                   "control_source", "save_debug_xml", "seed"};
-    keys.merge(SceneSectionNames());
+    keys.insert(registered.begin(), registered.end());
     CheckKeys(root, "the scene", keys);
     const YAML::Node arts = root["articulations"];
     if (!arts || !arts.IsSequence() || arts.size() == 0) {

@@ -13,7 +13,8 @@
 // camera, net), above world; world only holds this table. The modules register from the top:
 // the `urlab` tool registers every subsystem's sections at start (src/app/main.cc), a test or
 // program registers those it parses. A top-level key no registered parser claims is an unknown
-// key, as before.
+// key, except the `urlab` tool's own sections (network, cameras, viewer, cinematic: a table in
+// scene_file.cc), which a program that did not register them is told how to register.
 //
 // Threading contract: register before any scene is parsed (main thread at start; registering a
 // name again replaces nothing and is harmless); parsing reads the table from any thread.

@@ -23,12 +23,23 @@ def fail(message):
 
 
 def sweep(path, *extra):
-    return subprocess.run([URLAB, "sweep", path, *extra], capture_output=True, text=True,
-                          timeout=600)
+    # Bounded below ctest's limit, so that a sweep that stops making progress shows what it
+    # printed so far instead of being killed without a word.
+    try:
+        return subprocess.run([URLAB, "sweep", path, *extra], capture_output=True, text=True,
+                              timeout=270)
+    except subprocess.TimeoutExpired as e:
+        out = e.stdout.decode(errors="replace") if isinstance(e.stdout, bytes) else e.stdout
+        err = e.stderr.decode(errors="replace") if isinstance(e.stderr, bytes) else e.stderr
+        fail(f"urlab sweep {path} still running after {e.timeout} s:\n{out}\n"
+             f"{(err or '')[-3000:]}")
 
 
 def main():
     tmp = tempfile.mkdtemp(prefix="urlab_sweep_")
+    # Dask's worker scratch space (its folders and their lock files) for this run alone: test
+    # runs sharing the machine never lock or purge each other's.
+    os.environ["DASK_TEMPORARY_DIRECTORY"] = os.path.join(tmp, "dask")
     policy = os.path.join(SOURCE, "examples", "python", "sweep_policy.py")
     spec = os.path.join(tmp, "grid.yaml")
     with open(spec, "w") as f:
@@ -42,6 +53,7 @@ policies:
   - {{name: broken, command: exit 3}}
 output: out
 cluster: {{workers: 2}}
+timeout: 120
 """)
     r = sweep(spec)
     out = os.path.join(tmp, "out")

@@ -18,12 +18,7 @@
 namespace urlab {
 namespace {
 
-const std::string kArm = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
-
-// "articulations:\n  - name: a\n    mjcf: ARM\n" followed by `extra` (from line 4 on).
-std::string WithArm(const std::string& extra) {
-  return "articulations:\n  - name: a\n    mjcf: " + kArm + "\n" + extra;
-}
+using testing::WithArm;
 
 class CameraSceneSections : public testing::MujocoTest {
  protected:

@@ -16,12 +16,16 @@ Usage: cluster_e2e.py URLAB_BINARY SOURCE_DIR [--measure K]
 import os
 import signal
 import sys
+import tempfile
 import time
 
 import numpy as np
 
 URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
+# Dask's worker scratch space (its folders and their lock files) for this run alone: test runs
+# sharing the machine never lock or purge each other's.
+os.environ["DASK_TEMPORARY_DIRECTORY"] = tempfile.mkdtemp(prefix="urlab_dask_")
 from distributed import Client, LocalCluster  # noqa: E402
 
 from urlab_client.cluster import ServerPool  # noqa: E402

@@ -12,9 +12,7 @@
 #include <zmq.hpp>
 
 #include "net/step_test_client.h"
-#include "support/mujoco_test.h"
-#include "urlab/net/network.h"
-#include "urlab/world/manager.h"
+#include "support/step_server_fixture.h"
 
 namespace urlab::net {
 namespace {
@@ -45,28 +43,16 @@ constexpr const char* kArmXml = R"(<mujoco model="arm">
 
 constexpr int kPool = 3;
 
-class Dialect2026HelloTest : public urlab::testing::MujocoTest {
+class Dialect2026HelloTest : public urlab::testing::ServedSessionTest {
  protected:
   void SetUp() override {
-    dir_ = urlab::testing::MakeTempDir("dialect_2026_hello");
     urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml);
-    NetworkOptions o;
-    o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
-    o.step_mode = "direct";
-    net_ = &static_cast<NetworkSubsystem&>(
-        manager_.AddSubsystem(std::make_unique<NetworkSubsystem>(o)));
-    manager_.BeginPlay(world::ParseScene(
+    Serve(
         "control_source: network\narticulations:\n  - {name: arm, mjcf: arm.xml}\n"
         "launchers:\n  - {name: gun, pos: [0.5, 0, 1], speed: 2, pool: " +
             std::to_string(kPool) + "}\n",
-        dir_ + "/scene.yaml"));
-    ASSERT_FALSE(net_->endpoints().rpc.empty());
+        urlab::testing::AutoPorts("direct"));
   }
-
-  std::string dir_;
-  world::Manager manager_;
-  NetworkSubsystem* net_ = nullptr;
-  zmq::context_t ctx_{1};
 };
 
 TEST_F(Dialect2026HelloTest, FreeBodiesOfNoArticulationAreEntitiesWithTheirStateInScene) {

@@ -16,12 +16,7 @@
 namespace urlab {
 namespace {
 
-const std::string kArm = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
-
-// "articulations:\n  - name: a\n    mjcf: ARM\n" followed by `extra` (from line 4 on).
-std::string WithArm(const std::string& extra) {
-  return "articulations:\n  - name: a\n    mjcf: " + kArm + "\n" + extra;
-}
+using testing::WithArm;
 
 class NetworkSceneSection : public ::testing::Test {
  protected:

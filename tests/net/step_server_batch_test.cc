@@ -12,11 +12,9 @@
 #include <zmq.hpp>
 
 #include "net/step_test_client.h"
-#include "support/mujoco_test.h"
+#include "support/step_server_fixture.h"
 #include "support/wait.h"
-#include "urlab/net/network.h"
 #include "urlab/world/batch_subsystem.h"
-#include "urlab/world/manager.h"
 
 namespace urlab::net {
 namespace {
@@ -56,37 +54,23 @@ std::vector<T> Unpack(const Json& v) {
   return out;
 }
 
-class StepServerBatchTest : public urlab::testing::MujocoTest {
+class StepServerBatchTest : public urlab::testing::ServedSessionTest {
  protected:
-  void SetUp() override {
-    dir_ = urlab::testing::MakeTempDir("step_server_batch");
-    urlab::testing::WriteTextFile(dir_, "pendulum.xml", kPendulumXml);
-  }
+  void SetUp() override { urlab::testing::WriteTextFile(dir_, "pendulum.xml", kPendulumXml); }
   void Play(world::BatchSubsystemOptions b, const std::string& mode = "direct",
             const std::string& scene = "articulations:\n  - {name: pend, mjcf: pendulum.xml}\n") {
     batch_ = &static_cast<world::BatchSubsystem&>(
         manager_.AddSubsystem(std::make_unique<world::BatchSubsystem>(b)));
-    NetworkOptions o;
-    o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
-    o.step_mode = mode;
-    auto net = std::make_unique<NetworkSubsystem>(o);
-    net->SetBatch(batch_);
-    net_ = &static_cast<NetworkSubsystem&>(manager_.AddSubsystem(std::move(net)));
-    manager_.BeginPlay(world::ParseScene(scene, dir_ + "/scene.yaml"));
-    ASSERT_FALSE(net_->endpoints().rpc.empty());
+    Serve(scene, urlab::testing::AutoPorts(mode),
+          [&](NetworkSubsystem& net) { net.SetBatch(batch_); });
   }
-  std::string rpc() const { return net_->endpoints().rpc; }
   // Steps with `actions` (one per environment: one actuator).
   Json Step(Client& c, const std::vector<double>& actions, Json extra = Json::object()) {
     extra["actions"] = Packed(actions);
     return c.Op("batch_step", extra);
   }
 
-  std::string dir_;
-  world::Manager manager_;
   world::BatchSubsystem* batch_ = nullptr;
-  NetworkSubsystem* net_ = nullptr;
-  zmq::context_t ctx_{1};
 };
 
 TEST_F(StepServerBatchTest, InfoDescribesTheBatchAndAStepStepsEveryEnvironment) {
@@ -286,13 +270,9 @@ std::vector<std::vector<double>> DriveRun(const std::string& dir, const std::str
   auto* batch = &static_cast<world::BatchSubsystem&>(
       manager.AddSubsystem(std::make_unique<world::BatchSubsystem>(
           world::BatchSubsystemOptions{.envs = envs, .threads = 2, .seed = seed})));
-  NetworkOptions o;
-  o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
-  o.step_mode = "direct";
-  auto net = std::make_unique<NetworkSubsystem>(o);
-  net->SetBatch(batch);
-  auto* served = &static_cast<NetworkSubsystem&>(manager.AddSubsystem(std::move(net)));
-  manager.BeginPlay(world::ParseScene(scene, dir + "/scene.yaml"));
+  NetworkSubsystem* served =
+      &urlab::testing::Serve(manager, dir, scene, urlab::testing::AutoPorts("direct"),
+                             [&](NetworkSubsystem& net) { net.SetBatch(batch); });
   zmq::context_t ctx(1);
   std::vector<std::vector<double>> path;
   {

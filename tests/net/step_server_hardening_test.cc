@@ -14,11 +14,9 @@
 #include <zmq.hpp>
 
 #include "net/step_test_client.h"
-#include "support/mujoco_test.h"
+#include "support/step_server_fixture.h"
 #include "support/wait.h"
-#include "urlab/net/network.h"
 #include "urlab/replay/recorder.h"
-#include "urlab/world/manager.h"
 
 namespace urlab::net {
 namespace {
@@ -80,10 +78,9 @@ struct PlayOptions {
   std::string state = "tcp://127.0.0.1:*", rpc = "tcp://127.0.0.1:*";
 };
 
-class StepServerHardeningTest : public urlab::testing::MujocoTest {
+class StepServerHardeningTest : public urlab::testing::ServedSessionTest {
  protected:
   void SetUp() override {
-    dir_ = urlab::testing::MakeTempDir("step_server_hardening");
     urlab::testing::WriteTextFile(dir_, "bot.xml", kBotXml);
     files_ = dir_ + "/files";
     log_ = std::make_shared<LogLines>();
@@ -104,30 +101,19 @@ class StepServerHardeningTest : public urlab::testing::MujocoTest {
       recorder = &static_cast<replay::RecorderSubsystem&>(
           manager_.AddSubsystem(std::make_unique<replay::RecorderSubsystem>()));
     }
-    NetworkOptions o;
-    o.control = o.info = "tcp://127.0.0.1:*";
+    NetworkOptions o = urlab::testing::AutoPorts(p.mode);
     o.state = p.state;
     o.rpc = p.rpc;
-    o.step_mode = p.mode;
     o.files_dir = p.files_dir.empty() ? files_ : p.files_dir;
     o.max_queued_steps = p.max_queued_steps;
-    auto net = std::make_unique<NetworkSubsystem>(o);
-    net->SetRecorder(recorder);
-    net_ = &static_cast<NetworkSubsystem&>(manager_.AddSubsystem(std::move(net)));
-    manager_.BeginPlay(world::ParseScene(
-        "control_source: network\narticulations:\n  - {name: bot, mjcf: " + p.mjcf + "}\n",
-        dir_ + "/scene.yaml"));
-    ASSERT_FALSE(net_->endpoints().rpc.empty());
+    Serve("control_source: network\narticulations:\n  - {name: bot, mjcf: " + p.mjcf + "}\n", o,
+          [&](NetworkSubsystem& net) { net.SetRecorder(recorder); });
   }
-  std::string rpc() const { return net_->endpoints().rpc; }
   physics::PhysicsEngine& engine() { return manager_.session().engine(); }
 
-  std::string dir_, files_;
+  std::string files_;
   std::shared_ptr<LogLines> log_;
   spdlog::level::level_enum level_ = spdlog::level::info;
-  world::Manager manager_;
-  NetworkSubsystem* net_ = nullptr;
-  zmq::context_t ctx_{1};
 };
 
 // A DEALER client: several requests in flight for one session.

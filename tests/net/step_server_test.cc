@@ -11,11 +11,9 @@
 #include <zmq_addon.hpp>
 
 #include "net/step_test_client.h"
-#include "support/mujoco_test.h"
+#include "support/step_server_fixture.h"
 #include "support/wait.h"
-#include "urlab/net/network.h"
 #include "urlab/wire/wire.h"
-#include "urlab/world/manager.h"
 
 namespace urlab::net {
 namespace {
@@ -48,32 +46,17 @@ constexpr const char* kArmXml = R"(<mujoco model="arm">
 
 using test_client::Client;
 
-class StepServerTest : public urlab::testing::MujocoTest {
+class StepServerTest : public urlab::testing::ServedSessionTest {
  protected:
-  void SetUp() override {
-    dir_ = urlab::testing::MakeTempDir("step_server");
-    urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml);
-  }
+  void SetUp() override { urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml); }
   void Play(std::chrono::milliseconds lease = 5000ms, const std::string& mode = "live",
             const std::string& controller = "", const std::string& mjcf = "arm.xml") {
-    NetworkOptions o;
-    o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
+    NetworkOptions o = urlab::testing::AutoPorts(mode);
     o.lease_timeout = lease;
-    o.step_mode = mode;
-    net_ = &static_cast<NetworkSubsystem&>(
-        manager_.AddSubsystem(std::make_unique<NetworkSubsystem>(o)));
-    manager_.BeginPlay(
-        world::ParseScene("control_source: network\narticulations:\n  - {name: arm, mjcf: " + mjcf +
-                              controller + "}\n",
-                          dir_ + "/scene.yaml"));
-    ASSERT_FALSE(net_->endpoints().rpc.empty());
+    Serve("control_source: network\narticulations:\n  - {name: arm, mjcf: " + mjcf + controller +
+              "}\n",
+          o);
   }
-  std::string rpc() const { return net_->endpoints().rpc; }
-
-  std::string dir_;
-  world::Manager manager_;
-  NetworkSubsystem* net_ = nullptr;
-  zmq::context_t ctx_{1};
 };
 
 TEST_F(StepServerTest, HelloDescribesTheSceneAndMetaListsTheOperations) {

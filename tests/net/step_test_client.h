@@ -17,7 +17,7 @@ class Client {
   Client(zmq::context_t& ctx, const std::string& endpoint, bool json = false)
       : socket_(ctx, zmq::socket_type::req), json_(json) {
     socket_.set(zmq::sockopt::linger, 0);
-    socket_.set(zmq::sockopt::rcvtimeo, 10000);
+    socket_.set(zmq::sockopt::rcvtimeo, 60000);  // a hang guard on a loaded machine
     socket_.connect(endpoint);
   }
   Json Call(const Json& request) {

@@ -14,11 +14,9 @@
 #include <zmq.hpp>
 
 #include "net/step_test_client.h"
-#include "support/mujoco_test.h"
-#include "urlab/net/network.h"
+#include "support/step_server_fixture.h"
 #include "urlab/ops/error.h"
 #include "urlab/replay/recorder.h"
-#include "urlab/world/manager.h"
 
 namespace urlab::ops::test {
 
@@ -78,12 +76,9 @@ inline Refusal FromCall(const std::function<void()>& call) {
   return {"(no error)", ""};
 }
 
-class OpsTest : public urlab::testing::MujocoTest {
+class OpsTest : public urlab::testing::ServedSessionTest {
  protected:
-  void SetUp() override {
-    dir_ = urlab::testing::MakeTempDir("ops");
-    urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml);
-  }
+  void SetUp() override { urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml); }
   // `controller`: ", controller: {...}" appended to the articulation's entry.
   // `recorder`: with a recorder subsystem the step server's recording operations use.
   void Play(const std::string& mode = "live", const std::string& controller = "",
@@ -92,31 +87,19 @@ class OpsTest : public urlab::testing::MujocoTest {
       recorder_ = &static_cast<replay::RecorderSubsystem&>(
           manager_.AddSubsystem(std::make_unique<replay::RecorderSubsystem>()));
     }
-    net::NetworkOptions o;
-    o.state = o.control = o.info = o.rpc = "tcp://127.0.0.1:*";
-    o.step_mode = mode;
+    net::NetworkOptions o = urlab::testing::AutoPorts(mode);
     o.files_dir = dir_;  // clients name files in the test's folder
-    auto net = std::make_unique<net::NetworkSubsystem>(o);
-    net->SetRecorder(recorder_);
-    net_ = &static_cast<net::NetworkSubsystem&>(manager_.AddSubsystem(std::move(net)));
-    manager_.BeginPlay(
-        world::ParseScene("control_source: network\narticulations:\n  - {name: arm, mjcf: arm.xml" +
-                              controller + "}\n" + extra,
-                          dir_ + "/scene.yaml"));
-    ASSERT_FALSE(net_->endpoints().rpc.empty());
+    Serve("control_source: network\narticulations:\n  - {name: arm, mjcf: arm.xml" + controller +
+              "}\n" + extra,
+          o, [&](net::NetworkSubsystem& net) { net.SetRecorder(recorder_); });
   }
   world::Session& session() { return manager_.session(); }
-  std::string rpc() const { return net_->endpoints().rpc; }
   // Waits for command `seq` (a direct call's) to take effect.
   void Wait(std::uint64_t seq) {
-    ASSERT_TRUE(session().engine().WaitForCommand(seq, std::chrono::seconds(10)).ok());
+    ASSERT_TRUE(session().engine().WaitForCommand(seq, std::chrono::seconds(60)).ok());
   }
 
-  std::string dir_;
-  world::Manager manager_;
-  net::NetworkSubsystem* net_ = nullptr;
   replay::RecorderSubsystem* recorder_ = nullptr;
-  zmq::context_t ctx_{1};
 };
 
 }  // namespace urlab::ops::test

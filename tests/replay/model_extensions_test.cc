@@ -5,18 +5,16 @@
 // format 1 files (no extensions section) are still read; other versions are refused by number.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iterator>
-#include <thread>
 
 #include "replay/format.h"
 #include "support/mujoco_test.h"
-#include "support/wait.h"
+#include "support/step_recording.h"
 #include "urlab/physics/engine.h"
 #include "urlab/physics/model.h"
 #include "urlab/replay/player.h"
@@ -27,9 +25,7 @@ namespace urlab::replay {
 namespace {
 
 namespace fs = std::filesystem;
-using namespace std::chrono_literals;
 using physics::PhysicsEngine;
-using urlab::testing::WaitFor;
 
 // An arm held up by gravity compensation, a ball hanging from a dead-band rope spring, and a
 // joint actuator force sensor (3.x constructs the runtime computes for 2.2.2).
@@ -72,17 +68,16 @@ class ModelExtensionsTest : public urlab::testing::MujocoTest {
   // `before_start` runs between the recorder's construction (in begin-play) and its Start.
   std::string RecordRun(PhysicsEngine& engine, const std::string& name, int steps,
                         bool sensordata = true, const std::function<void()>& before_start = {}) {
-    Recorder recorder(engine, {{"arm"}, "", ""}, 1 << 14);
+    urlab::testing::StepRecording recording(engine);
     if (before_start) before_start();
     engine.AddPreStepCallback(
         [](const mjModel*, mjData* d) { d->ctrl[0] = std::sin(5 * d->time); });
     RecorderOptions o;
     o.path = dir_ + "/" + name;
     o.sensordata = sensordata;
-    recorder.Start(o);
-    engine.StepSync(steps);
-    recorder.Stop();
-    return o.path;
+    recording.Start(o);
+    recording.Step(steps);
+    return recording.Finish();
   }
   std::string dir_ = urlab::testing::MakeTempDir("model_extensions");
 };

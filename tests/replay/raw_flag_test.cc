@@ -4,18 +4,17 @@
 // every frame as not raw, and a format 2 file carrying raw flags is refused as damaged.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <fstream>
 #include <iterator>
 #include <string>
-#include <thread>
 #include <utility>
 #include <vector>
 
 #include "physics/test_models.h"
 #include "replay/format.h"
+#include "support/controlled_articulation.h"
 #include "support/mujoco_test.h"
-#include "urlab/control/articulation_control.h"
+#include "support/step_recording.h"
 #include "urlab/physics/engine.h"
 #include "urlab/replay/player.h"
 #include "urlab/replay/recorder.h"
@@ -24,7 +23,6 @@
 namespace urlab::replay {
 namespace {
 
-using namespace std::chrono_literals;
 using control::ControlSource;
 using physics::PhysicsEngine;
 
@@ -39,36 +37,27 @@ class RawFlagTest : public urlab::testing::MujocoTest {
   };
   Run RecordRun(const std::string& name, bool raw) {
     PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
-    control::ControlSystem controls;
-    control::ArticulationControl* arm = nullptr;
-    engine.WithLockedData([&](mjModel* m, mjData* d) {
-      arm = &controls.Add(std::make_unique<control::ArticulationControl>(
-          physics::ArticulationBindings(m, d, "arm_")));
-    });
-    controls.Install(engine);
-    Recorder recorder(engine, {{"arm"}, "", ""}, 1 << 17);
-    engine.SetAsFastAsPossible(true);
-    engine.Start();
+    urlab::testing::ControlledArticulation arm(engine);
+    urlab::testing::StepRecording recording(engine);
     RecorderOptions o;
     o.path = dir_ + "/" + name;
     o.keyframe_interval = 0.05;  // several chunks: each carries the frames (and flags) again
-    recorder.Start(o);
+    recording.Start(o);
     control::FrameChannel& channel = arm->channel(ControlSource::kNetwork);
     const std::vector<std::pair<int, double>> first{{0, 0.2}, {1, -0.1}};
     EXPECT_TRUE(channel.Patch(first));
-    std::this_thread::sleep_for(30ms);
+    for (int i = 0; i < 8; ++i) recording.Step(10);  // 0.16 s: chunks of 0.05 s
     Run run{o.path};
     if (raw) {
       const std::vector<std::pair<int, double>> controls_now{{0, 0.5}, {1, 0.25}};
       EXPECT_TRUE(channel.Patch(controls_now, true));
       run.raw_seq = channel.last_seq();
-      std::this_thread::sleep_for(30ms);
+      for (int i = 0; i < 4; ++i) recording.Step(10);
       EXPECT_TRUE(channel.Patch(first, false));
       run.back_seq = channel.last_seq();
-      std::this_thread::sleep_for(30ms);
+      for (int i = 0; i < 4; ++i) recording.Step(10);
     }
-    recorder.Stop();
-    engine.Stop();
+    recording.Finish();
     return run;
   }
 

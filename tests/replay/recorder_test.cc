@@ -10,12 +10,12 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <thread>
 
 #include "physics/test_models.h"
+#include "support/controlled_articulation.h"
 #include "support/mujoco_test.h"
+#include "support/step_recording.h"
 #include "support/wait.h"
-#include "urlab/control/articulation_control.h"
 #include "urlab/physics/engine.h"
 #include "urlab/replay/player.h"
 #include "urlab/replay/recording.h"
@@ -60,23 +60,24 @@ std::string RecordBusyRun(PhysicsEngine& engine, Recorder& recorder, const std::
   engine.SetAsFastAsPossible(true);
   engine.Start();
   recorder.Start(options);
-  // Each phase lasts a little wall time and at least `kPhaseSteps` steps (a loaded machine steps
-  // slowly; the tests need a few hundred frames in each phase).
+  // Each phase lasts until the recorder's writer has taken at least `kPhaseSteps` more frames:
+  // the tests need a few hundred frames in each phase, and chunks, which the writer starts with
+  // keyframes it asks of the running engine. (Waiting on the engine's steps alone let a starved
+  // writer ask only after the engine had stopped: one chunk.)
   constexpr std::uint64_t kPhaseSteps = 300;
-  const auto phase = [&](std::chrono::milliseconds at_least) {
-    const std::uint64_t from = engine.step_count();
-    std::this_thread::sleep_for(at_least);
-    WaitFor([&] { return engine.step_count() >= from + kPhaseSteps; }, 60000ms);
+  const auto phase = [&] {
+    const std::uint64_t from = recorder.status().frames;
+    EXPECT_TRUE(WaitFor([&] { return recorder.status().frames >= from + kPhaseSteps; }));
   };
-  phase(50ms);
+  phase();
   const int box = mj_name2id(m, mjOBJ_BODY, "box");
   if (box >= 0) engine.Submit(cmd::ApplyForce{box, {0.5, 0, 0}, {0, 0, 0}, 3});
   if (m->nmocap > 0) engine.Submit(cmd::SetMocap{0, {0.2, 0.1, 0.6}, {1, 0, 0, 0}});
-  phase(50ms);
+  phase();
   engine.Reset();
-  phase(30ms);
+  phase();
   engine.Submit(cmd::SetOptions{[](mjOption& o) { o.gravity[2] = -5; }, "low gravity"});
-  phase(50ms);
+  phase();
   recorder.Stop();
   engine.Stop();
   return path;
@@ -201,32 +202,23 @@ TEST_F(RecorderTest, KinematicPlaybackShowsEveryRecordedFrameBitIdentical) {
 // gain overrides) as the controllers applied them, with their publication numbers and source.
 TEST_F(RecorderTest, RecordsTheAppliedCommandFrames) {
   PhysicsEngine engine(physics::CompileXmlString(urlab::testing::kArmXml));
-  control::ControlSystem controls;
-  control::ArticulationControl* arm = nullptr;
-  engine.WithLockedData([&](mjModel* m, mjData* d) {
-    arm = &controls.Add(std::make_unique<control::ArticulationControl>(
-        physics::ArticulationBindings(m, d, "arm_")));
-  });
-  controls.Install(engine);
-  Recorder recorder(engine, {{"arm"}, "", ""}, kDeepRing);
-  engine.SetAsFastAsPossible(true);
-  engine.Start();
+  urlab::testing::ControlledArticulation arm(engine);
+  urlab::testing::StepRecording recording(engine, {{"arm"}, "", ""}, kDeepRing);
   RecorderOptions o;
   o.path = dir_ + "/commands.urrec";
   o.keyframe_interval = 0.05;  // several chunks: each must carry the frames again
-  recorder.Start(o);
+  recording.Start(o);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<std::uint64_t> published;
   for (int k = 1; k <= 3; ++k) {
-    std::this_thread::sleep_for(30ms);
+    for (int i = 0; i < 3; ++i) recording.Step(10);
     ASSERT_TRUE(arm->PublishFrame(control::ControlSource::kNetwork,
                                   std::vector<double>{0.1 * k, 0.2 * k, 0.3 * k},
                                   std::vector<double>{k == 2 ? 7.0 : nan, nan, nan}));
     published.push_back(arm->channel(control::ControlSource::kNetwork).last_seq());
   }
-  std::this_thread::sleep_for(30ms);
-  recorder.Stop();
-  engine.Stop();
+  for (int i = 0; i < 3; ++i) recording.Step(10);
+  recording.Finish();
 
   const RecordingReader reader = RecordingReader::Open(o.path);
   ASSERT_EQ(reader.info().tables.command_groups, engine.command_layout());

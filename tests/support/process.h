@@ -4,8 +4,12 @@
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
+#include <fstream>
+#include <iterator>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -44,6 +48,27 @@ class UrlabProcess {
     }
     return true;
   }
+  // True once the process catches `sig` (its handler is installed: /proc/PID/status, SigCgt);
+  // false after `limit` or when it ended. A signal sent before that would kill it by default.
+  bool WaitForHandler(int sig, std::chrono::seconds limit = std::chrono::seconds(60)) {
+    const auto start = Clock::now();
+    while (!Catches(sig)) {
+      if (Clock::now() - start > limit || Ended()) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return true;
+  }
+  // True once the process has used `cpu` of processor time (/proc/PID/stat: user + system), a
+  // point in its own work whatever the machine's load; false after `limit` or when it ended.
+  bool WaitForCpu(std::chrono::milliseconds cpu,
+                  std::chrono::seconds limit = std::chrono::seconds(60)) {
+    const auto start = Clock::now();
+    while (CpuUsed() < cpu) {
+      if (Clock::now() - start > limit || Ended()) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return true;
+  }
   void Signal(int sig) { kill(pid_, sig); }
   // Exit code (128+N when killed by signal N), or -1 after `limit`.
   int Wait(std::chrono::milliseconds limit) {
@@ -57,6 +82,30 @@ class UrlabProcess {
   std::string output() const { return ReadTextFile(log_); }
 
  private:
+  std::chrono::milliseconds CpuUsed() const {
+    std::ifstream stat("/proc/" + std::to_string(pid_) + "/stat");
+    std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+    const std::size_t after_name = text.rfind(')');  // the name may hold spaces
+    if (after_name == std::string::npos) return std::chrono::milliseconds(0);
+    std::istringstream fields(text.substr(after_name + 2));
+    std::string field;
+    unsigned long long utime = 0, stime = 0;
+    for (int i = 3; i <= 15 && fields >> field; ++i) {  // fields 14 and 15: utime, stime
+      if (i == 14) utime = std::stoull(field);
+      if (i == 15) stime = std::stoull(field);
+    }
+    return std::chrono::milliseconds((utime + stime) * 1000 / sysconf(_SC_CLK_TCK));
+  }
+  bool Catches(int sig) const {
+    std::ifstream status("/proc/" + std::to_string(pid_) + "/status");
+    std::string line;
+    while (std::getline(status, line)) {
+      if (line.rfind("SigCgt:", 0) == 0) {
+        return (std::stoull(line.substr(7), nullptr, 16) >> (sig - 1)) & 1u;
+      }
+    }
+    return false;
+  }
   bool Ended() {
     if (done_) return true;
     int status = 0;

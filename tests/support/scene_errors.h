@@ -1,5 +1,6 @@
-// Test helper: a scene text that world::ParseScene must refuse at a given file and line, with a
-// message containing a given text (the shape every scene-section test checks its bad input in).
+// Test helpers for the scene-section tests: a scene of one arm with more lines after it, and a
+// scene text that world::ParseScene must refuse at a given file and line, with a message
+// containing a given text (the shape every scene-section test checks its bad input in).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -10,6 +11,14 @@
 #include "urlab/world/scene_file.h"
 
 namespace urlab::testing {
+
+// The bundled arm: the one articulation of the scenes the section tests parse.
+inline const std::string kArm = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
+
+// "articulations:\n  - name: a\n    mjcf: ARM\n" followed by `extra` (from line 4 on).
+inline std::string WithArm(const std::string& extra) {
+  return "articulations:\n  - name: a\n    mjcf: " + kArm + "\n" + extra;
+}
 
 inline void ExpectSceneRefusedAt(const std::string& yaml, const std::string& path, int line,
                                  const std::string& message) {

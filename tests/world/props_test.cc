@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
-#include <thread>
 
 #include "convert/test_meshes.h"
 #include "mujoco_test.h"
@@ -15,6 +14,7 @@
 #include "urlab/world/manager.h"
 #include "urlab/world/scene.h"
 #include "urlab/world/session.h"
+#include "wait.h"
 
 namespace urlab {
 namespace {
@@ -105,13 +105,14 @@ TEST_F(PropsTest, DynamicPropFallsAndReportsItsPose_MocapPropFollowsTheHost) {
     ASSERT_NE(p, nullptr);
     EXPECT_NEAR(manager.session().engine().model()->body_subtreemass[p->body], 0.3, 1e-9);
     manager.session().SetPaused(false);
-    for (int i = 0; i < 50 && manager.session().engine().model() != nullptr; ++i) {
+    // A dynamic prop falls: ticked until its reported pose is a centimetre lower (bounded).
+    EXPECT_TRUE(urlab::testing::WaitFor([&] {
       manager.Tick();
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
+      const auto now = manager.BodyPose("mug", "body");
+      return now && now->pos[2] < 0.99;
+    })) << "a dynamic prop falls";
     const auto pose = manager.BodyPose("mug", "body");
     ASSERT_TRUE(pose);
-    EXPECT_LT(pose->pos[2], 0.99) << "a dynamic prop falls";
     EXPECT_THROW(manager.session().SetHostDrivenPose("mug", "body", {}), Error);
     manager.EndPlay();
   }
@@ -121,10 +122,12 @@ TEST_F(PropsTest, DynamicPropFallsAndReportsItsPose_MocapPropFollowsTheHost) {
   world::Pose target;
   target.pos = {0.3, -0.2, 0.9};
   manager.session().SetHostDrivenPose("mug", "body", target);
-  for (int i = 0; i < 20; ++i) {
+  // Ticked until the mocap body left where the scene put it (bounded): then it is at the target.
+  EXPECT_TRUE(urlab::testing::WaitFor([&] {
     manager.Tick();
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
+    const auto now = manager.BodyPose("mug", "body");
+    return now && now->pos[2] != 0.72;
+  }));
   const auto pose = manager.BodyPose("mug", "body");
   ASSERT_TRUE(pose);
   EXPECT_NEAR(pose->pos[0], 0.3, 1e-9);
