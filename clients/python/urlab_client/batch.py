@@ -258,7 +258,6 @@ class BatchBackend:
         if actions.shape != (n, self.nu):
             raise ValueError(f"actions of shape {actions.shape}, expected {(n, self.nu)}")
         resetting = self._autoreset.copy()
-        terminated = np.zeros(n, dtype=bool)
         truncated = np.zeros(n, dtype=bool)
         lost = np.zeros(n, dtype=bool)
         done = np.zeros(n, dtype=bool)
@@ -308,14 +307,25 @@ class BatchBackend:
             self._elapsed[resetting] = 0
         obs = self._view(self._obs)
         infos = _infos(n, time=time)
-        rewards = np.zeros(n)
+        rewards, terminated = self._outcome(obs, actions, infos, done, truncated, lost, resetting,
+                                            any_reset, self._elapsed)
+        self._autoreset = terminated | truncated
+        return obs, rewards, terminated, truncated, infos
+
+    def _outcome(self, obs, actions, infos, done, truncated, lost, resetting, any_reset, elapsed):
+        """Rewards and terminations of one step of len(done) environments (step() and recv()).
+        Updates `truncated` in place (episode ends, max_episode_steps) and `infos` (lost servers).
+        """
+        m = len(done)
+        rewards = np.zeros(m)
         if self.reward_fn is not None:
             rewards = np.asarray(self.reward_fn(obs, actions, infos), dtype=np.float64)
+        terminated = np.zeros(m, dtype=bool)
         if self.terminated_fn is not None:
             terminated = np.asarray(self.terminated_fn(obs, infos), dtype=bool).copy()
         truncated |= done
         if self.max_episode_steps is not None:
-            truncated |= self._elapsed >= self.max_episode_steps
+            truncated |= elapsed >= self.max_episode_steps
         # The environments that reset in this step: reward 0, not ended (gymnasium's next-step).
         if any_reset:
             rewards[resetting] = 0
@@ -324,8 +334,7 @@ class BatchBackend:
         if lost.any():
             infos["server_lost"] = lost
             infos["_server_lost"] = lost.copy()
-        self._autoreset = terminated | truncated
-        return obs, rewards, terminated, truncated, infos
+        return rewards, terminated
 
     # ---- Asynchronous stepping, EnvPool's send/recv (UrlabVectorEnv.send, recv)
     def _check_idle(self, what):
@@ -422,22 +431,8 @@ class BatchBackend:
             elapsed[resetting] = 0
         view = self._view(obs)  # the reply's own array: later replies leave it as it is
         infos = _infos(m, time=time, env_id=np.arange(s.start, s.stop))
-        rewards = np.zeros(m)
-        if self.reward_fn is not None:
-            rewards = np.asarray(self.reward_fn(view, actions, infos), dtype=np.float64)
-        terminated = np.zeros(m, dtype=bool)
-        if self.terminated_fn is not None:
-            terminated = np.asarray(self.terminated_fn(view, infos), dtype=bool).copy()
-        truncated |= done
-        if self.max_episode_steps is not None:
-            truncated |= elapsed >= self.max_episode_steps
-        if any_reset:
-            rewards[resetting] = 0
-            terminated[resetting] = False
-            truncated[resetting & ~lost] = False
-        if lost.any():
-            infos["server_lost"] = lost
-            infos["_server_lost"] = lost.copy()
+        rewards, terminated = self._outcome(view, actions, infos, done, truncated, lost, resetting,
+                                            any_reset, elapsed)
         self._autoreset[s] = terminated | truncated
         return view, rewards, terminated, truncated, infos
 
