@@ -93,8 +93,9 @@ run_ctest() {
 SANITIZER_OPT="-O1 -g1 -DNDEBUG"
 
 main_stage() {
-  # Line tables only (-g1): enough for stack traces, a third less to compile and link than -g.
-  tools/build.sh "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG"
+  # tools/build.sh's build (-O2 -g1: line tables only), the one tools/demo.sh makes too, so that
+  # either command after the other reuses the objects.
+  tools/build.sh
   if [ -f tools/install-mujoco-js.sh ]; then
     bash tools/install-mujoco-js.sh "$BUILD_DIR/mujoco-js" ||
       echo "mujoco-js not installed: the 3.x reference test will skip"
