@@ -228,7 +228,10 @@ TEST_F(StepServerTest, BadRequestsGetTheirErrorCodes) {
 // Observers read while one driver holds the lease; force takes it over; a silent driver loses
 // it after the lease timeout; JSON text clients work beside msgpack ones; DEALER clients too.
 TEST_F(StepServerTest, OneDriverManyObserversWithLeases) {
-  Play(300ms, "direct");
+  // A lease of 2 s: the requests between a takeover and the check that the old driver lost the
+  // lease must come within it even on a loaded machine (a 300 ms lease could pass during one
+  // stall of a busy 2-core CI run and let the old driver step again).
+  Play(2000ms, "direct");
   Client a(ctx_, rpc()), b(ctx_, rpc()), observer(ctx_, rpc(), /*json=*/true);
   a.Hello();
   b.Hello();
@@ -243,7 +246,7 @@ TEST_F(StepServerTest, OneDriverManyObserversWithLeases) {
   EXPECT_EQ(observer.Op("read_mocap_pose", {{"body", "arm_target"}})["op"], "read_mocap_pose_ok");
   ASSERT_EQ(b.Op("step", {{"force", true}})["op"], "step_ok");  // b takes over
   EXPECT_EQ(a.Op("step")["code"], "not_driver");
-  std::this_thread::sleep_for(400ms);  // b falls silent past the lease timeout
+  std::this_thread::sleep_for(2200ms);  // b falls silent past the lease timeout
   EXPECT_EQ(a.Op("step")["op"], "step_ok");
   EXPECT_EQ(a.Op("bye")["op"], "bye_ok");  // releases the lease
   EXPECT_EQ(a.Op("step")["code"], "session_expired");
@@ -378,7 +381,7 @@ TEST_F(StepServerTest, PuppetModeWritesTheClientsStateAndNeverSteps) {
 
 // A driver that disappears in direct mode loses its lease and the simulation runs live again.
 TEST_F(StepServerTest, ASilentDriversLockstepEndsWithItsLease) {
-  Play(200ms);
+  Play(1000ms);  // long enough that the check 50 ms after the step comes within it
   Client c(ctx_, rpc());
   c.Hello();
   ASSERT_EQ(c.Op("set_mode", {{"mode", "direct"}})["op"], "set_mode_ok");
