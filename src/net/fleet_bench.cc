@@ -82,15 +82,33 @@ class LeanClient {
     std::string why;
     return DecodeMsgpack(reply_, reply_size_, &why).value_or(Json());
   }
-  // One request; throws unless the reply's op is `ok_op`... or any non-error op.
+  // One request; throws unless the reply's op is a non-error one.
   void Exchange(Json request) {
     if (!session_.empty()) request["session_id"] = session_;
     writer_.Clear();
     writer_.Value(request);
+    Transfer(request.value("op", "") == "step" ? request.value("n_steps", 1) : 0);
+  }
+  // A step request of n steps, written straight into the encoder as a lean client would (no
+  // tree of the request first).
+  void Step(int n) {
+    writer_.Clear();
+    writer_.Map(3);
+    writer_.Key("op");
+    writer_.Str("step");
+    writer_.Key("n_steps");
+    writer_.Int(n);
+    writer_.Key("session_id");
+    writer_.Str(session_);
+    Transfer(n);
+  }
+
+ private:
+  // Sends the encoded request (which runs `steps` steps) and checks the reply's op.
+  void Transfer(int steps) {
     if (channel_) {
       // The client's wait policy (as urlab::client::StepClient's): spin about as long as the
       // server is expected to take, then sleep.
-      const int steps = request.value("op", "") == "step" ? request.value("n_steps", 1) : 0;
       const auto t0 = Clock::now();
       channel_->SendRequest(
           {reinterpret_cast<const std::uint8_t*>(writer_.data()), writer_.size()});
@@ -106,8 +124,11 @@ class LeanClient {
       reply_ = static_cast<const std::uint8_t*>(message_.data());
       reply_size_ = message_.size();
     }
+    // Strings and packed arrays stay views into the reply (as a client reading observations
+    // straight from the channel would), not copies.
     const msgpack::object_handle h =
-        msgpack::unpack(reinterpret_cast<const char*>(reply_), reply_size_);
+        msgpack::unpack(reinterpret_cast<const char*>(reply_), reply_size_,
+                        [](msgpack::type::object_type, std::size_t, void*) { return true; });
     const std::string_view op = ReplyOp(h.get());
     if (op.empty() || op == "error") {
       std::string why;
@@ -116,7 +137,6 @@ class LeanClient {
     }
   }
 
- private:
   zmq::socket_t socket_;
   std::optional<wire::ShmChannel> channel_;
   std::string session_;
@@ -129,10 +149,9 @@ class LeanClient {
 
 // Lockstep steps per second with n steps per request.
 double LockstepRate(LeanClient& client, int steps, int n) {
-  const Json step{{"op", "step"}, {"n_steps", n}};
   const int requests = std::max(1, steps / n);
   const auto t0 = Clock::now();
-  for (int i = 0; i < requests; ++i) client.Exchange(step);
+  for (int i = 0; i < requests; ++i) client.Step(n);
   return requests * n / std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
@@ -143,7 +162,7 @@ void LockstepFigures(FleetContext& ctx, bool shm, std::vector<FleetFigure>* out)
   LeanClient client(zctx, ctx.rpc(), shm);
   client.Exchange(Json{{"op", "set_mode"}, {"mode", "direct"}});
   const std::string name = shm ? "shm" : "zmq";
-  for (int i = 0; i < 200; ++i) client.Exchange(Json{{"op", "step"}, {"n_steps", 1}});  // warm
+  for (int i = 0; i < 200; ++i) client.Step(1);  // warm
   for (const int n : {1, 10}) {
     const double ratio =
         ctx.MedianRatio([&] { return LockstepRate(client, ctx.steps_per_round(), n); });
@@ -152,11 +171,10 @@ void LockstepFigures(FleetContext& ctx, bool shm, std::vector<FleetFigure>* out)
                       ratio, ctx.options().rounds));
   }
   std::vector<double> step_us, rtt_us;
-  const Json step{{"op", "step"}, {"n_steps", 1}};
   const Json counters{{"op", "get_counters"}};
   for (int i = 0; i < ctx.options().samples; ++i) {
     auto t0 = Clock::now();
-    client.Exchange(step);
+    client.Step(1);
     step_us.push_back(Micros(Clock::now() - t0));
     t0 = Clock::now();
     client.Exchange(counters);
@@ -170,7 +188,9 @@ void LockstepFigures(FleetContext& ctx, bool shm, std::vector<FleetFigure>* out)
 
 // Raw ping-pongs: an echo thread answers each ping. ZeroMQ REQ/REP, the echo in its own
 // context; shared memory through the same channel and wait strategy as the step server (the
-// echo spins with yields for a millisecond, then sleeps in poll on its wake socket).
+// echo spins for a millisecond as the server's I/O thread spins for a shared-memory request:
+// SpinWait::SpinTight, pause instructions and a yield every few turns; then it sleeps in poll on
+// its wake socket).
 void RawFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
   const std::vector<std::uint8_t> ping(64, 7);
   {
@@ -218,7 +238,7 @@ void RawFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
           server.WriteReply(*r);
           continue;
         }
-        if (spin.Spin(std::chrono::milliseconds(1), [&] {
+        if (spin.SpinTight(std::chrono::milliseconds(1), [&] {
               return server.request_waiting() || stop.load(std::memory_order_relaxed);
             })) {
           continue;
