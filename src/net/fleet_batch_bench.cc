@@ -100,15 +100,20 @@ env.close()
 )PY";
 
 // Dask LocalCluster: 1 worker, then 2, each running one batched server of 16 environments (one
-// stepping thread each), driven as one vector env (urlab_client.cluster).
+// stepping thread each), driven as one vector env (urlab_client.cluster). Both runs take the same
+// number of vector steps from the same start, so each server simulates the same trajectory in
+// both (a run of fixed seconds would stop the faster one elsewhere in its episodes, whose physics
+// costs more or less per step). Besides the rates, per vector step: the wall time, the busiest
+// server's own stepping time (batch_info's busy_seconds) and the driver thread's CPU time
+// (its waits for the replies included).
 constexpr const char* kDaskScript = R"PY(
 import sys, time
 sys.path.insert(0, sys.argv[1])
 import numpy as np
 from distributed import Client, LocalCluster
 from urlab_client.cluster import ServerPool
-urlab, scene, seconds = sys.argv[2], sys.argv[3], float(sys.argv[4])
-def rate(workers):
+urlab, scene, steps = sys.argv[2], sys.argv[3], int(sys.argv[4])
+def run(workers):
     with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                       dashboard_address=None, silence_logs=40) as c, Client(c) as client:
         pool = ServerPool(client, scene, workers, urlab=urlab, envs_per_server=16, threads=1)
@@ -117,14 +122,19 @@ def rate(workers):
             a = np.zeros(envs.action_space.shape)
             for _ in range(20):
                 envs.step(a)
-            n, t0 = 0, time.perf_counter()
-            while time.perf_counter() - t0 < seconds:
+            busy = [s.client.call("batch_info")["busy_seconds"] for s in envs.envs]
+            cpu, t0 = time.thread_time(), time.perf_counter()
+            for _ in range(steps):
                 envs.step(a)
-                n += envs.num_envs
-            return n / (time.perf_counter() - t0)
-one = rate(1)
-two = rate(2)
-print("one=%f two=%f" % (one, two))
+            wall, cpu = time.perf_counter() - t0, time.thread_time() - cpu
+            busy = max(s.client.call("batch_info")["busy_seconds"] - b
+                       for s, b in zip(envs.envs, busy))
+            return steps * envs.num_envs / wall, 1e6 * wall / steps, 1e6 * busy / steps, \
+                1e6 * cpu / steps
+one, two = run(1), run(2)
+print("one=%f two=%f" % (one[0], two[0]))
+for k, r in (("1", one), ("2", two)):
+    print("wall%s=%f busy%s=%f cpu%s=%f" % (k, r[1], k, r[2], k, r[3]))
 )PY";
 
 // The figure after `key=` in `text`.
@@ -246,7 +256,7 @@ void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
   if (o.python_client.empty() || access(o.python.c_str(), X_OK) != 0) return;
   int status = 0;
   const std::string text = RunCaptured(
-      {o.python, "-c", kDaskScript, o.python_client, SelfPath(), ctx.scene_path, "5"}, &status);
+      {o.python, "-c", kDaskScript, o.python_client, SelfPath(), ctx.scene_path, "4000"}, &status);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     ctx.Report("no Dask figures (python3-distributed missing, or the cluster failed): " + text);
     return;
@@ -259,6 +269,13 @@ void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
       Format("Dask LocalCluster, batched servers of 16 environments: 1 worker %.0f, 2 "
              "workers %.0f env steps/s (%.2f)",
              one, two, two / one));
+  for (const char* w : {"1", "2"}) {
+    const std::string k(w);
+    ctx.Report(Format("Dask, %s worker(s), per vector step: %.0f us of wall time, the busiest "
+                      "server stepping %.0f us, the driver's CPU %.0f us (its waits included)",
+                      w, Field(text, "wall" + k), Field(text, "busy" + k),
+                      Field(text, "cpu" + k)));
+  }
 }
 
 void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {

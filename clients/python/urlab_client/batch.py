@@ -60,19 +60,33 @@ class BatchClient:
                 "episode_steps": np.frombuffer(reply["episode_steps"], _U4),
                 "step_seconds": float(reply.get("step_seconds", 0.0))}
 
+    def _parts(self, reply):
+        """(obs, done, time) of a reply: what a vector env reads, views on the reply's bytes."""
+        return (np.frombuffer(reply["obs"], _F8).reshape(self.envs, self.obs_size),
+                np.frombuffer(reply["done"], np.bool_), np.frombuffer(reply["time"], _F8))
+
     def send_step(self, actions, reset=None):
         """actions: (envs, nu) float64; reset: (envs,) bool, those environments reset instead of
         stepping (their actions ignored)."""
-        # A C-contiguous float64 array goes as a buffer (msgpack copies it once, no tobytes()).
-        fields = {"actions": memoryview(np.ascontiguousarray(actions, dtype=_F8)).cast("B")}
+        if type(actions) is not np.ndarray or actions.dtype != _F8 or \
+                not actions.flags.c_contiguous:
+            actions = np.ascontiguousarray(actions, dtype=_F8)
+        fields = {}
         if self.n_steps != 1:
             fields["n_steps"] = self.n_steps
-        if reset is not None and reset.any():
+        if reset is not None and np.count_nonzero(reset):
             fields["reset"] = np.ascontiguousarray(reset, dtype=np.uint8).tobytes()
-        self.client.send_request("batch_step", **fields)
+        # The actions' bytes go into the request as they are (no msgpack copy).
+        self.client.send_request_bytes("batch_step", "actions", actions, **fields)
 
     def receive_step(self):
         return self._result(self.client.receive_reply("batch_step"))
+
+    def receive_step_parts(self):
+        return self._parts(self.client.receive_reply("batch_step"))
+
+    def receive_reset_parts(self):
+        return self._parts(self.client.receive_reply("batch_reset"))
 
     def send_reset(self, envs=None, seeds=None, auto_reset=None):
         """envs: indices (None: all); seeds: one int or None per listed environment."""
@@ -201,14 +215,18 @@ class BatchBackend:
             raise RuntimeError(f"the replacement of server {k} runs another batch")
         self._lost[k] = False
 
-    def _lose(self, k, truncated, lost):
+    def _lose(self, k, lost):
+        """Server k stopped answering: forgets it (replaced at its environments' autoreset) and
+        marks its rows in `lost` ((num_envs,) bool, made here when None); returns `lost`."""
         if self.replace is None:
             raise RuntimeError(f"server {k} ({self.clients[k].endpoint}) stopped answering, "
                                "and this vector env has no replace callback")
         self.clients[k].drop()
         self._lost[k] = True
-        truncated[self._slice(k)] = True
-        lost[self._slice(k)] = True
+        if lost is None:
+            lost = np.zeros(self.num_envs, dtype=bool)
+        lost[self._rows[k]] = True
+        return lost
 
     # ---- gymnasium's vector API (UrlabVectorEnv calls these)
     def reset(self, seed=None, options=None):
@@ -252,86 +270,99 @@ class BatchBackend:
         return self._view(self._obs), _infos(n, time=time)
 
     def step(self, actions):
-        self._check_idle("step")
+        if self._in_flight:
+            self._check_idle("step")
         n = self.num_envs
         actions = np.asarray(actions, dtype=np.float64)
         if actions.shape != (n, self.nu):
             raise ValueError(f"actions of shape {actions.shape}, expected {(n, self.nu)}")
-        resetting = self._autoreset.copy()
-        truncated = np.zeros(n, dtype=bool)
-        lost = np.zeros(n, dtype=bool)
-        done = np.zeros(n, dtype=bool)
-        time = np.zeros(n)
-        replies = {}
+        # Per step: one request per server, then numpy over all environments at once; the
+        # masks of resets and lost servers only when there are any.
+        clients, rows = self.clients, self._rows
+        single = len(clients) == 1
+        resetting = self._autoreset
+        any_reset = bool(np.count_nonzero(resetting))
+        lost = None
         sent = []
-        for k in range(len(self.clients)):
-            s = self._slice(k)
+        for k in range(len(clients)):
             try:
                 if self._lost[k]:  # its environments were truncated: back at their autoreset
                     self._renew(k)
                     self.clients[k].send_reset()
                     sent.append((k, True))
                 else:
-                    self.clients[k].send_step(actions[s], resetting[s])
+                    s = rows[k]
+                    clients[k].send_step(actions if single else actions[s],
+                                         (resetting if single else resetting[s]) if any_reset
+                                         else None)
                     sent.append((k, False))
             except LOST:
-                self._lose(k, truncated, lost)
+                lost = self._lose(k, lost)
+        got = [None] * len(clients)
         for k, renewed in sent:
-            s = self._slice(k)
             try:
-                r = self.clients[k].receive_reset() if renewed else self.clients[k].receive_step()
+                c = self.clients[k]
+                got[k] = c.receive_reset_parts() if renewed else c.receive_step_parts()
             except LOST:
-                self._lose(k, truncated, lost)
+                lost = self._lose(k, lost)
                 continue
             except UrlabError as e:
                 if e.code not in ("session_expired", "shutting_down"):
                     raise
-                self._lose(k, truncated, lost)
+                lost = self._lose(k, lost)
                 continue
-            replies[k] = r["obs"]
-            done[s] = r["done"]
-            time[s] = r["time"]
             if renewed:
-                resetting[s] = True
-        if len(self.clients) == 1 and 0 in replies:
-            self._obs = replies[0]  # the reply's own array (read-only), no copy
-        else:
-            new = np.empty((n, self.obs_size))
-            for k in range(len(self.clients)):
-                new[self._slice(k)] = replies[k] if k in replies else self._obs[self._slice(k)]
-            self._obs = new
-        # No per-step work beyond what a step needs: the masks below only when something reset.
-        any_reset = bool(resetting.any())
-        self._elapsed += 1
+                if resetting is self._autoreset:
+                    resetting = resetting.copy()
+                resetting[rows[k]] = True
+                any_reset = True
+        if single and got[0] is not None:
+            obs, truncated, time = got[0]  # obs: the reply's own array (read-only), no copy
+            truncated, time = truncated.copy(), time.copy()
+        else:  # the servers' rows in order; a lost server's keep their observation
+            obs = np.concatenate([got[k][0] if got[k] is not None else self._obs[rows[k]]
+                                  for k in range(len(clients))])
+            truncated = np.concatenate([got[k][1] if got[k] is not None
+                                        else np.zeros(self.counts[k], dtype=bool)
+                                        for k in range(len(clients))])
+            time = np.concatenate([got[k][2] if got[k] is not None else np.zeros(self.counts[k])
+                                   for k in range(len(clients))])
+        self._obs = obs
+        elapsed = self._elapsed
+        elapsed += 1
         if any_reset:
-            self._elapsed[resetting] = 0
-        obs = self._view(self._obs)
-        infos = _infos(n, time=time)
-        rewards, terminated = self._outcome(obs, actions, infos, done, truncated, lost, resetting,
-                                            any_reset, self._elapsed)
+            elapsed[resetting] = 0
+        view = self._view(obs)
+        infos = {"time": time, "_time": np.ones(n, dtype=bool)}
+        rewards, terminated = self._outcome(view, actions, infos, truncated, lost, resetting,
+                                            any_reset, elapsed)
         self._autoreset = terminated | truncated
-        return obs, rewards, terminated, truncated, infos
+        return view, rewards, terminated, truncated, infos
 
-    def _outcome(self, obs, actions, infos, done, truncated, lost, resetting, any_reset, elapsed):
-        """Rewards and terminations of one step of len(done) environments (step() and recv()).
-        Updates `truncated` in place (episode ends, max_episode_steps) and `infos` (lost servers).
-        """
-        m = len(done)
-        rewards = np.zeros(m)
+    def _outcome(self, obs, actions, infos, truncated, lost, resetting, any_reset, elapsed):
+        """Rewards and terminations of one step of len(truncated) environments (step() and
+        recv()). `truncated` comes in as the episodes the server ended and is updated in place
+        (max_episode_steps, lost servers); lost: None, or the environments of servers that
+        stopped answering (infos["server_lost"])."""
+        m = len(truncated)
         if self.reward_fn is not None:
             rewards = np.asarray(self.reward_fn(obs, actions, infos), dtype=np.float64)
-        terminated = np.zeros(m, dtype=bool)
+        else:
+            rewards = np.zeros(m)
         if self.terminated_fn is not None:
             terminated = np.asarray(self.terminated_fn(obs, infos), dtype=bool).copy()
-        truncated |= done
+        else:
+            terminated = np.zeros(m, dtype=bool)
+        if lost is not None:
+            truncated |= lost
         if self.max_episode_steps is not None:
             truncated |= elapsed >= self.max_episode_steps
         # The environments that reset in this step: reward 0, not ended (gymnasium's next-step).
         if any_reset:
             rewards[resetting] = 0
             terminated[resetting] = False
-            truncated[resetting & ~lost] = False
-        if lost.any():
+            truncated[resetting if lost is None else resetting & ~lost] = False
+        if lost is not None:
             infos["server_lost"] = lost
             infos["_server_lost"] = lost.copy()
         return rewards, terminated
@@ -398,17 +429,14 @@ class BatchBackend:
         if not self._in_flight:
             raise RuntimeError("recv() with no send() waiting for its reply")
         k, renewed, failed, actions, resetting = self._in_flight.popleft()
-        n, s = self.num_envs, self._slice(k)
-        m = self.counts[k]
-        truncated_all = np.zeros(n, dtype=bool)
-        lost_all = np.zeros(n, dtype=bool)
-        done = np.zeros(m, dtype=bool)
-        time = np.zeros(m)
-        obs = None
+        s, m = self._rows[k], self.counts[k]
+        lost = None
         if not failed:
             try:
-                r = self.clients[k].receive_reset() if renewed else self.clients[k].receive_step()
-                obs, done, time = r["obs"], r["done"].copy(), r["time"].copy()
+                c = self.clients[k]
+                obs, truncated, time = c.receive_reset_parts() if renewed else \
+                    c.receive_step_parts()
+                truncated, time = truncated.copy(), time.copy()
                 if renewed:
                     resetting = np.ones(m, dtype=bool)
             except LOST:
@@ -418,20 +446,19 @@ class BatchBackend:
                     raise
                 failed = True
         if failed:
-            self._lose(k, truncated_all, lost_all)
-            obs = self._obs[s].copy()
+            lost = self._lose(k, None)[s]
+            obs, truncated, time = self._obs[s].copy(), np.zeros(m, dtype=bool), np.zeros(m)
         if not self._obs.flags.writeable:  # a reply's own array after step()
             self._obs = self._obs.copy()
         self._obs[s] = obs
-        truncated, lost = truncated_all[s], lost_all[s]
         elapsed = self._elapsed[s]  # a view: updated in place
         elapsed += 1
-        any_reset = bool(resetting.any())
+        any_reset = bool(np.count_nonzero(resetting))
         if any_reset:
             elapsed[resetting] = 0
         view = self._view(obs)  # the reply's own array: later replies leave it as it is
         infos = _infos(m, time=time, env_id=np.arange(s.start, s.stop))
-        rewards, terminated = self._outcome(view, actions, infos, done, truncated, lost, resetting,
+        rewards, terminated = self._outcome(view, actions, infos, truncated, lost, resetting,
                                             any_reset, elapsed)
         self._autoreset[s] = terminated | truncated
         return view, rewards, terminated, truncated, infos

@@ -184,10 +184,27 @@ class ShmChannel:
         """The first half of request(): writes the request and wakes the server; returns the
         request's sequence number for wait() (one request in flight at a time)."""
         n = len(payload)
+        self._fits(n)
+        self._view[_HEADER:_HEADER + n] = payload
+        return self._publish(n)
+
+    def post_parts(self, head, body):
+        """post() of the bytes `head` followed by `body` (a flat byte memoryview, e.g. of a
+        C-contiguous numpy array), each copied once, straight into the request slot."""
+        h = len(head)
+        n = h + body.nbytes
+        self._fits(n)
+        view = self._view
+        view[_HEADER:_HEADER + h] = head
+        view[_HEADER + h:_HEADER + n] = body
+        return self._publish(n)
+
+    def _fits(self, n):
         if n > self._req_cap:
             raise ShmError(f"shared memory {self.path}: a request of {n} bytes "
                            f"(capacity {self._req_cap})")
-        self._view[_HEADER:_HEADER + n] = payload
+
+    def _publish(self, n):
         self._req_len.value = n
         seq = (self._seq + 1) & 0xFFFFFFFF or 1
         self._seq = seq
