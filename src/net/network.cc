@@ -44,9 +44,6 @@ constexpr auto kIdlePeriod = std::chrono::milliseconds(50);
 constexpr auto kReplySpin = std::chrono::milliseconds(1);
 // While spinning for a shared-memory request, the sockets are polled at most this often.
 constexpr auto kSocketCheck = std::chrono::microseconds(20);
-// While a shared-memory client keeps this thread busy (its next request comes before the spin
-// above polls), the ZeroMQ sockets are still read at least this often.
-constexpr auto kZmqMaxDelay = std::chrono::microseconds(500);
 constexpr auto kPausedRepublish = std::chrono::milliseconds(100);  // at most 10 Hz while paused
 constexpr auto kPausedInfo = std::chrono::seconds(1);
 constexpr auto kDropLogPeriod = std::chrono::seconds(1);
@@ -124,7 +121,7 @@ struct NetworkSubsystem::Impl {
   std::atomic<bool> stop{false};
   std::array<std::atomic<std::uint64_t>, wire::kNumDrops> drops{};
   std::atomic<std::uint64_t> controls_applied{0}, gains_applied{0}, steps_published{0},
-      info_published{0}, frames_skipped{0}, state_messages{0}, zmq_reads{0};
+      info_published{0}, frames_skipped{0}, state_messages{0};
 
   // ---- I/O thread only ----
   std::optional<zmq::context_t> context;
@@ -136,19 +133,9 @@ struct NetworkSubsystem::Impl {
   std::vector<std::vector<char>> joint_wanted, sensor_wanted;  // per articulation, per topic
   std::vector<char> twist_wanted, actions_wanted;              // per articulation
   bool full_wanted = false;
-  // While a shared-memory client is expected to send its next request soon, the turns of Run
-  // read the ZeroMQ sockets only when a poll found one readable (the spin for the next request
-  // polls them every kSocketCheck) or kZmqMaxDelay after the last read: reading an empty ZeroMQ
-  // socket costs a system call (it polls its mailbox), and those between a reply and the next
-  // request would add to every shared-memory round trip.
-  Clock::time_point zmq_read{};
-  bool zmq_readable = true;
-  SpinWait spin;  // for parked replies (gives up under CPU contention)
-  // For a request from a client on shared memory, which lands within a microsecond of the reply:
-  // pause instructions and a yield every few turns only (a system call on every turn would add
-  // its length to every round trip).
-  SpinWait spin_quick;
-  physics::StateFrame frame;  // the newest frame taken from the ring
+  SpinWait spin;                    // for parked replies (gives up under CPU contention)
+  Clock::time_point quiet_until{};  // SpinQuick: no spinning until then (contention seen)
+  physics::StateFrame frame;        // the newest frame taken from the ring
   bool have_frame = false;
   std::string payload;
   std::optional<ObsLevel> full_state;  // the state/full level, none: not published
@@ -162,17 +149,6 @@ struct NetworkSubsystem::Impl {
   std::uint64_t next_info_step = 0;  // discovery: every 50 steps for the first 2500, then 500
 
   void Drop(wire::Drop d) { drops[static_cast<std::size_t>(d)].fetch_add(1); }
-
-  // True when the ZeroMQ sockets are to be read now (see zmq_read).
-  bool ZmqDue(Clock::time_point now) {
-    if (!zmq_readable && now - zmq_read < kZmqMaxDelay && server && server->shm_expecting(now)) {
-      return false;
-    }
-    zmq_readable = false;
-    zmq_read = now;
-    zmq_reads.fetch_add(1, std::memory_order_relaxed);
-    return true;
-  }
 
   // Creates and binds a socket; on failure logs the endpoint (and who holds the port) and
   // returns nothing. Returns the bound endpoint (a wildcard port resolved).
@@ -414,6 +390,33 @@ struct NetworkSubsystem::Impl {
 
   // Sleeps until a socket has a message, the physics thread published a frame (or finished a
   // command), or the idle period ends (paused republishing, lease expiry, drop logging).
+  // Like SpinWait::Spin (the same give-up under contention), with pause instructions and a yield
+  // every 16 turns only: a request from a client on shared memory lands within a microsecond of
+  // the reply, and a system call on every turn would add its length to every round trip.
+  template <class Done>
+  bool SpinQuick(Clock::duration limit, Done&& done) {
+    auto now = Clock::now();
+    if (now < quiet_until) return done();
+    const auto until = now + limit;
+    for (unsigned turn = 1;; ++turn) {
+      if (done()) return true;
+      if (turn % 16 == 0) {
+        std::this_thread::yield();
+      } else {
+#if defined(__x86_64__) || defined(__i386__)
+        __builtin_ia32_pause();
+#endif
+      }
+      const auto before = now;
+      now = Clock::now();
+      if (now - before > SpinWait::kPreemptedTurn) {
+        quiet_until = now + SpinWait::kBackoff;
+        return done();
+      }
+      if (now >= until) return false;
+    }
+  }
+
   void Sleep() {
     const auto work = [&] {
       return ring->size() > 0 || (server && (server->has_ready() || server->shm_request_waiting()));
@@ -441,20 +444,19 @@ struct NetworkSubsystem::Impl {
             if (work()) return true;
             if (!server->has_pending() && !server->shm_expecting(Clock::now())) return true;
             return (++turn & 7) == 0 &&
-                   (zmq_readable = zmq::poll(items, static_cast<std::size_t>(n),
-                                             std::chrono::milliseconds(0)) > 0);
+                   zmq::poll(items, static_cast<std::size_t>(n), std::chrono::milliseconds(0)) > 0;
           })) {
         return;
       }
     } else if (server && server->shm_expecting(Clock::now())) {
-      if (spin_quick.SpinTight(kReplySpin, [&] {
+      auto polled = Clock::now();
+      if (SpinQuick(kReplySpin, [&] {
             if (work()) return true;
             const auto now = Clock::now();
             if (!server->shm_expecting(now)) return true;
-            if (now - zmq_read < kSocketCheck) return false;
-            zmq_read = now;
-            return zmq_readable = zmq::poll(items, static_cast<std::size_t>(n),
-                                            std::chrono::milliseconds(0)) > 0;
+            if (now - polled < kSocketCheck) return false;
+            polled = now;
+            return zmq::poll(items, static_cast<std::size_t>(n), std::chrono::milliseconds(0)) > 0;
           })) {
         return;
       }
@@ -468,7 +470,6 @@ struct NetworkSubsystem::Impl {
       return;
     }
     zmq::poll(items, static_cast<std::size_t>(n), kIdlePeriod);
-    zmq_readable = true;  // after a sleep, reading the sockets once is cheap beside it
     if (server) server->ShmAwake();
     bell->Clear();
   }
@@ -504,13 +505,10 @@ struct NetworkSubsystem::Impl {
     ready->set_value(bound);
     while (!stop.load(std::memory_order_acquire)) {
       // 1. Inbound first (controls and requests are what clients wait on).
-      const bool zmq_due = ZmqDue(Clock::now());
-      if (zmq_due) {
-        DrainControl();
-        DrainSubscriptions();
-      }
+      DrainControl();
+      DrainSubscriptions();
       if (server) {
-        server->HandleIncoming(zmq_due);
+        server->HandleIncoming();
         // 2. Replies whose commands took effect (a lockstep reply as soon as its window ends).
         server->Service(Clock::now());
       }
@@ -530,10 +528,8 @@ struct NetworkSubsystem::Impl {
           PublishInfo();
           next_info_step = frame.step + (frame.step < 2500 ? 50 : 500);
         }
-        // A long backlog must not starve inbound messages.
-        const bool due = ZmqDue(Clock::now());
-        if (due) DrainControl();
-        if (server) server->HandleIncoming(due);
+        DrainControl();  // a long backlog must not starve inbound messages
+        if (server) server->HandleIncoming();
       }
       const auto now = Clock::now();
       if (!got && have_frame && frame.paused) {
@@ -672,7 +668,6 @@ NetworkCounters NetworkSubsystem::counters() const {
   c.steps_published = impl_->steps_published.load();
   c.info_published = impl_->info_published.load();
   c.state_messages = impl_->state_messages.load();
-  c.zmq_reads = impl_->zmq_reads.load();
   c.frames_dropped = (impl_->ring ? impl_->ring->dropped() : 0) + impl_->frames_skipped.load();
   return c;
 }

@@ -5,8 +5,6 @@
 #include <cmath>
 #include <cstring>
 #include <random>
-#include <string_view>
-#include <unordered_map>
 #include <zmq_addon.hpp>
 
 #include "net/base64.h"
@@ -403,9 +401,9 @@ void StepServer::SendError(const Route& envelope, const Json& seq, bool json,
   Send(envelope, reply, json);
 }
 
-void StepServer::HandleIncoming(bool zmq) {
+void StepServer::HandleIncoming() {
   HandleShm();
-  if (!zmq || !socket_) return;
+  if (!socket_) return;
   std::vector<zmq::message_t> parts;
   while (true) {
     parts.clear();
@@ -478,15 +476,10 @@ void StepServer::Dispatch(Request& r) {
     const auto op_it = r.body.find("op");
     if (op_it == r.body.end()) Fail("missing_op", "the request has no 'op'");
     const std::string op = String(*op_it, "op");
-    // By name through a table built once (a scan of the catalogue compared every name, and
-    // showed in profiles of shared-memory lockstep).
-    static const std::unordered_map<std::string_view, const OpSpec*> by_name = [] {
-      std::unordered_map<std::string_view, const OpSpec*> m;
-      for (const OpSpec& s : Ops()) m.emplace(s.name, &s);
-      return m;
-    }();
-    const auto found = by_name.find(op);
-    const OpSpec* spec = found == by_name.end() ? nullptr : found->second;
+    const OpSpec* spec = nullptr;
+    for (const OpSpec& s : Ops()) {
+      if (op == s.name) spec = &s;
+    }
     if (!spec) {
       if (std::optional<std::string> why = dialect2026::EditorOnly(op)) Fail("unknown_op", *why);
       Fail("unknown_op", "no operation '" + op + "' (see 'meta')");

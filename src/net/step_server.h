@@ -104,9 +104,8 @@ class StepServer {
   // `failure`; logged when that is null).
   std::string Bind(zmq::context_t& context, std::string* failure = nullptr);
   zmq::socket_t* socket() { return socket_ ? &*socket_ : nullptr; }
-  // Reads and answers (or parks) every waiting request: of the shared-memory channels, and of
-  // the ZeroMQ socket unless `zmq` is false (reading it costs a system call even when empty).
-  void HandleIncoming(bool zmq = true);
+  // Reads and answers (or parks) every waiting request.
+  void HandleIncoming();
   // Sends the replies whose commands took effect; expires leases and overdue replies.
   void Service(Clock::time_point now);
   bool has_pending() const { return !pending_.empty(); }

@@ -82,9 +82,6 @@ struct NetworkCounters {
   std::uint64_t info_published = 0;  // discovery messages
   // State topic messages sent (topics no subscriber asked for are not sent, nor encoded).
   std::uint64_t state_messages = 0;
-  // Times the I/O thread read its ZeroMQ sockets (each read of an empty socket is a system
-  // call; while a shared-memory client keeps the thread busy they are read only now and then).
-  std::uint64_t zmq_reads = 0;
   std::uint64_t total_drops() const;
 };
 
