@@ -133,9 +133,12 @@ struct NetworkSubsystem::Impl {
   std::vector<std::vector<char>> joint_wanted, sensor_wanted;  // per articulation, per topic
   std::vector<char> twist_wanted, actions_wanted;              // per articulation
   bool full_wanted = false;
-  SpinWait spin;                    // for parked replies (gives up under CPU contention)
-  Clock::time_point quiet_until{};  // SpinQuick: no spinning until then (contention seen)
-  physics::StateFrame frame;        // the newest frame taken from the ring
+  SpinWait spin;  // for parked replies (gives up under CPU contention)
+  // For a request from a client on shared memory, which lands within a microsecond of the reply:
+  // SpinTight (pause instructions, a yield every few turns only: a system call on every turn
+  // would add its length to every round trip).
+  SpinWait spin_quick;
+  physics::StateFrame frame;  // the newest frame taken from the ring
   bool have_frame = false;
   std::string payload;
   std::optional<ObsLevel> full_state;  // the state/full level, none: not published
@@ -390,33 +393,6 @@ struct NetworkSubsystem::Impl {
 
   // Sleeps until a socket has a message, the physics thread published a frame (or finished a
   // command), or the idle period ends (paused republishing, lease expiry, drop logging).
-  // Like SpinWait::Spin (the same give-up under contention), with pause instructions and a yield
-  // every 16 turns only: a request from a client on shared memory lands within a microsecond of
-  // the reply, and a system call on every turn would add its length to every round trip.
-  template <class Done>
-  bool SpinQuick(Clock::duration limit, Done&& done) {
-    auto now = Clock::now();
-    if (now < quiet_until) return done();
-    const auto until = now + limit;
-    for (unsigned turn = 1;; ++turn) {
-      if (done()) return true;
-      if (turn % 16 == 0) {
-        std::this_thread::yield();
-      } else {
-#if defined(__x86_64__) || defined(__i386__)
-        __builtin_ia32_pause();
-#endif
-      }
-      const auto before = now;
-      now = Clock::now();
-      if (now - before > SpinWait::kPreemptedTurn) {
-        quiet_until = now + SpinWait::kBackoff;
-        return done();
-      }
-      if (now >= until) return false;
-    }
-  }
-
   void Sleep() {
     const auto work = [&] {
       return ring->size() > 0 || (server && (server->has_ready() || server->shm_request_waiting()));
@@ -450,7 +426,7 @@ struct NetworkSubsystem::Impl {
       }
     } else if (server && server->shm_expecting(Clock::now())) {
       auto polled = Clock::now();
-      if (SpinQuick(kReplySpin, [&] {
+      if (spin_quick.SpinTight(kReplySpin, [&] {
             if (work()) return true;
             const auto now = Clock::now();
             if (!server->shm_expecting(now)) return true;
