@@ -333,7 +333,7 @@ class BatchBackend:
         if any_reset:
             elapsed[resetting] = 0
         view = self._view(obs)
-        infos = {"time": time, "_time": np.ones(n, dtype=bool)}
+        infos = _infos(n, time=time)
         rewards, terminated = self._outcome(view, actions, infos, truncated, lost, resetting,
                                             any_reset, elapsed)
         self._autoreset = terminated | truncated

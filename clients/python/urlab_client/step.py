@@ -122,36 +122,38 @@ class StepClient:
         self.send_request(op, **fields)
         return self.receive_reply(op)
 
-    def send_request(self, op, **fields):
-        """The first half of call(): sends the request without waiting (one at a time; a vector
-        env sends to every server, then gathers with receive_reply)."""
+    def _request(self, op, fields):
         request = {"op": op, "seq": next(self._seq), **fields}
         if self.session_id and op not in ("hello", "meta"):
             request["session_id"] = self.session_id
-        if self._channel is not None and op != "hello":  # hello (and its assets) over ZeroMQ
-            self._posted = self._channel.post(msgpack.packb(request, use_bin_type=True))
+        return request
+
+    def _send(self, op, head, body=None):
+        """Sends one request's bytes (`head`, then `body` when given): over shared memory when
+        there is a channel (hello and its assets always over ZeroMQ), else over ZeroMQ."""
+        if self._channel is not None and op != "hello":
+            self._posted = self._channel.post(head) if body is None else \
+                self._channel.post_parts(head, body)
             return
         self._posted = None
-        self._socket.send(msgpack.packb(request, use_bin_type=True))
+        self._socket.send(head if body is None else head + body)
+
+    def send_request(self, op, **fields):
+        """The first half of call(): sends the request without waiting (one at a time; a vector
+        env sends to every server, then gathers with receive_reply)."""
+        self._send(op, msgpack.packb(self._request(op, fields), use_bin_type=True))
 
     def send_request_bytes(self, op, name, data, **fields):
         """send_request(op, **fields, name=data) for a large binary field (data: a C-contiguous
         buffer, e.g. a float64 numpy array): its bytes go straight into the shared-memory
         request, not through msgpack (the same message; the field's length as a bin 32)."""
-        request = {"op": op, "seq": next(self._seq), **fields}
-        if self.session_id:
-            request["session_id"] = self.session_id
+        request = self._request(op, fields)
         request[name] = b""
         head = msgpack.packb(request, use_bin_type=True)
         body = memoryview(data).cast("B")
         # The map's last entry is `name: b""`, packed as bin 8 of length 0 (c4 00): the same
         # entry with the data's length as a bin 32 (c6 + 4 bytes, big-endian), the data after it.
-        head = head[:-2] + b"\xc6" + body.nbytes.to_bytes(4, "big")
-        if self._channel is not None and op != "hello":
-            self._posted = self._channel.post_parts(head, body)
-            return
-        self._posted = None
-        self._socket.send(head + body)
+        self._send(op, head[:-2] + b"\xc6" + body.nbytes.to_bytes(4, "big"), body)
 
     def receive_reply(self, op):
         """The second half of call(): waits for the reply to the request sent."""
