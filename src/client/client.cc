@@ -226,8 +226,7 @@ struct StepClient::Impl {
     if (channel && request.value("op", "") != "hello") {
       // Spin about as long as the server is expected to take (the channel's wait policy), then
       // sleep on the reply word.
-      const std::string op = request.value("op", "");
-      const int steps = op == "step" || op == "batch_step" ? request.value("n_steps", 1) : 0;
+      const int steps = wire::RequestSteps(request.value("op", ""), request.value("n_steps", 1));
       const auto t0 = Clock::now();
       channel->SendRequest(bytes);
       std::span<const std::uint8_t> reply;

@@ -34,7 +34,18 @@ namespace {
 using bench::Format;
 using bench::Median;
 
-constexpr const char* kBatchScript = R"PY(
+// The actions the batched scripts step with (after they made `env`): 8 sets drawn uniformly in
+// the action space (an unbounded actuator within [-1, 1]), the same in every run.
+constexpr const char* kRandomActions = R"PY(
+n, nu = env.num_envs, env.single_action_space.shape[0]
+low = np.where(np.isfinite(env.single_action_space.low), env.single_action_space.low, -1.0)
+high = np.where(np.isfinite(env.single_action_space.high), env.single_action_space.high, 1.0)
+actions = np.random.default_rng(0).uniform(low, high, size=(8, n, nu))
+)PY";
+
+// One batched server's vector env: `steps` synchronous steps; prints the Python rate and the
+// server's own (batch_info's busy time).
+constexpr const char* kBatchHead = R"PY(
 import sys, time
 sys.path.insert(0, sys.argv[1])
 import numpy as np
@@ -42,11 +53,8 @@ from urlab_client import UrlabVectorEnv
 endpoint, steps = sys.argv[2], int(sys.argv[3])
 env = UrlabVectorEnv.over_batch(endpoint)
 client = env.envs[0].client
-n, nu = env.num_envs, env.single_action_space.shape[0]
-low = np.where(np.isfinite(env.single_action_space.low), env.single_action_space.low, -1.0)
-high = np.where(np.isfinite(env.single_action_space.high), env.single_action_space.high, 1.0)
-actions = np.random.default_rng(0).uniform(low, high, size=(8, n, nu))
-env.reset(seed=0)
+)PY";
+constexpr const char* kBatchBody = R"PY(env.reset(seed=0)
 for i in range(10):
     env.step(actions[i % 8])
 before = client.call("batch_info")
@@ -64,18 +72,15 @@ env.close()
 // one vector env over both, driven first synchronously (step: both servers step, then Python
 // handles both replies) and then asynchronously (send/recv: one server steps its half while
 // Python handles the other's reply). Prints both aggregate rates.
-constexpr const char* kAsyncScript = R"PY(
+constexpr const char* kAsyncHead = R"PY(
 import sys, time
 sys.path.insert(0, sys.argv[1])
 import numpy as np
 from urlab_client import UrlabVectorEnv
 endpoints, steps = sys.argv[2].split(","), int(sys.argv[3])
 env = UrlabVectorEnv.over_batch(endpoints)
-n, nu = env.num_envs, env.single_action_space.shape[0]
-low = np.where(np.isfinite(env.single_action_space.low), env.single_action_space.low, -1.0)
-high = np.where(np.isfinite(env.single_action_space.high), env.single_action_space.high, 1.0)
-actions = np.random.default_rng(0).uniform(low, high, size=(8, n, nu))
-env.reset(seed=0)
+)PY";
+constexpr const char* kAsyncBody = R"PY(env.reset(seed=0)
 for i in range(10):
     env.step(actions[i % 8])
 t0 = time.perf_counter()
@@ -271,10 +276,10 @@ void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
              one, two, two / one));
   for (const char* w : {"1", "2"}) {
     const std::string k(w);
-    ctx.Report(Format("Dask, %s worker(s), per vector step: %.0f us of wall time, the busiest "
-                      "server stepping %.0f us, the driver's CPU %.0f us (its waits included)",
-                      w, Field(text, "wall" + k), Field(text, "busy" + k),
-                      Field(text, "cpu" + k)));
+    ctx.Report(
+        Format("Dask, %s worker(s), per vector step: %.0f us of wall time, the busiest "
+               "server stepping %.0f us, the driver's CPU %.0f us (its waits included)",
+               w, Field(text, "wall" + k), Field(text, "busy" + k), Field(text, "cpu" + k)));
   }
 }
 
@@ -296,9 +301,10 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
       // At N = 64, also what the threads give at all in this round (CeilingRate).
       const double ceiling = envs == 64 ? ctx.CeilingRate(kThreads, ctx.steps_per_round()) : 0;
       int status = 0;
-      const std::string text = RunCaptured(
-          {o.python, "-c", kBatchScript, o.python_client, server.rpc(), std::to_string(steps)},
-          &status);
+      const std::string text =
+          RunCaptured({o.python, "-c", std::string(kBatchHead) + kRandomActions + kBatchBody,
+                       o.python_client, server.rpc(), std::to_string(steps)},
+                      &status);
       if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
         throw Error("bench fleet: the Python batched client failed (" + text + ")");
       }
@@ -337,9 +343,10 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
   for (int round = 0; round < o.rounds; ++round) {
     const double bare = ctx.BareRate(ctx.steps_per_round());
     int status = 0;
-    const std::string text = RunCaptured({o.python, "-c", kAsyncScript, o.python_client,
-                                          a.rpc() + "," + b.rpc(), std::to_string(steps)},
-                                         &status);
+    const std::string text =
+        RunCaptured({o.python, "-c", std::string(kAsyncHead) + kRandomActions + kAsyncBody,
+                     o.python_client, a.rpc() + "," + b.rpc(), std::to_string(steps)},
+                    &status);
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
       throw Error("bench fleet: the Python asynchronous batched client failed (" + text + ")");
     }

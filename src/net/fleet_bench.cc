@@ -87,7 +87,7 @@ class LeanClient {
     if (!session_.empty()) request["session_id"] = session_;
     writer_.Clear();
     writer_.Value(request);
-    Transfer(request.value("op", "") == "step" ? request.value("n_steps", 1) : 0);
+    Transfer(wire::RequestSteps(request.value("op", ""), request.value("n_steps", 1)));
   }
   // A step request of n steps, written straight into the encoder as a lean client would (no
   // tree of the request first).

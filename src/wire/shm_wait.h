@@ -18,6 +18,7 @@
 // Threading: SpinBudget is a pure function; SpareCore reads /proc/loadavg (any thread).
 #include <algorithm>
 #include <chrono>
+#include <string_view>
 
 namespace urlab::wire {
 
@@ -38,6 +39,12 @@ std::chrono::nanoseconds SpinBudget(std::chrono::nanoseconds expected, SpareCore
   if (expected <= W::kShortWait) return std::max(W::kMinSpin, 3 * expected);
   if (!spare_core()) return W::kMinSpin;
   return std::min(W::kMaxSpin, expected * 5 / 4 + W::kSlack);
+}
+
+// The steps a request runs, as ShmRoundTrips counts them: `n_steps` for a step or batch_step
+// request, 0 for any other operation.
+inline int RequestSteps(std::string_view op, int n_steps) {
+  return op == "step" || op == "batch_step" ? n_steps : 0;
 }
 
 // What a client expects its next round trip to take (SpinBudget's `expected`): it learns the
