@@ -23,19 +23,11 @@ URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
 sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 from urlab_client import UrlabVectorEnv  # noqa: E402
-from urlab_process import fail, start_announced  # noqa: E402
+from urlab_process import PROCS, arm_scene, check, start_announced, stop_all  # noqa: E402
+from urlab_process import wave_actions as actions_for  # noqa: E402
 
-PROCS = []
 STEPS = 12
 EPISODE = 5  # max_episode_steps: truncations at steps 4 and 10, resets at 5 and 11
-
-
-def check(cond, message):
-    if not cond:
-        for p in PROCS:
-            if p.poll() is None:
-                p.kill()
-        fail(message)
 
 
 def server(scene, envs):
@@ -43,12 +35,6 @@ def server(scene, envs):
                               "--threads", "1", "--reset-noise", "0.05")
     PROCS.append(proc)
     return a["endpoints"]["rpc"]
-
-
-def actions_for(t, n, nu):
-    i = np.arange(n)[:, None]
-    j = np.arange(nu)[None, :]
-    return np.sin(0.7 * t + 0.3 * i + 1.1 * j)
 
 
 def reward_fn(obs, actions, infos):
@@ -67,10 +53,7 @@ def expect_error(kind, fn, what):
 
 def main():
     tmp = tempfile.mkdtemp(prefix="urlab_batch_async_")
-    scene = os.path.join(tmp, "arm.yaml")
-    model = os.path.join(SOURCE, "examples", "models", "servo_arm.xml")
-    with open(scene, "w") as f:
-        f.write(f"articulations:\n  - name: arm\n    mjcf: {model}\n")
+    scene = arm_scene(tmp, "arm.yaml", controller=False)
     rpcs = [server(scene, 4), server(scene, 4)]
 
     def make(shared_memory=True):
@@ -156,9 +139,7 @@ def main():
           "after a close with sends in flight, the first step differs")
     envs.close()
 
-    for p in PROCS:
-        p.terminate()
-        p.wait(timeout=30)
+    stop_all()
     print("batch_async_e2e: ok")
 
 

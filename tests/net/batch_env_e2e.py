@@ -23,18 +23,10 @@ URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
 sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 from urlab_client import UrlabVectorEnv  # noqa: E402
-from urlab_process import fail, start_announced  # noqa: E402
+from urlab_process import PROCS, arm_scene, check, start_announced, stop_all  # noqa: E402
+from urlab_process import wave_actions as actions_for  # noqa: E402
 
-PROCS = []
 NOISE = "0.05"
-
-
-def check(cond, message):
-    if not cond:
-        for p in PROCS:
-            if p.poll() is None:
-                p.kill()
-        fail(message)
 
 
 def server(scene, envs, *extra):
@@ -44,19 +36,9 @@ def server(scene, envs, *extra):
     return a["endpoints"]["rpc"]
 
 
-def actions_for(t, n, nu):
-    # Different per environment and per step, the same in every run.
-    i = np.arange(n)[:, None]
-    j = np.arange(nu)[None, :]
-    return np.sin(0.7 * t + 0.3 * i + 1.1 * j)
-
-
 def main():
     tmp = tempfile.mkdtemp(prefix="urlab_batch_")
-    scene = os.path.join(tmp, "arm.yaml")
-    model = os.path.join(SOURCE, "examples", "models", "servo_arm.xml")
-    with open(scene, "w") as f:
-        f.write(f"articulations:\n  - name: arm\n    mjcf: {model}\n")
+    scene = arm_scene(tmp, "arm.yaml", controller=False)
     rpc8 = server(scene, 8, "--threads", "2")
     rpc1 = server(scene, 1)
 
@@ -128,9 +110,7 @@ def main():
           "two servers of 4 do not run the 8 episodes of one server of 8")
     envs.close()
 
-    for p in PROCS:
-        p.terminate()
-        p.wait(timeout=30)
+    stop_all()
     print("batch_env_e2e: ok")
 
 

@@ -25,17 +25,7 @@ URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
 sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 from urlab_client import StepClient, UrlabEnv, UrlabVectorEnv  # noqa: E402
-from urlab_process import arm_scene, fail, start_announced  # noqa: E402
-
-PROCS = []
-
-
-def check(cond, message):
-    if not cond:
-        for p in PROCS:
-            if p.poll() is None:
-                p.kill()
-        fail(message)
+from urlab_process import PROCS, arm_scene, check, fail, start_announced, stop_all  # noqa: E402
 
 
 def server(scene, *extra):
@@ -175,9 +165,7 @@ def main():
         obs, *_ = env.step(env.action_space.sample())
         check(space.contains(obs), "step obs with cameras outside the space")
     print("cameras: rgb and depth images in the observation space")
-    for p in PROCS:
-        p.terminate()
-        p.wait(timeout=30)
+    stop_all()
     print("PASS")
 
 

@@ -10,11 +10,11 @@ SOURCE = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 SERVO_ARM = os.path.join(SOURCE, "examples", "models", "servo_arm.xml")
 
 
-def arm_scene(folder, name="scene.yaml", ephemeral_ports=False, extra=""):
+def arm_scene(folder, name="scene.yaml", ephemeral_ports=False, extra="", controller=True):
     """Writes the Python tests' scene into `folder`: the bundled servo arm as articulation `arm`
-    under a PD controller (kp 400, kv 20), with `extra` YAML appended; with `ephemeral_ports`
-    every socket binds a port the system chooses and the network is the control source. Returns
-    the scene's path."""
+    under a PD controller (kp 400, kv 20; none with controller=False: the actions are its raw
+    controls), with `extra` YAML appended; with `ephemeral_ports` every socket binds a port the
+    system chooses and the network is the control source. Returns the scene's path."""
     text = ""
     if ephemeral_ports:
         text += """control_source: network
@@ -27,8 +27,7 @@ network:
     text += f"""articulations:
   - name: arm
     mjcf: {SERVO_ARM}
-    controller: {{type: pd, kp: 400, kv: 20}}
-""" + extra
+""" + ("    controller: {type: pd, kp: 400, kv: 20}\n" if controller else "") + extra
     path = os.path.join(folder, name)
     with open(path, "w") as f:
         f.write(text)
@@ -57,6 +56,36 @@ cameras:
   rate: 30
 """ + extra)
     return path
+
+
+# The servers a test started (its own helpers append them): check() kills them before failing,
+# stop_all() ends them at the test's end.
+PROCS = []
+
+
+def check(cond, message):
+    """Fails the test with `message` unless `cond`, killing every server in PROCS first."""
+    if not cond:
+        for p in PROCS:
+            if p.poll() is None:
+                p.kill()
+        fail(message)
+
+
+def stop_all():
+    """Terminates every server in PROCS and waits for it (a test's end)."""
+    for p in PROCS:
+        p.terminate()
+        p.wait(timeout=30)
+
+
+def wave_actions(t, n, nu):
+    """(n, nu) actions for step t: different per environment and per step, the same in every
+    run (the batched tests compare runs bit for bit)."""
+    import numpy as np
+    i = np.arange(n)[:, None]
+    j = np.arange(nu)[None, :]
+    return np.sin(0.7 * t + 0.3 * i + 1.1 * j)
 
 
 def fail(message, proc=None):
