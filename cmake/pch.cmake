@@ -1,7 +1,7 @@
 # Precompiled headers: the standard library and the third-party headers most translation units
 # include are parsed once per target instead of once per file (an average file here is ~110,000
 # preprocessed lines, most of them these headers). A build-time aid only: every source still
-# includes what it uses, and CI's clang stage builds with URLAB_PCH=OFF to keep that true.
+# includes what it uses (CI's install stage compiles every installed header on its own).
 option(URLAB_PCH "Precompile common standard and third-party headers" ON)
 
 set(URLAB_PCH_STD
@@ -40,7 +40,7 @@ function(urlab_pch target)
     # GCC 12's flow-based buffer warnings misfire on std::string's inlined copies (string
     # concatenation: PR 105651 and its kin) once <string> comes from a precompiled header, where
     # it no longer counts as a system header. They stay on in builds without precompiled headers
-    # and in clang builds (CI's asan stage: clang, no precompiled headers, ASan at run time).
+    # and in clang builds (CI's asan stage).
     target_compile_options(${target} PRIVATE -Wno-array-bounds -Wno-stringop-overflow
                                              -Wno-stringop-overread -Wno-restrict)
   endif()

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang (every library instrumented, ASan + UBSan) into
 # build-fuzz (or $URLAB_FUZZ_BUILD_DIR) and runs each for a bounded time on a fresh copy of its
-# seed corpus (fuzz/corpus/<target>; the MJCF reader also gets Debian's sample models).
+# seed corpus (fuzz/corpus/<target>; the MJCF reader also gets Debian's sample models),
+# URLAB_JOBS (default: the cores) at a time.
 # Usage: tools/fuzz.sh [SECONDS=60] [TARGET...]
 #   targets: fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_recording
 #   fuzz_mesh
@@ -41,9 +42,10 @@ max_len() {
   esac
 }
 
-status=0
-SUMMARY=()
-for t in "${TARGETS[@]}"; do
+# fuzz_one TARGET: runs one target; its summary line goes to its work folder's `result` and its
+# exit status is the fuzzer's.
+fuzz_one() {
+  local t=$1 work len rc cov runs repro
   work="$BUILD_DIR/fuzz-run/$t"
   rm -rf "$work"
   mkdir -p "$work/corpus" "$work/artifacts"
@@ -62,14 +64,32 @@ for t in "${TARGETS[@]}"; do
   cov=$(grep -oE 'cov: [0-9]+ ft: [0-9]+' "$work/log" | tail -1 || true)
   runs=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$work/log" | grep -oE '[0-9]+$' || true)
   if [ $rc -ne 0 ]; then
-    status=1
     grep -E 'ERROR|SUMMARY|runtime error|Test unit written' "$work/log" | head -20 || true
     repro=$(grep -oE 'Test unit written to [^ ]+' "$work/log" | tail -1 | sed 's/Test unit written to //' || true)
     echo "fuzz: $t FAILED (exit $rc); reproducer: ${repro:-none} (log: $work/log)"
-    SUMMARY+=("$t: FAILED, ${cov:-no coverage line}; reproducer ${repro:-none}")
+    echo "$t: FAILED, ${cov:-no coverage line}; reproducer ${repro:-none}" >"$work/result"
   else
-    SUMMARY+=("$t: ok, ${cov:-?} after ${runs:-?} runs")
+    echo "$t: ok, ${cov:-?} after ${runs:-?} runs" >"$work/result"
   fi
+  return $rc
+}
+
+# The targets run URLAB_JOBS at a time (each fuzzer is one process on one core).
+status=0
+PARALLEL="${URLAB_JOBS:-$(nproc)}"
+PIDS=()
+for t in "${TARGETS[@]}"; do
+  fuzz_one "$t" &
+  PIDS+=($!)
+  if [ "${#PIDS[@]}" -ge "$PARALLEL" ]; then
+    wait "${PIDS[0]}" || status=1
+    PIDS=("${PIDS[@]:1}")
+  fi
+done
+for pid in "${PIDS[@]}"; do wait "$pid" || status=1; done
+SUMMARY=()
+for t in "${TARGETS[@]}"; do
+  SUMMARY+=("$(cat "$BUILD_DIR/fuzz-run/$t/result" 2>/dev/null || echo "$t: FAILED before fuzzing")")
 done
 echo "== fuzz summary (${SECONDS_TO_RUN} s each)"
 for s in "${SUMMARY[@]}"; do echo "  $s"; done

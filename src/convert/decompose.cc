@@ -356,7 +356,7 @@ Piece ToPiece(const Part& part, const Context& ctx) {
 
 // ---- clipping ----
 
-std::uint64_t EdgeKey(std::int32_t a, std::int32_t b) {
+std::uint64_t CrossingKey(std::int32_t a, std::int32_t b) {
   if (a > b) std::swap(a, b);
   return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
          static_cast<std::uint32_t>(b);
@@ -418,7 +418,8 @@ void Split(const Part& part, const Plane& plane, const Context& ctx, Part* lo, P
   };
   std::unordered_map<std::uint64_t, std::pair<std::int32_t, std::int32_t>> crossings;
   auto crossing = [&](std::int32_t a, std::int32_t b) {
-    auto [it, fresh] = crossings.emplace(EdgeKey(a, b), std::pair<std::int32_t, std::int32_t>{});
+    auto [it, fresh] =
+        crossings.emplace(CrossingKey(a, b), std::pair<std::int32_t, std::int32_t>{});
     if (fresh) {
       const std::size_t ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
       const double t = s[ua] / (s[ua] - s[ub]);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <optional>
 
 #include "geometry.h"
@@ -12,7 +13,6 @@ namespace urlab::convert {
 
 HullSetMetrics EvaluateHulls(TriMesh mesh, const std::vector<TriMesh>& hulls,
                              const EvaluateOptions& options) {
-  constexpr double kPi = 3.14159265358979323846;
   HullSetMetrics m;
   const CleanReport clean = CleanMesh(mesh);
   if (mesh.empty()) return m;
@@ -78,7 +78,8 @@ HullSetMetrics EvaluateHulls(TriMesh mesh, const std::vector<TriMesh>& hulls,
     }
   }
   const double volume_term =
-      options.volume_weight * std::cbrt(3 * std::abs(m.union_volume - mesh_vox) / (4 * kPi));
+      options.volume_weight *
+      std::cbrt(3 * std::abs(m.union_volume - mesh_vox) / (4 * std::numbers::pi));
   m.concavity = std::max(depth, clean.closed() ? volume_term : 0) / diag;
   m.hausdorff = std::max(bulge, outside) / diag;
   return m;

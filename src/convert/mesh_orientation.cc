@@ -11,15 +11,15 @@ namespace urlab::convert {
 
 namespace {
 
-using EdgeKey = std::pair<std::int32_t, std::int32_t>;  // (lower, higher) vertex
+using EdgePair = std::pair<std::int32_t, std::int32_t>;  // (lower, higher) vertex
 
 struct EdgeUse {
   std::size_t triangle;
   bool forward;  // the triangle runs from the lower to the higher vertex
 };
 
-struct EdgeKeyHash {
-  std::size_t operator()(const EdgeKey& e) const {
+struct EdgePairHash {
+  std::size_t operator()(const EdgePair& e) const {
     return std::hash<std::uint64_t>()(
         (static_cast<std::uint64_t>(static_cast<std::uint32_t>(e.first)) << 32) |
         static_cast<std::uint32_t>(e.second));
@@ -43,7 +43,7 @@ std::vector<Triangle> CornerIds(const TriMesh& mesh, bool weld) {
 
 std::size_t RepeatedDirectedEdges(const std::vector<Triangle>& tris,
                                   const std::vector<bool>& flip) {
-  std::vector<EdgeKey> directed;
+  std::vector<EdgePair> directed;
   directed.reserve(tris.size() * 3);
   for (std::size_t t = 0; t < tris.size(); ++t) {
     Triangle c = tris[t];
@@ -65,7 +65,7 @@ OrientationPlan PlanConsistentOrientation(const TriMesh& mesh, bool weld_equal_v
   plan.flip.assign(n, false);
   plan.repeated_edges = RepeatedDirectedEdges(tris, plan.flip);
 
-  std::unordered_map<EdgeKey, std::vector<EdgeUse>, EdgeKeyHash> edges;
+  std::unordered_map<EdgePair, std::vector<EdgeUse>, EdgePairHash> edges;
   edges.reserve(n * 2);
   for (std::size_t t = 0; t < n; ++t) {
     for (int k = 0; k < 3; ++k) {
@@ -137,7 +137,7 @@ OrientationPlan PlanConsistentOrientation(const TriMesh& mesh, bool weld_equal_v
 
 std::size_t MakeEdgesOrientable(TriMesh& mesh) {
   const OrientationPlan plan = PlanConsistentOrientation(mesh, false);
-  std::unordered_set<EdgeKey, EdgeKeyHash> directed;  // (from, to) edges in use
+  std::unordered_set<EdgePair, EdgePairHash> directed;  // (from, to) edges in use
   directed.reserve(mesh.triangles.size() * 3);
   std::vector<Triangle> kept;
   kept.reserve(mesh.triangles.size());

@@ -9,7 +9,7 @@ namespace urlab::document {
 
 namespace {
 // clang-format off
-constexpr GrammarRow kRows[] = {
+constexpr GrammarRow kDialectRows[] = {
     // <frame> (3.1): flattened by the bridge; children are linked below
     {"frame", "frame", "", "body geom site camera light joint freejoint frame replicate attach", "name:s childclass:s@class pos:r3 quat:r4 axisangle:r4 xyaxes:r6 zaxis:r3 euler:r3"},
     // <replicate> (3.2): expanded by the bridge into suffixed copies (one <frame> each)
@@ -142,6 +142,6 @@ constexpr GrammarRow kRows[] = {
 // clang-format on
 }  // namespace
 
-std::span<const GrammarRow> DialectGrammarTable() { return kRows; }
+std::span<const GrammarRow> DialectGrammarTable() { return kDialectRows; }
 
 }  // namespace urlab::document

@@ -37,12 +37,12 @@ auto Arrays(State& s) {
   const StateLayout& l = s.layout;
   using Vec =
       std::conditional_t<std::is_const_v<State>, const std::vector<mjtNum>, std::vector<mjtNum>>;
-  struct Entry {
+  struct ArrayEntry {
     const char* name;
     Vec* vec;
     std::int64_t length;
   };
-  return std::array<Entry, 10>{{
+  return std::array<ArrayEntry, 10>{{
       {"qpos", &s.qpos, l.nq},
       {"qvel", &s.qvel, l.nv},
       {"act", &s.act, l.na},

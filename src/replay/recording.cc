@@ -13,7 +13,9 @@
 namespace urlab::replay {
 
 namespace fs = std::filesystem;
+namespace {
 using Reason = RecordingError::Reason;
+}  // namespace
 
 void DescribeModel(const physics::Model& m, RecordingInfo* info) {
   info->urlab_version = kVersion;

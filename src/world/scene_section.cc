@@ -10,9 +10,10 @@
 namespace urlab::world {
 
 std::string NumberRange::Text() const {
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  if (max == kInf && min == -kInf) return "a number (not NaN)";
-  if (max == kInf) return std::string(min_exclusive ? "> " : ">= ") + document::FormatReal(min);
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  if (max == kInfinity && min == -kInfinity) return "a number (not NaN)";
+  if (max == kInfinity)
+    return std::string(min_exclusive ? "> " : ">= ") + document::FormatReal(min);
   if (max == std::numeric_limits<double>::max()) {
     return std::string(min_exclusive ? "> " : ">= ") + document::FormatReal(min) + " and finite";
   }

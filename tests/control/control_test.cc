@@ -27,8 +27,8 @@ using testing::kHumanoidPath;
 class ControlTest : public urlab::testing::MujocoTest {};
 
 // An engine plus a ControlSystem with one articulation per prefix.
-struct Rig {
-  explicit Rig(physics::ModelPtr model, std::vector<std::string> prefixes = {"arm_"})
+struct ControlRig {
+  explicit ControlRig(physics::ModelPtr model, std::vector<std::string> prefixes = {"arm_"})
       : engine(std::move(model)) {
     engine.WithLockedData([&](mjModel* m, mjData* d) {
       for (const auto& p : prefixes) {
@@ -90,7 +90,7 @@ TEST_F(ControlTest, PdLawClampsTargetAndTorque) {
 }
 
 TEST_F(ControlTest, PdHeldJointSettlesAtTarget) {
-  Rig rig(CompileXmlString(kArmXml));
+  ControlRig rig(CompileXmlString(kArmXml));
   PdController& pd = rig.arm().Use(std::make_unique<PdController>(PdGains{400, 40}));
   EXPECT_EQ(pd.bindings().size(), 3u);
   rig.arm().SetTarget(ControlSource::kNetwork, "shoulder_motor", 0.6);
@@ -103,7 +103,7 @@ TEST_F(ControlTest, PdHeldJointSettlesAtTarget) {
 }
 
 TEST_F(ControlTest, ControlSourceGlobalAndOverride) {
-  Rig rig(CompileXmlString(kArmXml));
+  ControlRig rig(CompileXmlString(kArmXml));
   ArticulationControl& arm = rig.arm();
   arm.SetTarget(ControlSource::kNetwork, 0, 1.5);
   arm.SetTarget(ControlSource::kUi, 0, -2.5);
@@ -129,7 +129,7 @@ TEST_F(ControlTest, ControlSourceGlobalAndOverride) {
 }
 
 TEST_F(ControlTest, KeyframeControllerPassesPosesInOrder) {
-  Rig rig(CompileXmlString(kArmXml));
+  ControlRig rig(CompileXmlString(kArmXml));
   KeyframeController::Options options;
   options.start_delay = 0.1;
   KeyframeController& kc =
@@ -182,7 +182,7 @@ TEST_F(ControlTest, KeyframeControllerLoopsAndEases) {
   EXPECT_LT(KeyframeController::Ease(0.1), 0.1);  // slow start
   EXPECT_GT(KeyframeController::Ease(0.9), 0.9);  // slow end
 
-  Rig rig(CompileXmlString(kArmXml));
+  ControlRig rig(CompileXmlString(kArmXml));
   KeyframeController::Options options;
   options.loop = true;
   options.autoplay = false;
@@ -205,7 +205,7 @@ TEST_F(ControlTest, KeyframeControllerLoopsAndEases) {
 }
 
 TEST_F(ControlTest, SnapshotDeterminismWithControllersActive) {
-  Rig rig(LoadXmlFile(kHumanoidPath), {""});
+  ControlRig rig(LoadXmlFile(kHumanoidPath), {""});
   rig.arm().Use(std::make_unique<PdController>(PdGains{5, 0.5}));
   for (int i = 0; i < rig.arm().num_actuators(); ++i) {
     rig.arm().SetTarget(ControlSource::kNetwork, i, 0.3 * std::sin(i));
@@ -224,7 +224,7 @@ TEST_F(ControlTest, SnapshotDeterminismWithControllersActive) {
   EXPECT_TRUE(a.BitwiseEquals(b));
 
   // Time-driven keyframe controller on the arm: replays identically after restore.
-  Rig arm(CompileXmlString(kArmXml));
+  ControlRig arm(CompileXmlString(kArmXml));
   KeyframeController& kc = arm.arm().Use(std::make_unique<KeyframeController>());
   std::vector<double> p(3, 0.4);
   kc.AddPose({"p", p, 0.3, 0.2});
@@ -239,7 +239,7 @@ TEST_F(ControlTest, SnapshotDeterminismWithControllersActive) {
 }
 
 TEST_F(ControlTest, ArticulationKeyframeResetLeavesOthersAlone) {
-  Rig rig(CompileXmlString(kArmXml), {"arm_", "box"});
+  ControlRig rig(CompileXmlString(kArmXml), {"arm_", "box"});
   rig.engine.StepSync(200);  // arm swings, box settles
   rig.engine.WithLockedData([](mjModel*, mjData* d) {
     d->qpos[0] = 0.3;
@@ -262,7 +262,7 @@ TEST_F(ControlTest, ArticulationKeyframeResetLeavesOthersAlone) {
 }
 
 TEST_F(ControlTest, HoldKeyframeKeepsThePoseUntilStopped) {
-  Rig rig(CompileXmlString(kArmXml));
+  ControlRig rig(CompileXmlString(kArmXml));
   rig.arm().Use(std::make_unique<PdController>(PdGains{400, 40}));
   rig.arm().HoldKeyframe("arm_bent");
   EXPECT_TRUE(rig.arm().holding());
@@ -277,7 +277,7 @@ TEST_F(ControlTest, HoldKeyframeKeepsThePoseUntilStopped) {
 
 // Control writes, gain changes, source flips and holds from other threads while the loop runs.
 TEST_F(ControlTest, StressControlWritesWhileRunning) {
-  Rig rig(CompileXmlString(kArmXml));
+  ControlRig rig(CompileXmlString(kArmXml));
   PdController& pd = rig.arm().Use(std::make_unique<PdController>());
   rig.engine.SetAsFastAsPossible(true);
   rig.engine.Start();

@@ -14,7 +14,9 @@
 #include "net/step_test_client.h"
 #include "support/step_server_fixture.h"
 
-namespace urlab::net {
+// A namespace of their own: their plain nlohmann::json alias must not meet net::Json (the
+// ordered one) where a unity build puts several test files in one translation unit.
+namespace urlab::net::tests {
 namespace {
 
 using namespace std::chrono_literals;
@@ -22,7 +24,7 @@ using Json = nlohmann::json;
 using test_client::Client;
 
 // An arm with a free-floating ball of its own (the articulation's: not a free body of the scene).
-constexpr const char* kArmXml = R"(<mujoco model="arm">
+constexpr const char* kArmWithBallXml = R"(<mujoco model="arm">
   <option timestep="0.002"/>
   <worldbody>
     <geom name="floor" type="plane" size="5 5 0.1"/>
@@ -46,7 +48,7 @@ constexpr int kPool = 3;
 class Dialect2026HelloTest : public urlab::testing::ServedSessionTest {
  protected:
   void SetUp() override {
-    urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml);
+    urlab::testing::WriteTextFile(dir_, "arm.xml", kArmWithBallXml);
     Serve(
         "control_source: network\narticulations:\n  - {name: arm, mjcf: arm.xml}\n"
         "launchers:\n  - {name: gun, pos: [0.5, 0, 1], speed: 2, pool: " +
@@ -132,4 +134,4 @@ TEST_F(Dialect2026HelloTest, FreeBodiesOfNoArticulationAreEntitiesWithTheirState
 }
 
 }  // namespace
-}  // namespace urlab::net
+}  // namespace urlab::net::tests

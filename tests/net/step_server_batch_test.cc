@@ -16,7 +16,9 @@
 #include "support/wait.h"
 #include "urlab/world/batch_subsystem.h"
 
-namespace urlab::net {
+// A namespace of their own: their plain nlohmann::json alias must not meet net::Json (the
+// ordered one) where a unity build puts several test files in one translation unit.
+namespace urlab::net::tests {
 namespace {
 
 using namespace std::chrono_literals;
@@ -390,4 +392,4 @@ TEST_F(StepServerBatchTest, OneEnvironmentIsTheEngineAlone) {
 }
 
 }  // namespace
-}  // namespace urlab::net
+}  // namespace urlab::net::tests

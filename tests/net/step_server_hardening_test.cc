@@ -18,7 +18,9 @@
 #include "support/wait.h"
 #include "urlab/replay/recorder.h"
 
-namespace urlab::net {
+// A namespace of their own: their plain nlohmann::json alias must not meet net::Json (the
+// ordered one) where a unity build puts several test files in one translation unit.
+namespace urlab::net::tests {
 namespace {
 
 namespace fs = std::filesystem;
@@ -458,4 +460,4 @@ TEST_F(StepServerHardeningTest, SocketsBeyondLoopbackAreLogged) {
 }
 
 }  // namespace
-}  // namespace urlab::net
+}  // namespace urlab::net::tests

@@ -17,7 +17,9 @@
 #include "urlab/replay/recorder.h"
 #include "urlab/replay/recording.h"
 
-namespace urlab::net {
+// A namespace of their own: their plain nlohmann::json alias must not meet net::Json (the
+// ordered one) where a unity build puts several test files in one translation unit.
+namespace urlab::net::tests {
 namespace {
 
 namespace fs = std::filesystem;
@@ -25,7 +27,7 @@ using namespace std::chrono_literals;
 using Json = nlohmann::json;
 using urlab::testing::WaitFor;
 
-constexpr const char* kArmXml = R"(<mujoco model="arm">
+constexpr const char* kRecorderArmXml = R"(<mujoco model="arm">
   <option timestep="0.002"/>
   <worldbody>
     <body name="link" pos="0 0 1">
@@ -43,7 +45,7 @@ using test_client::Client;
 
 class StepServerRecorderTest : public urlab::testing::ServedSessionTest {
  protected:
-  void SetUp() override { urlab::testing::WriteTextFile(dir_, "arm.xml", kArmXml); }
+  void SetUp() override { urlab::testing::WriteTextFile(dir_, "arm.xml", kRecorderArmXml); }
   void Play(bool with_recorder = true) {
     replay::RecorderSubsystem* recorder = nullptr;
     if (with_recorder) {
@@ -242,4 +244,4 @@ TEST_F(StepServerRecorderTest, ReplaySessionsAndKinematicPlayback) {
 }
 
 }  // namespace
-}  // namespace urlab::net
+}  // namespace urlab::net::tests

@@ -15,7 +15,9 @@
 #include "support/wait.h"
 #include "urlab/wire/wire.h"
 
-namespace urlab::net {
+// A namespace of their own: their plain nlohmann::json alias must not meet net::Json (the
+// ordered one) where a unity build puts several test files in one translation unit.
+namespace urlab::net::tests {
 namespace {
 
 using namespace std::chrono_literals;
@@ -596,4 +598,4 @@ TEST_F(StepServerTest, JsonBinaryArraysTravelAsBase64Fields) {
 }
 
 }  // namespace
-}  // namespace urlab::net
+}  // namespace urlab::net::tests

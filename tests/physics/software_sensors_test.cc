@@ -16,7 +16,7 @@ namespace {
 using physics::SoftwareSensorKind;
 using physics::SoftwareSensorSpec;
 
-constexpr const char* kModel = R"(<mujoco>
+constexpr const char* kSensorsModel = R"(<mujoco>
   <option gravity="0 0 0"/>
   <worldbody>
     <body>
@@ -51,7 +51,7 @@ const SoftwareSensorSpec kSpecs[] = {{"jf", SoftwareSensorKind::kJointActuatorFo
 
 class SoftwareSensorsTest : public testing::CompiledModelTest {
  protected:
-  const char* Xml() const override { return kModel; }
+  const char* Xml() const override { return kSensorsModel; }
 };
 
 TEST_F(SoftwareSensorsTest, ComputesJointAndTendonActuatorForces) {
@@ -102,7 +102,7 @@ TEST_F(SoftwareSensorsTest, BadSpecsAreErrors) {
 }
 
 TEST_F(SoftwareSensorsTest, ModelsOnSeveralThreadsAreDispatchedByModel) {
-  physics::ModelPtr other = physics::CompileXmlString(kModel);
+  physics::ModelPtr other = physics::CompileXmlString(kSensorsModel);
   physics::SoftwareSensorRegistration r1 = physics::RegisterSoftwareSensors(model_.get(), kSpecs);
   physics::SoftwareSensorRegistration r2 = physics::RegisterSoftwareSensors(other.get(), kSpecs);
   std::atomic<int> bad = 0;

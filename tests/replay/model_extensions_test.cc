@@ -29,7 +29,7 @@ using physics::PhysicsEngine;
 
 // An arm held up by gravity compensation, a ball hanging from a dead-band rope spring, and a
 // joint actuator force sensor (3.x constructs the runtime computes for 2.2.2).
-constexpr const char* kXml = R"(<mujoco>
+constexpr const char* kExtensionsXml = R"(<mujoco>
   <option timestep="0.002"/>
   <worldbody>
     <site name="anchor" pos="0 0 2"/>
@@ -59,7 +59,7 @@ physics::Model Compile(double gravcomp = 1.0) {
   e.sensors = {{"h_force", physics::SoftwareSensorKind::kJointActuatorForce, {}}};
   e.gravcomp = {{"arm", gravcomp}};
   e.deadband_springs = {{"rope", 200, 0.8, 0.95}};
-  return physics::Model(physics::CompileXmlString(kXml), std::move(e));
+  return physics::Model(physics::CompileXmlString(kExtensionsXml), std::move(e));
 }
 
 class ModelExtensionsTest : public urlab::testing::MujocoTest {
@@ -181,7 +181,8 @@ std::string AsFormat1(const std::string& path, const std::string& out) {
 }
 
 TEST_F(ModelExtensionsTest, Format1RecordingsAreStillReadAndOthersRefusedByVersion) {
-  PhysicsEngine engine(physics::CompileXmlString(kXml));  // no extensions, as format 1 knew
+  PhysicsEngine engine(
+      physics::CompileXmlString(kExtensionsXml));  // no extensions, as format 1 knew
   engine.SetPaused(true);
   const std::string now = RecordRun(engine, "now.urrec", 100, false);
   const std::string v1 = AsFormat1(now, dir_ + "/v1.urrec");

@@ -23,6 +23,8 @@
 namespace urlab::replay {
 namespace {
 
+using testing::FramesOf;
+
 using control::ControlSource;
 using physics::PhysicsEngine;
 
@@ -63,14 +65,6 @@ class RawFlagTest : public urlab::testing::MujocoTest {
 
   std::string dir_ = urlab::testing::MakeTempDir("raw_flag");
 };
-
-std::vector<Frame> FramesOf(const std::vector<Record>& records) {
-  std::vector<Frame> frames;
-  for (const Record& r : records) {
-    if (const auto* f = std::get_if<Frame>(&r)) frames.push_back(*f);
-  }
-  return frames;
-}
 
 // The file as format 2 wrote it: the same chunks under version 2 in the file header and the
 // header chunk's JSON (format 3 changed only the data records of raw frames).

@@ -24,6 +24,7 @@ namespace urlab::replay {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::FramesOf;
 using namespace std::chrono_literals;
 using physics::PhysicsEngine;
 namespace cmd = physics::cmd;
@@ -38,14 +39,6 @@ class RecorderTest : public urlab::testing::MujocoTest {
  protected:
   std::string dir_ = urlab::testing::MakeTempDir("recorder");
 };
-
-std::vector<Frame> FramesOf(const std::vector<Record>& records) {
-  std::vector<Frame> frames;
-  for (const Record& r : records) {
-    if (const auto* f = std::get_if<Frame>(&r)) frames.push_back(*f);
-  }
-  return frames;
-}
 
 // Runs `engine` as fast as possible with controls that change every step (like a policy's
 // commands arriving), one-shot forces, a mocap move, a reset and an options change, recording

@@ -12,10 +12,13 @@
 #include <cstdint>
 #include <string>
 #include <utility>
+#include <variant>
+#include <vector>
 
 #include "support/wait.h"
 #include "urlab/physics/engine.h"
 #include "urlab/replay/recorder.h"
+#include "urlab/replay/recording.h"
 
 namespace urlab::testing {
 
@@ -63,6 +66,15 @@ inline std::string RecordSteps(physics::PhysicsEngine& engine, replay::RecorderO
   recording.Start(std::move(options));
   recording.Step(steps);
   return recording.Finish();
+}
+
+// The frames of a chunk's records, in order (its keyframes, markers and gaps left out).
+inline std::vector<replay::Frame> FramesOf(const std::vector<replay::Record>& records) {
+  std::vector<replay::Frame> frames;
+  for (const replay::Record& r : records) {
+    if (const auto* f = std::get_if<replay::Frame>(&r)) frames.push_back(*f);
+  }
+  return frames;
 }
 
 }  // namespace urlab::testing

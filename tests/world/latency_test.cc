@@ -19,7 +19,7 @@ namespace urlab {
 namespace {
 
 // A pendulum with a motor and a joint-position sensor: every step moves it, every ctrl shows.
-constexpr const char* kArm = R"(<mujoco model="arm">
+constexpr const char* kLatencyArmXml = R"(<mujoco model="arm">
   <option timestep="0.002"/>
   <worldbody>
     <body name="link" pos="0 0 1">
@@ -39,7 +39,7 @@ class LatencyTest : public testing::MujocoTest {
  protected:
   void SetUp() override {
     dir_ = testing::MakeTempDir("latency");
-    testing::WriteTextFile(dir_, "arm.xml", kArm);
+    testing::WriteTextFile(dir_, "arm.xml", kLatencyArmXml);
   }
   world::SceneConfig Scene(const std::string& extra = "", const std::string& top = "") {
     return world::ParseScene(top + "articulations:\n  - name: arm\n    mjcf: arm.xml\n" + extra,

@@ -22,7 +22,7 @@
 namespace urlab {
 namespace {
 
-constexpr const char* kArm = R"(<mujoco model="arm">
+constexpr const char* kRandomizeArmXml = R"(<mujoco model="arm">
   <option timestep="0.002"/>
   <worldbody>
     <geom name="floor" type="plane" size="2 2 0.1"/>
@@ -64,7 +64,7 @@ class RandomizeTest : public testing::MujocoTest {
  protected:
   void SetUp() override {
     dir_ = testing::MakeTempDir("randomize");
-    testing::WriteTextFile(dir_, "arm.xml", kArm);
+    testing::WriteTextFile(dir_, "arm.xml", kRandomizeArmXml);
   }
   world::SceneConfig Scene(const std::string& randomize = kRandomize,
                            const std::string& top = "seed: 7\n") {

@@ -14,7 +14,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kArm = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
+const std::string kArmPath = URLAB_SOURCE_DIR "/examples/models/pendulum_arm.xml";
 
 class SceneChecksTest : public testing::MujocoTest {
  protected:
@@ -49,11 +49,11 @@ TEST_F(SceneChecksTest, ValidateReportsEveryBeginPlayProblemAtOnce) {
   const std::string yaml =
       "articulations:\n"
       "  - name: a\n    mjcf: " +
-      kArm +
+      kArmPath +
       "\n"
       "    hold_keyframe: true\n"
       "  - name: a_b\n    mjcf: " +
-      kArm + "\n";
+      kArmPath + "\n";
   const auto errors = ValidateErrors(yaml);
   EXPECT_TRUE(AnyContains(errors, "s.yaml:5: articulation names 'a' and 'a_b' overlap"))
       << Joined(errors);
@@ -74,14 +74,14 @@ TEST_F(SceneChecksTest, ControllerAndKeyframeNamesAreCheckedAgainstTheCompiledMo
   const std::string yaml =
       "articulations:\n"
       "  - name: a\n    mjcf: " +
-      kArm +
+      kArmPath +
       "\n"
       "    keyframe: lowered\n"
       "    controller:\n"
       "      type: pd\n"
       "      gains: {wrist: {kp: 10}, elbow: {kp: 5}, shoulder_motor: {kv: 1}}\n"
       "  - name: b\n    mjcf: " +
-      kArm +
+      kArmPath +
       "\n"
       "    controller:\n"
       "      type: keyframe\n"
@@ -190,7 +190,7 @@ TEST_F(SceneChecksTest, ALooseObjectInAFixedArmsFileIsNotAFreeBaseForTwist) {
 
 TEST_F(SceneChecksTest, ValidateStartsNothingAndWritesNothing) {
   const std::string yaml =
-      "articulations:\n  - {name: a, mjcf: " + kArm + "}\nsave_debug_xml: debug_out\n";
+      "articulations:\n  - {name: a, mjcf: " + kArmPath + "}\nsave_debug_xml: debug_out\n";
   const world::ValidationReport r = world::Validate(Write("s.yaml", yaml));
   EXPECT_TRUE(r.ok()) << Joined({r.diagnostics.all().empty() ? "" : r.diagnostics.all()[0].str()});
   EXPECT_FALSE(fs::exists(dir_ + "/debug_out"));
