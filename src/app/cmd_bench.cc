@@ -216,7 +216,9 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
       "synchronous step() over that one server. Then the same 64 environments as two servers "
       "of 32 with one thread each, through one vector env: batch2x32_sync_ratio (step()) and "
       "batch2x32_async_ratio (send/recv: one server steps while Python handles the other's "
-      "reply).");
+      "reply). Last, with python3-distributed, a Dask LocalCluster of 1 and 2 workers with one "
+      "batched server of 16 environments each: dask_scaling (2 workers over 1) and "
+      "dask_of_ceiling (that over what 2 plain threads make of the bare loop just after).");
   static net::FleetBenchOptions fleet_args;
   static std::string fleet_scene;
 #ifdef URLAB_PYTHON_CLIENT_DIR

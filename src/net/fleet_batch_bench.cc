@@ -270,10 +270,16 @@ void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
   out->push_back({"dask1x16_env_steps_per_s", one});
   out->push_back({"dask2x16_env_steps_per_s", two});
   out->push_back({"dask_scaling", two / one});
+  // What 2 cores give at all right after (2 plain threads over the bare loop): the scaling's
+  // bound on this machine at this time, so that a slow second CPU is told from a slow fleet.
+  const double bare = ctx.BareRate(ctx.steps_per_round());
+  const double ceiling = ctx.CeilingRate(2, ctx.steps_per_round()) / bare;
+  out->push_back({"dask_of_ceiling", two / one / ceiling});
   ctx.Report(
       Format("Dask LocalCluster, batched servers of 16 environments: 1 worker %.0f, 2 "
-             "workers %.0f env steps/s (%.2f)",
-             one, two, two / one));
+             "workers %.0f env steps/s (%.2f; 2 plain threads made %.2f of the bare loop just "
+             "after, so %.3f of that ceiling)",
+             one, two, two / one, ceiling, two / one / ceiling));
   for (const char* w : {"1", "2"}) {
     const std::string k(w);
     ctx.Report(
