@@ -162,16 +162,16 @@ check_client_links() {  # check_client_links BINARY...: fails when one links a s
 # (-fsyntax-only, warnings as errors), so each one includes what it uses. The builds themselves
 # cannot show it: precompiled headers and the sanitizer stages' unity batches supply includes.
 check_headers_alone() {
-  local prefix=$1 list
+  local prefix=$1 list rc=0
   list=$(mktemp)
   (cd "$prefix/include" && find urlab -name '*.h' | sort) >"$list"
   # shellcheck disable=SC2016
   xargs -P "$JOBS" -I{} sh -c 'printf "#include <%s>\n" "$1" |
     g++ -std=c++20 -fsyntax-only -Wall -Wextra -Werror -I"$2/include" -x c++ - ||
-    { echo "$1 does not compile on its own" >&2; exit 255; }' sh {} "$prefix" <"$list" ||
-    return 1
-  echo "$(wc -l <"$list") installed headers compile on their own"
+    { echo "$1 does not compile on its own" >&2; exit 255; }' sh {} "$prefix" <"$list" || rc=$?
+  [ $rc -eq 0 ] && echo "$(wc -l <"$list") installed headers compile on their own"
   rm -f "$list"
+  return $rc
 }
 
 install_stage() {

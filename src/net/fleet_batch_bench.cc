@@ -266,20 +266,20 @@ void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
     ctx.Report("no Dask figures (python3-distributed missing, or the cluster failed): " + text);
     return;
   }
-  const double one = Field(text, "one"), two = Field(text, "two");
+  const double one = Field(text, "one"), two = Field(text, "two"), scaling = two / one;
   out->push_back({"dask1x16_env_steps_per_s", one});
   out->push_back({"dask2x16_env_steps_per_s", two});
-  out->push_back({"dask_scaling", two / one});
-  // What 2 cores give at all right after (2 plain threads over the bare loop): the scaling's
-  // bound on this machine at this time, so that a slow second CPU is told from a slow fleet.
-  const double bare = ctx.BareRate(ctx.steps_per_round());
-  const double ceiling = ctx.CeilingRate(2, ctx.steps_per_round()) / bare;
-  out->push_back({"dask_of_ceiling", two / one / ceiling});
+  out->push_back({"dask_scaling", scaling});
+  // What 2 cores give at all right after (parallel_ceiling's measurement): the scaling's bound on
+  // this machine at this time, so that a slow second CPU is told from a slow fleet.
+  const double ceiling =
+      ctx.MedianRatio([&] { return ctx.CeilingRate(kFleetBatchThreads, ctx.steps_per_round()); });
+  out->push_back({"dask_of_ceiling", scaling / ceiling});
   ctx.Report(
       Format("Dask LocalCluster, batched servers of 16 environments: 1 worker %.0f, 2 "
              "workers %.0f env steps/s (%.2f; 2 plain threads made %.2f of the bare loop just "
              "after, so %.3f of that ceiling)",
-             one, two, two / one, ceiling, two / one / ceiling));
+             one, two, scaling, ceiling, scaling / ceiling));
   for (const char* w : {"1", "2"}) {
     const std::string k(w);
     ctx.Report(
