@@ -34,13 +34,12 @@ namespace {
 using bench::Format;
 using bench::Median;
 
-// The actions the batched scripts step with (after they made `env`): 8 sets drawn uniformly in
-// the action space (an unbounded actuator within [-1, 1]), the same in every run.
-constexpr const char* kRandomActions = R"PY(
+// The actions the batched scripts step with (after they made `env`): the sets
+// FleetContext::MakeTrajectories drew, from the file argv[4] (float64, sets x n x nu), so that the
+// bare loop of the same round times the same physics (BatchWork).
+constexpr const char* kFileActions = R"PY(
 n, nu = env.num_envs, env.single_action_space.shape[0]
-low = np.where(np.isfinite(env.single_action_space.low), env.single_action_space.low, -1.0)
-high = np.where(np.isfinite(env.single_action_space.high), env.single_action_space.high, 1.0)
-actions = np.random.default_rng(0).uniform(low, high, size=(8, n, nu))
+actions = np.fromfile(sys.argv[4], dtype="<f8").reshape(-1, n, nu)
 )PY";
 
 // One batched server's vector env: `steps` synchronous steps; prints the Python rate and the
@@ -56,11 +55,11 @@ client = env.envs[0].client
 )PY";
 constexpr const char* kBatchBody = R"PY(env.reset(seed=0)
 for i in range(10):
-    env.step(actions[i % 8])
+    env.step(actions[i % len(actions)])
 before = client.call("batch_info")
 t0 = time.perf_counter()
 for i in range(steps):
-    env.step(actions[i % 8])
+    env.step(actions[i % len(actions)])
 elapsed = time.perf_counter() - t0
 after = client.call("batch_info")
 server = (after["env_steps"] - before["env_steps"]) / (after["busy_seconds"] - before["busy_seconds"])
@@ -82,21 +81,21 @@ env = UrlabVectorEnv.over_batch(endpoints)
 )PY";
 constexpr const char* kAsyncBody = R"PY(env.reset(seed=0)
 for i in range(10):
-    env.step(actions[i % 8])
+    env.step(actions[i % len(actions)])
 t0 = time.perf_counter()
 for i in range(steps):
-    env.step(actions[i % 8])
+    env.step(actions[i % len(actions)])
 sync = steps * n / (time.perf_counter() - t0)
 env.reset(seed=0)
 env.send(actions[0])
 for i in range(10 * len(endpoints)):
     obs, rewards, terminated, truncated, infos = env.recv()
-    env.send(actions[i % 8][infos["env_id"]], infos["env_id"])
+    env.send(actions[i % len(actions)][infos["env_id"]], infos["env_id"])
 done, t0 = 0, time.perf_counter()
 for i in range(steps * len(endpoints)):
     obs, rewards, terminated, truncated, infos = env.recv()
     done += len(infos["env_id"])
-    env.send(actions[i % 8][infos["env_id"]], infos["env_id"])
+    env.send(actions[i % len(actions)][infos["env_id"]], infos["env_id"])
 for _ in endpoints:
     obs, rewards, terminated, truncated, infos = env.recv()
     done += len(infos["env_id"])
@@ -289,6 +288,38 @@ void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
   }
 }
 
+// A batched figure's work (FleetContext::Trajectories) and its actions in a file for the Python
+// script (removed on destruction).
+class BatchWork {
+ public:
+  // The scripts warm up with this many vector steps before timing.
+  static constexpr int kWarm = 10;
+  static constexpr int kSets = 8;
+  BatchWork(FleetContext& ctx, int envs, int steps)
+      : trajectories_(ctx.MakeTrajectories(envs, kSets, kWarm, steps, 0)),
+        path_((std::filesystem::temp_directory_path() /
+               ("urlab-bench-actions-" + std::to_string(getpid()) + "-" + std::to_string(envs) +
+                ".f64"))
+                  .string()) {
+    std::ofstream out(path_, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(trajectories_.actions.data()),
+              static_cast<std::streamsize>(trajectories_.actions.size() * sizeof(double)));
+    if (!out.flush()) throw Error("bench fleet: cannot write " + path_);
+  }
+  ~BatchWork() {
+    std::error_code ec;
+    std::filesystem::remove(path_, ec);
+  }
+  BatchWork(const BatchWork&) = delete;
+  BatchWork& operator=(const BatchWork&) = delete;
+  const FleetContext::Trajectories& trajectories() const { return trajectories_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  FleetContext::Trajectories trajectories_;
+  std::string path_;
+};
+
 void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
   const FleetBenchOptions& o = ctx.options();
   if (o.python_client.empty() || access(o.python.c_str(), X_OK) != 0) {
@@ -300,16 +331,22 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
     BatchServer server(ctx.scene_path, envs, kThreads);
     // About as many environment steps per round as the other figures' steps.
     const int steps = std::clamp(ctx.steps_per_round() / envs * 4, 30, 4000);
-    // Round by round: the bare loop, then the Python client; ratios to that round's bare rate.
-    std::vector<double> python_ratios, server_ratios, server_rates, overheads, of_ceiling;
+    const BatchWork work(ctx, envs, steps);
+    // Round by round: the bare loop over the same trajectories, then the Python client; ratios to
+    // that round's bare rate.
+    std::vector<double> python_ratios, server_ratios, server_rates, overheads, of_ceiling, ceilings,
+        costs, bares;
     for (int round = 0; round < o.rounds; ++round) {
-      const double bare = ctx.BareRate(ctx.steps_per_round());
-      // At N = 64, also what the threads give at all in this round (CeilingRate).
-      const double ceiling = envs == 64 ? ctx.CeilingRate(kThreads, ctx.steps_per_round()) : 0;
+      const double bare = ctx.TrajectoryRate(work.trajectories(), 1);
+      bares.push_back(bare);
+      // What the same physics costs beside the zero-control bare loop of the other figures.
+      costs.push_back(ctx.BareRate(ctx.steps_per_round()) / bare);
+      // At N = 64, also what the threads give the same work at all in this round.
+      const double ceiling = envs == 64 ? ctx.TrajectoryRate(work.trajectories(), kThreads) : 0;
       int status = 0;
       const std::string text =
-          RunCaptured({o.python, "-c", std::string(kBatchHead) + kRandomActions + kBatchBody,
-                       o.python_client, server.rpc(), std::to_string(steps)},
+          RunCaptured({o.python, "-c", std::string(kBatchHead) + kFileActions + kBatchBody,
+                       o.python_client, server.rpc(), std::to_string(steps), work.path()},
                       &status);
       if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
         throw Error("bench fleet: the Python batched client failed (" + text + ")");
@@ -319,7 +356,10 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
       server_ratios.push_back(server_rate / bare);
       server_rates.push_back(server_rate);
       overheads.push_back(1 - rate / server_rate);
-      if (ceiling > 0) of_ceiling.push_back(rate / ceiling);
+      if (ceiling > 0) {
+        of_ceiling.push_back(rate / ceiling);
+        ceilings.push_back(ceiling / bare);
+      }
     }
     const double ratio = Median(python_ratios);
     const std::string n = std::to_string(envs);
@@ -327,31 +367,39 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
     out->push_back({"batch" + n + "_server_ratio", Median(server_ratios)});
     out->push_back({"batch" + n + "_server_env_steps_per_s", Median(server_rates)});
     ctx.Report(
-        Format("batched server, %d envs, %d threads: Python vector env %.3f of bare, the "
-               "server's own rate %.0f env steps/s (%.3f of bare), Python's share %.3f",
-               envs, std::min(kThreads, envs), ratio, Median(server_rates), Median(server_ratios),
-               Median(overheads)));
+        Format("batched server, %d envs, %d threads: Python vector env %.3f of the bare loop "
+               "stepping the same trajectories (%.0f steps/s, each step %.2fx the zero-control "
+               "bare loop's cost), the server's own rate %.0f env steps/s (%.3f of that), "
+               "Python's share %.3f",
+               envs, std::min(kThreads, envs), ratio, Median(bares), Median(costs),
+               Median(server_rates), Median(server_ratios), Median(overheads)));
     if (envs == 64) {
       // batch64_ratio: the synchronous Python vector env over this one server of 64.
       out->push_back({"batch64_ratio", ratio});
       out->push_back({"python_overhead64", Median(overheads)});
+      out->push_back({"batch64_bare_steps_per_s", Median(bares)});
+      out->push_back({"batch64_action_cost", Median(costs)});
+      out->push_back({"batch64_ceiling", Median(ceilings)});
       out->push_back({"batch64_of_ceiling", Median(of_ceiling)});
       ctx.Report(
-          Format("batched server, 64 envs: %.3f of %d independent threads' rate (the "
-                 "ceiling)",
-                 Median(of_ceiling), kThreads));
+          Format("batched server, 64 envs: %.3f of what %d plain threads make of the same "
+                 "trajectories (%.3f of the bare loop: the ceiling)",
+                 Median(of_ceiling), kThreads, Median(ceilings)));
     }
   }
   // The same 64 environments as two servers of 32 with one stepping thread each.
   BatchServer a(ctx.scene_path, 32, 1), b(ctx.scene_path, 32, 1);
   const int steps = std::clamp(ctx.steps_per_round() / 64 * 4, 30, 4000);
+  const BatchWork work(ctx, 64, steps);
   std::vector<double> sync_ratios, async_ratios;
   for (int round = 0; round < o.rounds; ++round) {
-    const double bare = ctx.BareRate(ctx.steps_per_round());
+    // The synchronous run steps exactly these trajectories; the pipelined one draws the same sets
+    // in another order (each reply takes the next set), the same kind of work.
+    const double bare = ctx.TrajectoryRate(work.trajectories(), 1);
     int status = 0;
     const std::string text =
-        RunCaptured({o.python, "-c", std::string(kAsyncHead) + kRandomActions + kAsyncBody,
-                     o.python_client, a.rpc() + "," + b.rpc(), std::to_string(steps)},
+        RunCaptured({o.python, "-c", std::string(kAsyncHead) + kFileActions + kAsyncBody,
+                     o.python_client, a.rpc() + "," + b.rpc(), std::to_string(steps), work.path()},
                     &status);
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
       throw Error("bench fleet: the Python asynchronous batched client failed (" + text + ")");
@@ -362,9 +410,9 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
   out->push_back({"batch2x32_sync_ratio", Median(sync_ratios)});
   out->push_back({"batch2x32_async_ratio", Median(async_ratios)});
   ctx.Report(
-      Format("64 envs as 2 batched servers of 32, 1 thread each: Python vector env %.3f of bare "
-             "with step() (synchronous), %.3f with send/recv (one server steps while Python "
-             "handles the other's reply)",
+      Format("64 envs as 2 batched servers of 32, 1 thread each: Python vector env %.3f of the "
+             "bare loop stepping the same trajectories with step() (synchronous), %.3f with "
+             "send/recv (one server steps while Python handles the other's reply)",
              Median(sync_ratios), Median(async_ratios)));
 }
 

@@ -7,6 +7,7 @@
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <string>
@@ -44,6 +45,27 @@ class FleetContext {
   double CeilingRate(int threads, int steps, int copies = 1);
   // Median over rounds of measure() / BareRate measured just before it (each round).
   double MedianRatio(const std::function<double()>& measure);
+
+  // The work of a batched figure, to time the same physics without a batch around it (a
+  // humanoid's step under random actions costs about 1.4x one under none: the bare loop's work
+  // is not the batch's). `envs` environments each start from the reset state and step `warm`
+  // then `steps` times, environment e's i-th step (counted from 0 within each part) with the
+  // action row actions[(i % sets) * envs + e] (nu values).
+  struct Trajectories {
+    int envs = 0, nu = 0, sets = 0, warm = 0, steps = 0;
+    std::vector<double> actions;  // sets x envs x nu, row-major
+  };
+  // `sets` action sets drawn uniformly from a fixed seed within each actuator's ctrlrange (an
+  // unlimited actuator: [-1, 1]).
+  Trajectories MakeTrajectories(int envs, int sets, int warm, int steps, std::uint64_t seed) const;
+  // Timed steps per second of the trajectories on `threads` plain threads (environment e on
+  // thread e % threads, each its own mjData), counting only the `steps` part: one thread, the
+  // bare single-thread loop doing the batch's work; more, the ceiling of that work on that many
+  // cores (the wall time from one start signal to the last thread's end).
+  double TrajectoryRate(const Trajectories& t, int threads);
+  // The reset state of the served simulation (as a batched server resets an environment: the
+  // model's defaults, then each articulation's initial keyframe); default: mj_resetData.
+  std::function<void(const mjModel*, mjData*)> reset_state;
   void Report(const std::string& line) const {
     if (options_.report) options_.report(line);
   }

@@ -85,8 +85,9 @@ Batch::Batch(const Model& model, BatchOptions options) : options_(options) {
   }
   int threads = options.threads;
   if (threads == 0) threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  part_ = [this](int) { StepPart(); };
+  part_ = [this](int part) { StepPart(part); };
   pool_ = std::make_unique<WorkerPool>(std::min(threads, options.envs));
+  shares_ = std::make_unique<Share[]>(static_cast<std::size_t>(pool_->threads()));
   ResetAll(options.seed);
 }
 
@@ -270,27 +271,36 @@ void Batch::StepBegin(std::span<const double> actions, std::span<double> observa
   pass_.observations = observations;
   pass_.done = done;
   pass_.skip = skip;
-  pass_.next.store(0, std::memory_order_relaxed);
+  const std::size_t parts = static_cast<std::size_t>(pool_->threads());
+  for (std::size_t k = 0; k < parts; ++k) {
+    shares_[k].next.store(k * n / parts, std::memory_order_relaxed);
+    shares_[k].end = (k + 1) * n / parts;
+  }
   pool_->Start(part_);  // publishes pass_ to the workers
 }
 
-void Batch::StepPart() {
-  // Each thread claims the next environment from a shared counter: a thread the machine
-  // preempts holds back only the environment it is stepping, the others take the rest.
-  const std::size_t n = envs_.size();
+void Batch::StepPart(int part) {
+  // Each thread first claims environments from the front of its own share, then from the
+  // others' once its own are done: an environment stays on one thread (its data in that core's
+  // caches) from step to step while the threads keep pace, and a thread the machine preempts
+  // holds back only the environment it is stepping, the others take the rest of its share.
   const std::size_t nu = static_cast<std::size_t>(action_size());
   const std::size_t row = static_cast<std::size_t>(observation_size());
   const Pass& p = pass_;
-  for (std::size_t i = pass_.next.fetch_add(1, std::memory_order_relaxed); i < n;
-       i = pass_.next.fetch_add(1, std::memory_order_relaxed)) {
-    double* obs = p.observations.empty() ? nullptr : p.observations.data() + row * i;
-    if (!p.skip.empty() && p.skip[i]) {
-      if (!p.done.empty()) p.done[i] = 0;
-      if (obs) ObserveEnv(*envs_[i], obs);
-      continue;
+  const std::size_t parts = static_cast<std::size_t>(pool_->threads());
+  for (std::size_t r = 0; r < parts; ++r) {
+    Share& share = shares_[(static_cast<std::size_t>(part) + r) % parts];
+    for (std::size_t i = share.next.fetch_add(1, std::memory_order_relaxed); i < share.end;
+         i = share.next.fetch_add(1, std::memory_order_relaxed)) {
+      double* obs = p.observations.empty() ? nullptr : p.observations.data() + row * i;
+      if (!p.skip.empty() && p.skip[i]) {
+        if (!p.done.empty()) p.done[i] = 0;
+        if (obs) ObserveEnv(*envs_[i], obs);
+        continue;
+      }
+      StepEnv(*envs_[i], p.actions.data() + nu * i, obs,
+              p.done.empty() ? nullptr : p.done.data() + i);
     }
-    StepEnv(*envs_[i], p.actions.data() + nu * i, obs,
-            p.done.empty() ? nullptr : p.done.data() + i);
   }
 }
 

@@ -144,10 +144,26 @@ TEST(RunTest, BenchFleetPrintsEveryFigure) {
                  &out),
       0)
       << out;
-  for (const char* key : {"bare_steps_per_s", "raw_zmq_rtt_p50_us", "raw_shm_rtt_p50_us", "zmq_n1",
-                          "zmq_n10", "zmq_rtt_p50_us", "shm_n1", "shm_n10", "shm_step_rtt_p50_us",
-                          "shm_rtt_p50_us", "zmq_python_n1", "shm_python_n1", "parallel_ceiling64",
-                          "batch64_ratio", "batch2x32_sync_ratio", "batch2x32_async_ratio"}) {
+  for (const char* key : {"bare_steps_per_s",
+                          "raw_zmq_rtt_p50_us",
+                          "raw_shm_rtt_p50_us",
+                          "zmq_n1",
+                          "zmq_n10",
+                          "zmq_rtt_p50_us",
+                          "shm_n1",
+                          "shm_n10",
+                          "shm_step_rtt_p50_us",
+                          "shm_rtt_p50_us",
+                          "zmq_python_n1",
+                          "shm_python_n1",
+                          "parallel_ceiling64",
+                          "batch64_ratio",
+                          "batch64_bare_steps_per_s",
+                          "batch64_action_cost",
+                          "batch64_ceiling",
+                          "batch64_of_ceiling",
+                          "batch2x32_sync_ratio",
+                          "batch2x32_async_ratio"}) {
     EXPECT_TRUE(
         std::regex_search(out, std::regex(std::string("(^|\\n)") + key + "=[0-9][0-9.e+]*\\n")))
         << key << "\n"

@@ -76,6 +76,9 @@ def check_wait_policy():
                  f"{(spare, busy)}, asked {asks}")
     if spare_core() not in (True, False):
         fail("spare_core() is not a bool")
+    # Threads about to wake count as runnable: more of them than cores leave none spare.
+    if spare_core(waking=(os.cpu_count() or 1)):
+        fail("spare_core(waking=cores) found a spare core beside this thread")
     print("the wait policy: the same table as the C++ one")
 
 

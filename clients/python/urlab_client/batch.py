@@ -45,6 +45,9 @@ class BatchClient:
                            for part in info["obs_layout"]]
             self.action_low = np.frombuffer(info["action_low"], _F8).copy()
             self.action_high = np.frombuffer(info["action_high"], _F8).copy()
+            # A batch step keeps the server's stepping threads busy: a client on shared memory
+            # does not spin through it on a core they need.
+            self.client.set_partner_threads(int(info.get("threads", 1)))
             self.client.set_mode("direct")
         except BaseException:
             self.client.close()

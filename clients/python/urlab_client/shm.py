@@ -59,9 +59,11 @@ _loadavg = None
 _CORES = os.cpu_count() or 1
 
 
-def spare_core():
-    """True when the machine has no more runnable threads (this one among them) than CPUs
-    (/proc/loadavg's "runnable/total"); False when it cannot tell."""
+def spare_core(waking=0):
+    """True when the machine has no more runnable threads (this one among them), plus `waking`
+    threads about to run (a batched server's stepping threads beyond the one that reads the
+    request: asleep between requests, woken by this one), than CPUs (/proc/loadavg's
+    "runnable/total"); False when it cannot tell."""
     global _loadavg
     try:
         if _loadavg is None:
@@ -69,7 +71,7 @@ def spare_core():
         runnable = int(os.pread(_loadavg, 128, 0).split()[3].split(b"/")[0])
     except (OSError, ValueError, IndexError):
         return False
-    return runnable <= _CORES
+    return runnable + waking <= _CORES
 
 
 class ShmError(ConnectionError):
@@ -160,6 +162,9 @@ class ShmChannel:
         self._fence = threading.Lock()
         self._view = memoryview(mm)
         self._rtt = 0.0002
+        # The server threads one request keeps busy (a batched server's stepping threads): the
+        # spin below counts those not running yet as taking a core (spare_core).
+        self.partner_threads = 1
         self.path = path
         struct.pack_into("<I", mm, _CLIENT_PID, os.getpid())
         self._attached.value = 1
@@ -221,6 +226,9 @@ class ShmChannel:
         self._posted = time.perf_counter()
         return seq
 
+    def _spare_core(self):
+        return spare_core(self.partner_threads - 1)
+
     def wait(self, seq, timeout):
         """The second half of request(): the reply to request `seq` as a memoryview."""
         start = self._posted
@@ -229,7 +237,7 @@ class ShmChannel:
             # Spin about as long as the server took recently, then sleep on the word (the wait
             # policy: spin_budget). A turn that took long means this process lost its core (a
             # busy machine): then spinning only delays the server, so sleep at once.
-            spin_until = start + spin_budget(self._rtt, spare_core)
+            spin_until = start + spin_budget(self._rtt, self._spare_core)
             now = start
             turns = 0
             while rep_seq.value != seq:

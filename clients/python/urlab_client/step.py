@@ -155,6 +155,12 @@ class StepClient:
         # entry with the data's length as a bin 32 (c6 + 4 bytes, big-endian), the data after it.
         self._send(op, head[:-2] + b"\xc6" + body.nbytes.to_bytes(4, "big"), body)
 
+    def set_partner_threads(self, threads):
+        """The server threads one request keeps busy (a batched server's --threads): on shared
+        memory, the wait for a reply spins only while a core is free beside them all."""
+        if self._channel is not None:
+            self._channel.partner_threads = max(1, int(threads))
+
     def receive_reply(self, op):
         """The second half of call(): waits for the reply to the request sent."""
         if self._posted is not None:

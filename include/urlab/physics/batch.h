@@ -20,8 +20,10 @@
 // - One owner calls everything below: one thread, or threads taking turns under a lock of the
 //   caller's (a running engine's step mutex), never two at once. During Step the owner and K-1
 //   persistent workers (a WorkerPool: no thread is created per step) advance the environments,
-//   each claiming the next one from a shared counter (a preempted thread holds back only the one
-//   it steps); no environment is touched by two threads in a step, and the model is only read.
+//   each claiming the next one of its own contiguous share first, then of the others' (an
+//   environment keeps its thread from step to step while the threads keep pace; a preempted
+//   thread holds back only the one it steps); no environment is touched by two threads in a
+//   step, and the model is only read.
 //   Which thread steps an environment changes none of its bits.
 // - env(i) gives the environment's StepCore for its owner's use between steps (e.g. a state
 //   subscription on environment 0 made before stepping starts); never during Step.
@@ -154,14 +156,20 @@ class Batch {
     std::span<double> observations;
     std::span<std::uint8_t> done;
     std::span<const std::uint8_t> skip;
-    std::atomic<std::size_t> next{0};  // the next environment to claim
   };
-  void StepPart();
+  // Each part's own contiguous share of the environments (part k: [k n / K, (k + 1) n / K)),
+  // claimed from its front by its part first and by the others once theirs are done.
+  struct alignas(64) Share {
+    std::atomic<std::size_t> next{0};
+    std::size_t end = 0;
+  };
+  void StepPart(int part);
 
   BatchOptions options_;
   std::shared_ptr<Model> model_;
   std::vector<std::unique_ptr<Env>> envs_;
   Pass pass_;
+  std::unique_ptr<Share[]> shares_;
   std::function<void(int)> part_;     // StepPart, for the pool
   std::unique_ptr<WorkerPool> pool_;  // last: its workers stop before the rest goes
 };
