@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -42,15 +43,16 @@ n, nu = env.num_envs, env.single_action_space.shape[0]
 actions = np.fromfile(sys.argv[4], dtype="<f8").reshape(-1, n, nu)
 )PY";
 
-// One batched server's vector env: `steps` synchronous steps; prints the Python rate and the
-// server's own (batch_info's busy time).
+// One batched server's vector env: `steps` synchronous steps of n_steps physics steps each (the
+// action held: frame skip); prints the Python rate and the server's own (batch_info's busy
+// time), in physics steps per second.
 constexpr const char* kBatchHead = R"PY(
 import sys, time
 sys.path.insert(0, sys.argv[1])
 import numpy as np
 from urlab_client import UrlabVectorEnv
-endpoint, steps = sys.argv[2], int(sys.argv[3])
-env = UrlabVectorEnv.over_batch(endpoint)
+endpoint, steps, n_steps = sys.argv[2], int(sys.argv[3]), int(sys.argv[5])
+env = UrlabVectorEnv.over_batch(endpoint, n_steps=n_steps)
 client = env.envs[0].client
 )PY";
 constexpr const char* kBatchBody = R"PY(env.reset(seed=0)
@@ -63,7 +65,7 @@ for i in range(steps):
 elapsed = time.perf_counter() - t0
 after = client.call("batch_info")
 server = (after["env_steps"] - before["env_steps"]) / (after["busy_seconds"] - before["busy_seconds"])
-print("rate=%f server=%f transport=%s" % (steps * n / elapsed, server, client.transport))
+print("rate=%f server=%f transport=%s" % (steps * n * n_steps / elapsed, server, client.transport))
 env.close()
 )PY";
 
@@ -288,11 +290,12 @@ class BatchWork {
   // The scripts warm up with this many vector steps before timing.
   static constexpr int kWarm = 10;
   static constexpr int kSets = 8;
-  BatchWork(FleetContext& ctx, int envs, int steps)
-      : trajectories_(ctx.MakeTrajectories(envs, kSets, kWarm, steps, 0)),
+  // `steps` vector steps of `hold` physics steps each (the client's n_steps).
+  BatchWork(FleetContext& ctx, int envs, int steps, int hold = 1)
+      : trajectories_(ctx.MakeTrajectories(envs, kSets, kWarm * hold, steps * hold, 0, hold)),
         path_((std::filesystem::temp_directory_path() /
                ("urlab-bench-actions-" + std::to_string(getpid()) + "-" + std::to_string(envs) +
-                ".f64"))
+                "-" + std::to_string(hold) + ".f64"))
                   .string()) {
     std::ofstream out(path_, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(trajectories_.actions.data()),
@@ -313,6 +316,27 @@ class BatchWork {
   std::string path_;
 };
 
+// The physics steps per request of batch64_frameskip5_ratio (gymnasium's MuJoCo humanoid holds
+// each action for 5 steps).
+constexpr int kFrameSkip = 5;
+
+// One run of the batched script over `server` with `work`'s actions and `n_steps` per request;
+// its output (rate=..., server=...).
+std::string RunBatchScript(FleetContext& ctx, const BatchServer& server, const BatchWork& work,
+                           int n_steps) {
+  const FleetBenchOptions& o = ctx.options();
+  const int steps = work.trajectories().steps / n_steps;
+  int status = 0;
+  const std::string text = RunCaptured(
+      {o.python, "-c", std::string(kBatchHead) + kFileActions + kBatchBody, o.python_client,
+       server.rpc(), std::to_string(steps), work.path(), std::to_string(n_steps)},
+      &status);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    throw Error("bench fleet: the Python batched client failed (" + text + ")");
+  }
+  return text;
+}
+
 void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
   const FleetBenchOptions& o = ctx.options();
   if (o.python_client.empty() || access(o.python.c_str(), X_OK) != 0) {
@@ -328,22 +352,20 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
     // Round by round: the bare loop over the same trajectories, then the Python client; ratios to
     // that round's bare rate.
     std::vector<double> python_ratios, server_ratios, server_rates, overheads, of_ceiling, ceilings,
-        costs, bares;
+        costs, bares, skip_ratios;
+    // At N = 64, also the same with frame skip (n_steps per request).
+    std::optional<BatchWork> skip_work;
+    if (envs == 64) skip_work.emplace(ctx, envs, std::max(10, steps / kFrameSkip), kFrameSkip);
     for (int round = 0; round < o.rounds; ++round) {
       const double bare = ctx.TrajectoryRate(work.trajectories(), 1);
       bares.push_back(bare);
       // What the same physics costs beside the zero-control bare loop of the other figures.
       costs.push_back(ctx.BareRate(ctx.steps_per_round()) / bare);
-      // At N = 64, also what the threads give the same work at all in this round.
-      const double ceiling = envs == 64 ? ctx.TrajectoryRate(work.trajectories(), kThreads) : 0;
-      int status = 0;
-      const std::string text =
-          RunCaptured({o.python, "-c", std::string(kBatchHead) + kFileActions + kBatchBody,
-                       o.python_client, server.rpc(), std::to_string(steps), work.path()},
-                      &status);
-      if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-        throw Error("bench fleet: the Python batched client failed (" + text + ")");
-      }
+      // At N = 64, also what the threads give the same work at all in this round: 32 simulations
+      // each, stepped in turn as the batch steps them.
+      const double ceiling =
+          envs == 64 ? ctx.TrajectoryRate(work.trajectories(), kThreads, /*in_turn=*/true) : 0;
+      const std::string text = RunBatchScript(ctx, server, work, 1);
       const double rate = Field(text, "rate"), server_rate = Field(text, "server");
       python_ratios.push_back(rate / bare);
       server_ratios.push_back(server_rate / bare);
@@ -352,6 +374,13 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
       if (ceiling > 0) {
         of_ceiling.push_back(rate / ceiling);
         ceilings.push_back(ceiling / bare);
+      }
+      if (skip_work) {
+        // The same 64 environments with each action held for kFrameSkip physics steps (one
+        // request each), over a bare loop stepping those trajectories.
+        const double skip_bare = ctx.TrajectoryRate(skip_work->trajectories(), 1);
+        skip_ratios.push_back(Field(RunBatchScript(ctx, server, *skip_work, kFrameSkip), "rate") /
+                              skip_bare);
       }
     }
     const double ratio = Median(python_ratios);
@@ -374,10 +403,16 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
       out->push_back({"batch64_action_cost", Median(costs)});
       out->push_back({"batch64_ceiling", Median(ceilings)});
       out->push_back({"batch64_of_ceiling", Median(of_ceiling)});
+      out->push_back({"batch64_frameskip5_ratio", Median(skip_ratios)});
       ctx.Report(
           Format("batched server, 64 envs: %.3f of what %d plain threads make of the same "
-                 "trajectories (%.3f of the bare loop: the ceiling)",
+                 "trajectories, each stepping its 32 in turn (%.3f of the bare loop: the ceiling)",
                  Median(of_ceiling), kThreads, Median(ceilings)));
+      ctx.Report(
+          Format("batched server, 64 envs, each action held for %d physics steps (n_steps "
+                 "%d, frame skip): Python vector env %.3f of the bare loop stepping the "
+                 "same trajectories",
+                 kFrameSkip, kFrameSkip, Median(skip_ratios)));
     }
   }
   // The same 64 environments as two servers of 32 with one stepping thread each.

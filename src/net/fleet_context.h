@@ -47,22 +47,27 @@ class FleetContext {
   double MedianRatio(const std::function<double()>& measure);
 
   // The work of a batched figure, to time the same physics without a batch around it (a
-  // humanoid's step under random actions costs about 1.4x one under none: the bare loop's work
+  // humanoid's step under random actions costs more than one under none: the bare loop's work
   // is not the batch's). `envs` environments each start from the reset state and step `warm`
   // then `steps` times, environment e's i-th step (counted from 0 within each part) with the
-  // action row actions[(i % sets) * envs + e] (nu values).
+  // action row actions[((i / hold) % sets) * envs + e] (nu values): each action held for `hold`
+  // steps (a client's n_steps per request: frame skip).
   struct Trajectories {
-    int envs = 0, nu = 0, sets = 0, warm = 0, steps = 0;
+    int envs = 0, nu = 0, sets = 0, warm = 0, steps = 0, hold = 1;
     std::vector<double> actions;  // sets x envs x nu, row-major
   };
   // `sets` action sets drawn uniformly from a fixed seed within each actuator's ctrlrange (an
   // unlimited actuator: [-1, 1]).
-  Trajectories MakeTrajectories(int envs, int sets, int warm, int steps, std::uint64_t seed) const;
+  Trajectories MakeTrajectories(int envs, int sets, int warm, int steps, std::uint64_t seed,
+                                int hold = 1) const;
   // Timed steps per second of the trajectories on `threads` plain threads (environment e on
-  // thread e % threads, each its own mjData), counting only the `steps` part: one thread, the
-  // bare single-thread loop doing the batch's work; more, the ceiling of that work on that many
-  // cores (the wall time from one start signal to the last thread's end).
-  double TrajectoryRate(const Trajectories& t, int threads);
+  // thread e % threads, each its own mjData), counting only the `steps` part. One by one: each
+  // thread runs one environment's trajectory to its end, then the next, on one mjData (one
+  // thread: the bare single-thread loop doing the batch's work). In turn: each thread keeps an
+  // mjData per environment and steps them one after another, step by step, as a batch does
+  // (their data leaves the caches between a simulation's steps): the ceiling of that batch on
+  // that many cores (the wall time from one start signal to the last thread's end).
+  double TrajectoryRate(const Trajectories& t, int threads, bool in_turn = false);
   // The reset state of the served simulation (as a batched server resets an environment: the
   // model's defaults, then each articulation's initial keyframe); default: mj_resetData.
   std::function<void(const mjModel*, mjData*)> reset_state;

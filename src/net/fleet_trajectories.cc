@@ -13,11 +13,12 @@
 namespace urlab::net {
 
 FleetContext::Trajectories FleetContext::MakeTrajectories(int envs, int sets, int warm, int steps,
-                                                          std::uint64_t seed) const {
-  if (envs < 1 || sets < 1 || warm < 0 || steps < 1) {
-    throw Error("bench fleet: trajectories need envs, sets and steps >= 1");
+                                                          std::uint64_t seed, int hold) const {
+  if (envs < 1 || sets < 1 || warm < 0 || steps < 1 || hold < 1) {
+    throw Error("bench fleet: trajectories need envs, sets, steps and hold >= 1");
   }
-  Trajectories t{.envs = envs, .nu = m_->nu, .sets = sets, .warm = warm, .steps = steps};
+  Trajectories t{
+      .envs = envs, .nu = m_->nu, .sets = sets, .warm = warm, .steps = steps, .hold = hold};
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   t.actions.resize(static_cast<std::size_t>(sets) * static_cast<std::size_t>(envs) *
@@ -32,33 +33,54 @@ FleetContext::Trajectories FleetContext::MakeTrajectories(int envs, int sets, in
   return t;
 }
 
-double FleetContext::TrajectoryRate(const Trajectories& t, int threads) {
+double FleetContext::TrajectoryRate(const Trajectories& t, int threads, bool in_turn) {
   using Clock = std::chrono::steady_clock;
   threads = std::clamp(threads, 1, t.envs);
   const std::size_t nu = static_cast<std::size_t>(t.nu);
-  std::vector<physics::DataPtr> datas;
-  for (int k = 0; k < threads; ++k) datas.push_back(physics::MakeData(m_));
+  const auto reset = [&](mjData* d) {
+    if (reset_state) {
+      reset_state(m_, d);
+    } else {
+      mj_resetData(m_, d);
+    }
+  };
+  // Environment e's i-th step (counted within its warm-up and its timed part alike).
+  const auto act = [&](mjData* d, int e, int i) {
+    const std::size_t row = static_cast<std::size_t>((i / t.hold % t.sets) * t.envs + e);
+    std::copy_n(t.actions.data() + row * nu, nu, d->ctrl);
+    mj_step(m_, d);
+  };
   std::vector<double> seconds(static_cast<std::size_t>(threads), 0.0);
   std::atomic<bool> go{false};
   const auto run = [&](int k) {
-    mjData* d = datas[static_cast<std::size_t>(k)].get();
+    // Thread k's environments and their data (one mjData reused one by one; one each in turn).
+    std::vector<int> envs;
+    for (int e = k; e < t.envs; e += threads) envs.push_back(e);
+    std::vector<physics::DataPtr> datas;
+    for (std::size_t j = 0; j < (in_turn ? envs.size() : 1); ++j) {
+      datas.push_back(physics::MakeData(m_));
+    }
     while (!go.load(std::memory_order_acquire)) std::this_thread::yield();
     double timed = 0;
-    for (int e = k; e < t.envs; e += threads) {
-      if (reset_state) {
-        reset_state(m_, d);
-      } else {
-        mj_resetData(m_, d);
+    if (in_turn) {
+      for (std::size_t j = 0; j < envs.size(); ++j) reset(datas[j].get());
+      for (int i = 0; i < t.warm; ++i) {
+        for (std::size_t j = 0; j < envs.size(); ++j) act(datas[j].get(), envs[j], i);
       }
-      const auto act = [&](int i) {
-        const std::size_t row = static_cast<std::size_t>((i % t.sets) * t.envs + e);
-        std::copy_n(t.actions.data() + row * nu, nu, d->ctrl);
-        mj_step(m_, d);
-      };
-      for (int i = 0; i < t.warm; ++i) act(i);
       const auto t0 = Clock::now();
-      for (int i = 0; i < t.steps; ++i) act(i);
-      timed += std::chrono::duration<double>(Clock::now() - t0).count();
+      for (int i = 0; i < t.steps; ++i) {
+        for (std::size_t j = 0; j < envs.size(); ++j) act(datas[j].get(), envs[j], i);
+      }
+      timed = std::chrono::duration<double>(Clock::now() - t0).count();
+    } else {
+      mjData* d = datas.front().get();
+      for (const int e : envs) {
+        reset(d);
+        for (int i = 0; i < t.warm; ++i) act(d, e, i);
+        const auto t0 = Clock::now();
+        for (int i = 0; i < t.steps; ++i) act(d, e, i);
+        timed += std::chrono::duration<double>(Clock::now() - t0).count();
+      }
     }
     seconds[static_cast<std::size_t>(k)] = timed;
   };

@@ -162,6 +162,7 @@ TEST(RunTest, BenchFleetPrintsEveryFigure) {
                           "batch64_action_cost",
                           "batch64_ceiling",
                           "batch64_of_ceiling",
+                          "batch64_frameskip5_ratio",
                           "batch2x32_sync_ratio",
                           "batch2x32_async_ratio"}) {
     EXPECT_TRUE(

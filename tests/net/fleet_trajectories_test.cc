@@ -60,19 +60,23 @@ TEST_F(FleetTrajectoriesTest, ActionsStayInEachActuatorsRangeAndFollowTheSeed) {
   EXPECT_EQ(ctx_.MakeTrajectories(5, 3, 2, 10, 7).actions, t.actions);
   EXPECT_NE(ctx_.MakeTrajectories(5, 3, 2, 10, 8).actions, t.actions);
   EXPECT_THROW(ctx_.MakeTrajectories(0, 3, 2, 10, 7), std::exception);
+  EXPECT_THROW(ctx_.MakeTrajectories(5, 3, 2, 10, 7, 0), std::exception);  // hold < 1
+  EXPECT_EQ(ctx_.MakeTrajectories(5, 3, 2, 10, 7, 4).hold, 4);
 }
 
 TEST_F(FleetTrajectoriesTest, EveryEnvironmentStartsFromTheResetStateOnOneThreadOrTwo) {
   const FleetContext::Trajectories t = ctx_.MakeTrajectories(5, 3, 2, 20, 1);
-  for (const int threads : {1, 2, 9}) {
-    std::atomic<int> resets{0};
-    ctx_.reset_state = [&](const mjModel* m, mjData* d) {
-      mj_resetData(m, d);
-      d->qpos[0] = 0.3;
-      ++resets;
-    };
-    EXPECT_GT(ctx_.TrajectoryRate(t, threads), 0.0) << threads;
-    EXPECT_EQ(resets.load(), 5) << threads;
+  for (const bool in_turn : {false, true}) {
+    for (const int threads : {1, 2, 9}) {
+      std::atomic<int> resets{0};
+      ctx_.reset_state = [&](const mjModel* m, mjData* d) {
+        mj_resetData(m, d);
+        d->qpos[0] = 0.3;
+        ++resets;
+      };
+      EXPECT_GT(ctx_.TrajectoryRate(t, threads, in_turn), 0.0) << threads << " " << in_turn;
+      EXPECT_EQ(resets.load(), 5) << threads << " " << in_turn;
+    }
   }
 }
 
