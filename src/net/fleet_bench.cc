@@ -366,6 +366,7 @@ double FleetContext::CeilingRate(int threads, int steps, int copies) {
 double FleetContext::MedianRatio(const std::function<double()>& measure) {
   std::vector<double> ratios;
   for (int round = 0; round < options_.rounds; ++round) {
+    if (sync_bare) sync_bare(d_);
     const double bare = BareRate(steps_per_round());
     ratios.push_back(measure() / bare);
   }
@@ -450,6 +451,9 @@ std::vector<FleetFigure> RunFleetBench(world::SceneConfig scene, const FleetBenc
   for (const world::Articulation& a : manager.session().articulations()) {
     if (a.initial_key >= 0) keys.emplace_back(a.control, a.initial_key);
   }
+  ctx.sync_bare = [&engine, &bare_model](mjData* bare) {
+    engine.WithLockedData([&](mjModel*, mjData* d) { mj_copyData(bare, bare_model.get(), d); });
+  };
   ctx.reset_state = [keys](const mjModel* m, mjData* d) {
     mj_resetData(m, d);
     for (const auto& [control, key] : keys) control->ResetToKeyframe(m, d, key);

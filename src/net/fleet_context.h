@@ -43,8 +43,14 @@ class FleetContext {
   // to that many separate simulations per thread (each one's data leaves the caches before its
   // next step), still with no batch around them.
   double CeilingRate(int threads, int steps, int copies = 1);
-  // Median over rounds of measure() / BareRate measured just before it (each round).
+  // Median over rounds of measure() / BareRate measured just before it (each round). With
+  // sync_bare set, each round's bare loop first takes the served simulation's state, so that it
+  // steps exactly the trajectory the measured loop steps next (a lying humanoid's step costs
+  // more or less with its contacts: two states apart are two different workloads).
   double MedianRatio(const std::function<double()>& measure);
+  // Copies the served simulation's current state into the bare copy (set by the bench; the
+  // served simulation waits for lockstep requests between the figures, so it is still then).
+  std::function<void(mjData*)> sync_bare;
 
   // The work of a batched figure, to time the same physics without a batch around it (a
   // humanoid's step under random actions costs more than one under none: the bare loop's work
