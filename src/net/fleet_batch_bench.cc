@@ -194,14 +194,26 @@ class BatchServer {
          ("urlab-bench-batch-" + std::to_string(getpid()) + "-" + std::to_string(envs) + ".json"))
             .string();
     std::filesystem::remove(announce_);
-    const std::vector<std::string> argv = {
-        self, "run", scene, "--envs", std::to_string(envs), "--threads", std::to_string(threads),
-        "--ports", "auto", "--announce", announce_, "--no-cameras",
-        // Lockstep from the start, as --envs > 1 implies: a
-        // plain run (--envs 1) would otherwise play by itself
-        // at full speed between the clients, on the cores
-        // the bare loops of the next round measure.
-        "--step-mode", "direct", "--max-speed", "--duration", "900"};
+    // Lockstep from the start (--step-mode direct), as --envs > 1 implies: a plain run (--envs 1)
+    // would otherwise play by itself at full speed between the clients, on the cores the bare
+    // loops of the next round measure.
+    const std::vector<std::string> argv = {self,
+                                           "run",
+                                           scene,
+                                           "--envs",
+                                           std::to_string(envs),
+                                           "--threads",
+                                           std::to_string(threads),
+                                           "--ports",
+                                           "auto",
+                                           "--announce",
+                                           announce_,
+                                           "--no-cameras",
+                                           "--step-mode",
+                                           "direct",
+                                           "--max-speed",
+                                           "--duration",
+                                           "900"};
     pid_ = fork();
     if (pid_ < 0) throw Error("bench fleet: cannot fork");
     if (pid_ == 0) {

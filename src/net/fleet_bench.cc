@@ -18,7 +18,6 @@
 #include "net/bench_util.h"
 #include "net/fleet_context.h"
 #include "net/msgpack_codec.h"
-#include "urlab/control/articulation_control.h"
 #include "urlab/core/error.h"
 #include "urlab/net/network.h"
 #include "urlab/physics/model.h"
@@ -447,17 +446,10 @@ std::vector<FleetFigure> RunFleetBench(world::SceneConfig scene, const FleetBenc
   FleetContext ctx(options, net.endpoints().rpc, manager.session().articulations().front().name(),
                    bare_model.get(), bare_data.get());
   ctx.scene_path = scene.path;
-  std::vector<std::pair<const control::ArticulationControl*, int>> keys;
-  for (const world::Articulation& a : manager.session().articulations()) {
-    if (a.initial_key >= 0) keys.emplace_back(a.control, a.initial_key);
-  }
   ctx.sync_bare = [&engine, &bare_model](mjData* bare) {
     engine.WithLockedData([&](mjModel*, mjData* d) { mj_copyData(bare, bare_model.get(), d); });
   };
-  ctx.reset_state = [keys](const mjModel* m, mjData* d) {
-    mj_resetData(m, d);
-    for (const auto& [control, key] : keys) control->ResetToKeyframe(m, d, key);
-  };
+  ctx.reset_state = manager.session().InitialStateReset();  // a batched server's reset state
   ctx.Report(Format("scene %s: articulation '%s', timestep %.4f s; %d rounds of %d steps",
                     scene.path.c_str(), ctx.articulation().c_str(), engine.timestep(),
                     options.rounds, ctx.steps_per_round()));

@@ -86,22 +86,15 @@ void BatchSubsystem::BeginPlay(Session& session) {
   nq_ = m->nq;
   nv_ = m->nv;
   nsensordata_ = m->nsensordata;
-  // The session's initial state: every articulation in its initial keyframe (as
-  // Session::ResetToInitialState does), the rest in the model's default state.
-  std::vector<std::pair<const control::ArticulationControl*, int>> keys;
-  for (const Articulation& a : session.articulations()) {
-    if (a.initial_key >= 0) keys.emplace_back(a.control, a.initial_key);
-  }
   batch_options_.envs = std::max(1, options_.envs - 1);
   batch_options_.threads = options_.threads;
   batch_options_.auto_reset = false;  // next-step autoreset is ours (SubmitStep)
   batch_options_.max_episode_steps = options_.max_episode_steps;
   batch_options_.reset_noise = options_.reset_noise;
   batch_options_.seed = options_.seed;  // reseeded below: environment e starts with seed + e
-  batch_options_.reset_state = [keys](const mjModel* model, mjData* d) {
-    mj_resetData(model, d);
-    for (const auto& [control, key] : keys) control->ResetToKeyframe(model, d, key);
-  };
+  // The session's initial state: every articulation in its initial keyframe (as
+  // Session::ResetToInitialState does), the rest in the model's default state.
+  batch_options_.reset_state = session.InitialStateReset();
   // Emulated latency (the scene's `latency:`, as set when play began): per articulation, its
   // actuators and the entries of the observation row that are its state.
   latency_seed_ = session.latency_seed();

@@ -228,12 +228,24 @@ std::uint64_t Session::ResetArticulation(std::string_view name, std::string_view
                                          mj_id2name(engine_->model(), mjOBJ_KEY, id));
 }
 
-std::uint64_t Session::QueueInitialReset(bool full,
-                                         std::vector<std::pair<int, double>> qpos_offsets) {
+std::vector<std::pair<const control::ArticulationControl*, int>> Session::InitialKeys() const {
   std::vector<std::pair<const control::ArticulationControl*, int>> keys;
   for (const Articulation& a : articulations_) {
     if (a.initial_key >= 0) keys.emplace_back(a.control, a.initial_key);
   }
+  return keys;
+}
+
+physics::StepCallback Session::InitialStateReset() const {
+  return [keys = InitialKeys()](const mjModel* m, mjData* d) {
+    mj_resetData(m, d);
+    for (const auto& [control, key] : keys) control->ResetToKeyframe(m, d, key);
+  };
+}
+
+std::uint64_t Session::QueueInitialReset(bool full,
+                                         std::vector<std::pair<int, double>> qpos_offsets) {
+  std::vector<std::pair<const control::ArticulationControl*, int>> keys = InitialKeys();
   if (!full && keys.empty() && qpos_offsets.empty()) return 0;
   return engine_->ResetWith(
       [keys = std::move(keys), full, offsets = std::move(qpos_offsets)](const mjModel* m,

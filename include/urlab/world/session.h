@@ -110,6 +110,10 @@ class Session : public std::enable_shared_from_this<Session> {
   // Resets the whole simulation to qpos0, then every articulation to its initial keyframe, as
   // one queued command; returns its sequence number.
   std::uint64_t ResetToInitialState();
+  // That initial state (without randomisation) as a function any mjData of this model can be
+  // reset with: mj_resetData, then every articulation's initial keyframe. It refers to the
+  // articulations' controls: use it while the session lives.
+  physics::StepCallback InitialStateReset() const;
   // Resets one articulation to keyframe `key` (its initial keyframe when empty); the rest of the
   // scene is untouched. Throws Error for an unknown articulation or keyframe.
   std::uint64_t ResetArticulation(std::string_view name, std::string_view key = {});
@@ -180,6 +184,8 @@ class Session : public std::enable_shared_from_this<Session> {
   // Queues one reset restoring every articulation's initial keyframe (qpos0 first when `full`).
   // `qpos_offsets` ({qpos address, offset}) are added after the keyframes (qpos noise).
   std::uint64_t QueueInitialReset(bool full, std::vector<std::pair<int, double>> qpos_offsets = {});
+  // Each articulation with an initial keyframe: its control and the keyframe's id.
+  std::vector<std::pair<const control::ArticulationControl*, int>> InitialKeys() const;
 
   SessionOptions options_;
   SceneConfig config_;
