@@ -64,8 +64,8 @@ def check_wait_policy():
     seconds expected -> spin with a free core, without one, whether the cores are asked."""
     table = [(0, 30e-6, 30e-6, False), (5e-6, 30e-6, 30e-6, False),
              (46e-6, 138e-6, 138e-6, False), (100e-6, 300e-6, 300e-6, False),
-             (600e-6, 800e-6, 30e-6, True), (1e-3, 1.3e-3, 30e-6, True),
-             (2.5e-3, 3e-3, 30e-6, True), (3e-3, 3e-3, 30e-6, True),
+             (600e-6, 800e-6, 0.0, True), (1e-3, 1.3e-3, 0.0, True),
+             (2.5e-3, 3e-3, 0.0, True), (3e-3, 3e-3, 0.0, True),
              (3.001e-3, 30e-6, 30e-6, False), (40e-3, 30e-6, 30e-6, False)]
     for expected, spare, busy, asks in table:
         asked = []

@@ -44,14 +44,14 @@ MIN_SPIN, SHORT_WAIT, SLACK, MAX_SPIN = 30e-6, 100e-6, 50e-6, 3e-3
 def spin_budget(expected, spare_core):
     """How long to spin for a partner expected to take `expected` seconds before sleeping: a
     short wait (up to SHORT_WAIT) three times over; a longer one up to MAX_SPIN (expected x 5/4 +
-    SLACK) only when spare_core() says a core is free for the spinner (else it would take the
-    core of the servers it waits for); beyond MAX_SPIN, or nothing expected yet, MIN_SPIN."""
+    SLACK) when spare_core() says a core is free for the spinner, else not at all (it would take
+    the core of the servers it waits for); beyond MAX_SPIN, or nothing expected yet, MIN_SPIN."""
     if expected <= 0 or expected > MAX_SPIN:
         return MIN_SPIN
     if expected <= SHORT_WAIT:
         return max(MIN_SPIN, 3 * expected)
     if not spare_core():
-        return MIN_SPIN
+        return 0.0
     return min(MAX_SPIN, expected * 1.25 + SLACK)
 
 
