@@ -127,11 +127,18 @@ class BatchClient:
             client.close()
 
 
+_ALL = {}  # n -> a read-only (n,) array of True: the masks of columns every environment has
+
+
 def _infos(n, **columns):
+    every = _ALL.get(n)
+    if every is None:
+        every = _ALL[n] = np.ones(n, dtype=bool)
+        every.flags.writeable = False
     out = {}
     for key, values in columns.items():
         out[key] = values
-        out["_" + key] = np.ones(n, dtype=bool)
+        out["_" + key] = every
     return out
 
 
@@ -204,7 +211,7 @@ class BatchBackend:
     # ---- observations
     def _view(self, obs):
         """{"qpos", "qvel", "sensordata"} as views on the (N, obs_size) array."""
-        return OrderedDict([(name, obs[:, cols]) for name, cols in self._parts])
+        return {name: obs[:, cols] for name, cols in self._parts}
 
     def _slice(self, k):
         return self._rows[k]
@@ -320,8 +327,8 @@ class BatchBackend:
                 resetting[rows[k]] = True
                 any_reset = True
         if single and got[0] is not None:
-            obs, truncated, time = got[0]  # obs: the reply's own array (read-only), no copy
-            truncated, time = truncated.copy(), time.copy()
+            obs, truncated, time = got[0]  # obs, time: the reply's own arrays (read-only)
+            truncated = truncated.copy()  # updated in place below
         else:  # the servers' rows in order; a lost server's keep their observation
             obs = np.concatenate([got[k][0] if got[k] is not None else self._obs[rows[k]]
                                   for k in range(len(clients))])
