@@ -145,6 +145,8 @@ void BatchSubsystem::BeginPlay(Session& session) {
   skip_.assign(others, 0);
   done_.assign(others, 0);
   iteration_done_.assign(others, 0);
+  others_obs_.assign(others * static_cast<std::size_t>(observation_size()), 0.0);
+  others_observed_ = false;
   ended_.assign(static_cast<std::size_t>(options_.envs), 0);
   env0_rng_.seed(options_.seed + static_cast<std::uint64_t>(options_.engine_env));
   env0_latency_.Configure(LatencyGroups(options_.engine_env));
@@ -289,6 +291,7 @@ void BatchSubsystem::OnCommand(const physics::AppliedCommand& c) {
   if (std::string_view(c.name) != "step" || !armed_) return;
   armed_.reset();
   window_ = 0;
+  others_observed_ = false;
 }
 
 void BatchSubsystem::ApplyControls(const mjModel* m, mjData* d) {
@@ -303,12 +306,16 @@ void BatchSubsystem::ApplyControls(const mjModel* m, mjData* d) {
   if (env0_restart_observation_) ObserveEnv0(m, d, /*stepped=*/false);  // the reset's tick 0
   if (env0_latency_.controls_delayed()) env0_latency_.ApplyControl(row, d);
   // The other environments start stepping on the workers while this thread steps the engine's;
-  // PostStep joins them (StepOthers).
+  // PostStep joins them (StepOthers). In the window's last iteration the stepping threads also
+  // write their observation rows (each from its own core's caches), for Gather.
   if (others_) {
+    const bool last = iterations_ + 1 >= armed_->n;
+    others_observed_ = false;
     try {
       others_->StepBegin(
-          OthersRows(armed_->actions, static_cast<std::size_t>(nu_), &others_actions_), {},
-          iteration_done_, skip_);
+          OthersRows(armed_->actions, static_cast<std::size_t>(nu_), &others_actions_),
+          last ? std::span<double>(others_obs_) : std::span<double>(), iteration_done_, skip_);
+      others_observed_ = last;
     } catch (const std::exception& e) {
       spdlog::warn("batch: {}", e.what());
     }
@@ -362,12 +369,21 @@ void BatchSubsystem::Gather(const mjModel* m, const mjData* d, BatchResult& out)
   }
   out.time[e] = d->time;
   out.episode_steps[e] = env0_steps_;
+  // The others' rows: as the stepping threads wrote them in this window's last iteration (the
+  // rows before the engine's environment, then those after it), or read now.
+  if (others_ && others_observed_) {
+    const std::size_t before = e * row;
+    std::copy_n(others_obs_.data(), before, out.obs.data());
+    std::copy_n(others_obs_.data() + before, others_obs_.size() - before,
+                out.obs.data() + before + row);
+  }
   for (int j = 0; others_ && j < others_->envs(); ++j) {
     const std::size_t i = static_cast<std::size_t>(Wire(j));
-    others_->ObserveOne(j, out.obs.data() + row * i);
+    if (!others_observed_) others_->ObserveOne(j, out.obs.data() + row * i);
     out.time[i] = others_->env(j).data()->time;
     out.episode_steps[i] = static_cast<std::uint32_t>(others_->episode_steps(j));
   }
+  others_observed_ = false;
 }
 
 void BatchSubsystem::PostStep(const mjModel* m, mjData* d) {
@@ -437,6 +453,7 @@ void BatchSubsystem::Arm(const std::shared_ptr<BatchStepJob>& job, const mjModel
     if (skip_[j]) others_->Reset(static_cast<int>(j));
   }
   std::fill(done_.begin(), done_.end(), 0);
+  others_observed_ = false;
   armed_ = job;
   window_ = 0;
   iterations_ = 0;

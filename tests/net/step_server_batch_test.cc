@@ -183,6 +183,45 @@ TEST_F(StepServerBatchTest, TheSameSeedGivesTheSameEpisodeInEveryEnvironment) {
   EXPECT_EQ(Unpack<double>(reset["obs"])[0], first[0][0]);
 }
 
+TEST_F(StepServerBatchTest, EveryRowIsItsEnvironmentWhicheverTheEngineSteps) {
+  // The engine's simulation is environment 2: the batch's rows go around it (the stepping
+  // threads write them in a window's last iteration; a reset reads them). An episode follows
+  // its seed to whichever row runs it, with one physics step per request and with three.
+  Play({.envs = 4, .threads = 2, .reset_noise = 0.3, .engine_env = 2});
+  Client c(ctx_, rpc());
+  c.Hello();
+  const auto run = [&](const Json& seeds, int n_steps) {
+    const Json reset = c.Op("batch_reset", {{"seeds", seeds}});
+    EXPECT_EQ(reset["op"], "batch_reset_ok") << reset.dump();
+    std::vector<std::vector<double>> path{Unpack<double>(reset["obs"])};
+    for (int i = 0; i < 12; ++i) {
+      const double a = std::sin(0.3 * i);
+      const Json r = Step(c, {a, a, a, a}, {{"n_steps", n_steps}});
+      EXPECT_EQ(r["op"], "batch_step_ok") << r.dump();
+      EXPECT_EQ(Unpack<std::uint32_t>(r["episode_steps"]),
+                std::vector<std::uint32_t>(4, static_cast<std::uint32_t>((i + 1) * n_steps)));
+      path.push_back(Unpack<double>(r["obs"]));
+    }
+    return path;
+  };
+  for (int n_steps : {1, 3}) {
+    SCOPED_TRACE(::testing::Message() << "n_steps " << n_steps);
+    const auto first = run(Json{7, 8, 9, 7}, n_steps);
+    EXPECT_NE(first.back()[0], first.back()[3]);  // seeds 7 and 8 end apart
+    EXPECT_NE(first.back()[6], first.back()[3]);  // 9 and 8 too
+    const auto second = run(Json{9, 7, 7, 8}, n_steps);
+    for (std::size_t s = 0; s < first.size(); ++s) {
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(first[s][k], first[s][9 + k]);       // seed 7: rows 0 and 3
+        EXPECT_EQ(second[s][k], first[s][6 + k]);      // seed 9: row 0 now, row 2 (engine) before
+        EXPECT_EQ(second[s][3 + k], first[s][k]);      // seed 7: row 1
+        EXPECT_EQ(second[s][6 + k], first[s][k]);      // seed 7: the engine's row
+        EXPECT_EQ(second[s][9 + k], first[s][3 + k]);  // seed 8: row 3 now, row 1 before
+      }
+    }
+  }
+}
+
 TEST_F(StepServerBatchTest, EndedEpisodesResetAtTheNextStepUnlessAutoResetIsOff) {
   Play({.envs = 3, .threads = 2, .max_episode_steps = 6, .reset_noise = 0.1});
   Client c(ctx_, rpc());

@@ -34,7 +34,9 @@
 // - The iterating thread, always with the engine's step mutex held: the hooks, the command
 //   functions and every environment's state. That is the physics thread, or the requesting
 //   thread itself inside StepHere (PhysicsEngine::StepSync and WithLockedData take the mutex);
-//   the batch's worker threads step environments 1..N-1 only inside an iteration.
+//   the batch's worker threads step environments 1..N-1 only inside an iteration, and in a
+//   window's last iteration write their observation rows (others_obs_), which the iterating
+//   thread reads after joining them (Batch::StepEnd).
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -223,7 +225,11 @@ class BatchSubsystem : public Subsystem {
   int iterations_ = 0;                   // of armed_'s window so far
   std::vector<std::uint8_t> skip_, done_, iteration_done_;  // per other environment
   std::vector<double> others_actions_;                      // their actions (OthersRows)
-  double started_ = 0;                                      // armed_'s start (steady seconds)
+  // Their observation rows, written by the stepping threads in a window's last iteration;
+  // others_observed_: they hold the state Gather reports (false once anything else moved it).
+  std::vector<double> others_obs_;
+  bool others_observed_ = false;
+  double started_ = 0;  // armed_'s start (steady seconds)
 };
 
 }  // namespace urlab::world
