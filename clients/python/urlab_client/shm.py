@@ -234,11 +234,14 @@ class ShmChannel:
         start = self._posted
         rep_seq = self._rep_seq
         if rep_seq.value != seq:
-            # Spin about as long as the server took recently, then sleep on the word (the wait
-            # policy: spin_budget). A turn that took long means this process lost its core (a
-            # busy machine): then spinning only delays the server, so sleep at once.
-            spin_until = start + spin_budget(self._rtt, self._spare_core)
-            now = start
+            # Spin about as long as the server is still expected to take (what is left of its
+            # recent round trip since the request was posted), then sleep on the word (the wait
+            # policy: spin_budget). A driver that handled another server's reply meanwhile thus
+            # waits for this one with a short spin, not a sleep. A turn that took long means this
+            # process lost its core (a busy machine): then spinning only delays the server, so
+            # sleep at once.
+            now = time.perf_counter()
+            spin_until = now + spin_budget(self._rtt - (now - start), self._spare_core)
             turns = 0
             while rep_seq.value != seq:
                 before, now = now, time.perf_counter()
