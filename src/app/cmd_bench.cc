@@ -227,7 +227,9 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
       "batch2x32_async_ratio (send/recv: one server steps while Python handles the other's "
       "reply). Last, with python3-distributed, a Dask LocalCluster of 1 and 2 workers with one "
       "batched server of 16 environments each: dask_scaling (2 workers over 1) and "
-      "dask_of_ceiling (that over what 2 plain threads make of the bare loop just after).");
+      "dask_of_ceiling (that over what 2 plain threads make of the bare loop just after). "
+      "bare_spread comes last: the bare loop's fastest round over its slowest in the whole run "
+      "(above 1.15 a line says the machine was busy and the ratios are unreliable).");
   static net::FleetBenchOptions fleet_args;
   static std::string fleet_scene;
 #ifdef URLAB_PYTHON_CLIENT_DIR

@@ -33,6 +33,12 @@ using bench::Format;
 using bench::Median;
 using Clock = std::chrono::steady_clock;
 
+// The bare loop's spread (its fastest round over its slowest) above which a run's ratios are not
+// to be trusted. Even idle it moves a little: the humanoid's state, and its step's cost with it,
+// moves between rounds (1.04 in an idle run on this project's 2-core test machine; 1.46 to 1.66
+// while another guest of the host took a virtual CPU).
+constexpr double kBusySpread = 1.15;
+
 double Micros(Clock::duration d) { return std::chrono::duration<double, std::micro>(d).count(); }
 
 double P50(std::vector<double> us) { return Median(std::move(us)); }
@@ -335,7 +341,8 @@ void PythonFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
 double FleetContext::BareRate(int steps) {
   const auto t0 = Clock::now();
   for (int i = 0; i < steps; ++i) mj_step(m_, d_);
-  return steps / std::chrono::duration<double>(Clock::now() - t0).count();
+  bare_rates_.push_back(steps / std::chrono::duration<double>(Clock::now() - t0).count());
+  return bare_rates_.back();
 }
 
 double FleetContext::CeilingRate(int threads, int steps, int copies) {
@@ -459,6 +466,19 @@ std::vector<FleetFigure> RunFleetBench(world::SceneConfig scene, const FleetBenc
         std::find(options.only.begin(), options.only.end(), name) != options.only.end()) {
       produce(ctx, &figures);
     }
+  }
+  // How steady the machine was: every ratio above divides by a bare loop timed just before, so a
+  // busy machine (another process, a shared host's other guests taking a virtual CPU) shows as
+  // that loop's speed moving from round to round.
+  if (const std::vector<double>& rates = ctx.bare_rates(); rates.size() >= 2) {
+    const auto [lo, hi] = std::minmax_element(rates.begin(), rates.end());
+    const double spread = *hi / *lo;
+    figures.push_back({"bare_spread", spread});
+    ctx.Report(
+        Format("the bare loop over this run: %.0f to %.0f steps/s in %zu rounds (median "
+               "%.0f), a spread of %.2f%s",
+               *lo, *hi, rates.size(), Median(rates), spread,
+               spread > kBusySpread ? ": the machine was busy, the ratios are unreliable" : ""));
   }
   manager.EndPlay();
   return figures;

@@ -35,6 +35,8 @@ class FleetContext {
 
   // Steps per second of `steps` bare mj_step calls (continuing from the bare copy's state).
   double BareRate(int steps);
+  // Every BareRate of the run so far, in order: how much the same loop's speed moved.
+  const std::vector<double>& bare_rates() const { return bare_rates_; }
   // Aggregate steps per second of `threads` plain threads, each stepping `steps` times its own
   // copy of the bare copy's state (its own mjData, the shared model only read), with no
   // synchronisation between them (one start signal; the wall time runs from it to the last
@@ -87,6 +89,7 @@ class FleetContext {
   std::string rpc_, articulation_;
   const mjModel* m_;
   mjData* d_;
+  std::vector<double> bare_rates_;
 };
 
 // The stepping threads of the batched server's figures and of the ceiling.

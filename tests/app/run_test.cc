@@ -164,7 +164,8 @@ TEST(RunTest, BenchFleetPrintsEveryFigure) {
                           "batch64_of_ceiling",
                           "batch64_frameskip5_ratio",
                           "batch2x32_sync_ratio",
-                          "batch2x32_async_ratio"}) {
+                          "batch2x32_async_ratio",
+                          "bare_spread"}) {
     EXPECT_TRUE(
         std::regex_search(out, std::regex(std::string("(^|\\n)") + key + "=[0-9][0-9.e+]*\\n")))
         << key << "\n"
