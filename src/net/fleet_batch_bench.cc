@@ -332,21 +332,30 @@ class BatchWork {
 // each action for 5 steps).
 constexpr int kFrameSkip = 5;
 
-// One run of the batched script over `server` with `work`'s actions and `n_steps` per request;
-// its output (rate=..., server=...).
-std::string RunBatchScript(FleetContext& ctx, const BatchServer& server, const BatchWork& work,
-                           int n_steps) {
+// Runs a Python benchmark `script` with the client's folder as its first argument and `args`
+// after it; its output. Throws Error naming `what` when it fails.
+std::string RunClientScript(const FleetContext& ctx, const std::string& script,
+                            const std::vector<std::string>& args, const std::string& what) {
   const FleetBenchOptions& o = ctx.options();
-  const int steps = work.trajectories().steps / n_steps;
+  std::vector<std::string> argv = {o.python, "-c", script, o.python_client};
+  argv.insert(argv.end(), args.begin(), args.end());
   int status = 0;
-  const std::string text = RunCaptured(
-      {o.python, "-c", std::string(kBatchHead) + kFileActions + kBatchBody, o.python_client,
-       server.rpc(), std::to_string(steps), work.path(), std::to_string(n_steps)},
-      &status);
+  const std::string text = RunCaptured(argv, &status);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    throw Error("bench fleet: the Python batched client failed (" + text + ")");
+    throw Error("bench fleet: the Python " + what + " failed (" + text + ")");
   }
   return text;
+}
+
+// One run of the batched script over `server` with `work`'s actions and `n_steps` per request;
+// its output (rate=..., server=...).
+std::string RunBatchScript(const FleetContext& ctx, const BatchServer& server,
+                           const BatchWork& work, int n_steps) {
+  const int steps = work.trajectories().steps / n_steps;
+  return RunClientScript(
+      ctx, std::string(kBatchHead) + kFileActions + kBatchBody,
+      {server.rpc(), std::to_string(steps), work.path(), std::to_string(n_steps)},
+      "batched client");
 }
 
 void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
@@ -436,14 +445,10 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
     // The synchronous run steps exactly these trajectories; the pipelined one draws the same sets
     // in another order (each reply takes the next set), the same kind of work.
     const double bare = ctx.TrajectoryRate(work.trajectories(), 1);
-    int status = 0;
     const std::string text =
-        RunCaptured({o.python, "-c", std::string(kAsyncHead) + kFileActions + kAsyncBody,
-                     o.python_client, a.rpc() + "," + b.rpc(), std::to_string(steps), work.path()},
-                    &status);
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-      throw Error("bench fleet: the Python asynchronous batched client failed (" + text + ")");
-    }
+        RunClientScript(ctx, std::string(kAsyncHead) + kFileActions + kAsyncBody,
+                        {a.rpc() + "," + b.rpc(), std::to_string(steps), work.path()},
+                        "asynchronous batched client");
     sync_ratios.push_back(Field(text, "sync") / bare);
     async_ratios.push_back(Field(text, "async") / bare);
   }
