@@ -13,6 +13,9 @@ install(TARGETS ${urlab_modules} urlab
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+# liburlab_batch.so, the in-process batch's C interface (the Python client's in-process backend
+# finds it beside bin/urlab, in ../lib).
+install(TARGETS urlab_batch LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/urlab DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
         FILES_MATCHING PATTERN "*.h")
 install(FILES ${PROJECT_BINARY_DIR}/generated/urlab/core/version.h

@@ -138,6 +138,26 @@ int BenchLatency(const BenchLatencyArgs& args) {
   return 0;
 }
 
+// liburlab_batch.so beside this program (a build tree) or in its ../lib, ../lib/* (an
+// installation); "" when there is none.
+std::string BatchLibraryBesideThisProgram() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) return "";
+  const fs::path dir = exe.parent_path();
+  const char* name = "liburlab_batch.so";
+  for (const fs::path& p : {dir / name, dir / ".." / "lib" / name}) {
+    if (fs::exists(p, ec)) return p.lexically_normal().string();
+  }
+  for (const auto& entry : fs::directory_iterator(dir / ".." / "lib", ec)) {
+    if (entry.is_directory(ec) && fs::exists(entry.path() / name, ec)) {
+      return (entry.path() / name).lexically_normal().string();
+    }
+  }
+  return "";
+}
+
 }  // namespace
 
 void RegisterBenchCommand(CLI::App& app, int& exit_code) {
@@ -245,6 +265,12 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
   fleet->add_option("--samples", fleet_args.samples, "round trips per latency figure")
       ->check(CLI::Range(10, 10000000));
   fleet->add_option("--python", fleet_args.python, "the Python interpreter for the Python client")
+      ->capture_default_str();
+  fleet_args.batch_library = BatchLibraryBesideThisProgram();
+  fleet
+      ->add_option("--batch-library", fleet_args.batch_library,
+                   "liburlab_batch.so, for the in-process figures (default: the one beside this "
+                   "program, or in its ../lib; \"\": none)")
       ->capture_default_str();
   fleet
       ->add_option("--python-client", fleet_args.python_client,

@@ -69,6 +69,19 @@ print("rate=%f server=%f transport=%s" % (steps * n * n_steps / elapsed, server,
 env.close()
 )PY";
 
+// The same vector env over 64 environments stepped inside the script's own process
+// (UrlabVectorEnv.in_process: URLab's C library, argv[2]), 2 stepping threads; prints the
+// Python rate and the stepping thread's own (the library's step time), in steps per second.
+constexpr const char* kInProcessHead = R"PY(
+import sys, time
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+from urlab_client import UrlabVectorEnv
+library, steps, n_steps, scene = sys.argv[2], int(sys.argv[3]), int(sys.argv[5]), sys.argv[6]
+env = UrlabVectorEnv.in_process(scene, 64, threads=2, library=library)
+client = env.envs[0]
+)PY";
+
 // The same 64 environments as two servers of 32 (one stepping thread each: 2 threads in all),
 // one vector env over both, driven first synchronously (step: both servers step, then Python
 // handles both replies) and then asynchronously (send/recv: one server steps its half while
@@ -459,6 +472,48 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
              "bare loop stepping the same trajectories with step() (synchronous), %.3f with "
              "send/recv (one server steps while Python handles the other's reply)",
              Median(sync_ratios), Median(async_ratios)));
+}
+
+void InProcessFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
+  const FleetBenchOptions& o = ctx.options();
+  if (o.python_client.empty() || access(o.python.c_str(), X_OK) != 0) {
+    ctx.Report("no Python client (--python-client): in-process figures left out");
+    return;
+  }
+  if (o.batch_library.empty() || access(o.batch_library.c_str(), R_OK) != 0) {
+    ctx.Report("no in-process library (--batch-library " + o.batch_library +
+               "): in-process figures left out");
+    return;
+  }
+  constexpr int kEnvs = 64;
+  const int steps = std::clamp(ctx.steps_per_round() / kEnvs * 4, 30, 4000);
+  const BatchWork work(ctx, kEnvs, steps);
+  std::vector<double> ratios, overheads, of_ceiling, window_ratios;
+  for (int round = 0; round < o.rounds; ++round) {
+    // As the batched server's figure: the bare loop over the same trajectories, the ceiling of
+    // 2 plain threads stepping them in turn, then the Python vector env.
+    const double bare = ctx.TrajectoryRate(work.trajectories(), 1);
+    const double ceiling =
+        ctx.TrajectoryRate(work.trajectories(), kFleetBatchThreads, /*in_turn=*/true);
+    const std::string text =
+        RunClientScript(ctx, std::string(kInProcessHead) + kFileActions + kBatchBody,
+                        {o.batch_library, std::to_string(steps), work.path(), "1", ctx.scene_path},
+                        "in-process vector env");
+    const double rate = Field(text, "rate"), window = Field(text, "server");
+    ratios.push_back(rate / bare);
+    window_ratios.push_back(window / bare);
+    overheads.push_back(1 - rate / window);
+    of_ceiling.push_back(rate / ceiling);
+  }
+  out->push_back({"batch64_inproc_ratio", Median(ratios)});
+  out->push_back({"batch64_inproc_step_ratio", Median(window_ratios)});
+  out->push_back({"inproc_overhead64", Median(overheads)});
+  out->push_back({"batch64_inproc_of_ceiling", Median(of_ceiling)});
+  ctx.Report(
+      Format("in-process batch, 64 envs, 2 threads (UrlabVectorEnv.in_process, no server): "
+             "Python vector env %.3f of the bare loop stepping the same trajectories, the "
+             "library's own step %.3f, Python's share %.3f, %.3f of the ceiling",
+             Median(ratios), Median(window_ratios), Median(overheads), Median(of_ceiling)));
 }
 
 }  // namespace urlab::net

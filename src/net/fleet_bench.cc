@@ -418,6 +418,7 @@ std::vector<std::pair<std::string, FigureProducer>> FleetFigureProducers() {
        [](FleetContext& ctx, std::vector<FleetFigure>* out) { LockstepFigures(ctx, true, out); }},
       {"python", PythonFigures},
       {"batch", BatchFigures},
+      {"inproc", InProcessFigures},
       {"dask", DaskFigures},
   };
 }

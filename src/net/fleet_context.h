@@ -98,5 +98,7 @@ constexpr int kFleetBatchThreads = 2;
 // The batched server's figures (fleet_batch_bench.cc).
 void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out);
 void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out);
+// The same 64 environments inside the Python script's process (fleet_batch_bench.cc).
+void InProcessFigures(FleetContext& ctx, std::vector<FleetFigure>* out);
 
 }  // namespace urlab::net

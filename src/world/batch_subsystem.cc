@@ -69,6 +69,7 @@ BatchSubsystem::BatchSubsystem(BatchSubsystemOptions options) : options_(options
                 ": no such environment (--envs " + std::to_string(options_.envs) + " has 0.." +
                 std::to_string(options_.envs - 1) + ")");
   }
+  if (options_.detached) options_.engine_env = -1;  // no environment is the engine's
   auto_reset_.store(options_.auto_reset);
 }
 
@@ -86,7 +87,7 @@ void BatchSubsystem::BeginPlay(Session& session) {
   nq_ = m->nq;
   nv_ = m->nv;
   nsensordata_ = m->nsensordata;
-  batch_options_.envs = std::max(1, options_.envs - 1);
+  batch_options_.envs = detached() ? options_.envs : std::max(1, options_.envs - 1);
   batch_options_.threads = options_.threads;
   batch_options_.auto_reset = false;  // next-step autoreset is ours (SubmitStep)
   batch_options_.max_episode_steps = options_.max_episode_steps;
@@ -137,17 +138,23 @@ void BatchSubsystem::BeginPlay(Session& session) {
       Draw(Wire(j), seed, model, draw);
     };
   }
-  if (options_.envs > 1) {
+  if (options_.envs > 1 || detached()) {
     others_ = std::make_unique<physics::Batch>(engine.owned_model(), batch_options_);
     for (int j = 0; j < others_->envs(); ++j) others_->Reset(j, options_.seed + Wire(j));
   }
-  const std::size_t others = static_cast<std::size_t>(options_.envs - 1);
+  const std::size_t others = static_cast<std::size_t>(others_ ? others_->envs() : 0);
   skip_.assign(others, 0);
   done_.assign(others, 0);
   iteration_done_.assign(others, 0);
   others_obs_.assign(others * static_cast<std::size_t>(observation_size()), 0.0);
   others_observed_ = false;
   ended_.assign(static_cast<std::size_t>(options_.envs), 0);
+  if (detached()) {
+    // The engine's simulation is no environment: it stays as the session left it, unstepped.
+    spdlog::info("batch: {} environments, {} thread(s), detached from the engine", options_.envs,
+                 threads());
+    return;
+  }
   env0_rng_.seed(options_.seed + static_cast<std::uint64_t>(options_.engine_env));
   env0_latency_.Configure(LatencyGroups(options_.engine_env));
   if (options_.reset_noise > 0 || randomizer_) {
@@ -179,6 +186,7 @@ void BatchSubsystem::BeginPlay(Session& session) {
 void BatchSubsystem::EndPlay(Session& session) {
   physics::PhysicsEngine& engine = session.engine();
   if (others_) engine.WithLockedData([this](mjModel*, mjData*) { others_->Settle(); });
+  if (detached()) return;  // no hooks were installed
   for (std::uint64_t id : callbacks_) engine.RemoveCallback(id);
   callbacks_.clear();
   control::ControlSystem* controls = &session.controls();
@@ -326,6 +334,7 @@ template <typename T>
 std::span<const T> BatchSubsystem::OthersRows(const std::vector<T>& all, std::size_t width,
                                               std::vector<T>* scratch) const {
   // Rows in the batch's order: every environment's but the engine's.
+  if (detached()) return all;
   const std::size_t e = static_cast<std::size_t>(options_.engine_env);
   if (e == 0) return std::span<const T>(all.data() + width, all.size() - width);
   scratch->assign(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(e * width));
@@ -359,23 +368,28 @@ void BatchSubsystem::Gather(const mjModel* m, const mjData* d, BatchResult& out)
   out.episode_steps.resize(n);
   out.done.resize(n, 0);
   out.reset.resize(n, 0);
-  const std::size_t e = static_cast<std::size_t>(options_.engine_env);
-  double* engine_row = out.obs.data() + row * e;
-  if (env0_latency_.observations_delayed()) {
-    if (env0_restart_observation_) ObserveEnv0(m, d, /*stepped=*/false);  // reset, not stepped
-    mju_copy(engine_row, env0_observed_.data(), static_cast<int>(row));
-  } else {
-    TrueRow(m, d, engine_row);
+  // Detached, every row is the batch's (as if the engine's were past the last).
+  const std::size_t e = detached() ? n : static_cast<std::size_t>(options_.engine_env);
+  if (!detached()) {
+    double* engine_row = out.obs.data() + row * e;
+    if (env0_latency_.observations_delayed()) {
+      if (env0_restart_observation_) ObserveEnv0(m, d, /*stepped=*/false);  // reset, not stepped
+      mju_copy(engine_row, env0_observed_.data(), static_cast<int>(row));
+    } else {
+      TrueRow(m, d, engine_row);
+    }
+    out.time[e] = d->time;
+    out.episode_steps[e] = env0_steps_;
   }
-  out.time[e] = d->time;
-  out.episode_steps[e] = env0_steps_;
   // The others' rows: as the stepping threads wrote them in this window's last iteration (the
   // rows before the engine's environment, then those after it), or read now.
   if (others_ && others_observed_) {
     const std::size_t before = e * row;
     std::copy_n(others_obs_.data(), before, out.obs.data());
-    std::copy_n(others_obs_.data() + before, others_obs_.size() - before,
-                out.obs.data() + before + row);
+    if (!detached()) {
+      std::copy_n(others_obs_.data() + before, others_obs_.size() - before,
+                  out.obs.data() + before + row);
+    }
   }
   for (int j = 0; others_ && j < others_->envs(); ++j) {
     const std::size_t i = static_cast<std::size_t>(Wire(j));
@@ -461,6 +475,10 @@ void BatchSubsystem::Arm(const std::shared_ptr<BatchStepJob>& job, const mjModel
 
 bool BatchSubsystem::StepHere(const std::shared_ptr<BatchStepJob>& job) {
   CheckStep(*job);
+  if (detached()) {
+    StepDetached(*job);
+    return true;
+  }
   // Environment 0 resetting in this step goes through its commands (SubmitStep).
   const std::size_t e = static_cast<std::size_t>(options_.engine_env);
   const bool reset0 = (!job->reset.empty() && job->reset[e]) || (auto_reset() && ended_[e]);
@@ -484,6 +502,7 @@ bool BatchSubsystem::StepHere(const std::shared_ptr<BatchStepJob>& job) {
 
 std::uint64_t BatchSubsystem::SubmitStep(std::shared_ptr<BatchStepJob> job, std::uint64_t* steps) {
   CheckStep(*job);
+  if (detached()) throw Error("batch: a detached batch steps only on its requester (StepHere)");
   TakeResets(*job);
   physics::PhysicsEngine& engine = session_->engine();
   if (job->reset[static_cast<std::size_t>(options_.engine_env)]) {
@@ -553,7 +572,7 @@ std::uint64_t BatchSubsystem::SubmitReset(std::shared_ptr<BatchResetJob> job) {
   physics::PhysicsEngine& engine = session_->engine();
   for (std::size_t k = 0; k < job->envs.size(); ++k) {
     ended_[static_cast<std::size_t>(job->envs[k])] = 0;
-    if (job->envs[k] == options_.engine_env) {
+    if (!detached() && job->envs[k] == options_.engine_env) {
       engine.Submit(physics::cmd::ResetCustom{
           [this, seed = job->seeds[k]](const mjModel* m, mjData* d) { ResetEnv0(m, d, seed); },
           "batch reset (environment 0)"});
@@ -565,7 +584,7 @@ std::uint64_t BatchSubsystem::SubmitReset(std::shared_ptr<BatchResetJob> job) {
                               if (others_) others_->Settle();
                               SyncOptions(m);
                               for (std::size_t k = 0; k < job->envs.size(); ++k) {
-                                if (job->envs[k] != options_.engine_env)
+                                if (detached() || job->envs[k] != options_.engine_env)
                                   others_->Reset(Other(job->envs[k]), job->seeds[k]);
                               }
                               BatchResult& out = job->out;
@@ -576,6 +595,50 @@ std::uint64_t BatchSubsystem::SubmitReset(std::shared_ptr<BatchResetJob> job) {
                               out.complete = true;
                             },
                             "batch reset"});
+}
+
+void BatchSubsystem::StepDetached(BatchStepJob& job) {
+  // Every environment is the batch's: the requesting thread and the workers step them all, with
+  // the step mutex held (the commands of a reset, applied by the physics thread, touch them too).
+  TakeResets(job);
+  physics::PhysicsEngine& engine = session_->engine();
+  engine.WithLockedData([this, &job](mjModel* m, mjData*) {
+    const double t0 = Now();
+    others_->Settle();
+    SyncOptions(m);
+    for (std::size_t j = 0; j < job.reset.size(); ++j) {
+      if (job.reset[j]) others_->Reset(static_cast<int>(j));
+    }
+    BatchResult& out = job.out;
+    const std::size_t n = static_cast<std::size_t>(options_.envs);
+    out.obs.resize(n * static_cast<std::size_t>(observation_size()));
+    out.done.assign(n, 0);
+    for (int k = 0; k < job.n; ++k) {
+      // The last iteration writes the observation rows (each stepping thread its own).
+      const bool last = k + 1 == job.n;
+      try {
+        others_->Step(job.actions, last ? std::span<double>(out.obs) : std::span<double>(),
+                      iteration_done_, job.reset);
+      } catch (const std::exception& e) {
+        // The environment whose iteration threw is latched (done) until it is reset.
+        spdlog::warn("batch: {}", e.what());
+        if (last) others_->Observe(out.obs);
+      }
+      for (std::size_t i = 0; i < n; ++i) out.done[i] |= iteration_done_[i];
+    }
+    out.reset = job.reset;
+    out.time.resize(n);
+    out.episode_steps.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      out.time[i] = others_->env(static_cast<int>(i)).data()->time;
+      out.episode_steps[i] =
+          static_cast<std::uint32_t>(others_->episode_steps(static_cast<int>(i)));
+    }
+    out.seconds = Now() - t0;
+    out.complete = true;
+    AddSeconds(busy_seconds_, out.seconds);
+    env_steps_.fetch_add(static_cast<std::uint64_t>(job.n) * n, std::memory_order_relaxed);
+  });
 }
 
 void BatchSubsystem::Disarm() {

@@ -175,6 +175,18 @@ class UrlabVectorEnv(_VectorBase):
         backend = BatchBackend.connect(endpoints, replace=replace, **options)
         return cls(backend=backend, on_close=on_close)
 
+    @classmethod
+    def in_process(cls, scene, num_envs, threads=0, seed=None, on_close=None, **options):
+        """A vector env over `num_envs` environments of `scene` stepped inside this process
+        (urlab_client.inproc: URLab's C library, no server). threads: stepping threads (0: the
+        cores); seed: environment i starts with seed + i (None: the scene's). options: n_steps,
+        reward_fn, terminated_fn, max_episode_steps (vector steps, truncation),
+        server_max_episode_steps (physics steps, as `urlab run --max-episode-steps`),
+        reset_noise, library, log_level."""
+        from urlab_client.inproc import in_process_backend
+        backend = in_process_backend(scene, num_envs, threads=threads, seed=seed, **options)
+        return cls(backend=backend, on_close=on_close)
+
     @property
     def _batched(self):
         return getattr(self._backend, "batched", False)

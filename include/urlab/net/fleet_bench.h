@@ -26,6 +26,7 @@ struct FleetBenchOptions {
   int samples = 4000;  // round trips per latency figure
   std::string python = "/usr/bin/python3";
   std::string python_client;      // the folder holding urlab_client ("": no Python figures)
+  std::string batch_library;      // liburlab_batch.so ("": no in-process figures)
   std::vector<std::string> only;  // producers to run by name (empty: all of them)
   std::function<void(const std::string&)> report;  // report lines; empty: silent
 };

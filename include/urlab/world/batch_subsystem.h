@@ -65,6 +65,11 @@ struct BatchSubsystemOptions {
   // The environment the engine itself runs (`urlab run --record-env I`): the streaming topics,
   // the viewer and the recorder follow it; the others live in the batch.
   int engine_env = 0;
+  // No environment is the engine's: all N live in the batch and step on the requesting thread
+  // and the batch's workers (StepHere always), the engine left paused and unmoved; for a front
+  // end with no topics, viewer or recorder to follow one (the in-process batch). engine_env is
+  // ignored, and the episodes are the same as with one.
+  bool detached = false;
 };
 
 // The outputs every batch job fills (one entry or row per environment).
@@ -103,7 +108,8 @@ class BatchSubsystem : public Subsystem {
 
   // ---- Sizes (fixed once playing) ----
   int envs() const { return options_.envs; }
-  int engine_env() const { return options_.engine_env; }
+  int engine_env() const { return options_.engine_env; }  // -1 when detached
+  bool detached() const { return options_.detached; }
   int threads() const;
   int action_size() const { return nu_; }
   int observation_size() const { return nq_ + nv_ + nsensordata_; }
@@ -122,13 +128,13 @@ class BatchSubsystem : public Subsystem {
   // ---- Requests (the requesting thread) ----
   // Queues the commands of one batch step and returns the one to wait for; its steps (n when
   // it is a lockstep window the server may cancel, 0 otherwise) in *steps. Throws Error for
-  // arrays of the wrong size.
+  // arrays of the wrong size, and when detached (StepHere steps every job then).
   std::uint64_t SubmitStep(std::shared_ptr<BatchStepJob> job, std::uint64_t* steps);
   // Runs one batch step on this thread (PhysicsEngine::StepSync: the requesting thread and the
   // batch's workers step, the physics thread stays asleep) and returns true with the job
   // complete; false, with nothing done, while the loop runs or when environment 0 resets in
   // this step (then SubmitStep). Throws Error like SubmitStep, or when the window stopped
-  // part-way (a MuJoCo error: the job does not complete).
+  // part-way (a MuJoCo error: the job does not complete). Detached, it always steps here.
   bool StepHere(const std::shared_ptr<BatchStepJob>& job);
   // Queues the resets (environment 0's as a ResetCustom command) and returns the command to wait
   // for. Throws Error for a bad environment index.
@@ -151,6 +157,8 @@ class BatchSubsystem : public Subsystem {
   void TakeResets(BatchStepJob& job);  // the job's reset flags (auto-reset adds the ended)
   // Arms `job` for the next window (the other environments' resets, the options); step mutex.
   void Arm(const std::shared_ptr<BatchStepJob>& job, const mjModel* m);
+  // Detached: one batch step of every environment, here (the requesting thread's StepHere).
+  void StepDetached(BatchStepJob& job);
   // Steps the other environments once (not those in `skip`), or-ing their done flags into
   // `done`; `begun`: ApplyControls started that step (Batch::StepBegin), this finishes it.
   void StepOthers(const std::vector<double>& actions, std::vector<std::uint8_t>& done,
@@ -170,8 +178,9 @@ class BatchSubsystem : public Subsystem {
   static void TrueRow(const mjModel* m, const mjData* d, double* row);
   // Environment e (not the engine's) is the batch's Other(e); the batch's j is environment
   // Wire(j).
-  int Other(int e) const { return e < options_.engine_env ? e : e - 1; }
-  int Wire(int j) const { return j < options_.engine_env ? j : j + 1; }
+  // (Detached, engine_env is -1: both are the identity.)
+  int Other(int e) const { return e < options_.engine_env || detached() ? e : e - 1; }
+  int Wire(int j) const { return j < options_.engine_env || detached() ? j : j + 1; }
   // The rows of `all` (one per environment, `width` values each) without the engine's: a view
   // on `all`, or on `scratch` filled with them.
   template <typename T>

@@ -1,0 +1,299 @@
+"""Batched environments inside this Python process (EnvPool's way): no server, socket or shared
+memory between the learner and the physics. URLab's C interface (liburlab_batch.so, built and
+installed beside the `urlab` binary) runs the scene's batch on this thread and the batch's
+stepping threads while the call holds no GIL.
+
+    from urlab_client import UrlabVectorEnv
+    envs = UrlabVectorEnv.in_process("examples/scenes/humanoid_pd.yaml", num_envs=64)
+    obs, infos = envs.reset(seed=0)
+    obs, rewards, terminated, truncated, infos = envs.step(envs.action_space.sample())
+    envs.close()
+
+It is `urlab run SCENE --envs N` without the network: the same resets, seeds, next-step
+autoreset, episode limit, latency and randomisation, so environment i with seed s runs the same
+episode as in a batched server. One in-process batch at a time per process (close() the first).
+The arrays a step returns are fresh (a rollout buffer may keep them).
+
+The library is found from `library=`, then $URLAB_BATCH_LIBRARY, then beside the `urlab` found
+on PATH (its own folder: a build tree; ../lib and ../lib/*: an installation), then the system's
+library path.
+"""
+import ctypes
+import glob
+import os
+import shutil
+
+import numpy as np
+
+ABI = 1
+_F8 = np.dtype("<f8")
+_U4 = np.dtype("<u4")
+_NAME = "liburlab_batch.so"
+
+
+class _Options(ctypes.Structure):
+    _fields_ = [("envs", ctypes.c_int), ("threads", ctypes.c_int), ("auto_reset", ctypes.c_int),
+                ("max_episode_steps", ctypes.c_int), ("reset_noise", ctypes.c_double),
+                ("has_seed", ctypes.c_int), ("seed", ctypes.c_uint64),
+                ("log_level", ctypes.c_char_p)]
+
+
+class _Sizes(ctypes.Structure):
+    _fields_ = [("envs", ctypes.c_int), ("threads", ctypes.c_int), ("nu", ctypes.c_int),
+                ("nq", ctypes.c_int), ("nv", ctypes.c_int), ("nsensordata", ctypes.c_int),
+                ("obs_size", ctypes.c_int), ("timestep", ctypes.c_double)]
+
+
+class _Outputs(ctypes.Structure):
+    _fields_ = [("obs", ctypes.c_void_p), ("done", ctypes.c_void_p), ("reset", ctypes.c_void_p),
+                ("time", ctypes.c_void_p), ("episode_steps", ctypes.c_void_p),
+                ("seconds", ctypes.c_double)]
+
+
+def library_candidates(library=None):
+    """The paths tried for liburlab_batch.so, in order."""
+    if library:
+        return [library]
+    out = []
+    if os.environ.get("URLAB_BATCH_LIBRARY"):
+        out.append(os.environ["URLAB_BATCH_LIBRARY"])
+    urlab = shutil.which("urlab")
+    if urlab:
+        here = os.path.dirname(os.path.realpath(urlab))
+        out.append(os.path.join(here, _NAME))
+        out.append(os.path.join(here, "..", "lib", _NAME))
+        out.extend(sorted(glob.glob(os.path.join(here, "..", "lib", "*", _NAME))))
+    out.append(_NAME)  # the system's library path (ldconfig, LD_LIBRARY_PATH)
+    return out
+
+
+_LIB = {}
+
+
+def load_library(library=None):
+    """The C interface as a ctypes library (loaded once per path). Raises OSError saying where
+    it looked."""
+    tried = []
+    for path in library_candidates(library):
+        if path in _LIB:
+            return _LIB[path]
+        if os.sep in path and not os.path.exists(path):
+            tried.append(path + " (no such file)")
+            continue
+        try:
+            lib = ctypes.CDLL(path)  # CDLL: calls release the GIL
+        except OSError as e:
+            tried.append(f"{path} ({e})")
+            continue
+        lib.urlab_batch_abi.restype = ctypes.c_int
+        if lib.urlab_batch_abi() != ABI:
+            raise OSError(f"{path} has interface version {lib.urlab_batch_abi()}, this client "
+                          f"speaks {ABI}: use the urlab_client of the same URLab")
+        lib.urlab_batch_open.restype = ctypes.c_void_p
+        lib.urlab_batch_open.argtypes = [ctypes.c_char_p, ctypes.POINTER(_Options),
+                                         ctypes.c_char_p, ctypes.c_size_t]
+        lib.urlab_batch_close.restype = None
+        lib.urlab_batch_close.argtypes = [ctypes.c_void_p]
+        lib.urlab_batch_get_sizes.argtypes = [ctypes.c_void_p, ctypes.POINTER(_Sizes)]
+        lib.urlab_batch_action_bounds.argtypes = [ctypes.c_void_p, ctypes.c_void_p,
+                                                  ctypes.c_void_p]
+        lib.urlab_batch_actuator_names.restype = ctypes.c_size_t
+        lib.urlab_batch_actuator_names.argtypes = [ctypes.c_void_p, ctypes.c_char_p,
+                                                   ctypes.c_size_t]
+        lib.urlab_batch_step.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
+                                         ctypes.c_int, ctypes.POINTER(_Outputs),
+                                         ctypes.c_char_p, ctypes.c_size_t]
+        lib.urlab_batch_reset.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
+                                          ctypes.c_void_p, ctypes.c_void_p,
+                                          ctypes.POINTER(_Outputs), ctypes.c_char_p,
+                                          ctypes.c_size_t]
+        lib.urlab_batch_set_auto_reset.argtypes = [ctypes.c_void_p, ctypes.c_int]
+        _LIB[path] = lib
+        return lib
+    raise OSError("URLab's in-process library (" + _NAME + ") was not found; tried: " +
+                  "; ".join(tried) + ". Build URLab (tools/build.sh), put `urlab` on PATH, or "
+                  "give library= or $URLAB_BATCH_LIBRARY")
+
+
+class InProcessBatch:
+    """A batch of `envs` environments of `scene` in this process, with BatchClient's interface
+    (UrlabVectorEnv's BatchBackend drives either): send_step() steps at once (the GIL released),
+    receive_step_parts() returns the result. Errors in what it is given raise ValueError with
+    the library's message (naming the field, or the scene file and line)."""
+
+    def __init__(self, scene, envs=1, threads=0, seed=None, max_episode_steps=0, reset_noise=0.0,
+                 auto_reset=True, n_steps=1, library=None, log_level="warn"):
+        self._lib = load_library(library)
+        self.endpoint = "in-process:" + str(scene)
+        self.transport = "in-process"
+        self.n_steps = int(n_steps)
+        options = _Options(int(envs), int(threads), 1 if auto_reset else 0,
+                           int(max_episode_steps), float(reset_noise), seed is not None,
+                           int(seed or 0), log_level.encode())
+        self._error = ctypes.create_string_buffer(4096)
+        handle = self._lib.urlab_batch_open(os.fsencode(scene), ctypes.byref(options),
+                                            self._error, len(self._error))
+        if not handle:
+            raise ValueError(self._error.value.decode(errors="replace"))
+        self._handle = ctypes.c_void_p(handle)
+        self.client = self  # as BatchClient's: the object a vector env's envs[k].client is
+        sizes = _Sizes()
+        self._lib.urlab_batch_get_sizes(self._handle, ctypes.byref(sizes))
+        self.envs, self.nu, self.obs_size = sizes.envs, sizes.nu, sizes.obs_size
+        self.threads, self.timestep = sizes.threads, sizes.timestep
+        self.layout = [("qpos", 0, sizes.nq), ("qvel", sizes.nq, sizes.nv),
+                       ("sensordata", sizes.nq + sizes.nv, sizes.nsensordata)]
+        self.action_low = np.empty(self.nu)
+        self.action_high = np.empty(self.nu)
+        self._lib.urlab_batch_action_bounds(self._handle, self.action_low.ctypes.data,
+                                            self.action_high.ctypes.data)
+        need = self._lib.urlab_batch_actuator_names(self._handle, None, 0)
+        names = ctypes.create_string_buffer(max(1, need))
+        self._lib.urlab_batch_actuator_names(self._handle, names, need)
+        self.actuators = [n.decode() for n in names.raw[:need].split(b"\0")[:-1]]
+        self.info = {"envs": self.envs, "threads": self.threads, "nu": self.nu,
+                     "obs_size": self.obs_size, "timestep": self.timestep,
+                     "actuators": self.actuators, "auto_reset": bool(auto_reset),
+                     "max_episode_steps": int(max_episode_steps),
+                     "reset_noise": float(reset_noise)}
+        self._out = _Outputs()
+        self._result = None
+        self._step_seconds = 0.0
+        self._env_steps = 0
+        self._busy = 0.0
+
+    # ---- the calls
+    def _fresh(self):
+        n = self.envs
+        obs, done = np.empty((n, self.obs_size)), np.empty(n, np.bool_)
+        reset, time = np.empty(n, np.bool_), np.empty(n)
+        steps = np.empty(n, _U4)
+        out = self._out
+        out.obs, out.done, out.reset = obs.ctypes.data, done.ctypes.data, reset.ctypes.data
+        out.time, out.episode_steps = time.ctypes.data, steps.ctypes.data
+        return obs, done, reset, time, steps
+
+    def _check(self, status):
+        if status != 0:
+            raise ValueError(self._error.value.decode(errors="replace"))
+
+    def _need_open(self):
+        if self._handle is None:
+            raise RuntimeError("this in-process batch is closed")
+
+    def send_step(self, actions, reset=None):
+        """actions: (envs, nu) float64; reset: (envs,) bool, those reset instead of stepping."""
+        self._need_open()
+        if type(actions) is not np.ndarray or actions.dtype != _F8 or \
+                not actions.flags.c_contiguous:
+            actions = np.ascontiguousarray(actions, dtype=_F8)
+        if actions.size != self.envs * self.nu:
+            raise ValueError(f"actions hold {actions.size} values, expected "
+                             f"{self.envs * self.nu} ({self.envs} environments x {self.nu} "
+                             "actuators)")
+        flags = None
+        if reset is not None and np.count_nonzero(reset):
+            flags = np.ascontiguousarray(reset, dtype=np.uint8)
+            if flags.size != self.envs:
+                raise ValueError(f"reset holds {flags.size} flags, expected one per environment "
+                                 f"({self.envs})")
+        arrays = self._fresh()
+        self._check(self._lib.urlab_batch_step(
+            self._handle, actions.ctypes.data, None if flags is None else flags.ctypes.data,
+            self.n_steps, ctypes.byref(self._out), self._error, len(self._error)))
+        self._result = arrays
+        self._step_seconds = self._out.seconds
+        self._busy += self._out.seconds
+        self._env_steps += self.envs * self.n_steps
+
+    def send_reset(self, envs=None, seeds=None, auto_reset=None):
+        """envs: indices (None: all); seeds: one int or None per listed environment."""
+        self._need_open()
+        if auto_reset is not None:
+            self._lib.urlab_batch_set_auto_reset(self._handle, 1 if auto_reset else 0)
+            self.info["auto_reset"] = bool(auto_reset)
+        listed = None if envs is None else np.ascontiguousarray(envs, dtype=np.intc)
+        count = 0 if listed is None else listed.size
+        if listed is not None and count == 0:
+            raise ValueError("reset: an empty list of environments")
+        k = self.envs if listed is None else count
+        seed_values = has = None
+        if seeds is not None:
+            seeds = list(seeds)
+            if len(seeds) != k:
+                raise ValueError(f"{len(seeds)} seeds for {k} environments")
+            has = np.array([s is not None for s in seeds], dtype=np.uint8)
+            seed_values = np.array([0 if s is None else int(s) for s in seeds], dtype=np.uint64)
+        arrays = self._fresh()
+        self._check(self._lib.urlab_batch_reset(
+            self._handle, None if listed is None else listed.ctypes.data, count,
+            None if seed_values is None else seed_values.ctypes.data,
+            None if has is None else has.ctypes.data, ctypes.byref(self._out), self._error,
+            len(self._error)))
+        self._result = arrays
+
+    def _parts(self):
+        obs, done, _, time, _ = self._result
+        return obs, done, time
+
+    def receive_step_parts(self):
+        return self._parts()
+
+    def receive_reset_parts(self):
+        return self._parts()
+
+    def _dict(self):
+        obs, done, reset, time, steps = self._result
+        return {"obs": obs, "done": done, "reset": reset, "time": time, "episode_steps": steps,
+                "step_seconds": self._step_seconds}
+
+    def receive_step(self):
+        return self._dict()
+
+    def receive_reset(self):
+        return self._dict()
+
+    def step(self, actions, reset=None):
+        self.send_step(actions, reset)
+        return self.receive_step()
+
+    def reset(self, envs=None, seeds=None, auto_reset=None):
+        self.send_reset(envs, seeds, auto_reset)
+        return self.receive_reset()
+
+    def call(self, op):
+        """batch_info's counters (env_steps, busy_seconds: the stepping thread's time on
+        steps), as a batched server answers them."""
+        if op != "batch_info":
+            raise ValueError(f"an in-process batch answers batch_info only (not {op})")
+        return dict(self.info, env_steps=self._env_steps, busy_seconds=self._busy)
+
+    def drop(self):
+        self.close()
+
+    def close(self):
+        handle, self._handle = getattr(self, "_handle", None), None
+        if handle is not None:
+            self._lib.urlab_batch_close(handle)
+
+    def __del__(self):
+        self.close()
+
+
+def in_process_backend(scene, num_envs, threads=0, seed=None, n_steps=1, reward_fn=None,
+                       terminated_fn=None, max_episode_steps=None, server_max_episode_steps=0,
+                       reset_noise=0.0, library=None, log_level="warn"):
+    """UrlabVectorEnv's batched backend over one InProcessBatch (UrlabVectorEnv.in_process)."""
+    from urlab_client.batch import BatchBackend
+    batch = InProcessBatch(scene, envs=num_envs, threads=threads, seed=seed,
+                           max_episode_steps=server_max_episode_steps, reset_noise=reset_noise,
+                           n_steps=n_steps, library=library, log_level=log_level)
+    try:
+        return BatchBackend([batch], reward_fn=reward_fn, terminated_fn=terminated_fn,
+                            max_episode_steps=max_episode_steps)
+    except BaseException:
+        batch.close()
+        raise
+
+
+__all__ = ["InProcessBatch", "in_process_backend", "load_library", "library_candidates"]

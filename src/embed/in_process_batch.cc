@@ -1,0 +1,157 @@
+#include "urlab/embed/in_process_batch.h"
+
+#include <mujoco/mujoco.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "urlab/camera/scene_settings.h"
+#include "urlab/core/error.h"
+#include "urlab/net/scene_settings.h"
+#include "urlab/viewer/scene_settings.h"
+#include "urlab/world/manager.h"
+#include "urlab/world/scene_file.h"
+
+namespace urlab::embed {
+
+namespace {
+
+// How long a reset (commands the paused physics thread applies) may take.
+constexpr auto kCommandTimeout = std::chrono::seconds(60);
+// Engine events (divergences, MuJoCo errors) reach the log through Manager::Tick: once every so
+// many steps, and after each reset.
+constexpr std::uint64_t kTickEvery = 64;
+
+}  // namespace
+
+struct InProcessBatch::Playing {
+  world::Manager manager;
+  world::BatchSubsystem* batch = nullptr;
+  explicit Playing(const world::ManagerOptions& o) : manager(o) {}
+};
+
+InProcessBatch::InProcessBatch(const std::string& scene, const InProcessOptions& options) {
+  // The scene sections the `urlab` tool knows (a scene written for `urlab run` loads here as it
+  // is; the network, cameras and viewer they configure do not run).
+  viewer::RegisterSceneSections();
+  camera::RegisterSceneSections();
+  net::RegisterSceneSections();
+  world::SceneConfig config = world::LoadSceneOrModel(scene);
+  if (options.seed) config.seed = *options.seed;
+  world::ManagerOptions manager_options;
+  manager_options.start_paused = true;  // lockstep: it steps only when asked
+  manager_options.as_fast_as_possible = true;
+  playing_ = std::make_unique<Playing>(manager_options);
+  world::BatchSubsystemOptions batch_options;
+  batch_options.envs = options.envs;
+  batch_options.threads = options.threads;
+  batch_options.auto_reset = options.auto_reset;
+  batch_options.max_episode_steps = options.max_episode_steps;
+  batch_options.reset_noise = options.reset_noise;
+  batch_options.seed = config.seed;  // environment i: the seed + i
+  batch_options.detached = true;     // no topics, viewer or recorder follow an environment here
+  playing_->batch = &static_cast<world::BatchSubsystem&>(
+      playing_->manager.AddSubsystem(std::make_unique<world::BatchSubsystem>(batch_options)));
+  playing_->manager.BeginPlay(config);
+  const mjModel* m = playing_->manager.session().engine().model();
+  for (int i = 0; i < m->nu; ++i) {
+    const bool limited = m->actuator_ctrllimited[i] != 0;
+    action_low_.push_back(limited ? m->actuator_ctrlrange[2 * i]
+                                  : -std::numeric_limits<double>::infinity());
+    action_high_.push_back(limited ? m->actuator_ctrlrange[2 * i + 1]
+                                   : std::numeric_limits<double>::infinity());
+  }
+  step_job_ = std::make_shared<world::BatchStepJob>();
+  reset_job_ = std::make_shared<world::BatchResetJob>();
+}
+
+InProcessBatch::~InProcessBatch() = default;
+
+int InProcessBatch::envs() const { return playing_->batch->envs(); }
+int InProcessBatch::threads() const { return playing_->batch->threads(); }
+int InProcessBatch::action_size() const { return playing_->batch->action_size(); }
+int InProcessBatch::observation_size() const { return playing_->batch->observation_size(); }
+int InProcessBatch::nq() const { return playing_->batch->nq(); }
+int InProcessBatch::nv() const { return playing_->batch->nv(); }
+int InProcessBatch::nsensordata() const { return playing_->batch->nsensordata(); }
+double InProcessBatch::timestep() const { return playing_->manager.session().engine().timestep(); }
+
+std::vector<std::string> InProcessBatch::actuator_names() const {
+  const mjModel* m = playing_->manager.session().engine().model();
+  std::vector<std::string> names;
+  for (int i = 0; i < m->nu; ++i) {
+    const char* name = mj_id2name(m, mjOBJ_ACTUATOR, i);
+    names.emplace_back(name ? name : "");
+  }
+  return names;
+}
+
+void InProcessBatch::SetAutoReset(bool on) { playing_->batch->SetAutoReset(on); }
+
+const world::BatchResult& InProcessBatch::Step(std::span<const double> actions,
+                                               std::span<const std::uint8_t> reset, int n_steps) {
+  world::BatchSubsystem& b = *playing_->batch;
+  const std::size_t nu = static_cast<std::size_t>(b.action_size());
+  const std::size_t n = static_cast<std::size_t>(b.envs());
+  if (actions.size() != n * nu) {
+    throw Error("actions hold " + std::to_string(actions.size()) + " values, expected " +
+                std::to_string(n * nu) + " (" + std::to_string(n) + " environments x " +
+                std::to_string(nu) + " actuators)");
+  }
+  for (std::size_t i = 0; i < actions.size(); ++i) {
+    if (!std::isfinite(actions[i])) {
+      throw Error("actions: environment " + std::to_string(i / std::max<std::size_t>(nu, 1)) +
+                  ", actuator " + std::to_string(i % std::max<std::size_t>(nu, 1)) +
+                  " is not a finite number");
+    }
+  }
+  if (!reset.empty() && reset.size() != n) {
+    throw Error("reset holds " + std::to_string(reset.size()) +
+                " flags, expected one per environment (" + std::to_string(n) + ")");
+  }
+  if (n_steps < 1) throw Error("n_steps must be at least 1 (got " + std::to_string(n_steps) + ")");
+  // One job, reused: its arrays keep their capacity from step to step.
+  world::BatchStepJob& job = *step_job_;
+  job.actions.assign(actions.begin(), actions.end());
+  job.reset.assign(reset.begin(), reset.end());
+  for (std::uint8_t& f : job.reset) f = f != 0;
+  job.n = n_steps;
+  job.out.complete = false;
+  physics::PhysicsEngine& engine = playing_->manager.session().engine();
+  if (!b.StepHere(step_job_)) {
+    // Environment 0 resets in this step: through the engine's commands (the physics thread).
+    std::uint64_t steps = 0;
+    const std::uint64_t id = b.SubmitStep(step_job_, &steps);
+    const physics::CommandResult r = engine.WaitForCommand(id, kCommandTimeout);
+    if (!r.ok()) throw Error("the batch step failed: " + r.error);
+    steps_since_tick_ = kTickEvery;  // a reset: deliver its events now
+  }
+  if (!job.out.complete) throw Error("the batch step did not complete");
+  b.NoteCompleted(job.out);
+  steps_since_tick_ += static_cast<std::uint64_t>(n_steps);
+  if (steps_since_tick_ >= kTickEvery) {
+    steps_since_tick_ = 0;
+    playing_->manager.Tick();
+  }
+  return job.out;
+}
+
+const world::BatchResult& InProcessBatch::Reset(
+    std::span<const int> envs, std::span<const std::optional<std::uint64_t>> seeds) {
+  world::BatchSubsystem& b = *playing_->batch;
+  world::BatchResetJob& job = *reset_job_;
+  job.envs.assign(envs.begin(), envs.end());
+  job.seeds.assign(seeds.begin(), seeds.end());
+  job.out.complete = false;
+  const std::uint64_t id = b.SubmitReset(reset_job_);  // throws for a bad index or seed count
+  const physics::CommandResult r =
+      playing_->manager.session().engine().WaitForCommand(id, kCommandTimeout);
+  if (!r.ok()) throw Error("the batch reset failed: " + r.error);
+  if (!job.out.complete) throw Error("the batch reset did not complete");
+  steps_since_tick_ = 0;
+  playing_->manager.Tick();
+  return job.out;
+}
+
+}  // namespace urlab::embed

@@ -1,0 +1,234 @@
+// InProcessBatch and its C interface: a batch of the humanoid scene inside the test's process,
+// with real MuJoCo and the batch's real stepping threads.
+#include "urlab/embed/in_process_batch.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "mujoco_test.h"
+#include "urlab/core/error.h"
+#include "urlab/embed/urlab_batch.h"
+
+namespace urlab::embed {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::string Humanoid() { return urlab::testing::SourcePath("examples/scenes/humanoid_pd.yaml"); }
+
+// `steps` sets of actions for `envs` environments, uniform within each actuator's range.
+std::vector<std::vector<double>> Actions(const InProcessBatch& b, int steps, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<std::vector<double>> out;
+  for (int s = 0; s < steps; ++s) {
+    std::vector<double> a;
+    for (int e = 0; e < b.envs(); ++e) {
+      for (int i = 0; i < b.action_size(); ++i) {
+        std::uniform_real_distribution<double> u(b.action_low()[i], b.action_high()[i]);
+        a.push_back(u(rng));
+      }
+    }
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
+// The observation rows after each step of `actions` from a reset with `seed`.
+std::vector<std::vector<double>> Episodes(const InProcessOptions& o, std::uint64_t seed,
+                                          int steps) {
+  InProcessBatch b(Humanoid(), o);
+  std::vector<std::optional<std::uint64_t>> seeds;
+  for (int e = 0; e < o.envs; ++e) seeds.push_back(seed + static_cast<std::uint64_t>(e));
+  b.Reset({}, seeds);
+  std::vector<std::vector<double>> rows;
+  for (const std::vector<double>& a : Actions(b, steps, 3)) rows.push_back(b.Step(a).obs);
+  return rows;
+}
+
+class InProcessBatchTest : public urlab::testing::MujocoTest {};
+
+TEST_F(InProcessBatchTest, SizesAndBoundsAreTheScenesModel) {
+  InProcessBatch b(Humanoid(), {.envs = 3, .threads = 2});
+  EXPECT_EQ(b.envs(), 3);
+  EXPECT_EQ(b.threads(), 2);
+  EXPECT_EQ(b.action_size(), 21);
+  EXPECT_EQ(b.nq(), 28);
+  EXPECT_EQ(b.nv(), 27);
+  EXPECT_EQ(b.observation_size(), b.nq() + b.nv() + b.nsensordata());
+  ASSERT_EQ(b.action_low().size(), 21u);
+  for (int i = 0; i < 21; ++i) EXPECT_LT(b.action_low()[i], b.action_high()[i]);
+  EXPECT_THAT(b.actuator_names().front(), HasSubstr("abdomen"));
+  EXPECT_DOUBLE_EQ(b.timestep(), 0.005);
+  const world::BatchResult& r = b.Step(std::vector<double>(3 * 21, 0.0));
+  EXPECT_EQ(r.obs.size(), 3u * static_cast<std::size_t>(b.observation_size()));
+  EXPECT_THAT(r.episode_steps, ::testing::ElementsAre(1u, 1u, 1u));
+  for (double t : r.time) EXPECT_DOUBLE_EQ(t, 0.005);
+}
+
+TEST_F(InProcessBatchTest, SameSeedsSameEpisodesWhicheverTheThreads) {
+  const InProcessOptions one{.envs = 4, .threads = 1, .reset_noise = 0.05};
+  InProcessOptions two = one;
+  two.threads = 2;
+  const auto a = Episodes(one, 11, 30);
+  const auto b = Episodes(two, 11, 30);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t s = 0; s < a.size(); ++s) {
+    ASSERT_EQ(std::memcmp(a[s].data(), b[s].data(), a[s].size() * sizeof(double)), 0)
+        << "step " << s;
+  }
+  // Another seed gives another episode (the noise is drawn from it).
+  const auto c = Episodes(one, 12, 1);
+  EXPECT_NE(std::memcmp(a[0].data(), c[0].data(), a[0].size() * sizeof(double)), 0);
+}
+
+TEST_F(InProcessBatchTest, AnEnvironmentRunsItsSeedsEpisodeWhateverItsIndex) {
+  // Environment 2 of 3 (in the batch) and environment 0 of 1 (the engine's own), both reset
+  // with seed 40 and given the same actions, step through the same states.
+  const int steps = 20;
+  std::vector<std::vector<double>> three, single;
+  std::vector<double> row_actions;
+  {
+    InProcessBatch b(Humanoid(), {.envs = 3, .threads = 2, .reset_noise = 0.05});
+    const std::vector<std::optional<std::uint64_t>> seeds = {1, 2, 40};
+    b.Reset({}, seeds);
+    const auto actions = Actions(b, steps, 5);
+    const std::size_t row = static_cast<std::size_t>(b.observation_size());
+    for (const auto& a : actions) {
+      const auto& obs = b.Step(a).obs;
+      three.emplace_back(obs.begin() + static_cast<std::ptrdiff_t>(2 * row), obs.end());
+      row_actions.insert(row_actions.end(), a.begin() + 2 * 21, a.end());
+    }
+  }
+  {
+    InProcessBatch b(Humanoid(), {.envs = 1, .threads = 1, .reset_noise = 0.05});
+    const std::vector<int> envs = {0};
+    const std::vector<std::optional<std::uint64_t>> seeds = {40};
+    b.Reset(envs, seeds);
+    for (int s = 0; s < steps; ++s) {
+      const std::span<const double> a(row_actions.data() + s * 21, 21);
+      single.push_back(b.Step(a).obs);
+    }
+  }
+  for (int s = 0; s < steps; ++s) {
+    ASSERT_EQ(three[s], single[s]) << "step " << s;
+  }
+}
+
+TEST_F(InProcessBatchTest, EpisodesEndAndResetAtTheNextStep) {
+  InProcessBatch b(Humanoid(), {.envs = 2, .threads = 2, .max_episode_steps = 3});
+  const std::vector<double> zero(2 * 21, 0.0);
+  for (int s = 1; s <= 2; ++s) {
+    EXPECT_THAT(b.Step(zero).done, ::testing::ElementsAre(0, 0)) << s;
+  }
+  const world::BatchResult& third = b.Step(zero);
+  EXPECT_THAT(third.done, ::testing::ElementsAre(1, 1));
+  EXPECT_THAT(third.episode_steps, ::testing::ElementsAre(3u, 3u));
+  // Gymnasium's next-step autoreset: this step resets them and ignores their actions.
+  const world::BatchResult& fourth = b.Step(zero);
+  EXPECT_THAT(fourth.reset, ::testing::ElementsAre(1, 1));
+  EXPECT_THAT(fourth.done, ::testing::ElementsAre(0, 0));
+  EXPECT_THAT(fourth.episode_steps, ::testing::ElementsAre(0u, 0u));
+  for (double t : fourth.time) EXPECT_DOUBLE_EQ(t, 0.0);
+}
+
+TEST_F(InProcessBatchTest, BadArraysAreRefusedNamingTheField) {
+  InProcessBatch b(Humanoid(), {.envs = 2, .threads = 2});
+  const auto message = [&](auto&& fn) -> std::string {
+    try {
+      fn();
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_THAT(message([&] { b.Step(std::vector<double>(41, 0.0)); }),
+              HasSubstr("actions hold 41 values, expected 42 (2 environments x 21 actuators)"));
+  std::vector<double> a(42, 0.0);
+  a[21 + 3] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THAT(message([&] { b.Step(a); }),
+              HasSubstr("actions: environment 1, actuator 3 is not a finite number"));
+  a[21 + 3] = 0;
+  const std::vector<std::uint8_t> flags(3, 0);
+  EXPECT_THAT(message([&] { b.Step(a, flags); }),
+              HasSubstr("reset holds 3 flags, expected one per environment (2)"));
+  EXPECT_THAT(message([&] { b.Step(a, {}, 0); }), HasSubstr("n_steps must be at least 1"));
+  const std::vector<int> nine = {9};
+  EXPECT_THAT(message([&] { b.Reset(nine); }), HasSubstr("no environment 9"));
+  // Nothing was stepped by the refused requests.
+  EXPECT_THAT(b.Step(a).episode_steps, ::testing::ElementsAre(1u, 1u));
+}
+
+TEST_F(InProcessBatchTest, OneBatchPlaysAtATimeAndAMissingSceneIsNamed) {
+  {
+    InProcessBatch b(Humanoid(), {.envs = 1});
+    try {
+      InProcessBatch again(Humanoid(), {.envs = 1});
+      FAIL() << "a second batch played";
+    } catch (const Error& e) {
+      EXPECT_THAT(e.what(), HasSubstr("play"));
+    }
+  }
+  try {
+    InProcessBatch missing("/no/such/scene.yaml", {.envs = 2});
+    FAIL() << "a missing scene loaded";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("/no/such/scene.yaml"));
+  }
+  InProcessBatch after(Humanoid(), {.envs = 1});  // the failed ones left nothing playing
+}
+
+TEST_F(InProcessBatchTest, TheCInterfaceStepsAndReportsErrors) {
+  ASSERT_EQ(urlab_batch_abi(), URLAB_BATCH_ABI);
+  char error[512] = {};
+  urlab_batch_options o{};
+  o.envs = 2;
+  o.threads = 2;
+  o.auto_reset = 1;
+  EXPECT_EQ(urlab_batch_open("/no/such/scene.yaml", &o, error, sizeof error), nullptr);
+  EXPECT_THAT(error, HasSubstr("/no/such/scene.yaml"));
+  urlab_batch* b = urlab_batch_open(Humanoid().c_str(), &o, error, sizeof error);
+  ASSERT_NE(b, nullptr) << error;
+  urlab_batch_sizes sizes{};
+  ASSERT_EQ(urlab_batch_get_sizes(b, &sizes), 0);
+  EXPECT_EQ(sizes.envs, 2);
+  EXPECT_EQ(sizes.nu, 21);
+  EXPECT_EQ(sizes.obs_size, sizes.nq + sizes.nv + sizes.nsensordata);
+  std::vector<double> low(21), high(21);
+  ASSERT_EQ(urlab_batch_action_bounds(b, low.data(), high.data()), 0);
+  EXPECT_LT(low[0], high[0]);
+  const std::size_t need = urlab_batch_actuator_names(b, nullptr, 0);
+  std::string names(need, '\0');
+  urlab_batch_actuator_names(b, names.data(), names.size());
+  EXPECT_THAT(names, HasSubstr("abdomen"));
+
+  std::vector<double> obs(2 * static_cast<std::size_t>(sizes.obs_size)), time(2);
+  std::vector<std::uint8_t> done(2), reset(2);
+  std::vector<std::uint32_t> episode(2);
+  urlab_batch_outputs out{obs.data(), done.data(), reset.data(), time.data(), episode.data(), 0};
+  const std::uint64_t seeds[2] = {5, 6};
+  ASSERT_EQ(urlab_batch_reset(b, nullptr, 0, seeds, nullptr, &out, error, sizeof error), 0)
+      << error;
+  std::vector<double> actions(42, 0.1);
+  ASSERT_EQ(urlab_batch_step(b, actions.data(), nullptr, 2, &out, error, sizeof error), 0) << error;
+  EXPECT_THAT(episode, ::testing::ElementsAre(2u, 2u));
+  EXPECT_DOUBLE_EQ(time[1], 0.01);
+  EXPECT_GT(out.seconds, 0);
+  actions[5] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(urlab_batch_step(b, actions.data(), nullptr, 1, &out, error, sizeof error), -1);
+  EXPECT_THAT(error, HasSubstr("environment 0, actuator 5 is not a finite number"));
+  const int bad[1] = {2};
+  EXPECT_EQ(urlab_batch_reset(b, bad, 1, nullptr, nullptr, &out, error, sizeof error), -1);
+  EXPECT_THAT(error, HasSubstr("no environment 2"));
+  urlab_batch_close(b);
+}
+
+}  // namespace
+}  // namespace urlab::embed
