@@ -117,13 +117,13 @@ tsan_stage() {
   # The net tests include the Python client's end-to-end test, which runs the urlab binary.
   cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_core urlab_tests_physics \
     urlab_tests_control urlab_tests_world urlab_tests_replay urlab_tests_ops urlab_tests_net \
-    urlab_tests_client
+    urlab_tests_client urlab_tests_embed
   # The Python end-to-end tests whose subject is the Python side (examples, gait, the gymnasium
   # contract, Dask with plain and batched servers, the learning example, port choice) run in the
   # main stage only; the ones that load the server's threads (client, shared memory, hardening,
   # batched environments, latency) run here too.
   TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/tsan.supp" \
-    run_ctest "$dir" -L 'core|physics|control|world|replay|ops|net|client' \
+    run_ctest "$dir" -L 'core|physics|control|world|replay|ops|net|client|embed' \
     -E 'python_examples_e2e|gait_e2e|gym_env_e2e|cluster_(batch_)?e2e|learn_reach_smoke|ports_e2e' \
     -j"$JOBS" --timeout 900
 }
@@ -198,6 +198,17 @@ install_stage() {
   # assimp, Embree or a renderer (GL, EGL, OSMesa) may reach it.
   check_client_links "$example/urlab_client_only_example" "$BUILD_DIR/example_cpp_controller"
   "$prefix/bin/urlab" --version
+  # The in-process batch from Python, its library found beside the installed urlab (../lib).
+  PATH="$prefix/bin:$PATH" /usr/bin/python3 - <<'PY'
+import sys
+sys.path.insert(0, "clients/python")
+import numpy as np
+from urlab_client import UrlabVectorEnv
+with UrlabVectorEnv.in_process("examples/scenes/humanoid_pd.yaml", 2) as envs:
+    envs.reset(seed=0)
+    obs, *_ = envs.step(np.zeros((2, 21)))
+    print("in-process batch from", envs.envs[0]._lib._name, obs["qpos"].shape)
+PY
   rm -rf "$prefix" "$example"
 }
 

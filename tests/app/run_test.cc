@@ -165,6 +165,9 @@ TEST(RunTest, BenchFleetPrintsEveryFigure) {
                           "batch64_frameskip5_ratio",
                           "batch2x32_sync_ratio",
                           "batch2x32_async_ratio",
+                          "batch64_inproc_ratio",
+                          "inproc_overhead64",
+                          "batch64_inproc_of_ceiling",
                           "bare_spread"}) {
     EXPECT_TRUE(
         std::regex_search(out, std::regex(std::string("(^|\\n)") + key + "=[0-9][0-9.e+]*\\n")))

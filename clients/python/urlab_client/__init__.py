@@ -21,8 +21,10 @@ and the step server (lockstep learning loops), shaped like gymnasium (without re
         obs, info = env.reset(seed=0)
         obs, reward, terminated, truncated, info = env.step([0.1, -0.2])
 
-UrlabVectorEnv steps many servers together (urlab_client.vector); urlab_client.cluster starts
-servers on a Dask cluster and returns one.
+UrlabVectorEnv steps many servers together (urlab_client.vector), the environments of batched
+servers (urlab_client.batch), or a batch inside this process with no server
+(UrlabVectorEnv.in_process, urlab_client.inproc); urlab_client.cluster starts servers on a Dask
+cluster and returns one.
 """
 from urlab_client.camera import CameraClient, decode_frame
 from urlab_client.step import StepClient, UrlabError

@@ -277,7 +277,10 @@ class InProcessBatch:
             self._lib.urlab_batch_close(handle)
 
     def __del__(self):
-        self.close()
+        try:
+            self.close()
+        except Exception:  # noqa: BLE001 - interpreter shutdown: the library may be gone
+            pass
 
 
 def in_process_backend(scene, num_envs, threads=0, seed=None, n_steps=1, reward_fn=None,
