@@ -28,7 +28,20 @@ _U4 = np.dtype("<u4")
 LOST = (TimeoutError, zmq.ZMQError, ConnectionError)  # ConnectionError: shm.ShmError
 
 
-class BatchClient:
+class BatchCalls:
+    """step() and reset() in one call, over a batch's send_*/receive_* halves (BatchClient's and
+    urlab_client.inproc.InProcessBatch's)."""
+
+    def step(self, actions, reset=None):
+        self.send_step(actions, reset)
+        return self.receive_step()
+
+    def reset(self, envs=None, seeds=None, auto_reset=None):
+        self.send_reset(envs, seeds, auto_reset)
+        return self.receive_reset()
+
+
+class BatchClient(BatchCalls):
     """One batched step server: batch_info at connection, direct mode, then batch requests
     (send_*/receive_* halves so a backend sends to every server before gathering)."""
 
@@ -104,14 +117,6 @@ class BatchClient:
 
     def receive_reset(self):
         return self._result(self.client.receive_reply("batch_reset"))
-
-    def step(self, actions, reset=None):
-        self.send_step(actions, reset)
-        return self.receive_step()
-
-    def reset(self, envs=None, seeds=None, auto_reset=None):
-        self.send_reset(envs, seeds, auto_reset)
-        return self.receive_reset()
 
     def drop(self):
         """Forgets a server that stopped answering (no bye)."""

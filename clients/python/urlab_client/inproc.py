@@ -25,6 +25,8 @@ import shutil
 
 import numpy as np
 
+from urlab_client.batch import BatchBackend, BatchCalls
+
 ABI = 1
 _F8 = np.dtype("<f8")
 _U4 = np.dtype("<u4")
@@ -115,7 +117,7 @@ def load_library(library=None):
                   "give library= or $URLAB_BATCH_LIBRARY")
 
 
-class InProcessBatch:
+class InProcessBatch(BatchCalls):
     """A batch of `envs` environments of `scene` in this process, with BatchClient's interface
     (UrlabVectorEnv's BatchBackend drives either): send_step() steps at once (the GIL released),
     receive_step_parts() returns the result. Errors in what it is given raise ValueError with
@@ -253,14 +255,6 @@ class InProcessBatch:
     def receive_reset(self):
         return self._dict()
 
-    def step(self, actions, reset=None):
-        self.send_step(actions, reset)
-        return self.receive_step()
-
-    def reset(self, envs=None, seeds=None, auto_reset=None):
-        self.send_reset(envs, seeds, auto_reset)
-        return self.receive_reset()
-
     def call(self, op):
         """batch_info's counters (env_steps, busy_seconds: the stepping thread's time on
         steps), as a batched server answers them."""
@@ -287,7 +281,6 @@ def in_process_backend(scene, num_envs, threads=0, seed=None, n_steps=1, reward_
                        terminated_fn=None, max_episode_steps=None, server_max_episode_steps=0,
                        reset_noise=0.0, library=None, log_level="warn"):
     """UrlabVectorEnv's batched backend over one InProcessBatch (UrlabVectorEnv.in_process)."""
-    from urlab_client.batch import BatchBackend
     batch = InProcessBatch(scene, envs=num_envs, threads=threads, seed=seed,
                            max_episode_steps=server_max_episode_steps, reset_noise=reset_noise,
                            n_steps=n_steps, library=library, log_level=log_level)
