@@ -4,7 +4,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <limits>
 
 #include "urlab/camera/scene_settings.h"
 #include "urlab/core/error.h"
@@ -54,14 +53,6 @@ InProcessBatch::InProcessBatch(const std::string& scene, const InProcessOptions&
   playing_->batch = &static_cast<world::BatchSubsystem&>(
       playing_->manager.AddSubsystem(std::make_unique<world::BatchSubsystem>(batch_options)));
   playing_->manager.BeginPlay(config);
-  const mjModel* m = playing_->manager.session().engine().model();
-  for (int i = 0; i < m->nu; ++i) {
-    const bool limited = m->actuator_ctrllimited[i] != 0;
-    action_low_.push_back(limited ? m->actuator_ctrlrange[2 * i]
-                                  : -std::numeric_limits<double>::infinity());
-    action_high_.push_back(limited ? m->actuator_ctrlrange[2 * i + 1]
-                                   : std::numeric_limits<double>::infinity());
-  }
   step_job_ = std::make_shared<world::BatchStepJob>();
   reset_job_ = std::make_shared<world::BatchResetJob>();
 }
@@ -75,6 +66,12 @@ int InProcessBatch::observation_size() const { return playing_->batch->observati
 int InProcessBatch::nq() const { return playing_->batch->nq(); }
 int InProcessBatch::nv() const { return playing_->batch->nv(); }
 int InProcessBatch::nsensordata() const { return playing_->batch->nsensordata(); }
+const std::vector<double>& InProcessBatch::action_low() const {
+  return playing_->batch->action_low();
+}
+const std::vector<double>& InProcessBatch::action_high() const {
+  return playing_->batch->action_high();
+}
 double InProcessBatch::timestep() const { return playing_->manager.session().engine().timestep(); }
 
 std::vector<std::string> InProcessBatch::actuator_names() const {

@@ -8,7 +8,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <limits>
 #include <memory>
 
 #include "net/request_fields.h"
@@ -109,14 +108,8 @@ StepServer::Json StepServer::BatchHello() const {
 StepServer::Outcome StepServer::BatchInfo(Request&) {
   world::BatchSubsystem& b = RequireBatch();
   const mjModel* m = session_.engine().model();
-  std::vector<double> low(static_cast<std::size_t>(m->nu)), high(low.size());
   Json actuators = Json::array();
   for (int i = 0; i < m->nu; ++i) {
-    const bool limited = m->actuator_ctrllimited[i] != 0;
-    low[static_cast<std::size_t>(i)] =
-        limited ? m->actuator_ctrlrange[2 * i] : -std::numeric_limits<double>::infinity();
-    high[static_cast<std::size_t>(i)] =
-        limited ? m->actuator_ctrlrange[2 * i + 1] : std::numeric_limits<double>::infinity();
     const char* name = mj_id2name(m, mjOBJ_ACTUATOR, i);
     actuators.push_back(name ? name : "");
   }
@@ -139,8 +132,8 @@ StepServer::Outcome StepServer::BatchInfo(Request&) {
                {"nsensordata", b.nsensordata()},
                {"obs_size", b.observation_size()},
                {"obs_layout", std::move(layout)},
-               {"action_low", Packed(low)},
-               {"action_high", Packed(high)},
+               {"action_low", Packed(b.action_low())},
+               {"action_high", Packed(b.action_high())},
                {"actuators", std::move(actuators)},
                {"sensors", std::move(sensors)},
                {"auto_reset", b.auto_reset()},

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "urlab/control/articulation_control.h"
 #include "urlab/core/error.h"
@@ -87,6 +88,14 @@ void BatchSubsystem::BeginPlay(Session& session) {
   nq_ = m->nq;
   nv_ = m->nv;
   nsensordata_ = m->nsensordata;
+  action_low_.clear();
+  action_high_.clear();
+  for (int i = 0; i < m->nu; ++i) {
+    const bool limited = m->actuator_ctrllimited[i] != 0;
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    action_low_.push_back(limited ? m->actuator_ctrlrange[2 * i] : -kInf);
+    action_high_.push_back(limited ? m->actuator_ctrlrange[2 * i + 1] : kInf);
+  }
   batch_options_.envs = detached() ? options_.envs : std::max(1, options_.envs - 1);
   batch_options_.threads = options_.threads;
   batch_options_.auto_reset = false;  // next-step autoreset is ours (SubmitStep)

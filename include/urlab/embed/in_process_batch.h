@@ -54,8 +54,8 @@ class InProcessBatch {
   int nsensordata() const;
   double timestep() const;
   // Each actuator's control range (-inf / +inf when it has none), in actuator order.
-  const std::vector<double>& action_low() const { return action_low_; }
-  const std::vector<double>& action_high() const { return action_high_; }
+  const std::vector<double>& action_low() const;
+  const std::vector<double>& action_high() const;
   std::vector<std::string> actuator_names() const;
 
   // One batch step of `n_steps` physics steps, the actions (envs x action_size, finite) held;
@@ -73,7 +73,6 @@ class InProcessBatch {
  private:
   struct Playing;
   std::unique_ptr<Playing> playing_;
-  std::vector<double> action_low_, action_high_;
   std::shared_ptr<world::BatchStepJob> step_job_;
   std::shared_ptr<world::BatchResetJob> reset_job_;
   std::uint64_t steps_since_tick_ = 0;

@@ -113,6 +113,10 @@ class BatchSubsystem : public Subsystem {
   int threads() const;
   int action_size() const { return nu_; }
   int observation_size() const { return nq_ + nv_ + nsensordata_; }
+  // The actions' bounds: each actuator's ctrlrange (-inf / +inf when it has none), in actuator
+  // order.
+  const std::vector<double>& action_low() const { return action_low_; }
+  const std::vector<double>& action_high() const { return action_high_; }
   int nq() const { return nq_; }
   int nv() const { return nv_; }
   int nsensordata() const { return nsensordata_; }
@@ -192,6 +196,7 @@ class BatchSubsystem : public Subsystem {
   Session* session_ = nullptr;
   std::unique_ptr<physics::Batch> others_;  // environments 1..N-1 (null when N == 1)
   int nu_ = 0, nq_ = 0, nv_ = 0, nsensordata_ = 0;
+  std::vector<double> action_low_, action_high_;
   std::vector<std::uint64_t> callbacks_;
   // The articulations with a latency: their actuators, observation row entries and settings.
   struct LatencyTemplate {
