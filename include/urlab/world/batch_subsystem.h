@@ -37,6 +37,9 @@
 //   the batch's worker threads step environments 1..N-1 only inside an iteration, and in a
 //   window's last iteration write their observation rows (others_obs_), which the iterating
 //   thread reads after joining them (Batch::StepEnd).
+// - Detached: the requesting thread's StepHere steps every environment, with the batch's workers
+//   and the step mutex held; a reset's Inspect command touches them on the physics thread (or
+//   the requester's, when the loop is not running) while the requester waits for it.
 #include <atomic>
 #include <cstdint>
 #include <memory>
