@@ -31,6 +31,18 @@ struct InProcessBatch::Playing {
 };
 
 InProcessBatch::InProcessBatch(const std::string& scene, const InProcessOptions& options) {
+  // The options by their names here (the batch subsystem's own messages name urlab run's flags).
+  if (options.envs < 1) {
+    throw Error("envs must be at least 1 (got " + std::to_string(options.envs) + ")");
+  }
+  if (options.threads < 0) {
+    throw Error("threads must be 0 (the cores) or more (got " + std::to_string(options.threads) +
+                ")");
+  }
+  if (options.max_episode_steps < 0) throw Error("max_episode_steps must be 0 or more");
+  if (!(options.reset_noise >= 0) || !std::isfinite(options.reset_noise)) {
+    throw Error("reset_noise must be a finite number, 0 or more");
+  }
   // The scene sections the `urlab` tool knows (a scene written for `urlab run` loads here as it
   // is; the network, cameras and viewer they configure do not run).
   viewer::RegisterSceneSections();

@@ -166,6 +166,22 @@ TEST_F(InProcessBatchTest, BadArraysAreRefusedNamingTheField) {
   EXPECT_THAT(b.Step(a).episode_steps, ::testing::ElementsAre(1u, 1u));
 }
 
+TEST_F(InProcessBatchTest, BadOptionsAreNamedAsTheyAreHere) {
+  const auto message = [](InProcessOptions o) -> std::string {
+    try {
+      InProcessBatch b(Humanoid(), o);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_THAT(message({.envs = 0}), HasSubstr("envs must be at least 1 (got 0)"));
+  EXPECT_THAT(message({.envs = 2, .threads = -1}), HasSubstr("threads must be 0"));
+  EXPECT_THAT(message({.envs = 2, .max_episode_steps = -5}), HasSubstr("max_episode_steps"));
+  EXPECT_THAT(message({.envs = 2, .reset_noise = std::nan("")}), HasSubstr("reset_noise"));
+  EXPECT_EQ(message({.envs = 2}), "no error");
+}
+
 TEST_F(InProcessBatchTest, OneBatchPlaysAtATimeAndAMissingSceneIsNamed) {
   {
     InProcessBatch b(Humanoid(), {.envs = 1});

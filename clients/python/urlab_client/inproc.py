@@ -125,6 +125,8 @@ class InProcessBatch(BatchCalls):
 
     def __init__(self, scene, envs=1, threads=0, seed=None, max_episode_steps=0, reset_noise=0.0,
                  auto_reset=True, n_steps=1, library=None, log_level="warn"):
+        if int(envs) < 1:
+            raise ValueError(f"num_envs must be at least 1 (got {envs})")
         self._lib = load_library(library)
         self.endpoint = "in-process:" + str(scene)
         self.transport = "in-process"
