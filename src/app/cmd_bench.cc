@@ -253,7 +253,10 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
       "rate over that) and batch64_inproc_of_ceiling (over batch64_ceiling's rate). Last, with "
       "python3-distributed, a Dask LocalCluster of 1 and 2 workers with one "
       "batched server of 16 environments each: dask_scaling (2 workers over 1) and "
-      "dask_of_ceiling (that over what 2 plain threads make of the bare loop just after). "
+      "dask_of_ceiling (that over what 2 plain threads make of the bare loop just after); then "
+      "the same clusters with rollout workers (urlab_client.rollout: 16 in-process environments "
+      "per worker, stepped by the worker with the policy each call sends, the driver out of the "
+      "step loop): dask_rollout_scaling (2 workers over 1) and dask_rollout_of_ceiling. "
       "bare_spread comes last: the bare loop's fastest round over its slowest in the whole run "
       "(above 1.15 a line says the machine was busy and the ratios are unreliable).");
   static net::FleetBenchOptions fleet_args;

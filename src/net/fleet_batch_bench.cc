@@ -156,6 +156,37 @@ for k, r in (("1", one), ("2", two)):
     print("wall%s=%f busy%s=%f cpu%s=%f" % (k, r[1], k, r[2], k, r[3]))
 )PY";
 
+// Dask LocalCluster again, 1 worker then 2, each now a rollout worker (urlab_client.rollout): 16
+// environments inside the worker's own process (the in-process library, argv[2]), stepped by the
+// worker with the policy each call sends (zero actions, as the vector env's figure), `steps` steps
+// a call; the driver only sends calls and gathers trajectories. Prints both aggregate rates and,
+// per worker of the 2-worker run, its stepping and CPU time over the wall time.
+constexpr const char* kRolloutScript = R"PY(
+import sys, time
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+from distributed import Client, LocalCluster
+from urlab_client.rollout import RolloutPool
+library, scene, steps, calls = sys.argv[2], sys.argv[3], int(sys.argv[4]), 4
+def run(workers):
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                      dashboard_address=None, silence_logs=40) as c, Client(c) as client:
+        with RolloutPool(client, scene, envs_per_worker=16, threads=1, library=library) as pool:
+            policy = lambda obs, nu=pool.nu: np.zeros((len(obs["qpos"]), nu))
+            pool.run(policy, 20)
+            done, stepping, cpu, t0 = 0, [0.0] * workers, [0.0] * workers, time.perf_counter()
+            for _ in range(calls):
+                for k, r in enumerate(pool.run(policy, steps)):
+                    done += r["env_steps"]
+                    stepping[k] += r["step_seconds"]
+                    cpu[k] += r["cpu_seconds"]
+            wall = time.perf_counter() - t0
+            return done / wall, [s / wall for s in stepping], [c / wall for c in cpu]
+one, two = run(1), run(2)
+print("one=%f two=%f" % (one[0], two[0]))
+print("stepping=%f cpu=%f" % (min(two[1]), min(two[2])))
+)PY";
+
 // The figure after `key=` in `text`.
 double Field(const std::string& text, const std::string& key) {
   const auto at = text.find(key + "=");
@@ -306,6 +337,43 @@ void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
                "server stepping %.0f us, the driver's CPU %.0f us (its waits included)",
                w, Field(text, "wall" + k), Field(text, "busy" + k), Field(text, "cpu" + k)));
   }
+}
+
+void RolloutFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
+  const FleetBenchOptions& o = ctx.options();
+  if (o.python_client.empty() || access(o.python.c_str(), X_OK) != 0 || o.batch_library.empty() ||
+      access(o.batch_library.c_str(), R_OK) != 0) {
+    ctx.Report("no Python client or in-process library: Dask rollout figures left out");
+    return;
+  }
+  int status = 0;
+  // Steps per call: 500 at the default --steps (a call then takes about 0.3 s, and Dask's own
+  // cost per call is a few milliseconds).
+  const int steps = std::clamp(ctx.steps_per_round() / 8, 20, 500);
+  const std::string text = RunCaptured({o.python, "-c", kRolloutScript, o.python_client,
+                                        o.batch_library, ctx.scene_path, std::to_string(steps)},
+                                       &status);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    ctx.Report("no Dask rollout figures (python3-distributed missing, or the cluster failed): " +
+               text);
+    return;
+  }
+  const double one = Field(text, "one"), two = Field(text, "two"), scaling = two / one;
+  out->push_back({"dask_rollout1x16_env_steps_per_s", one});
+  out->push_back({"dask_rollout2x16_env_steps_per_s", two});
+  out->push_back({"dask_rollout_scaling", scaling});
+  const double ceiling =
+      ctx.MedianRatio([&] { return ctx.CeilingRate(kFleetBatchThreads, ctx.steps_per_round()); });
+  out->push_back({"dask_rollout_of_ceiling", scaling / ceiling});
+  ctx.Report(
+      Format("Dask LocalCluster, rollout workers of 16 in-process environments (the driver out "
+             "of the step loop): 1 worker %.0f, 2 workers %.0f env steps/s (%.2f; %.3f of what 2 "
+             "plain threads made of the bare loop just after)",
+             one, two, scaling, scaling / ceiling));
+  ctx.Report(
+      Format("Dask rollouts, 2 workers: the slower worker stepped %.0f%% of the wall time "
+             "and ran Python for %.0f%%",
+             100 * Field(text, "stepping"), 100 * (Field(text, "cpu") - Field(text, "stepping"))));
 }
 
 // A batched figure's work (FleetContext::Trajectories) and its actions in a file for the Python

@@ -420,6 +420,7 @@ std::vector<std::pair<std::string, FigureProducer>> FleetFigureProducers() {
       {"batch", BatchFigures},
       {"inproc", InProcessFigures},
       {"dask", DaskFigures},
+      {"rollout", RolloutFigures},
   };
 }
 

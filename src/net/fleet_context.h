@@ -100,5 +100,8 @@ void BatchFigures(FleetContext& ctx, std::vector<FleetFigure>* out);
 void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out);
 // The same 64 environments inside the Python script's process (fleet_batch_bench.cc).
 void InProcessFigures(FleetContext& ctx, std::vector<FleetFigure>* out);
+// Dask rollout workers, each stepping in-process environments with a policy it is sent
+// (fleet_batch_bench.cc).
+void RolloutFigures(FleetContext& ctx, std::vector<FleetFigure>* out);
 
 }  // namespace urlab::net

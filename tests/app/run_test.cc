@@ -168,6 +168,7 @@ TEST(RunTest, BenchFleetPrintsEveryFigure) {
                           "batch64_inproc_ratio",
                           "inproc_overhead64",
                           "batch64_inproc_of_ceiling",
+                          "dask_rollout_scaling",
                           "bare_spread"}) {
     EXPECT_TRUE(
         std::regex_search(out, std::regex(std::string("(^|\\n)") + key + "=[0-9][0-9.e+]*\\n")))

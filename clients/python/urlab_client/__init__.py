@@ -24,7 +24,7 @@ and the step server (lockstep learning loops), shaped like gymnasium (without re
 UrlabVectorEnv steps many servers together (urlab_client.vector), the environments of batched
 servers (urlab_client.batch), or a batch inside this process with no server
 (UrlabVectorEnv.in_process, urlab_client.inproc); urlab_client.cluster starts servers on a Dask
-cluster and returns one.
+cluster and returns one; urlab_client.rollout runs in-process batches as Dask rollout workers.
 """
 from urlab_client.camera import CameraClient, decode_frame
 from urlab_client.step import StepClient, UrlabError
