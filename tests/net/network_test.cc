@@ -190,11 +190,47 @@ TEST_F(NetworkTest, OnlySubscribedTopicsAreSent) {
   EXPECT_NEAR(per_step(), 1.0, 0.05);
   EXPECT_FALSE(Receive("a/joint/hinge").empty());
   state_.set(zmq::sockopt::unsubscribe, "a/joint/hinge");
-  EXPECT_NEAR(per_step(), 0.0, 0.05);
+  // No subscriber at all: the every-step ring is off, so nothing is even copied for the topics
+  // while the simulation runs on.
+  std::this_thread::sleep_for(300ms);  // the unsubscription reaches the server
+  physics::PhysicsEngine& engine = manager_.session().engine();
+  const NetworkCounters idle = net_->counters();
+  const std::uint64_t steps = engine.step_count();
+  EXPECT_TRUE(urlab::testing::WaitFor([&] { return engine.step_count() >= steps + 100; }));
+  EXPECT_EQ(net_->counters().state_messages, idle.state_messages);
+  EXPECT_LE(net_->counters().steps_published, idle.steps_published + 1);
   state_.set(zmq::sockopt::subscribe, "a/");  // a prefix: every topic of robot a
   const double robot_a = per_step();
   EXPECT_GT(robot_a, 2.0);
   EXPECT_LT(robot_a, everything);
+}
+
+// The every-step ring is off without a subscriber: one who subscribes while the simulation is
+// paused still gets its state (the engine publishes a frame when the ring comes on), and discovery
+// goes on meanwhile on the engine's own counters.
+TEST_F(NetworkTest, ASubscriberWhileNobodyListenedAndPausedGetsTheState) {
+  Play();
+  state_.set(zmq::sockopt::unsubscribe, "");
+  physics::PhysicsEngine& engine = manager_.session().engine();
+  std::this_thread::sleep_for(300ms);  // the unsubscription reaches the server: the ring is off
+  engine.SetPaused(true);
+  std::this_thread::sleep_for(100ms);
+  const double time = manager_.session().engine().Snapshot().time;
+  info_.set(zmq::sockopt::rcvtimeo, 3000);
+  zmq::message_t m;
+  EXPECT_TRUE(info_.recv(m)) << "no discovery while paused without state subscribers";
+  // A new socket: the old one may still hold messages received before its unsubscription.
+  zmq::socket_t late(ctx_, zmq::socket_type::sub);
+  late.connect(net_->endpoints().state);
+  late.set(zmq::sockopt::subscribe, "a/joint/hinge");
+  late.set(zmq::sockopt::rcvtimeo, 3000);
+  std::vector<zmq::message_t> parts;
+  ASSERT_TRUE(zmq::recv_multipart(late, std::back_inserter(parts)))
+      << "a late subscriber got no state while paused";
+  ASSERT_EQ(parts.size(), 2u);
+  EXPECT_EQ(parts[0].to_string(), "a/joint/hinge");
+  EXPECT_TRUE(wire::DecodeJoint(parts[1].to_string()).has_value());
+  EXPECT_EQ(engine.Snapshot().time, time);  // still paused: the frame is the paused state
 }
 
 TEST_F(NetworkTest, ControlIsAppliedWholeAndOnlyToItsOwnRobot) {

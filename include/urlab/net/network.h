@@ -77,9 +77,9 @@ struct NetworkCounters {
   std::array<std::uint64_t, wire::kNumDrops> drops{};  // inbound messages dropped, per reason
   std::uint64_t controls_applied = 0;                  // control messages applied
   std::uint64_t gains_applied = 0;                     // set_gains messages applied
-  std::uint64_t steps_published = 0;                   // physics steps whose state went out
-  std::uint64_t frames_dropped = 0;  // steps the I/O thread could not keep up with
-  std::uint64_t info_published = 0;  // discovery messages
+  std::uint64_t steps_published = 0;  // physics steps whose state went out (while subscribed)
+  std::uint64_t frames_dropped = 0;   // steps the I/O thread could not keep up with
+  std::uint64_t info_published = 0;   // discovery messages
   // State topic messages sent (topics no subscriber asked for are not sent, nor encoded).
   std::uint64_t state_messages = 0;
   std::uint64_t total_drops() const;
