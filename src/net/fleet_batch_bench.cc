@@ -306,30 +306,50 @@ class BatchServer {
 
 }  // namespace
 
+namespace {
+
+// A Dask script's 1- and 2-worker rates (one=, two=): runs it with `args` after the client's
+// folder, pushes {key}1x16_env_steps_per_s, {key}2x16_env_steps_per_s, {key}_scaling and
+// {key}_of_ceiling (the scaling over what 2 plain threads make of the bare loop right after: the
+// bound on this machine at this time, so that a slow second CPU is told from a slow fleet), and
+// returns the script's output with the ceiling in *ceiling; "" (reported) when the script failed.
+std::string DaskScaling(FleetContext& ctx, const char* script, std::vector<std::string> args,
+                        const std::string& key, std::vector<FleetFigure>* out, double* ceiling) {
+  const FleetBenchOptions& o = ctx.options();
+  std::vector<std::string> argv = {o.python, "-c", script, o.python_client};
+  argv.insert(argv.end(), args.begin(), args.end());
+  int status = 0;
+  const std::string text = RunCaptured(argv, &status);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    ctx.Report("no " + key +
+               " figures (python3-distributed missing, or the cluster failed): " + text);
+    return "";
+  }
+  const double one = Field(text, "one"), two = Field(text, "two");
+  out->push_back({key + "1x16_env_steps_per_s", one});
+  out->push_back({key + "2x16_env_steps_per_s", two});
+  out->push_back({key + "_scaling", two / one});
+  *ceiling =
+      ctx.MedianRatio([&] { return ctx.CeilingRate(kFleetBatchThreads, ctx.steps_per_round()); });
+  out->push_back({key + "_of_ceiling", two / one / *ceiling});
+  return text;
+}
+
+}  // namespace
+
 void DaskFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
   const FleetBenchOptions& o = ctx.options();
   if (o.python_client.empty() || access(o.python.c_str(), X_OK) != 0) return;
-  int status = 0;
-  const std::string text = RunCaptured(
-      {o.python, "-c", kDaskScript, o.python_client, SelfPath(), ctx.scene_path, "4000"}, &status);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    ctx.Report("no Dask figures (python3-distributed missing, or the cluster failed): " + text);
-    return;
-  }
-  const double one = Field(text, "one"), two = Field(text, "two"), scaling = two / one;
-  out->push_back({"dask1x16_env_steps_per_s", one});
-  out->push_back({"dask2x16_env_steps_per_s", two});
-  out->push_back({"dask_scaling", scaling});
-  // What 2 cores give at all right after (parallel_ceiling's measurement): the scaling's bound on
-  // this machine at this time, so that a slow second CPU is told from a slow fleet.
-  const double ceiling =
-      ctx.MedianRatio([&] { return ctx.CeilingRate(kFleetBatchThreads, ctx.steps_per_round()); });
-  out->push_back({"dask_of_ceiling", scaling / ceiling});
+  double ceiling = 0;
+  const std::string text =
+      DaskScaling(ctx, kDaskScript, {SelfPath(), ctx.scene_path, "4000"}, "dask", out, &ceiling);
+  if (text.empty()) return;
+  const double one = Field(text, "one"), two = Field(text, "two");
   ctx.Report(
       Format("Dask LocalCluster, batched servers of 16 environments: 1 worker %.0f, 2 "
              "workers %.0f env steps/s (%.2f; 2 plain threads made %.2f of the bare loop just "
              "after, so %.3f of that ceiling)",
-             one, two, scaling, ceiling, scaling / ceiling));
+             one, two, two / one, ceiling, two / one / ceiling));
   for (const char* w : {"1", "2"}) {
     const std::string k(w);
     ctx.Report(
@@ -346,30 +366,20 @@ void RolloutFigures(FleetContext& ctx, std::vector<FleetFigure>* out) {
     ctx.Report("no Python client or in-process library: Dask rollout figures left out");
     return;
   }
-  int status = 0;
   // Steps per call: 500 at the default --steps (a call then takes about 0.3 s, and Dask's own
   // cost per call is a few milliseconds).
   const int steps = std::clamp(ctx.steps_per_round() / 8, 20, 500);
-  const std::string text = RunCaptured({o.python, "-c", kRolloutScript, o.python_client,
-                                        o.batch_library, ctx.scene_path, std::to_string(steps)},
-                                       &status);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    ctx.Report("no Dask rollout figures (python3-distributed missing, or the cluster failed): " +
-               text);
-    return;
-  }
-  const double one = Field(text, "one"), two = Field(text, "two"), scaling = two / one;
-  out->push_back({"dask_rollout1x16_env_steps_per_s", one});
-  out->push_back({"dask_rollout2x16_env_steps_per_s", two});
-  out->push_back({"dask_rollout_scaling", scaling});
-  const double ceiling =
-      ctx.MedianRatio([&] { return ctx.CeilingRate(kFleetBatchThreads, ctx.steps_per_round()); });
-  out->push_back({"dask_rollout_of_ceiling", scaling / ceiling});
+  double ceiling = 0;
+  const std::string text =
+      DaskScaling(ctx, kRolloutScript, {o.batch_library, ctx.scene_path, std::to_string(steps)},
+                  "dask_rollout", out, &ceiling);
+  if (text.empty()) return;
+  const double one = Field(text, "one"), two = Field(text, "two");
   ctx.Report(
       Format("Dask LocalCluster, rollout workers of 16 in-process environments (the driver out "
              "of the step loop): 1 worker %.0f, 2 workers %.0f env steps/s (%.2f; %.3f of what 2 "
              "plain threads made of the bare loop just after)",
-             one, two, scaling, scaling / ceiling));
+             one, two, two / one, two / one / ceiling));
   ctx.Report(
       Format("Dask rollouts, 2 workers: the slower worker stepped %.0f%% of the wall time "
              "and ran Python for %.0f%%",
