@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "ops/value_ranges.h"
 #include "urlab/camera/scene_settings.h"
 #include "urlab/core/error.h"
 #include "urlab/net/scene_settings.h"
@@ -15,6 +16,14 @@
 namespace urlab::embed {
 
 namespace {
+
+// Seeds are whole numbers a double holds exactly, as the step server takes them (ops' table).
+void CheckSeed(std::uint64_t seed, const char* what) {
+  const ops::ValueRange& r = ops::RangeOf("seed");
+  if (static_cast<double>(seed) > r.max) {
+    throw Error(std::string(what) + ": " + std::to_string(seed) + " is not " + ops::RangeText(r));
+  }
+}
 
 // How long a reset (commands the paused physics thread applies) may take.
 constexpr auto kCommandTimeout = std::chrono::seconds(60);
@@ -43,6 +52,7 @@ InProcessBatch::InProcessBatch(const std::string& scene, const InProcessOptions&
   if (!(options.reset_noise >= 0) || !std::isfinite(options.reset_noise)) {
     throw Error("reset_noise must be a finite number, 0 or more");
   }
+  if (options.seed) CheckSeed(*options.seed, "seed");
   // The scene sections the `urlab` tool knows (a scene written for `urlab run` loads here as it
   // is; the network, cameras and viewer they configure do not run).
   viewer::RegisterSceneSections();
@@ -148,6 +158,9 @@ const world::BatchResult& InProcessBatch::Step(std::span<const double> actions,
 
 const world::BatchResult& InProcessBatch::Reset(
     std::span<const int> envs, std::span<const std::optional<std::uint64_t>> seeds) {
+  for (const std::optional<std::uint64_t>& seed : seeds) {
+    if (seed) CheckSeed(*seed, "seeds");
+  }
   world::BatchSubsystem& b = *playing_->batch;
   world::BatchResetJob& job = *reset_job_;
   job.envs.assign(envs.begin(), envs.end());

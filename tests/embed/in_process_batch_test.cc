@@ -162,6 +162,10 @@ TEST_F(InProcessBatchTest, BadArraysAreRefusedNamingTheField) {
   EXPECT_THAT(message([&] { b.Step(a, {}, 0); }), HasSubstr("n_steps must be at least 1"));
   const std::vector<int> nine = {9};
   EXPECT_THAT(message([&] { b.Reset(nine); }), HasSubstr("no environment 9"));
+  const std::vector<int> zero = {0};
+  const std::vector<std::optional<std::uint64_t>> huge = {std::uint64_t{1} << 60};
+  EXPECT_THAT(message([&] { b.Reset(zero, huge); }),
+              HasSubstr("seeds: 1152921504606846976 is not"));
   // Nothing was stepped by the refused requests.
   EXPECT_THAT(b.Step(a).episode_steps, ::testing::ElementsAre(1u, 1u));
 }

@@ -97,6 +97,9 @@ def main():
     bad[2, 5] = np.nan
     raises(ValueError, "environment 2, actuator 5 is not a finite number",
            lambda: local.step(bad))
+    raises(ValueError, "seeds: -3 is not", lambda: local.reset(seed=[-3, 0, 0, 0]))
+    raises(ValueError, "seeds: 9007199254740992 is not",
+           lambda: local.reset(seed=[2 ** 53, 0, 0, 0]))
     raises(ValueError, "play", lambda: InProcessBatch(SCENE, envs=1, library=LIBRARY))
     raises(OSError, "/no/such/liburlab_batch.so (no such file)",
            lambda: InProcessBatch(SCENE, library="/no/such/liburlab_batch.so"))

@@ -127,6 +127,8 @@ class InProcessBatch(BatchCalls):
                  auto_reset=True, n_steps=1, library=None, log_level="warn"):
         if int(envs) < 1:
             raise ValueError(f"num_envs must be at least 1 (got {envs})")
+        if seed is not None and int(seed) < 0:
+            raise ValueError(f"seed: {seed} is not a whole number of 0 or more")
         self._lib = load_library(library)
         self.endpoint = "in-process:" + str(scene)
         self.transport = "in-process"
@@ -226,6 +228,9 @@ class InProcessBatch(BatchCalls):
             seeds = list(seeds)
             if len(seeds) != k:
                 raise ValueError(f"{len(seeds)} seeds for {k} environments")
+            for s in seeds:
+                if s is not None and int(s) < 0:
+                    raise ValueError(f"seeds: {s} is not a whole number of 0 or more")
             has = np.array([s is not None for s in seeds], dtype=np.uint8)
             seed_values = np.array([0 if s is None else int(s) for s in seeds], dtype=np.uint64)
         arrays = self._fresh()
