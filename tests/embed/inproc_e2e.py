@@ -9,12 +9,15 @@ server) against a batched server (`urlab run SCENE --envs N`, its own process, s
   episode, fresh arrays every step (a rollout buffer may keep them);
 - bad input raises with the library's message: a missing scene named, actions of the wrong
   shape, a NaN action naming its environment and actuator, a second batch in the process, a
-  library that is not there (the paths tried), a step after close().
+  library that is not there (the paths tried), a step after close(), close() on another thread
+  while one steps.
 Usage: inproc_e2e.py URLAB_BINARY SOURCE_DIR LIBRARY
 """
 import os
 import sys
 import tempfile
+import threading
+import time
 
 import numpy as np
 
@@ -115,6 +118,24 @@ def main():
     gone = InProcessBatch(SCENE, envs=2, library=LIBRARY)
     gone.close()
     raises(RuntimeError, "closed", lambda: gone.step(np.zeros((2, nu))))
+    # close() on another thread while one steps: the step under way ends, the next one raises.
+    racer = InProcessBatch(SCENE, envs=2, library=LIBRARY)
+    errors = []
+
+    def steps():
+        try:
+            for _ in range(1000000):
+                racer.step(np.zeros((2, nu)))
+        except RuntimeError as e:
+            errors.append(str(e))
+
+    thread = threading.Thread(target=steps)
+    thread.start()
+    time.sleep(0.3)
+    racer.close()
+    thread.join(30)
+    check(not thread.is_alive() and errors and "closed" in errors[0],
+          f"a step racing close(): {errors}")
     # A context manager releases the batch: another one opens after it.
     with UrlabVectorEnv.in_process(SCENE, 2, library=LIBRARY) as envs:
         envs.reset(seed=0)

@@ -22,6 +22,7 @@ import ctypes
 import glob
 import os
 import shutil
+import threading
 
 import numpy as np
 
@@ -120,7 +121,8 @@ def load_library(library=None):
 class InProcessBatch(BatchCalls):
     """A batch of `envs` environments of `scene` in this process, with BatchClient's interface
     (UrlabVectorEnv's BatchBackend drives either): send_step() steps at once (the GIL released),
-    receive_step_parts() returns the result. Errors in what it is given raise ValueError with
+    receive_step_parts() returns the result. Calls from several threads take turns; close()
+    waits for one under way. Errors in what it is given raise ValueError with
     the library's message (naming the field, or the scene file and line)."""
 
     def __init__(self, scene, envs=1, threads=0, seed=None, max_episode_steps=0, reset_noise=0.0,
@@ -130,6 +132,7 @@ class InProcessBatch(BatchCalls):
         if seed is not None and int(seed) < 0:
             raise ValueError(f"seed: {seed} is not a whole number of 0 or more")
         self._lib = load_library(library)
+        self._lock = threading.Lock()  # calls from several threads take turns
         self.endpoint = "in-process:" + str(scene)
         self.transport = "in-process"
         self.n_steps = int(n_steps)
@@ -189,6 +192,10 @@ class InProcessBatch(BatchCalls):
 
     def send_step(self, actions, reset=None):
         """actions: (envs, nu) float64; reset: (envs,) bool, those reset instead of stepping."""
+        with self._lock:
+            self._send_step(actions, reset)
+
+    def _send_step(self, actions, reset):
         self._need_open()
         if type(actions) is not np.ndarray or actions.dtype != _F8 or \
                 not actions.flags.c_contiguous:
@@ -214,6 +221,10 @@ class InProcessBatch(BatchCalls):
 
     def send_reset(self, envs=None, seeds=None, auto_reset=None):
         """envs: indices (None: all); seeds: one int or None per listed environment."""
+        with self._lock:
+            self._send_reset(envs, seeds, auto_reset)
+
+    def _send_reset(self, envs, seeds, auto_reset):
         self._need_open()
         if auto_reset is not None:
             self._lib.urlab_batch_set_auto_reset(self._handle, 1 if auto_reset else 0)
@@ -273,9 +284,13 @@ class InProcessBatch(BatchCalls):
         self.close()
 
     def close(self):
-        handle, self._handle = getattr(self, "_handle", None), None
-        if handle is not None:
-            self._lib.urlab_batch_close(handle)
+        lock = getattr(self, "_lock", None)
+        if lock is None:  # the constructor failed before it
+            return
+        with lock:  # after a call under way on another thread, never during it
+            handle, self._handle = getattr(self, "_handle", None), None
+            if handle is not None:
+                self._lib.urlab_batch_close(handle)
 
     def __del__(self):
         try:
