@@ -9,6 +9,7 @@
 #include "urlab/camera/scene_settings.h"
 #include "urlab/core/error.h"
 #include "urlab/net/scene_settings.h"
+#include "urlab/ops/batch.h"
 #include "urlab/viewer/scene_settings.h"
 #include "urlab/world/manager.h"
 #include "urlab/world/scene_file.h"
@@ -111,41 +112,16 @@ void InProcessBatch::SetAutoReset(bool on) { playing_->batch->SetAutoReset(on); 
 const world::BatchResult& InProcessBatch::Step(std::span<const double> actions,
                                                std::span<const std::uint8_t> reset, int n_steps) {
   world::BatchSubsystem& b = *playing_->batch;
-  const std::size_t nu = static_cast<std::size_t>(b.action_size());
-  const std::size_t n = static_cast<std::size_t>(b.envs());
-  if (actions.size() != n * nu) {
-    throw Error("actions hold " + std::to_string(actions.size()) + " values, expected " +
-                std::to_string(n * nu) + " (" + std::to_string(n) + " environments x " +
-                std::to_string(nu) + " actuators)");
-  }
-  for (std::size_t i = 0; i < actions.size(); ++i) {
-    if (!std::isfinite(actions[i])) {
-      throw Error("actions: environment " + std::to_string(i / std::max<std::size_t>(nu, 1)) +
-                  ", actuator " + std::to_string(i % std::max<std::size_t>(nu, 1)) +
-                  " is not a finite number");
-    }
-  }
-  if (!reset.empty() && reset.size() != n) {
-    throw Error("reset holds " + std::to_string(reset.size()) +
-                " flags, expected one per environment (" + std::to_string(n) + ")");
-  }
-  if (n_steps < 1) throw Error("n_steps must be at least 1 (got " + std::to_string(n_steps) + ")");
   // One job, reused: its arrays keep their capacity from step to step.
   world::BatchStepJob& job = *step_job_;
   job.actions.assign(actions.begin(), actions.end());
   job.reset.assign(reset.begin(), reset.end());
+  // The step server's checks (ops::CheckBatchStep); BatchSubsystem::CheckStep refuses n_steps < 1.
+  ops::CheckBatchStep(b, job.actions, job.reset);
   for (std::uint8_t& f : job.reset) f = f != 0;
   job.n = n_steps;
   job.out.complete = false;
-  physics::PhysicsEngine& engine = playing_->manager.session().engine();
-  if (!b.StepHere(step_job_)) {
-    // Environment 0 resets in this step: through the engine's commands (the physics thread).
-    std::uint64_t steps = 0;
-    const std::uint64_t id = b.SubmitStep(step_job_, &steps);
-    const physics::CommandResult r = engine.WaitForCommand(id, kCommandTimeout);
-    if (!r.ok()) throw Error("the batch step failed: " + r.error);
-    steps_since_tick_ = kTickEvery;  // a reset: deliver its events now
-  }
+  b.StepHere(step_job_);  // detached: always here, on this thread and the batch's workers
   if (!job.out.complete) throw Error("the batch step did not complete");
   b.NoteCompleted(job.out);
   steps_since_tick_ += static_cast<std::uint64_t>(n_steps);

@@ -6,13 +6,13 @@
 #include <mujoco/mujoco.h>
 
 #include <chrono>
-#include <cmath>
 #include <cstring>
 #include <memory>
 
 #include "net/request_fields.h"
 #include "net/step_server.h"
 #include "net/value_ranges.h"
+#include "urlab/ops/batch.h"
 #include "urlab/world/batch_subsystem.h"
 
 namespace urlab::net {
@@ -161,31 +161,10 @@ StepServer::Outcome StepServer::BatchStep(Request& r) {
     job->n = static_cast<int>(RangedNumber(*it, "n_steps"));
   }
   job->actions = Doubles(r.body["actions"], "actions");
-  const std::size_t expected =
-      static_cast<std::size_t>(b.envs()) * static_cast<std::size_t>(b.action_size());
-  if (job->actions.size() != expected) {
-    Fail("dim_mismatch", "actions hold " + std::to_string(job->actions.size()) +
-                             " values, expected " + std::to_string(expected) + " (" +
-                             std::to_string(b.envs()) + " environments x " +
-                             std::to_string(b.action_size()) + " actuators)");
-  }
-  for (std::size_t i = 0; i < job->actions.size(); ++i) {
-    const double x = job->actions[i];
-    if (!std::isfinite(x)) {
-      const std::size_t nu = static_cast<std::size_t>(std::max(1, b.action_size()));
-      Fail("bad_value", "actions: environment " + std::to_string(i / nu) + ", actuator " +
-                            std::to_string(i % nu) + " is not a finite number");
-    }
-  }
-  CheckRanges(job->actions, "actions");
   if (const auto it = r.body.find("reset"); it != r.body.end() && !it->is_null()) {
     job->reset = Flags(*it, "reset");
-    if (job->reset.size() != static_cast<std::size_t>(b.envs())) {
-      Fail("dim_mismatch", "reset holds " + std::to_string(job->reset.size()) +
-                               " flags, expected one per environment (" + std::to_string(b.envs()) +
-                               ")");
-    }
   }
+  ops::CheckBatchStep(b, job->actions, job->reset);
   const std::uint64_t queued = QueuedSteps(r.client->id);
   if (queued + static_cast<std::uint64_t>(job->n) > options_.limits.max_queued_steps) {
     Fail("queue_full", "this session has " + std::to_string(queued) + " steps queued already");

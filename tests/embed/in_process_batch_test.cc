@@ -155,6 +155,8 @@ TEST_F(InProcessBatchTest, BadArraysAreRefusedNamingTheField) {
   a[21 + 3] = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THAT(message([&] { b.Step(a); }),
               HasSubstr("actions: environment 1, actuator 3 is not a finite number"));
+  a[21 + 3] = 1e10;  // beyond the actions' range, as the step server refuses it
+  EXPECT_THAT(message([&] { b.Step(a); }), HasSubstr("actions must be"));
   a[21 + 3] = 0;
   const std::vector<std::uint8_t> flags(3, 0);
   EXPECT_THAT(message([&] { b.Step(a, flags); }),
