@@ -377,9 +377,9 @@ void BatchSubsystem::Gather(const mjModel* m, const mjData* d, BatchResult& out)
   out.episode_steps.resize(n);
   out.done.resize(n, 0);
   out.reset.resize(n, 0);
-  // Detached, every row is the batch's (as if the engine's were past the last).
-  const std::size_t e = detached() ? n : static_cast<std::size_t>(options_.engine_env);
+  // Detached, every row is the batch's: the engine's simulation is none of them.
   if (!detached()) {
+    const std::size_t e = static_cast<std::size_t>(options_.engine_env);
     double* engine_row = out.obs.data() + row * e;
     if (env0_latency_.observations_delayed()) {
       if (env0_restart_observation_) ObserveEnv0(m, d, /*stepped=*/false);  // reset, not stepped
@@ -389,13 +389,12 @@ void BatchSubsystem::Gather(const mjModel* m, const mjData* d, BatchResult& out)
     }
     out.time[e] = d->time;
     out.episode_steps[e] = env0_steps_;
-  }
-  // The others' rows: as the stepping threads wrote them in this window's last iteration (the
-  // rows before the engine's environment, then those after it), or read now.
-  if (others_ && others_observed_) {
-    const std::size_t before = e * row;
-    std::copy_n(others_obs_.data(), before, out.obs.data());
-    if (!detached()) {
+    // The others' rows: as the stepping threads wrote them in this window's last iteration (the
+    // rows before the engine's environment, then those after it), or read below. (Only a
+    // window's last iteration sets others_observed_: never detached.)
+    if (others_ && others_observed_) {
+      const std::size_t before = e * row;
+      std::copy_n(others_obs_.data(), before, out.obs.data());
       std::copy_n(others_obs_.data() + before, others_obs_.size() - before,
                   out.obs.data() + before + row);
     }
