@@ -230,18 +230,18 @@ struct NetworkSubsystem::Impl {
     }
   }
 
-  // The info topic's schedule while the ring is off (no frames): the engine's own counters.
-  void InfoWithoutFrames(Clock::time_point now) {
-    physics::PhysicsEngine& engine = session->engine();
-    const std::uint64_t step = engine.step_count();
-    if (step >= next_info_step) {
-      PublishInfo();
-      next_info_step = step + (step < 2500 ? 50 : 500);
-    }
-    if (engine.paused() && now - last_paused_info >= kPausedInfo) {
-      PublishInfo();
-      last_paused_info = now;
-    }
+  // The info topic's schedule (discovery): every 50 steps for the first 2500, then every 500,
+  // by the step of the newest frame, or the engine's step counter while the ring is off.
+  void InfoAtStep(std::uint64_t step) {
+    if (step < next_info_step) return;
+    PublishInfo();
+    next_info_step = step + (step < 2500 ? 50 : 500);
+  }
+  // And while paused, every kPausedInfo.
+  void InfoWhilePaused(Clock::time_point now) {
+    if (now - last_paused_info < kPausedInfo) return;
+    PublishInfo();
+    last_paused_info = now;
   }
 
   bool Wanted(std::string_view topic) const {
@@ -530,25 +530,20 @@ struct NetworkSubsystem::Impl {
         got = have_frame = true;
         PublishState(frame);
         steps_published.fetch_add(1);
-        if (frame.step >= next_info_step) {
-          PublishInfo();
-          next_info_step = frame.step + (frame.step < 2500 ? 50 : 500);
-        }
+        InfoAtStep(frame.step);
         DrainControl();  // a long backlog must not starve inbound messages
         if (server) server->HandleIncoming();
       }
       const auto now = Clock::now();
-      if (!ring->active()) {
-        InfoWithoutFrames(now);
+      if (!ring->active()) {  // no frames: the engine's own counters
+        InfoAtStep(session->engine().step_count());
+        if (session->engine().paused()) InfoWhilePaused(now);
       } else if (!got && have_frame && frame.paused) {
         if (now - last_republish >= kPausedRepublish) {  // late subscribers see a paused state
           PublishState(frame);
           last_republish = now;
         }
-        if (now - last_paused_info >= kPausedInfo) {
-          PublishInfo();
-          last_paused_info = now;
-        }
+        InfoWhilePaused(now);
       }
       LogDrops(now);
       Sleep();
