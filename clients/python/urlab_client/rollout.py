@@ -37,9 +37,13 @@ class RolloutWorker:
         from urlab_client.cluster import _host
         # Pause the worker's statistical profiler while it steps (as a worker hosting a server).
         self._worker = distributed.get_worker()
-        _host(self._worker, +1)
         self.env = UrlabVectorEnv.in_process(scene, envs, threads=threads, **options)
-        self.obs, _ = self.env.reset(seed=seed)
+        try:
+            self.obs, _ = self.env.reset(seed=seed)
+        except BaseException:
+            self.env.close()
+            raise
+        _host(self._worker, +1)  # counted once it exists (close() uncounts it)
 
     def spaces(self):
         """(single_action_space, single_observation_space) of the environments."""
