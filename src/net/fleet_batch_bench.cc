@@ -308,21 +308,34 @@ class BatchServer {
 
 namespace {
 
-// A Dask script's 1- and 2-worker rates (one=, two=): runs it with `args` after the client's
-// folder, pushes {key}1x16_env_steps_per_s, {key}2x16_env_steps_per_s, {key}_scaling and
-// {key}_of_ceiling (the scaling over what 2 plain threads make of the bare loop right after: the
-// bound on this machine at this time, so that a slow second CPU is told from a slow fleet), and
-// returns the script's output with the ceiling in *ceiling; "" (reported) when the script failed.
-std::string DaskScaling(FleetContext& ctx, const char* script, std::vector<std::string> args,
-                        const std::string& key, std::vector<FleetFigure>* out, double* ceiling) {
+// Runs a Python benchmark `script` with the client's folder as its first argument and `args`
+// after it; its output. Throws Error naming `what` when it fails.
+std::string RunClientScript(const FleetContext& ctx, const std::string& script,
+                            const std::vector<std::string>& args, const std::string& what) {
   const FleetBenchOptions& o = ctx.options();
   std::vector<std::string> argv = {o.python, "-c", script, o.python_client};
   argv.insert(argv.end(), args.begin(), args.end());
   int status = 0;
   const std::string text = RunCaptured(argv, &status);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    throw Error("bench fleet: the Python " + what + " failed (" + text + ")");
+  }
+  return text;
+}
+
+// A Dask script's 1- and 2-worker rates (one=, two=): runs it with `args` after the client's
+// folder, pushes {key}1x16_env_steps_per_s, {key}2x16_env_steps_per_s, {key}_scaling and
+// {key}_of_ceiling (the scaling over what 2 plain threads make of the bare loop right after: the
+// bound on this machine at this time, so that a slow second CPU is told from a slow fleet), and
+// returns the script's output with the ceiling in *ceiling; "" (reported) when the script failed.
+std::string DaskScaling(FleetContext& ctx, const char* script, const std::vector<std::string>& args,
+                        const std::string& key, std::vector<FleetFigure>* out, double* ceiling) {
+  std::string text;
+  try {
+    text = RunClientScript(ctx, script, args, key + " script");
+  } catch (const Error& e) {
     ctx.Report("no " + key +
-               " figures (python3-distributed missing, or the cluster failed): " + text);
+               " figures (python3-distributed missing, or the cluster failed): " + e.what());
     return "";
   }
   const double one = Field(text, "one"), two = Field(text, "two");
@@ -422,21 +435,6 @@ class BatchWork {
 // The physics steps per request of batch64_frameskip5_ratio (gymnasium's MuJoCo humanoid holds
 // each action for 5 steps).
 constexpr int kFrameSkip = 5;
-
-// Runs a Python benchmark `script` with the client's folder as its first argument and `args`
-// after it; its output. Throws Error naming `what` when it fails.
-std::string RunClientScript(const FleetContext& ctx, const std::string& script,
-                            const std::vector<std::string>& args, const std::string& what) {
-  const FleetBenchOptions& o = ctx.options();
-  std::vector<std::string> argv = {o.python, "-c", script, o.python_client};
-  argv.insert(argv.end(), args.begin(), args.end());
-  int status = 0;
-  const std::string text = RunCaptured(argv, &status);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    throw Error("bench fleet: the Python " + what + " failed (" + text + ")");
-  }
-  return text;
-}
 
 // One run of the batched script over `server` with `work`'s actions and `n_steps` per request;
 // its output (rate=..., server=...).
