@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
-# Installs every build, test and runtime dependency of URLab from Debian bookworm's archive.
-# Run as root (or through sudo). Safe to run again.
+# Installs every build, test and runtime dependency of URLab: Debian bookworm's packages, then the
+# project's Python environment .venv (Debian's python3 with its system packages, plus the exact
+# PyPI versions of tools/requirements.txt, MuJoCo's wheel among them: CMake builds against it).
+# Run as root (or through sudo) for the Debian part. Safe to run again: nothing is fetched when
+# everything is present.
 set -euo pipefail
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
@@ -11,7 +14,7 @@ PACKAGES=(
   libeigen3-dev libzmq3-dev cppzmq-dev libmsgpack-cxx-dev libzstd-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev ccache
-  python3 python3-zmq python3-msgpack python3-numpy
+  python3 python3-venv python3-zmq python3-msgpack python3-numpy
   # urlab_client.cluster and `urlab sweep`: Dask distributed, YAML
   python3-distributed python3-yaml
   # examples/python/learn_reach.py (PPO through the vector env; CI runs a short smoke of it)
@@ -23,11 +26,25 @@ PACKAGES=(
 )
 # Everything present already (a second run, a prepared machine): no apt-get, no network.
 PRESENT=$(dpkg-query -W -f='${db:Status-Abbrev}\n' "${PACKAGES[@]}" 2>/dev/null | grep -c '^ii' || true)
-if [ "$PRESENT" -eq "${#PACKAGES[@]}" ]; then
-  echo "install-deps: ${#PACKAGES[@]} packages present"
-  exit 0
+if [ "$PRESENT" -ne "${#PACKAGES[@]}" ]; then
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${PACKAGES[@]}" >/dev/null
 fi
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${PACKAGES[@]}" >/dev/null
 echo "install-deps: ${#PACKAGES[@]} packages present"
+
+# The Python environment: made once; the pinned packages installed again only when
+# tools/requirements.txt changed (its hash is kept in the environment).
+cd "$(dirname "$0")/.."
+VENV=.venv
+REQ=tools/requirements.txt
+STAMP="$VENV/.urlab-requirements.sha256"
+WANT=$(sha256sum "$REQ" | cut -d' ' -f1)
+if [ ! -x "$VENV/bin/python" ]; then
+  /usr/bin/python3 -m venv --system-site-packages "$VENV"
+fi
+if [ "$(cat "$STAMP" 2>/dev/null)" != "$WANT" ]; then
+  "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-input -r "$REQ"
+  echo "$WANT" >"$STAMP"
+fi
+echo "install-deps: $VENV ($("$VENV/bin/python" -c 'import mujoco; print("mujoco", mujoco.__version__)'))"
