@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
   options.threads = argc > 1 ? std::atoi(argv[1]) : 2;
   options.env_steps = argc > 2 ? std::atoi(argv[2]) : 20000;
   options.trials = argc > 3 ? std::atoi(argv[3]) : 5;
-  const std::string path = argc > 4 ? argv[4] : "/usr/share/mujoco/model/humanoid/humanoid.xml";
+  const std::string path = argc > 4 ? argv[4] : URLAB_SOURCE_DIR "/examples/models/humanoid.xml";
   options.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
   const urlab::physics::Model model(urlab::physics::LoadXmlFile(path));
   std::printf("model %s, %d threads\n", path.c_str(), options.threads);

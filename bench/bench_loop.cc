@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
   urlab::world::LoopBenchOptions options;
   options.steps = argc > 1 ? std::atoi(argv[1]) : 20000;
   options.trials = argc > 2 ? std::atoi(argv[2]) : 9;
-  const std::string path = argc > 3 ? argv[3] : "/usr/share/mujoco/model/humanoid/humanoid.xml";
+  const std::string path = argc > 3 ? argv[3] : URLAB_SOURCE_DIR "/examples/models/humanoid.xml";
   options.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
 
   const urlab::physics::Model model(urlab::physics::LoadXmlFile(path));

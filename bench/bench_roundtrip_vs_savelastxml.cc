@@ -1,5 +1,5 @@
 // Comparison: URLab's import/export round trip versus MuJoCo 2.2.2's own mj_saveLastXML on every
-// model under /usr/share/mujoco/model (or the folders given). For each model the output is
+// model under tests/data/mjcf/corpus (or the folders given). For each model the output is
 // reloaded from another working directory and its 1000-step zero-control trajectory compared
 // bit for bit with the original's. Prints counts for both and the ratio of bit-identical models.
 #include <unistd.h>
@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
   urlab::SetLogLevel("off");
   std::vector<std::string> dirs;
   for (int i = 1; i < argc; ++i) dirs.push_back(argv[i]);
-  if (dirs.empty()) dirs.push_back("/usr/share/mujoco/model");
+  if (dirs.empty()) dirs.push_back(URLAB_SOURCE_DIR "/tests/data/mjcf/corpus");
   std::vector<std::string> files;
   for (const auto& d : dirs) {
     for (const auto& e : fs::recursive_directory_iterator(d)) {

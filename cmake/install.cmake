@@ -6,6 +6,18 @@
 # the exported link interface as $<LINK_ONLY:...>, so urlabConfig.cmake finds those too.
 include(CMakePackageConfigHelpers)
 
+# The MuJoCo release URLab was built with travels with it: its library (found by the installed
+# programs through $ORIGIN/../lib), its C headers (the public headers include them) and its engine
+# plugins (lib/mujoco_plugin, loaded at start).
+install(FILES ${URLAB_MUJOCO_LIBRARY} DESTINATION ${CMAKE_INSTALL_LIBDIR})
+get_target_property(_urlab_mujoco_include mujoco::mujoco INTERFACE_INCLUDE_DIRECTORIES)
+install(DIRECTORY ${_urlab_mujoco_include}/mujoco DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+if(URLAB_MUJOCO_PLUGIN_DIR)
+  install(DIRECTORY ${URLAB_MUJOCO_PLUGIN_DIR}/ DESTINATION ${CMAKE_INSTALL_LIBDIR}/mujoco_plugin
+          FILES_MATCHING PATTERN "*.so*")
+endif()
+set_target_properties(urlab urlab_batch PROPERTIES INSTALL_RPATH "$ORIGIN/../${CMAKE_INSTALL_LIBDIR}")
+
 get_property(urlab_modules GLOBAL PROPERTY URLAB_MODULES)
 set_target_properties(urlab PROPERTIES EXPORT_NAME urlab)
 install(TARGETS ${urlab_modules} urlab
@@ -23,6 +35,7 @@ install(FILES ${PROJECT_BINARY_DIR}/generated/urlab/core/version.h
 
 set(URLAB_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/urlab)
 install(EXPORT urlabTargets NAMESPACE urlab:: DESTINATION ${URLAB_CMAKE_DIR})
+get_filename_component(URLAB_MUJOCO_SONAME ${URLAB_MUJOCO_LIBRARY} NAME)
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/urlabConfig.cmake.in
                               ${PROJECT_BINARY_DIR}/urlabConfig.cmake
                               INSTALL_DESTINATION ${URLAB_CMAKE_DIR})

@@ -45,7 +45,8 @@ int main(int argc, char** argv) {
   const int steps = static_cast<int>(1.0 / model->opt.timestep);
   for (int i = 0; i < steps; ++i) mj_step(model.get(), data.get());
   std::printf("nbody=%d njnt=%d nu=%d nsensor=%d; after %.2fs: shoulder=%.4f elbow=%.4f\n",
-              model->nbody, model->njnt, model->nu, model->nsensor, data->time, data->qpos[0],
-              data->qpos[1]);
+              static_cast<int>(model->nbody), static_cast<int>(model->njnt),
+              static_cast<int>(model->nu), static_cast<int>(model->nsensor), data->time,
+              data->qpos[0], data->qpos[1]);
   return 0;
 }

@@ -1,7 +1,7 @@
 // libFuzzer target for the scene path: a YAML scene file and an MJCF articulation, through
-// world::ParseScene, the scene checks, the MJCF reader and dialect bridge, mjcf::Compose and the
-// writer, then (for what composed) world::BuildCheckedScene: MuJoCo compiles the composed model
-// and the compiled-scene checks run. No physics step.
+// world::ParseScene, the scene checks, MuJoCo's parser (mjcf::ParseFile), mjcf::Compose (mjSpec
+// attachment), MuJoCo's compiler and writer, then (for what composed) world::BuildCheckedScene:
+// MuJoCo compiles the composed model and the compiled-scene checks run. No physics step.
 //
 // Input: YAML text, optionally followed by "\n---mjcf---\n" and MJCF text. The MJCF is written
 // to robot.xml in a private temporary folder next to the scene (which also holds arm.xml, a
@@ -19,10 +19,8 @@
 #include "urlab/camera/scene_settings.h"
 #include "urlab/core/diagnostics.h"
 #include "urlab/core/error.h"
-#include "urlab/mjcf/bridge.h"
 #include "urlab/mjcf/compose.h"
-#include "urlab/mjcf/reader.h"
-#include "urlab/mjcf/writer.h"
+#include "urlab/mjcf/spec.h"
 #include "urlab/net/scene_settings.h"
 #include "urlab/viewer/scene_settings.h"
 #include "urlab/world/scene.h"
@@ -77,13 +75,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     scene.save_debug_xml.clear();  // writes nothing
     urlab::Diagnostics sink;
     urlab::world::CheckSceneConfig(scene, sink);
-    // Composition as BuildScene does it, then the composed document written out.
+    // Composition as BuildScene does it, then the composed spec written out.
     std::vector<urlab::mjcf::ArticulationInput> inputs;
     for (const auto& a : scene.articulations) {
       urlab::mjcf::ArticulationInput in;
       in.name = a.name;
-      in.doc = urlab::mjcf::ReadFile(a.mjcf);
-      (void)urlab::mjcf::ApplyBridge(in.doc);
+      in.file = a.mjcf;
+      in.spec = urlab::mjcf::ParseFile(a.mjcf);
       in.placement.pos = a.pos;
       in.placement.quat = a.quat;
       in.options = a.options;
@@ -92,11 +90,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     if (inputs.empty()) return 0;
     urlab::mjcf::ComposeResult composed = urlab::mjcf::Compose(std::move(inputs), scene.options);
-    for (const auto& [k, v] : scene.options) {
-      urlab::mjcf::SetOptionAttribute(composed.doc, k, v);
+    for (const auto& [k, v] : scene.size) urlab::mjcf::SetSize(composed.spec.get(), k, v);
+    if (mjModel* m = mj_compile(composed.spec.get(), nullptr)) {
+      mj_deleteModel(m);
+      (void)urlab::mjcf::SaveXml(composed.spec.get());
     }
-    for (const auto& [k, v] : scene.size) composed.doc.Section("size").Set(k, v);
-    (void)urlab::mjcf::WriteString(composed.doc);
     if (sink.has_errors()) return 0;
     // The whole begin-play path: compose again, compile with MuJoCo, check the compiled scene.
     (void)urlab::world::BuildCheckedScene(scene);

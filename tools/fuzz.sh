@@ -51,7 +51,7 @@ fuzz_one() {
   mkdir -p "$work/corpus" "$work/artifacts"
   cp fuzz/corpus/"$t"/* "$work/corpus/"
   if [ "$t" = fuzz_mjcf_reader ]; then
-    cp /usr/share/mujoco/model/*/*.xml "$work/corpus/" 2>/dev/null || true
+    cp examples/models/*.xml tests/data/mjcf/corpus/*.xml "$work/corpus/" 2>/dev/null || true
   fi
   len=$(max_len "$t")
   echo "== fuzz $t for ${SECONDS_TO_RUN} s, inputs up to $len bytes (seeds: $(ls "$work/corpus" | wc -l))"

@@ -9,7 +9,7 @@ SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git
-  libmujoco-dev libmujoco-samples libqhull-dev
+  libqhull-dev
   libtinyxml2-dev libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   libeigen3-dev libzmq3-dev cppzmq-dev libmsgpack-cxx-dev libzstd-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev

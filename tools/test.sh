@@ -99,10 +99,6 @@ main_stage() {
   # tools/build.sh's build (-O2 -g1: line tables only), the one tools/demo.sh makes too, so that
   # either command after the other reuses the objects.
   tools/build.sh
-  if [ -f tools/install-mujoco-js.sh ]; then
-    bash tools/install-mujoco-js.sh "$BUILD_DIR/mujoco-js" ||
-      echo "mujoco-js not installed: the 3.x reference test will skip"
-  fi
   run_ctest "$BUILD_DIR" -j"$JOBS" --timeout 900
   # The viewer end to end on a private virtual display (the viewer.xvfb ctest entry runs its unit
   # tests the same way): a window, the panel, a screenshot taken at t=0.5 s.
@@ -137,11 +133,7 @@ asan_stage() {  # also CI's clang build and its build with assertions on
   cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_core urlab_tests_mjcf \
     urlab_tests_document urlab_tests_replay urlab_tests_control urlab_tests_embed \
     fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_recording fuzz_mesh
-  # The MuJoCo 3.x reference the main stage installed (the 3.x comparison tests skip without it).
-  local js="$BUILD_DIR/mujoco-js"
-  [[ "$js" == /* ]] || js="$PWD/$js"
-  URLAB_MUJOCO_JS="$js" \
-    ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1" \
+  ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1" \
     run_ctest "$dir" -L 'core|mjcf|document|replay|control|embed' \
     -j"$JOBS" --timeout 900
 }

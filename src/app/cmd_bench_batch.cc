@@ -37,8 +37,9 @@ void RegisterBenchBatchCommand(CLI::App& bench, int& exit_code) {
     // Exactly what begin-play builds and checks.
     const world::CompiledScene compiled = world::BuildCheckedScene(world::LoadSceneOrModel(scene));
     options.report = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
-    std::printf("scene %s: nq=%d nv=%d nu=%d, %d threads\n", scene.c_str(), compiled.model->nq,
-                compiled.model->nv, compiled.model->nu, options.threads);
+    std::printf("scene %s: nq=%d nv=%d nu=%d, %d threads\n", scene.c_str(),
+                static_cast<int>(compiled.model->nq), static_cast<int>(compiled.model->nv),
+                static_cast<int>(compiled.model->nu), options.threads);
     for (const physics::BatchBenchPoint& p : physics::RunBatchBench(compiled.model, options)) {
       std::printf("bare_steps_per_s_N%d=%.0f\nbatch_steps_per_s_N%d=%.0f\nratio_N%d=%.4f\n", p.envs,
                   p.bare_rate, p.envs, p.batch_rate, p.envs, p.ratio);

@@ -10,8 +10,6 @@
 #include "app/commands.h"
 #include "app/signals.h"
 #include "urlab/core/files.h"
-#include "urlab/mjcf/bridge.h"
-#include "urlab/mjcf/writer.h"
 #include "urlab/world/scene.h"
 #include "urlab/world/scene_checks.h"
 
@@ -20,7 +18,7 @@ namespace urlab::app {
 namespace {
 
 // The model sizes `urlab compile` reports, in print order.
-std::vector<std::pair<const char*, int>> ModelSizes(const mjModel* m) {
+std::vector<std::pair<const char*, mjtSize>> ModelSizes(const mjModel* m) {
   return {{"nq", m->nq},
           {"nv", m->nv},
           {"nu", m->nu},
@@ -65,25 +63,17 @@ int Compile(const CompileArgs& args) {
     // Both or neither: each is staged next to its target, then both are put in place.
     StagedOutputs outputs;
     if (!args.save_xml.empty()) {
-      mjcf::WriteOptions o;  // asset paths relative to the output folder
-      o.relative_to =
-          std::filesystem::absolute(args.save_xml).parent_path().lexically_normal().string();
-      outputs.Add(args.save_xml, mjcf::WriteString(out.doc, o));
+      // Written by MuJoCo from the spec, asset paths relative to the output folder.
+      outputs.Add(
+          args.save_xml,
+          world::SceneXml(
+              out, nullptr,
+              std::filesystem::absolute(args.save_xml).parent_path().lexically_normal().string()));
     }
     if (!args.save_mjb.empty()) outputs.Add(args.save_mjb, out.model.Mjb());
     outputs.Commit();
     for (const std::string& saved : {args.save_xml, args.save_mjb}) {
       if (!saved.empty()) spdlog::info("saved {}", saved);
-    }
-    const physics::SoftwareModelSpec& ext = out.model.extensions();
-    if (!args.save_mjb.empty() && !ext.empty()) {
-      // An MJB holds MuJoCo's model only (physics/model.h: recordings store the extensions).
-      spdlog::warn(
-          "{}: the MJB does not carry what URLab computes for this model beside MuJoCo ({} "
-          "software sensor(s), {} gravity-compensated body(ies), {} dead-band spring(s)); "
-          "MuJoCo alone leaves those sensors at 0 and omits those forces. Run the XML, or "
-          "replay a recording, which stores them beside its MJB",
-          args.save_mjb, ext.sensors.size(), ext.gravcomp.size(), ext.deadband_springs.size());
     }
   }
   const auto sizes = ModelSizes(checked.model.get());
@@ -99,37 +89,11 @@ int Compile(const CompileArgs& args) {
 
 struct ValidateArgs {
   std::string file;
-  bool bridge_report = false;
-  bool bridge_rules = false;
 };
 
-// The dialect bridge's rule table, one line per rule.
-void PrintBridgeRules() {
-  for (const mjcf::BridgeRule& rule : mjcf::BridgeRules()) {
-    std::cout << rule.id << "\t" << mjcf::BridgeKindName(rule.kind) << "\t"
-              << mjcf::BridgeRulePasses(rule) << "\t" << rule.construct << "\n";
-  }
-}
-
 int Validate(const ValidateArgs& args) {
-  if (args.bridge_rules) {
-    PrintBridgeRules();
-    if (args.file.empty()) return 0;
-  }
   CurrentInput() = args.file;
-  const world::ValidationReport r = world::Validate(args.file, args.bridge_report);
-  for (const auto& b : r.bridge) std::cout << "bridge: " << b << "\n";
-  if (args.bridge_report && r.bridge.empty()) {
-    std::cout << "bridge: no changes (MuJoCo 2.2.2 MJCF)\n";
-  }
-  // The rules applied (rows of the rule table, src/mjcf/bridge_rules.cc), in table order.
-  for (const mjcf::BridgeRule& rule : mjcf::BridgeRules()) {
-    auto it = r.bridge_rules.find(rule.id);
-    if (it == r.bridge_rules.end()) continue;
-    std::cout << "bridge rule: " << rule.id << " (" << mjcf::BridgeKindName(rule.kind) << ", "
-              << rule.construct << ", " << mjcf::BridgeRuleFunction(rule) << "): " << it->second
-              << " change(s)\n";
-  }
+  const world::ValidationReport r = world::Validate(args.file);
   for (const auto& w : r.diagnostics.warnings()) std::cout << "warning: " << w.str() << "\n";
   for (const auto& e : r.diagnostics.errors()) std::cout << "error: " << e.str() << "\n";
   if (r.ok()) {
@@ -149,8 +113,8 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
       "compile",
       "Build a model (MJCF) or scene (YAML) exactly as `urlab run` does (a single MJCF file is "
       "composed as a scene of one articulation named after the file), with every check `urlab "
-      "validate` runs, compile it with MuJoCo from an in-memory virtual file system and print "
-      "the compiled model's sizes. Outputs are written atomically, both or neither, and never over "
+      "validate` runs, compile it with MuJoCo and print the compiled model's sizes. Outputs are "
+      "written atomically, both or neither, and never over "
       "an "
       "input file; a device or FIFO (/dev/stdout) is written in place, a symlink through the "
       "link.");
@@ -158,36 +122,27 @@ void RegisterCompileCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("FILE", args.file, "MJCF model file (.xml) or scene file (.yaml)")->required();
   cmd->add_flag("--json", args.json, "print the sizes as one JSON object");
   cmd->add_option("--save-xml", args.save_xml,
-                  "also save the exported MJCF (a single model keeps its own names, a scene is "
-                  "saved as composed; asset paths relative to its folder; loadable on its own)")
+                  "also save the model as MJCF, written by MuJoCo (a single model keeps its own "
+                  "names, a scene is saved as composed; asset paths relative to its folder; "
+                  "loadable on its own)")
       ->check(OutputPath());
   cmd->add_option("--save-mjb", args.save_mjb,
-                  "also save the compiled model as MuJoCo binary (same model as --save-xml; what "
-                  "URLab computes beside MuJoCo for a 3.x model, such as gravcomp or "
-                  "jointactuatorfrc sensors, is not in it: a warning says so)")
+                  "also save the compiled model as MuJoCo binary (same model as --save-xml; it "
+                  "loads in the same MuJoCo release, e.g. the `mujoco` Python package of the "
+                  "version `urlab --version` prints)")
       ->check(OutputPath());
   cmd->callback([&exit_code] { exit_code = Compile(args); });
 
   CLI::App* val = app.add_subcommand(
       "validate",
-      "Check a scene (YAML) or MJCF file without running it or writing anything: read, compose "
-      "and compile as `urlab run` does, run every check begin-play runs, and report every "
-      "problem found with its file and line. Meshes are converted and decomposed in a temporary "
+      "Check a scene (YAML) or MJCF file without running it or writing anything: parse every "
+      "MJCF file with MuJoCo, compose and compile as `urlab run` does, run every check "
+      "begin-play runs, and report every problem found with its file and line. Meshes are "
+      "converted and decomposed in a temporary "
       "folder removed at the end (never in the cache). Exit code 1 when there is any error.");
   static ValidateArgs vargs;
-  val->add_option("FILE", vargs.file, "scene (.yaml) or MJCF (.xml) file");
-  val->add_flag("--bridge-rules", vargs.bridge_rules,
-                "print the dialect bridge's rule table (id, kind, passes, construct)");
-  val->add_flag("--bridge-report", vargs.bridge_report,
-                "list every change the MuJoCo 3.x dialect bridge makes, with file and line");
-  val->callback([&exit_code] {
-    if (vargs.file.empty() && !vargs.bridge_rules) {
-      std::cerr << "validate: FILE is required\n";
-      exit_code = 2;
-      return;
-    }
-    exit_code = Validate(vargs);
-  });
+  val->add_option("FILE", vargs.file, "scene (.yaml) or MJCF (.xml) file")->required();
+  val->callback([&exit_code] { exit_code = Validate(vargs); });
 }
 
 }  // namespace urlab::app

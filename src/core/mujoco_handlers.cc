@@ -1,10 +1,14 @@
 #include "urlab/core/mujoco_handlers.h"
 
+#include <dlfcn.h>
 #include <mujoco/mujoco.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cstdlib>
+#include <filesystem>
 #include <mutex>
+#include <vector>
 
 #include "core/warning_limiter.h"
 #include "urlab/core/error.h"
@@ -53,6 +57,41 @@ void InstallMujocoHandlers() {
   spdlog::default_logger();
   mju_user_error = &ErrorHandler;
   mju_user_warning = &WarningHandler;
+  LoadEnginePlugins();
+}
+
+std::string EnginePluginDir() {
+  namespace fs = std::filesystem;
+  std::vector<std::string> candidates;
+  if (const char* env = std::getenv("URLAB_MUJOCO_PLUGIN_DIR"); env && *env) {
+    return env;  // the user's choice, even when it does not exist (then nothing is loaded)
+  }
+  // Beside an installed URLab: <prefix>/lib/mujoco_plugin, found from this code's own file.
+  Dl_info info;
+  if (dladdr(reinterpret_cast<void*>(&EnginePluginDir), &info) && info.dli_fname) {
+    const fs::path self = fs::weakly_canonical(info.dli_fname);
+    candidates.push_back((self.parent_path().parent_path() / "lib" / "mujoco_plugin").string());
+    candidates.push_back((self.parent_path() / "mujoco_plugin").string());
+  }
+  candidates.push_back(URLAB_MUJOCO_PLUGIN_DIR);  // the release it was built with
+  for (const std::string& c : candidates) {
+    std::error_code ec;
+    if (!c.empty() && fs::is_directory(c, ec)) return c;
+  }
+  return "";
+}
+
+void LoadEnginePlugins() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    const std::string dir = EnginePluginDir();
+    if (dir.empty()) {
+      spdlog::debug("MuJoCo engine plugins: no plugin folder found");
+      return;
+    }
+    mj_loadAllPluginLibraries(dir.c_str(), nullptr);
+    spdlog::debug("MuJoCo engine plugins: {} registered from {}", mjp_pluginCount(), dir);
+  });
 }
 
 void ReportMujocoWarning(const std::string& text) {

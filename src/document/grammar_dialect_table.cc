@@ -1,8 +1,7 @@
-// MJCF written for MuJoCo 3.x: elements and attributes the dialect bridge (mjcf/bridge.h)
-// accepts and translates. Row format as in grammar_table.cc; ids starting with '+' extend the
-// 2.2.2 row of that id. See grammar.h. What the bridge does with each entry is in
-// docs/dialect-bridge.md; entries it cannot translate are still listed so that a document using
-// them reads, and `urlab validate --bridge-report` can list every problem with its line.
+// MJCF written for MuJoCo 3.x: elements and attributes the reader accepts in a document URLab
+// reads or generates itself (`urlab mjcf roundtrip`, props, terrain, launchers, the C++ builder;
+// models themselves are parsed by MuJoCo). Row format as in grammar_table.cc; ids starting with
+// '+' extend the 2.2.2 row of that id. See grammar.h.
 #include "urlab/document/grammar.h"
 
 namespace urlab::document {

@@ -4,17 +4,16 @@
 #include <map>
 
 #include "urlab/core/files.h"
-#include "urlab/mjcf/writer.h"
+#include "urlab/mjcf/spec.h"
 
 namespace urlab::net {
 
-ModelWithAssets FlattenAssets(const document::Document& doc, std::uintmax_t max_file_bytes) {
+ModelWithAssets FlattenAssets(const std::string& xml, std::uintmax_t max_file_bytes) {
   namespace fs = std::filesystem;
   std::map<std::string, std::string> bare;  // resolved path -> bare name
   std::map<std::string, int> taken;         // bare name -> uses
   ModelWithAssets out;
-  mjcf::WriteOptions options;
-  options.file_name = [&](const std::string& resolved) -> std::string {
+  auto rename = [&](const std::string& resolved) -> std::string {
     if (const auto it = bare.find(resolved); it != bare.end()) return it->second;
     const fs::path p(resolved);
     std::string name = p.filename().string();
@@ -28,7 +27,7 @@ ModelWithAssets FlattenAssets(const document::Document& doc, std::uintmax_t max_
     out.assets.emplace_back(name, std::move(bytes));
     return name;
   };
-  out.xml = mjcf::WriteString(doc, options);
+  out.xml = mjcf::MapAssetPaths(xml, rename);
   return out;
 }
 

@@ -1,13 +1,12 @@
 #pragma once
 // The composed model as self-contained MJCF for a client (hello's include_assets): the XML with
 // every asset file renamed to a bare name, and those files' bytes under the same names, so that
-// a client can compile it from a virtual file system (MuJoCo's VFS, or 3.x's assets dict) on
-// another machine. Thread: any (reads the document and the asset files only).
+// a client can compile it from a virtual file system (MuJoCo's VFS, or the Python package's
+// assets dict) on another machine. Thread: any (reads the text and the asset files only).
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "urlab/document/document.h"
 
 namespace urlab::net {
 
@@ -19,7 +18,8 @@ struct ModelWithAssets {
 
 // Two different files with the same base name get distinct names ("box.stl", "box_2.stl").
 // Throws InputError naming a file that cannot be read (or is larger than `max_file_bytes`).
-ModelWithAssets FlattenAssets(const document::Document& doc,
+// `xml` is MJCF with absolute asset paths (world::SceneXml).
+ModelWithAssets FlattenAssets(const std::string& xml,
                               std::uintmax_t max_file_bytes = 256ull << 20);
 
 }  // namespace urlab::net

@@ -26,9 +26,9 @@ using VfsPtr = std::unique_ptr<mjVFS, VfsDeleter>;
 VfsPtr VfsWith(const char* name, std::string_view bytes) {
   VfsPtr vfs(new mjVFS);
   mj_defaultVFS(vfs.get());
-  if (mj_makeEmptyFileVFS(vfs.get(), name, static_cast<int>(bytes.size())) != 0) return nullptr;
-  const int index = mj_findFileVFS(vfs.get(), name);
-  if (!bytes.empty()) std::memcpy(vfs->filedata[index], bytes.data(), bytes.size());
+  if (mj_addBufferVFS(vfs.get(), name, bytes.data(), static_cast<int>(bytes.size())) != 0) {
+    return nullptr;
+  }
   return vfs;
 }
 
@@ -39,7 +39,7 @@ ModelPtr FinishLoad(mjModel* m, const char* error) {
   return ModelPtr(m);
 }
 
-// mj_loadXML of `xml` from an in-memory VFS holding only that text (the VFS is 2 MB: on the
+// mj_loadXML of `xml` from an in-memory VFS holding only that text (the VFS on the
 // heap). `error` receives the compiler's message (or warning when the model compiled).
 mjModel* LoadFromMemory(const std::string& xml, char* error) {
   VfsPtr vfs = VfsWith(kVirtualName, xml);
@@ -163,8 +163,7 @@ Model Model::Copy() const {
 std::uint64_t Model::Hash() const { return ContentHash(Mjb(), extension_text_); }
 
 std::string MujocoVersion() {
-  const int v = mj_version();
-  return std::to_string(v / 100) + "." + std::to_string(v / 10 % 10) + "." + std::to_string(v % 10);
+  return mj_versionString();
 }
 
 }  // namespace urlab::physics

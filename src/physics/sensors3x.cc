@@ -148,7 +148,7 @@ mjtNum PotentialEnergy(const mjModel* m, const mjData* d) {
     for (int b = 1; b < m->nbody; ++b)
       e -= m->body_mass[b] * mju_dot3(m->opt.gravity, d->xipos + 3 * b);
   }
-  if (m->opt.disableflags & mjDSBL_PASSIVE) return e;
+  if (m->opt.disableflags & mjDSBL_SPRING) return e;
   for (int j = 0; j < m->njnt; ++j) {
     const mjtNum k = m->jnt_stiffness[j];
     if (k == 0) continue;

@@ -106,15 +106,11 @@ void Deadband(const mjModel* m, mjData* d, const std::vector<DeadbandEntry>& ent
     if (length < e.lo) force = e.stiffness * (e.lo - length);
     if (length > e.hi) force = e.stiffness * (e.hi - length);
     if (force == 0) continue;
-    // The tendon's Jacobian (its moment arms), sparse or dense as the engine keeps it.
+    // The tendon's Jacobian (its moment arms), kept sparse by the engine.
     const int t = e.tendon;
-    if (mj_isSparse(m)) {
-      const int adr = d->ten_J_rowadr[t];
-      for (int k = 0; k < d->ten_J_rownnz[t]; ++k) {
-        d->qfrc_passive[d->ten_J_colind[adr + k]] += d->ten_J[adr + k] * force;
-      }
-    } else {
-      mju_addToScl(d->qfrc_passive, d->ten_J + static_cast<size_t>(t) * m->nv, force, m->nv);
+    const int adr = m->ten_J_rowadr[t];
+    for (int k = 0; k < m->ten_J_rownnz[t]; ++k) {
+      d->qfrc_passive[m->ten_J_colind[adr + k]] += d->ten_J[adr + k] * force;
     }
   }
 }

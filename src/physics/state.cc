@@ -101,7 +101,10 @@ class Reader {
 }  // namespace
 
 StateLayout StateLayout::Of(const mjModel* m) {
-  return StateLayout{m->nq, m->nv, m->na, m->nu, m->nbody, m->nmocap, m->nuserdata};
+  return StateLayout{static_cast<int>(m->nq),    static_cast<int>(m->nv),
+                     static_cast<int>(m->na),    static_cast<int>(m->nu),
+                     static_cast<int>(m->nbody), static_cast<int>(m->nmocap),
+                     static_cast<int>(m->nuserdata)};
 }
 
 std::string StateLayout::str() const {

@@ -8,7 +8,7 @@
 namespace urlab::physics {
 
 std::string CompareSizes(const mjModel* a, const mjModel* b) {
-  static constexpr std::pair<const char*, int mjModel::*> kSizes[] = {
+  static constexpr std::pair<const char*, mjtSize mjModel::*> kSizes[] = {
       {"nq", &mjModel::nq},
       {"nv", &mjModel::nv},
       {"nu", &mjModel::nu},

@@ -610,7 +610,7 @@ void RecorderSubsystem::BeginPlay(world::Session& session) {
   session_ = session.shared_from_this();
   RecorderSource source;
   for (const auto& a : session.articulations()) source.articulations.push_back(a.name());
-  source.mjcf = mjcf::WriteString(session.scene().doc);
+  source.mjcf = world::SceneXml(session.scene());
   source.scene = session.scene_config().path;
   recorder_ = std::make_unique<Recorder>(session.engine(), std::move(source));
   if (autostart_) recorder_->Start(*autostart_);

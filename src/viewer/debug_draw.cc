@@ -36,13 +36,13 @@ class Painter {
     mjvGeom* g = Next();
     if (!g) return;
     mjv_initGeom(g, mjGEOM_LINE, nullptr, nullptr, nullptr, rgba);
-    mjv_makeConnector(g, mjGEOM_LINE, width, a[0], a[1], a[2], b[0], b[1], b[2]);
+    mjv_connector(g, mjGEOM_LINE, width, a, b);
   }
   void Arrow(const mjtNum a[3], const mjtNum b[3], mjtNum width, const float rgba[4]) {
     mjvGeom* g = Next();
     if (!g) return;
     mjv_initGeom(g, mjGEOM_ARROW, nullptr, nullptr, nullptr, rgba);
-    mjv_makeConnector(g, mjGEOM_ARROW, width, a[0], a[1], a[2], b[0], b[1], b[2]);
+    mjv_connector(g, mjGEOM_ARROW, width, a, b);
   }
   void Sphere(const mjtNum pos[3], mjtNum radius, const float rgba[4]) {
     mjvGeom* g = Next();

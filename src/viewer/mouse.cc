@@ -7,10 +7,10 @@ namespace urlab::viewer::internal {
 int MouseControl::BodyAt(SceneView& view, double x, double y, int window_w, int window_h,
                          mjtNum point[3]) {
   if (window_w <= 0 || window_h <= 0) return 0;
-  int geom = -1, skin = -1;
+  int geom = -1, flex = -1, skin = -1;
   const int body = mjv_select(view.model(), view.data(), &view.option(),
                               static_cast<mjtNum>(window_w) / window_h, x / window_w,
-                              (window_h - y) / window_h, &view.scene(), point, &geom, &skin);
+                              (window_h - y) / window_h, &view.scene(), point, &geom, &flex, &skin);
   return body < 0 ? 0 : body;
 }
 
@@ -82,12 +82,12 @@ void MouseControl::Move(SceneView& view, double x, double y, int window_w, int w
   if (pert.active) {
     mjv_movePerturb(view.model(), view.data(), action, rx, ry, &view.scene(), &pert);
   } else {
-    mjv_moveCamera(view.model(), action, rx, ry, &view.scene(), &view.camera());
+    mjv_moveCamera(view.model(), action, rx, ry, &view.camera());
   }
 }
 
 void MouseControl::Scroll(SceneView& view, double dy) {
-  mjv_moveCamera(view.model(), mjMOUSE_ZOOM, 0, -0.05 * dy, &view.scene(), &view.camera());
+  mjv_moveCamera(view.model(), mjMOUSE_ZOOM, 0, -0.05 * dy, &view.camera());
 }
 
 }  // namespace urlab::viewer::internal

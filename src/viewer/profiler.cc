@@ -83,7 +83,9 @@ void Profiler::Request(physics::PhysicsEngine& engine) {
                                         s->prev_n = n;
                                         p.ncon = d->ncon;
                                         p.nefc = d->nefc;
-                                        p.iterations = d->solver_iter;
+                                        p.iterations = 0;  // the most any island took
+                                        for (int i = 0; i < std::min(d->nisland, mjNISLAND); ++i)
+                                          p.iterations = std::max(p.iterations, d->solver_niter[i]);
                                         std::lock_guard<std::mutex> lock(s->mutex);
                                         s->fresh.push_back(p);
                                         if (s->fresh.size() > kHistory) s->fresh.pop_front();

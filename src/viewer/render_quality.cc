@@ -78,18 +78,28 @@ void DrawGradientSky(const mjrRect& vp) {
   glDisable(GL_STENCIL_TEST);
   glDisable(GL_CULL_FACE);
   glDisable(GL_COLOR_MATERIAL);
-  // Only where nothing was drawn: the cleared depth (the far plane) passes LEQUAL at z = 1.
+  // Only where nothing was drawn: at the cleared depth (the far plane). MuJoCo 3 renders with a
+  // reversed depth range (cleared to 0, depth = NDC z through glClipControl), 2.x with the
+  // classic one (cleared to 1): the quad sits at the clear value either way.
+  GLfloat clear = 1;
+  glGetFloatv(GL_DEPTH_CLEAR_VALUE, &clear);
+  constexpr GLenum kClipDepthMode = 0x935D, kZeroToOne = 0x935F;  // GL 4.5 / ARB_clip_control
+  GLint mode = 0;
+  glGetIntegerv(kClipDepthMode, &mode);
+  while (glGetError() != GL_NO_ERROR) {
+  }
+  const GLfloat z = static_cast<GLenum>(mode) == kZeroToOne ? clear : 2 * clear - 1;
   glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LEQUAL);
+  glDepthFunc(clear < 0.5f ? GL_GEQUAL : GL_LEQUAL);
   glDepthMask(GL_FALSE);
   glShadeModel(GL_SMOOTH);
   glBegin(GL_QUADS);
   glColor3f(0.80f, 0.85f, 0.90f);  // near the horizon
-  glVertex3f(-1, -1, 1);
-  glVertex3f(1, -1, 1);
+  glVertex3f(-1, -1, z);
+  glVertex3f(1, -1, z);
   glColor3f(0.36f, 0.50f, 0.68f);  // overhead
-  glVertex3f(1, 1, 1);
-  glVertex3f(-1, 1, 1);
+  glVertex3f(1, 1, z);
+  glVertex3f(-1, 1, z);
   glEnd();
   glPopMatrix();
   glMatrixMode(GL_PROJECTION);

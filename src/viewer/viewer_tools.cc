@@ -125,10 +125,10 @@ void ViewerCore::Step() {
 
 std::string ViewerCore::SaveXml() {
   const std::string path = OutputPath("urlab_scene.xml");
-  mjcf::WriteOptions o;  // asset paths relative to the output folder
-  o.relative_to = fs::absolute(path).parent_path().lexically_normal().string();
-  std::vector<std::string> changed;
-  WriteFileAtomic(path, ops::SceneXml(*session_, o, &changed));
+  std::vector<std::string> changed;  // asset paths relative to the output folder
+  WriteFileAtomic(path, ops::SceneXml(*session_,
+                                      fs::absolute(path).parent_path().lexically_normal().string(),
+                                      &changed));
   SetStatus("saved the composed scene to " + path +
             (changed.empty() ? ""
                              : fmt::format(" with the options changed at run time ({})",

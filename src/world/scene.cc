@@ -4,14 +4,14 @@
 #include <stdlib.h>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 
 #include "urlab/convert/mesh_assets.h"
 #include "urlab/convert/prop.h"
 #include "urlab/core/files.h"
 #include "urlab/core/mujoco_hints.h"
-#include "urlab/mjcf/bridge.h"
-#include "urlab/mjcf/reader.h"
+#include "urlab/mjcf/spec.h"
 #include "urlab/mjcf/writer.h"
 #include "urlab/world/scene_checks.h"
 
@@ -21,148 +21,94 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Compiles `doc`; a MuJoCo error is rethrown naming the source element (and its articulation).
-physics::ModelPtr CompileDocument(const document::Document& doc,
-                                  const std::vector<mjcf::ArticulationLayout>* layouts) {
-  mjcf::LineMap map;
-  const std::string xml = mjcf::WriteString(doc, {}, &map);
-  physics::ModelPtr model;
+// Parses an articulation's MJCF and prepares its meshes; `label` prefixes error messages.
+mjcf::SpecPtr ParseArticulation(const std::string& path, const std::string& label,
+                                const std::string& cache_dir, std::vector<Diagnostic>* warnings) {
   try {
-    model = physics::CompileXmlString(xml);
-  } catch (const physics::CompileError& e) {
-    std::string msg = mjcf::ExplainCompileMessage(e.what(), map);
-    if (layouts) {
-      // Name the articulation whose prefix the offending element carries.
-      for (const auto& art : *layouts) {
-        if (msg.find("'" + art.prefix) != std::string::npos) {
-          msg = art.name + ": " + msg;
-          break;
+    mjcf::SpecPtr spec = mjcf::ParseFile(path);
+    const convert::MeshAssetReport r = convert::PrepareMeshAssets(spec.get(), path, cache_dir);
+    for (const std::string& step : r.steps) spdlog::info("{}{}", label, step);
+    warnings->insert(warnings->end(), r.warnings.begin(), r.warnings.end());
+    return spec;
+  } catch (const InputError& e) {
+    throw InputError(e.where(), label + e.message());
+  }
+}
+
+// Compiles `spec`; a MuJoCo error is rethrown naming the articulation whose prefix the offending
+// element carries, and its file.
+physics::ModelPtr CompileSpec(mjSpec* spec, const std::vector<mjcf::ArticulationLayout>& layouts,
+                              const std::string& single_file = {}) {
+  mjModel* m = mj_compile(spec, nullptr);
+  if (m) {
+    // Compiler warnings (MuJoCo reports them through the spec too).
+    return physics::ModelPtr(m);
+  }
+  const std::string raw = mjs_getError(spec);
+  std::string msg = mjcf::TidyMujocoMessage(raw);
+  if (msg.empty()) msg = "MuJoCo could not compile the model";
+  const int line = mjcf::LineOfMujocoMessage(raw);
+  // The articulation whose prefix the offending element carries: an error in its file.
+  for (const mjcf::ArticulationLayout& art : layouts) {
+    if (msg.find("'" + art.prefix) != std::string::npos && !art.file.empty()) {
+      throw InputError({art.file, art.line > 0 ? art.line : line}, art.name + ": " + msg);
+    }
+  }
+  // A file MuJoCo could not open or read (a mesh, a texture): the articulation whose model (or
+  // an include of it) names it, at that line.
+  if (const auto open = msg.find('\''); open != std::string::npos) {
+    const auto close = msg.find('\'', open + 1);
+    const std::string named =
+        close == std::string::npos
+            ? ""
+            : fs::path(msg.substr(open + 1, close - open - 1)).filename().string();
+    std::vector<std::pair<std::string, std::string>> owners;  // (label, model file)
+    for (const mjcf::ArticulationLayout& art : layouts) {
+      if (art.line == 0) owners.emplace_back(art.name, art.file);  // not a generated one
+    }
+    if (!single_file.empty()) owners.emplace_back("", single_file);
+    for (const auto& [name, file] : owners) {
+      if (named.empty() || file.empty() || !fs::is_regular_file(file)) continue;
+      for (const std::string& input : mjcf::ModelInputFiles(file)) {
+        if (input.ends_with(".xml") || input == file) {
+          if (const int at = mjcf::LineContaining(input, named + "\""); at > 0) {
+            throw InputError({input, at}, (name.empty() ? "" : name + ": ") + msg);
+          }
         }
       }
     }
-    throw physics::CompileError(msg);
   }
-  return model;
+  if (!single_file.empty()) throw InputError({single_file, line}, msg);
+  throw physics::CompileError(msg);
 }
 
-// Reads an MJCF file and translates MuJoCo 3.x constructs; `label` prefixes error messages.
-document::Document ReadBridged(const std::string& path, const std::string& label,
-                               mjcf::BridgeReport* report) {
-  try {
-    document::Document doc = mjcf::ReadFile(path);
-    *report = mjcf::ApplyBridge(doc);
-    return doc;
-  } catch (const InputError& e) {
-    throw InputError(e.where(), label + e.message());
-  }
-}
-
-// Mesh files MuJoCo 2.2.2 cannot load are converted (cached); each step is logged, warnings
-// (a dropped visual mesh) are kept for the user; face orientation repairs join the bridge report
-// (rule mesh.orientation).
-void PrepareMeshes(document::Document& doc, const std::string& label, const std::string& cache_dir,
-                   std::vector<document::Diagnostic>* warnings, mjcf::BridgeReport* bridge) {
-  try {
-    const convert::MeshAssetReport r = convert::PrepareMeshAssets(doc, cache_dir);
-    for (const std::string& step : r.steps) spdlog::info("{}{}", label, step);
-    for (const Diagnostic& w : r.warnings) {
-      warnings->push_back(w);
-    }
-    bridge->changes.insert(bridge->changes.end(), r.bridge_changes.begin(), r.bridge_changes.end());
-  } catch (const InputError& e) {
-    throw InputError(e.where(), label + e.message());
-  }
-}
-
-}  // namespace
-
-void AddBridgeRuntime(const mjcf::BridgeReport& report, const std::string& prefix,
-                      physics::SoftwareModelSpec* spec) {
-  using B = mjcf::BridgedSensor::Kind;
-  using P = physics::SoftwareSensorKind;
-  static const std::map<B, P> kKinds = {{B::kJointActuatorForce, P::kJointActuatorForce},
-                                        {B::kTendonActuatorForce, P::kTendonActuatorForce},
-                                        {B::kKineticEnergy, P::kKineticEnergy},
-                                        {B::kPotentialEnergy, P::kPotentialEnergy},
-                                        {B::kInsideSite, P::kInsideSite},
-                                        {B::kContact, P::kContact}};
-  // Attributes naming model elements get the articulation's prefix like every name.
-  static const char* kNames[] = {"site",  "objname", "geom1",    "geom2",
-                                 "body1", "body2",   "subtree1", "subtree2"};
-  for (const mjcf::BridgedSensor& b : report.software_sensors) {
-    std::map<std::string, std::string> params = b.params;
-    for (const char* n : kNames) {
-      if (params.count(n) && params[n] != "world") params[n] = prefix + params[n];
-    }
-    spec->sensors.push_back({prefix + b.name, kKinds.at(b.kind), std::move(params)});
-  }
-  for (const mjcf::BridgedGravcomp& g : report.gravcomp) {
-    spec->gravcomp.push_back({prefix + g.body, g.gravcomp});
-  }
-  for (const mjcf::BridgedDeadbandSpring& t : report.deadband_springs) {
-    spec->deadband_springs.push_back({prefix + t.tendon, t.stiffness, t.lo, t.hi});
-  }
-  for (const mjcf::BridgedSiteEquality& e : report.site_equalities) {
-    spec->site_equalities.push_back({prefix + e.equality, prefix + e.site1, prefix + e.site2});
-  }
-}
-
-namespace {
-
-void NoteBridge(const mjcf::BridgeReport& report, const std::string& label, std::string* out) {
-  if (report.changes.empty()) return;
-  spdlog::info(
-      "{}MuJoCo 3.x constructs translated for 2.2.2 ({} change(s); `urlab validate "
-      "--bridge-report` lists them)",
-      label, report.changes.size());
-  *out += report.Format();
-}
-
-// Writes the compiled keyframes back into the composed document's placeholder keys, so that the
-// document (and the debug XML saved from it) holds the full-length keys MuJoCo needs.
-void WriteKeyframeValues(document::Document& doc, const mjModel* m) {
-  document::Element* section = doc.root().FirstChild("keyframe");
-  if (!section) return;
-  auto row = [](const mjtNum* base, int k, int n) {
-    return std::vector<double>(base + static_cast<size_t>(k) * n,
-                               base + static_cast<size_t>(k + 1) * n);
-  };
-  int k = 0;
-  for (const auto& key : section->children()) {
-    key->SetReals("qpos", row(m->key_qpos, k, m->nq));
-    if (m->nv) key->SetReals("qvel", row(m->key_qvel, k, m->nv));
-    if (m->na) key->SetReals("act", row(m->key_act, k, m->na));
-    if (m->nu) key->SetReals("ctrl", row(m->key_ctrl, k, m->nu));
-    if (m->nmocap) {
-      key->SetReals("mpos", row(m->key_mpos, k, 3 * m->nmocap));
-      key->SetReals("mquat", row(m->key_mquat, k, 4 * m->nmocap));
-    }
-    ++k;
-  }
-}
-
-void SaveDebug(const document::Document& doc, const mjModel* m, const std::string& folder,
+void SaveDebug(const CompiledScene& scene, const std::string& folder,
                const std::vector<std::string>& inputs) {
   const std::string xml = (fs::path(folder) / "scene_compiled.xml").string();
   const std::string mjb = (fs::path(folder) / "scene_compiled.mjb").string();
   RefuseOverwritingInput(xml, inputs, "save_debug_xml");
   RefuseOverwritingInput(mjb, inputs, "save_debug_xml");
-  mjcf::WriteFile(doc, xml);
-  WriteFileAtomic(mjb, physics::MjbBytes(m));
+  WriteFileAtomic(xml, SceneXml(scene, nullptr, folder));
+  WriteFileAtomic(mjb, physics::MjbBytes(scene.model.get()));
   spdlog::info("saved {} and {}", xml, mjb);
 }
 
 // A document the scene generated (a prop, a terrain, a launcher) as a composition input at its
-// placement; it takes the scene's options. Its elements are located at the scene entry that made
-// them, so a MuJoCo message about one names the scene file's line, not the generated text's.
-mjcf::ArticulationInput GeneratedInput(const std::string& name, document::Document doc,
+// placement; it takes the scene's options. A MuJoCo message about it names the scene file's
+// line of its entry.
+mjcf::ArticulationInput GeneratedInput(const std::string& name, const document::Document& doc,
                                        const std::array<double, 3>& pos,
                                        const std::array<double, 4>& quat,
                                        const SourceLocation& where) {
-  doc.root().Visit([&](document::Element& e) { e.set_location(where); });
   mjcf::ArticulationInput in;
   in.name = name;
-  in.doc = std::move(doc);
+  try {
+    in.spec = mjcf::ParseString(mjcf::WriteString(doc), where);
+  } catch (const InputError& e) {
+    throw InputError(where, name + ": " + e.message());
+  }
+  in.file = where.file;
+  in.line = where.line;
   in.placement.pos = pos;
   in.placement.quat = quat;
   in.takes_scene_options = true;
@@ -198,6 +144,29 @@ bool IsConvertedPropPart(const CompiledScene& scene, int geom) {
   return false;
 }
 
+std::string SceneXml(const CompiledScene& scene, const mjOption* model_options,
+                     const std::string& relative_to) {
+  std::string xml;
+  if (!model_options || std::memcmp(model_options, &scene.spec->option, sizeof(mjOption)) == 0) {
+    xml = mjcf::SaveXml(scene.spec.get());
+  } else {
+    // MuJoCo writes a spec as last compiled: the options in effect go into a compiled copy,
+    // every one of them written (marked authored).
+    const mjcf::SpecPtr copy(mj_copySpec(scene.spec.get()));
+    if (!copy) throw Error("MuJoCo could not copy the scene's spec");
+    copy->option = *model_options;
+    copy->authored.option = ~std::uint64_t{0};
+    copy->authored.disableflags = ~0;
+    copy->authored.enableflags = ~0;
+    const physics::ModelPtr compiled(mj_compile(copy.get(), nullptr));
+    if (!compiled)
+      throw Error(std::string("MuJoCo could not compile the scene's copy: ") +
+                  mjs_getError(copy.get()));
+    xml = mjcf::SaveXml(copy.get());
+  }
+  return relative_to.empty() ? xml : mjcf::RelativeAssetPaths(xml, relative_to);
+}
+
 namespace {
 
 // An error of a prop or terrain entry at the scene file's line, naming the file it concerns.
@@ -211,17 +180,12 @@ InputError AtEntry(const SourceLocation& entry, const std::string& name, const I
 CompiledScene BuildScene(const SceneConfig& scene, const std::string& cache) {
   const std::string cache_dir = cache.empty() ? convert::DefaultCacheDir() : cache;
   std::vector<mjcf::ArticulationInput> inputs;
-  physics::SoftwareModelSpec software;
-  std::string bridge_text;
-  std::vector<document::Diagnostic> mesh_warnings;
+  std::vector<Diagnostic> mesh_warnings;
   for (const ArticulationConfig& a : scene.articulations) {
     mjcf::ArticulationInput in;
     in.name = a.name;
-    mjcf::BridgeReport report;
-    in.doc = ReadBridged(a.mjcf, a.name + ": ", &report);
-    PrepareMeshes(in.doc, a.name + ": ", cache_dir, &mesh_warnings, &report);
-    AddBridgeRuntime(report, a.name + "_", &software);
-    NoteBridge(report, a.name + ": ", &bridge_text);
+    in.file = a.mjcf;
+    in.spec = ParseArticulation(a.mjcf, a.name + ": ", cache_dir, &mesh_warnings);
     in.placement.pos = a.pos;
     in.placement.quat = a.quat;
     in.options = a.options;
@@ -239,7 +203,7 @@ CompiledScene BuildScene(const SceneConfig& scene, const std::string& cache) {
     }
     for (const std::string& line : built.report) spdlog::info("{}: {}", p.spec.name, line);
     prop_cache_hits.push_back(built.cache_hit ? 1 : 0);
-    inputs.push_back(GeneratedInput(p.spec.name, std::move(built.doc), p.pos, p.quat, p.where));
+    inputs.push_back(GeneratedInput(p.spec.name, built.doc, p.pos, p.quat, p.where));
   }
   // Terrain: heightfields sampled from meshes (cached) or PNG height maps, composed last.
   std::vector<bool> terrain_cached;
@@ -252,7 +216,7 @@ CompiledScene BuildScene(const SceneConfig& scene, const std::string& cache) {
     }
     for (const std::string& line : built.report) spdlog::info("{}: {}", t.spec.name, line);
     terrain_cached.push_back(built.cache_hit);
-    inputs.push_back(GeneratedInput(t.spec.name, std::move(built.doc), t.pos, t.quat, t.where));
+    inputs.push_back(GeneratedInput(t.spec.name, built.doc, t.pos, t.quat, t.where));
   }
   // Impulse launchers: their trays and projectile pools, in world coordinates.
   for (const LauncherConfig& l : scene.launchers) {
@@ -262,21 +226,30 @@ CompiledScene BuildScene(const SceneConfig& scene, const std::string& cache) {
     } catch (const InputError& e) {
       throw InputError(l.where, e.message());
     }
-    inputs.push_back(GeneratedInput(l.spec.name, std::move(doc), {0, 0, 0}, {1, 0, 0, 0}, l.where));
+    inputs.push_back(GeneratedInput(l.spec.name, doc, {0, 0, 0}, {1, 0, 0, 0}, l.where));
   }
-  mjcf::ComposeResult composed = mjcf::Compose(std::move(inputs), scene.options);
-  // Scene overrides: only the fields set, over whatever the articulations gave.
-  for (const auto& [k, v] : scene.options) mjcf::SetOptionAttribute(composed.doc, k, v);
-  for (const auto& [k, v] : scene.size) composed.doc.Section("size").Set(k, v);
+  mjcf::ComposeResult composed;
+  try {
+    composed = mjcf::Compose(std::move(inputs), scene.options);
+  } catch (const InputError& e) {
+    throw InputError(e.where().file.empty() ? SourceLocation{scene.path, 0} : e.where(),
+                     e.message());
+  }
+  // Scene overrides of the sizes, over whatever the articulations gave.
+  for (const auto& [k, v] : scene.size) {
+    try {
+      mjcf::SetSize(composed.spec.get(), k, v);
+    } catch (const Error& e) {
+      throw InputError({scene.path, 0}, std::string("size: ") + e.what());
+    }
+  }
   CompiledScene out;
-  out.model =
-      physics::Model(CompileDocument(composed.doc, &composed.articulations), std::move(software));
-  mjcf::ApplyArticulationKeyframes(composed.articulations, out.model.get());
-  WriteKeyframeValues(composed.doc, out.model.get());
-  out.bridge_report = std::move(bridge_text);
-  if (!scene.save_debug_xml.empty()) {
-    SaveDebug(composed.doc, out.model.get(), scene.save_debug_xml, SceneInputFiles(scene));
-  }
+  out.model = physics::Model(CompileSpec(composed.spec.get(), composed.articulations));
+  mjcf::CheckAttached(out.model.get(), composed.articulations);
+  for (mjcf::ArticulationLayout& art : composed.articulations)
+    mjcf::LayoutOf(out.model.get(), &art);
+  mjcf::PlaceKeyframes(composed.articulations, out.model.get(), composed.spec.get());
+  out.spec = std::shared_ptr<mjSpec>(composed.spec.release(), mjcf::SpecDeleter());
   for (std::size_t i = 0; i < scene.props.size(); ++i) {
     out.props.push_back(PropLayoutOf(out.model.get(), scene.props[i], prop_cache_hits[i]));
   }
@@ -296,24 +269,23 @@ CompiledScene BuildScene(const SceneConfig& scene, const std::string& cache) {
     }
     out.launchers.push_back(LauncherLayoutOf(out.model.get(), l.spec));
   }
+  // The articulations only (props, terrain and launchers were composed after them).
+  composed.articulations.resize(scene.articulations.size());
   out.articulations = std::move(composed.articulations);
   out.diagnostics = std::move(composed.diagnostics);
   out.diagnostics.insert(out.diagnostics.end(), mesh_warnings.begin(), mesh_warnings.end());
-  out.doc = std::move(composed.doc);
+  if (!scene.save_debug_xml.empty()) {
+    SaveDebug(out, scene.save_debug_xml, SceneInputFiles(scene));
+  }
   return out;
 }
 
 CompiledScene BuildModel(const std::string& mjcf_path) {
-  mjcf::BridgeReport report;
-  document::Document doc = ReadBridged(mjcf_path, "", &report);
   CompiledScene out;
-  out.diagnostics = doc.diagnostics();
-  PrepareMeshes(doc, "", convert::DefaultCacheDir(), &out.diagnostics, &report);
-  physics::SoftwareModelSpec software;
-  AddBridgeRuntime(report, "", &software);
-  out.model = physics::Model(CompileDocument(doc, nullptr), std::move(software));
-  NoteBridge(report, "", &out.bridge_report);
-  out.doc = std::move(doc);
+  mjcf::SpecPtr spec =
+      ParseArticulation(mjcf_path, "", convert::DefaultCacheDir(), &out.diagnostics);
+  out.model = physics::Model(CompileSpec(spec.get(), {}, mjcf_path));
+  out.spec = std::shared_ptr<mjSpec>(spec.release(), mjcf::SpecDeleter());
   return out;
 }
 
@@ -326,16 +298,7 @@ std::vector<std::string> SceneInputFiles(const SceneConfig& scene) {
     if (!t.spec.png.empty()) files.push_back(t.spec.png);
   }
   for (const ArticulationConfig& a : scene.articulations) {
-    mjcf::ReadOptions lenient;
-    lenient.check_files = false;
-    lenient.check_references = false;
-    try {
-      for (std::string& f : mjcf::InputFiles(mjcf::ReadFile(a.mjcf, lenient))) {
-        files.push_back(std::move(f));
-      }
-    } catch (const Error&) {
-      files.push_back(a.mjcf);  // unreadable: at least the file itself
-    }
+    for (std::string& f : mjcf::ModelInputFiles(a.mjcf)) files.push_back(std::move(f));
   }
   return files;
 }
@@ -368,7 +331,7 @@ class ScratchDir {
 
 }  // namespace
 
-ValidationReport Validate(const std::string& path, bool bridge_report) {
+ValidationReport Validate(const std::string& path) {
   ValidationReport report;
   Diagnostics& sink = report.diagnostics;
   SceneConfig scene;
@@ -384,37 +347,11 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
   const bool is_scene = IsSceneFile(path);
   for (const ArticulationConfig& a : scene.articulations) {
     const std::string label = is_scene ? a.name + ": " : "";
-    mjcf::ReadOptions lenient;
-    lenient.check_files = false;
-    lenient.check_references = false;
     try {
-      document::Document doc = mjcf::ReadFile(a.mjcf, lenient);
-      sink.Append(doc.diagnostics(), label);
-      mjcf::FindDuplicateNames(doc, sink, label);
-      mjcf::FindMissingFiles(doc, sink, label);
-      mjcf::BridgeOptions list_all;
-      list_all.throw_on_refusal = false;
-      mjcf::BridgeReport bridged = mjcf::ApplyBridge(doc, list_all);
-      for (const InputError& e : bridged.Refusals()) sink.Add(e, label);
-      if (bridge_report) {
-        // Mesh repairs are bridge changes too; a mesh that cannot be read is reported by
-        // FindMissingFiles above and by the composition below.
-        try {
-          const convert::MeshAssetReport meshes = convert::PrepareMeshAssets(doc, cache.path());
-          bridged.changes.insert(bridged.changes.end(), meshes.bridge_changes.begin(),
-                                 meshes.bridge_changes.end());
-        } catch (const InputError&) {
-        }
+      const mjcf::SpecPtr spec = mjcf::ParseFile(a.mjcf);
+      for (const Diagnostic& d : mjcf::KeyframeLengthProblems(spec.get(), a.mjcf, a.name)) {
+        sink.Add(d);
       }
-      if (bridge_report) {
-        for (const mjcf::BridgeChange& c : bridged.changes) {
-          report.bridge.push_back(label + c.where.str() + ": " + mjcf::BridgeKindName(c.kind) +
-                                  " [" + c.rule + "]: " + c.what);
-          ++report.bridge_rules[c.rule];
-        }
-      }
-      // References are checked after the bridge (3.x names such as frames are flattened).
-      mjcf::FindDanglingReferences(doc, sink, label);
     } catch (const InputError& e) {
       sink.Add(e, label);
     }
@@ -442,10 +379,9 @@ ValidationReport Validate(const std::string& path, bool bridge_report) {
   } catch (const InputError& e) {
     sink.Add(e);
   } catch (const Error& e) {
-    // A MuJoCo compile error names the element and its file:line in its text when it can; an
-    // engine error while compiling (2.2.2's compiler runs the model: "engine error: Stack
-    // overflow") names nothing. Either is located at the file validated, with the hint `run`
-    // prints.
+    // A MuJoCo compile error names the element, its line and (in a scene) its articulation; an
+    // engine error while computing the initial state ("Stack overflow") names nothing. Either is
+    // located at the file validated, with the hint `run` prints.
     const std::string hint = MujocoHint(e.what());
     sink.Error({fs::absolute(path).lexically_normal().string(), 0},
                std::string(e.what()) + (hint.empty() ? "" : "\n  hint: " + hint));

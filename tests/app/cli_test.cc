@@ -1,4 +1,6 @@
 // End-to-end tests of the `urlab` command-line tool: real binary, real files.
+#include <mujoco/mujoco.h>
+
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -17,7 +19,8 @@ TEST(CliTest, VersionNamesMujoco) {
   std::string out;
   ASSERT_EQ(RunCommand(UrlabBinary() + " --version", &out), 0) << out;
   EXPECT_NE(out.find("urlab 0."), std::string::npos) << out;
-  EXPECT_NE(out.find("MuJoCo 2.2.2"), std::string::npos) << out;
+  EXPECT_NE(out.find("MuJoCo " + std::string(mj_versionString())), std::string::npos) << out;
+  EXPECT_NE(out.find("MuJoCo 3."), std::string::npos) << out;
 }
 
 TEST(CliTest, EverySubcommandHasHelp) {
@@ -31,8 +34,8 @@ TEST(CliTest, EverySubcommandHasHelp) {
 
 TEST(CliTest, CompileJsonPrintsSizes) {
   std::string out;
-  ASSERT_EQ(RunCommand(UrlabBinary() + " --log-level off compile --json "
-                                       "/usr/share/mujoco/model/humanoid/humanoid.xml",
+  ASSERT_EQ(RunCommand(UrlabBinary() + " --log-level off compile --json " URLAB_SOURCE_DIR
+                                       "/examples/models/humanoid.xml",
                        &out),
             0)
       << out;
@@ -53,7 +56,7 @@ TEST(CliTest, CompileSavesLoadableXmlAndMjb) {
   // A model with a file asset next to it (named explicitly: implicitly named file assets are
   // prefixed twice by composition until the composer's fix, issue 7 section 1).
   fs::create_directories(dir + "/assets");
-  fs::copy_file("/usr/share/mujoco/model/mug/mug.obj", dir + "/assets/mug.obj");
+  fs::copy_file(URLAB_TEST_DATA_DIR "/mjcf/robots/arm/assets/link2.obj", dir + "/assets/mug.obj");
   const std::string model = testing::WriteTextFile(dir, "mug.xml", R"(<mujoco>
   <asset><mesh name="mug" file="assets/mug.obj"/></asset>
   <worldbody><body pos="0 0 1"><freejoint/><geom type="mesh" mesh="mug"/></body></worldbody>
@@ -80,8 +83,7 @@ TEST(CliTest, RoundtripWritesOutput) {
   const std::string dir = testing::MakeTempDir("cli_rt");
   std::string out;
   ASSERT_EQ(RunCommand(UrlabBinary() +
-                           " mjcf roundtrip /usr/share/mujoco/model/humanoid100/"
-                           "humanoid100.xml -o " +
+                           " mjcf roundtrip " URLAB_SOURCE_DIR "/examples/models/humanoid.xml -o " +
                            dir + "/h.xml",
                        &out),
             0)
@@ -96,7 +98,7 @@ TEST(CliTest, BrokenModelExitsNonZeroWithFileAndLine) {
   std::string out;
   EXPECT_EQ(RunCommand(UrlabBinary() + " compile " + bad, &out), 1) << out;
   EXPECT_NE(out.find(bad + ":3:"), std::string::npos) << out;
-  EXPECT_NE(out.find("unknown element"), std::string::npos) << out;
+  EXPECT_NE(out.find("unrecognized element"), std::string::npos) << out;
   EXPECT_EQ(RunCommand(UrlabBinary() + " mjcf roundtrip " + bad + " -o " + dir + "/o.xml", &out), 1)
       << out;
   EXPECT_FALSE(fs::exists(dir + "/o.xml"));
@@ -124,10 +126,11 @@ TEST(CliTest, ValidateReportsEveryProblem) {
   <actuator><motor joint="jj"/></actuator>
 </mujoco>
 )");
+  // MuJoCo stops at a file's first problem (the repeated body name, at its line); validate
+  // goes on with the scene's other files and its own checks.
   std::string out;
   EXPECT_EQ(RunCommand(UrlabBinary() + " validate " + bad, &out), 1) << out;
-  for (const char* want :
-       {"bad.xml:2:", "bad.xml:4:", "bad.xml:5:", "bad.xml:7:", "4 problem(s)"}) {
+  for (const char* want : {"bad.xml:5:", "repeated name 'b'", "1 problem(s)"}) {
     EXPECT_NE(out.find(want), std::string::npos) << want << " missing in:\n" << out;
   }
   const std::string scene =
@@ -138,25 +141,9 @@ TEST(CliTest, ValidateReportsEveryProblem) {
   EXPECT_NE(out.find("b: "), std::string::npos) << out;
 }
 
-TEST(CliTest, ValidateBridgeReportListsTranslationsWithLines) {
-  std::string out;
-  const std::string file = std::string(URLAB_TEST_DATA_DIR) + "/mjcf/dialect3x/go2_like.xml";
-  ASSERT_EQ(RunCommand(UrlabBinary() + " --log-level off validate --bridge-report " + file, &out),
-            0)
-      << out;
-  EXPECT_NE(out.find("bridge: " + file + ":"), std::string::npos) << out;
-  EXPECT_NE(out.find("actuatorfrcrange"), std::string::npos) << out;
-  // Every change names its rule; the applied rules are listed with their function.
-  EXPECT_NE(out.find("translated [actuatorfrcrange.one]: "), std::string::npos) << out;
-  EXPECT_NE(out.find("bridge rule: actuatorfrcrange.one (translated, "), std::string::npos) << out;
-  EXPECT_NE(out.find(": OK"), std::string::npos) << out;
-  ASSERT_EQ(RunCommand(UrlabBinary() + " validate --bridge-rules", &out), 0) << out;
-  EXPECT_NE(out.find("frame\ttranslated\tFlattenFrames\t"), std::string::npos) << out;
-}
-
 TEST(CliTest, LogsGoToStderrSoJsonStaysClean) {
   std::string out;
-  // The bridge logs what it translated; stdout must still be exactly one JSON object.
+  // Logs (the model's composition) go to stderr; stdout must be exactly one JSON object.
   // -O3: a false -Wrestrict inside std::string's operator+ (GCC PR 105329 / 105651).
   URLAB_GCC_IGNORE("-Wrestrict")
   ASSERT_EQ(RunCommand("(" + UrlabBinary() +

@@ -1,12 +1,12 @@
-// Every model of the MuJoCo 3.x bridge tests (tests/data/mjcf/bridge3x) and every MuJoCo sample
-// model (/usr/share/mujoco/model, Debian's libmujoco-samples), recorded for one second through
+// Every model of the MuJoCo 3.x bridge tests (tests/data/mjcf/bridge3x), the robot-style corpus,
+// the examples' models and, when $URLAB_MUJOCO_MODELS names it, MuJoCo's own corpus (model/ and
+// test/ of the pinned release, brought by tools/corpus_check), recorded for one second through
 // a scene by the real binary (`urlab record MODEL.xml`: a scene of one articulation) and checked
 // with `urlab replay FILE --check`: every one re-simulates bit for bit. The recording carries
 // the model with its extensions (software sensors, gravcomp and dead-band springs, site
 // equalities; physics/model.h), so the bridged models re-simulate as they ran.
 //
-// No model is excluded (the humanoid_body.xml fragments of humanoid100 and hammock compile on
-// their own too). Two models run at a time (the CI machine has 2 cores); each is recorded for one
+// No model is excluded. Two models run at a time (the CI machine has 2 cores); each is recorded for one
 // wall-clock second at real-time pacing, so the whole test takes about 20 s plus loading.
 #include <algorithm>
 #include <atomic>
@@ -16,6 +16,7 @@
 #include <thread>
 #include <vector>
 
+#include "model_files.h"
 #include "mujoco_test.h"
 
 namespace urlab {
@@ -26,7 +27,6 @@ using testing::RunCommand;
 using testing::SourcePath;
 using testing::UrlabBinary;
 
-constexpr const char* kSamples = "/usr/share/mujoco/model";
 
 std::vector<std::string> ModelFiles(const fs::path& root) {
   std::vector<std::string> files;
@@ -59,13 +59,16 @@ Outcome RecordAndCheck(const std::string& model, const std::string& file) {
   return o;
 }
 
-TEST(ModelCorpusReplayTest, EveryBridgeAndSampleModelReSimulatesBitForBit) {
+TEST(ModelCorpusReplayTest, EveryBridgeRobotAndExampleModelReSimulatesBitForBit) {
   std::vector<std::string> models = ModelFiles(SourcePath("tests/data/mjcf/bridge3x"));
   const std::size_t bridged = models.size();
   ASSERT_GE(bridged, 10u);
-  const std::vector<std::string> samples = ModelFiles(kSamples);
-  if (samples.empty()) GTEST_SKIP() << kSamples << " is missing (package libmujoco-samples)";
-  models.insert(models.end(), samples.begin(), samples.end());
+  for (const std::string& dir : {SourcePath("tests/data/mjcf/robots"),
+                                 SourcePath("examples/models"), testing::MujocoCorpusDir()}) {
+    if (dir.empty()) continue;
+    const std::vector<std::string> more = ModelFiles(dir);
+    models.insert(models.end(), more.begin(), more.end());
+  }
 
   const std::string dir = testing::MakeTempDir("corpus_replay");
   std::vector<Outcome> outcomes(models.size());

@@ -57,7 +57,7 @@ TEST_F(Heightfield, SampledSinusoidMatchesTheSurfaceWithinTheGridResolution) {
     const double y = 0.01 + 0.98 * std::fmod(i * 0.414214, 1.0);
     const mjtNum start[3] = {x, y, 1.0}, down[3] = {0, 0, -1};
     int geom = -1;
-    const mjtNum dist = mj_ray(m.get(), d.get(), start, down, nullptr, 1, -1, &geom);
+    const mjtNum dist = mj_ray(m.get(), d.get(), start, down, nullptr, 1, -1, &geom, nullptr);
     ASSERT_GE(dist, 0) << x << " " << y;
     between = std::max(between, std::abs((1.0 - dist) - Sinusoid(x, y)));
   }

@@ -8,9 +8,7 @@
 #include "mujoco_test.h"
 #include "test_meshes.h"
 #include "urlab/convert/mesh_io.h"
-#include "urlab/mjcf/bridge.h"
-#include "urlab/mjcf/reader.h"
-#include "urlab/mjcf/writer.h"
+#include "urlab/mjcf/spec.h"
 #include "urlab/physics/model.h"
 
 namespace urlab::convert {
@@ -20,6 +18,23 @@ using testing::Box;
 using testing::TempDir;
 
 class MeshAssets : public urlab::testing::MujocoTest {};
+
+// The model at `path` with its meshes prepared, compiled by MuJoCo.
+struct Prepared {
+  mjcf::SpecPtr spec;
+  MeshAssetReport report;
+};
+Prepared Prepare(const std::filesystem::path& path, const std::filesystem::path& cache) {
+  Prepared p;
+  p.spec = mjcf::ParseFile(path);
+  p.report = PrepareMeshAssets(p.spec.get(), path, cache);
+  return p;
+}
+physics::ModelPtr CompileSpec(mjSpec* spec) {
+  mjModel* m = mj_compile(spec, nullptr);
+  EXPECT_NE(m, nullptr) << mjs_getError(spec);
+  return physics::ModelPtr(m);
+}
 
 using testing::Write;
 
@@ -40,7 +55,38 @@ std::string Ply(const TriMesh& m) {
   return s;
 }
 
-TEST_F(MeshAssets, ConvertsOtherFormatsOnceAndKeepsNamesDistinct) {
+TEST_F(MeshAssets, ConvertsOtherFormatsOnceUnderTheNameMujocoGivesThem) {
+  TempDir dir;
+  Write(dir / "link1.ply", Ply(Box({0, 0, 0}, {0.1, 0.1, 0.1})));
+  Write(dir / "link2.stl", StlBytes(Box({0, 0, 0}, {0.2, 0.1, 0.1})));
+  Write(dir / "m.xml", R"(<mujoco>
+  <asset>
+    <mesh file="link1.ply"/>
+    <mesh file="link2.stl"/>
+  </asset>
+  <worldbody>
+    <body><freejoint/><geom type="mesh" mesh="link1"/></body>
+  </worldbody>
+</mujoco>)");
+  Prepared p = Prepare(dir / "m.xml", dir / "cache");
+  const MeshAssetReport& first = p.report;
+  ASSERT_EQ(first.steps.size(), 1u);
+  EXPECT_NE(first.steps[0].find("converted to"), std::string::npos) << first.steps[0];
+  const physics::ModelPtr model = CompileSpec(p.spec.get());
+  ASSERT_TRUE(model);
+  EXPECT_EQ(model->nmesh, 2);
+  // The PLY box (0.1 wide), converted to OBJ, keeps the name MuJoCo gives the PLY file.
+  const int geom_mesh = model->geom_dataid[0];
+  EXPECT_EQ(std::string(mj_id2name(model.get(), mjOBJ_MESH, geom_mesh)), "link1");
+  EXPECT_GE(mj_name2id(model.get(), mjOBJ_MESH, "link2"), 0);
+  // Second load: the cached conversion.
+  const MeshAssetReport second = Prepare(dir / "m.xml", dir / "cache").report;
+  EXPECT_NE(second.steps[0].find("converted before"), std::string::npos) << second.steps[0];
+}
+
+// Two meshes MuJoCo names the same from their files (link1.ply and link1.stl): MuJoCo's parser
+// refuses the model, naming the repeated name and its line.
+TEST_F(MeshAssets, ImplicitNamesThatClashAreRefusedAtTheirLine) {
   TempDir dir;
   Write(dir / "link1.ply", Ply(Box({0, 0, 0}, {0.1, 0.1, 0.1})));
   Write(dir / "link1.stl", StlBytes(Box({0, 0, 0}, {0.2, 0.1, 0.1})));
@@ -49,26 +95,14 @@ TEST_F(MeshAssets, ConvertsOtherFormatsOnceAndKeepsNamesDistinct) {
     <mesh file="link1.ply"/>
     <mesh file="link1.stl"/>
   </asset>
-  <worldbody>
-    <body><freejoint/><geom type="mesh" mesh="link1"/></body>
-  </worldbody>
 </mujoco>)");
-  document::Document doc = mjcf::ReadFile(dir / "m.xml");
-  const MeshAssetReport first = PrepareMeshAssets(doc, dir / "cache");
-  ASSERT_EQ(first.steps.size(), 2u);
-  EXPECT_NE(first.steps[0].find("renamed 'link1_1'"), std::string::npos) << first.steps[0];
-  EXPECT_NE(first.steps[1].find("converted to"), std::string::npos) << first.steps[1];
-  const physics::ModelPtr model = physics::CompileXmlString(mjcf::WriteString(doc));
-  EXPECT_EQ(model->nmesh, 2);
-  EXPECT_GE(mj_name2id(model.get(), mjOBJ_MESH, "link1"), 0);
-  EXPECT_GE(mj_name2id(model.get(), mjOBJ_MESH, "link1_1"), 0);
-  // The PLY box (0.1 wide) is the one the geom uses, converted to OBJ.
-  const int geom_mesh = model->geom_dataid[0];
-  EXPECT_EQ(std::string(mj_id2name(model.get(), mjOBJ_MESH, geom_mesh)), "link1");
-  // Second load: the cached conversion.
-  document::Document again = mjcf::ReadFile(dir / "m.xml");
-  const MeshAssetReport second = PrepareMeshAssets(again, dir / "cache");
-  EXPECT_NE(second.steps[1].find("converted before"), std::string::npos) << second.steps[1];
+  try {
+    Prepare(dir / "m.xml", dir / "cache");
+    FAIL() << "two meshes named link1 were accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where().line, 4) << e.what();
+    EXPECT_NE(std::string(e.what()).find("repeated name 'link1'"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(MeshAssets, UnreadableVisualMeshIsDroppedUnreadableCollisionMeshIsAnError) {
@@ -84,94 +118,25 @@ TEST_F(MeshAssets, UnreadableVisualMeshIsDroppedUnreadableCollisionMeshIsAnError
   std::string visual = model;
   visual.replace(visual.find("CONTACT"), 7, R"(contype="0" conaffinity="0")");
   Write(dir / "visual.xml", visual);
-  document::Document doc = mjcf::ReadFile(dir / "visual.xml");
-  const MeshAssetReport r = PrepareMeshAssets(doc, dir / "cache");
+  Prepared p = Prepare(dir / "visual.xml", dir / "cache");
+  const MeshAssetReport& r = p.report;
   ASSERT_EQ(r.warnings.size(), 1u);
   EXPECT_EQ(r.warnings[0].where.line, 2);
   EXPECT_NE(r.warnings[0].message.find("collision geometry stays"), std::string::npos);
-  const physics::ModelPtr m = physics::CompileXmlString(mjcf::WriteString(doc));
+  const physics::ModelPtr m = CompileSpec(p.spec.get());
+  ASSERT_TRUE(m);
   EXPECT_EQ(m->ngeom, 1);  // the box
 
   std::string collision = model;
   collision.replace(collision.find("CONTACT"), 7, "");
   Write(dir / "collision.xml", collision);
-  document::Document doc2 = mjcf::ReadFile(dir / "collision.xml");
   try {
-    PrepareMeshAssets(doc2, dir / "cache");
+    Prepare(dir / "collision.xml", dir / "cache");
     FAIL() << "an unreadable collision mesh was accepted";
   } catch (const InputError& e) {
     EXPECT_EQ(e.where().line, 2);
     EXPECT_NE(std::string(e.what()).find("broken.dae"), std::string::npos) << e.what();
   }
-}
-
-// The bridge corpus's model with wound-inconsistently meshes (reference3x_test compares it with
-// MuJoCo 3.x): 2.2.2 alone rejects it; after the repair both meshes weigh what their volumes do.
-TEST_F(MeshAssets, FacesThatDisagreeAreOrientedInACachedCopy) {
-  TempDir dir;
-  const std::string path = urlab::testing::TestData("mjcf/bridge3x/mesh_orientation.xml");
-  document::Document plain = mjcf::ReadFile(path);
-  mjcf::ApplyBridge(plain);
-  try {
-    physics::CompileXmlString(mjcf::WriteString(plain));
-    FAIL() << "MuJoCo 2.2.2 compiled the crate's inconsistently wound OBJ";
-  } catch (const physics::CompileError& e) {
-    EXPECT_NE(std::string(e.what()).find("inconsistent orientation"), std::string::npos)
-        << e.what();
-  }
-
-  document::Document doc = mjcf::ReadFile(path);
-  mjcf::ApplyBridge(doc);  // sets exactmeshinertia, so the STL's faces count too
-  const MeshAssetReport r = PrepareMeshAssets(doc, dir / "cache");
-  ASSERT_EQ(r.bridge_changes.size(), 2u);
-  for (const mjcf::BridgeChange& c : r.bridge_changes) {
-    EXPECT_EQ(c.rule, "mesh.orientation");
-    EXPECT_EQ(c.kind, mjcf::BridgeChange::Kind::kTranslated);
-  }
-  EXPECT_EQ(r.bridge_changes[0].where.line, 10);
-  EXPECT_NE(r.bridge_changes[0].what.find("3 of 12 triangles reversed"), std::string::npos)
-      << r.bridge_changes[0].what;  // the right quad (two triangles) and one top triangle
-  EXPECT_EQ(r.bridge_changes[1].where.line, 11);
-  EXPECT_NE(r.bridge_changes[1].what.find("1 of 8 triangles reversed"), std::string::npos)
-      << r.bridge_changes[1].what;
-  const physics::ModelPtr m = physics::CompileXmlString(mjcf::WriteString(doc));
-  EXPECT_NEAR(m->body_mass[mj_name2id(m.get(), mjOBJ_BODY, "crate")], 1000 * 0.2 * 0.1 * 0.06,
-              1e-6);
-  EXPECT_NEAR(m->body_mass[mj_name2id(m.get(), mjOBJ_BODY, "wedge")], 1000 * 0.5 * 0.2 * 0.1 * 0.08,
-              1e-6);
-  // The mesh names stay the document's; a second load uses the cached copies.
-  EXPECT_GE(mj_name2id(m.get(), mjOBJ_MESH, "crate"), 0);
-  document::Document again = mjcf::ReadFile(path);
-  mjcf::ApplyBridge(again);
-  const MeshAssetReport second = PrepareMeshAssets(again, dir / "cache");
-  ASSERT_EQ(second.bridge_changes.size(), 2u);
-  EXPECT_EQ(second.bridge_changes[0].what, r.bridge_changes[0].what);
-}
-
-TEST_F(MeshAssets, ConsistentMeshesStayAndUnrepairableOnesAreAWarning) {
-  TempDir dir;
-  Write(dir / "box.obj", ObjBytes(Box({0, 0, 0}, {0.1, 0.1, 0.1})));
-  // Edge 1-2 in three triangles: no orientation makes every edge run both ways once.
-  Write(dir / "fin.obj",
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n");
-  Write(dir / "m.xml", R"(<mujoco>
-  <asset>
-    <mesh file="box.obj"/>
-    <mesh file="fin.obj"/>
-  </asset>
-  <worldbody>
-    <body><freejoint/><geom type="mesh" mesh="box"/></body>
-    <geom type="mesh" mesh="fin"/>
-  </worldbody>
-</mujoco>)");
-  document::Document doc = mjcf::ReadFile(dir / "m.xml");
-  const MeshAssetReport r = PrepareMeshAssets(doc, dir / "cache");
-  EXPECT_TRUE(r.bridge_changes.empty());
-  ASSERT_EQ(r.warnings.size(), 1u);
-  EXPECT_EQ(r.warnings[0].where.line, 4);
-  EXPECT_NE(r.warnings[0].message.find("cannot be oriented consistently"), std::string::npos)
-      << r.warnings[0].message;
-  EXPECT_EQ(doc.root().FirstChild("asset")->children()[0]->GetOr("file", ""), "box.obj");
 }
 
 }  // namespace

@@ -13,7 +13,9 @@
 #include "urlab/convert/mesh_assets.h"
 #include "urlab/convert/mesh_io.h"
 #include "urlab/convert/prop.h"
+#include "urlab/mjcf/spec.h"
 #include "urlab/mjcf/reader.h"
+#include "urlab/mjcf/spec.h"
 #include "urlab/mjcf/writer.h"
 #include "urlab/physics/model.h"
 
@@ -125,24 +127,23 @@ TEST_F(MujocoLimit, MjcfMeshesMujocoRefusesAreConvertedAndCompile) {
   Write(dir / "big.stl", StlBytes(BigTorus()));
   Write(dir / "ascii.stl", AsciiStl(Box({0, 0, 0}, {0.1, 0.1, 0.1})));
   Write(dir / "m.xml", R"(<mujoco>
-  <compiler exactmeshinertia="true"/>
   <asset>
-    <mesh file="big.stl"/>
-    <mesh file="ascii.stl"/>
+    <mesh file="big.stl" inertia="exact"/>
+    <mesh file="ascii.stl" inertia="exact"/>
   </asset>
   <worldbody>
     <body><freejoint/><geom type="mesh" mesh="big"/></body>
     <body pos="1 0 0"><freejoint/><geom type="mesh" mesh="ascii"/></body>
   </worldbody>
 </mujoco>)");
-  document::Document doc = mjcf::ReadFile(dir / "m.xml");
-  const MeshAssetReport report = PrepareMeshAssets(doc, dir / "cache");
+  mjcf::SpecPtr spec = mjcf::ParseFile(dir / "m.xml");
+  const MeshAssetReport report = PrepareMeshAssets(spec.get(), dir / "m.xml", dir / "cache");
   ASSERT_EQ(report.steps.size(), 2u);
   EXPECT_NE(report.steps[0].find("320000 faces"), std::string::npos) << report.steps[0];
   EXPECT_NE(report.steps[0].find("simplified from 320000"), std::string::npos) << report.steps[0];
   EXPECT_NE(report.steps[1].find("ASCII"), std::string::npos) << report.steps[1];
-  // Both bodies' inertias use their meshes, so 2.2.2 checks the faces' orientation too.
-  const physics::ModelPtr model = physics::CompileXmlString(mjcf::WriteString(doc));
+  const physics::ModelPtr model(mj_compile(spec.get(), nullptr));
+  ASSERT_TRUE(model) << mjs_getError(spec.get());
   ASSERT_EQ(model->nmesh, 2);
   EXPECT_LE(model->mesh_facenum[0], static_cast<int>(kMujocoMaxStlFaces));
   EXPECT_EQ(model->mesh_facenum[1], 12);

@@ -5,13 +5,13 @@
 namespace urlab {
 namespace {
 
-TEST(MujocoHintsTest, StackOverflowPointsAtNstack) {
-  EXPECT_NE(
-      MujocoHint("physics loop paused after an error: MuJoCo error: Stack overflow").find("nstack"),
-      std::string::npos);
-  EXPECT_NE(
-      MujocoHint("Pre-allocated contact buffer is full. Increase nconmax above 3.").find("nconmax"),
-      std::string::npos);
+TEST(MujocoHintsTest, StackOverflowPointsAtMemory) {
+  EXPECT_NE(MujocoHint("MuJoCo error: mj_stackAlloc: out of memory, stack overflow at "
+                       "mj_instantiateContact, line 1521")
+                .find("size: {memory:"),
+            std::string::npos);
+  EXPECT_NE(MujocoHint("Insufficient arena memory for the constraint solver").find("memory"),
+            std::string::npos);
   EXPECT_EQ(MujocoHint("something unheard of"), "");
 }
 

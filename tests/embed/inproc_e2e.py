@@ -112,7 +112,7 @@ def main():
     tmp = tempfile.mkdtemp(prefix="urlab_inproc_")
     broken = os.path.join(tmp, "broken.yaml")
     with open(broken, "w") as f:
-        f.write("articulations:\n  - name: h\n    mjcf: /usr/share/mujoco/model/humanoid/humanoid.xml\n"
+        f.write("articulations:\n  - name: h\n    mjcf: " + os.path.join(SOURCE, "examples/models/humanoid.xml") + "\n"
                 "    controller: {type: pd, kp: -3}\n")
     raises(ValueError, "broken.yaml:4", lambda: InProcessBatch(broken, envs=2, library=LIBRARY))
     gone = InProcessBatch(SCENE, envs=2, library=LIBRARY)

@@ -1,6 +1,6 @@
-// Composition of file assets named implicitly by their file (how Unitree and MuJoCo Menagerie
-// models name their meshes): the composed scene must name each asset "{prefix}{file stem}" once,
-// and every reference must find it.
+// Composition through MuJoCo's mjs_attach: file assets named implicitly by their file (how
+// Unitree and MuJoCo Menagerie models name their meshes) are named "{prefix}{file stem}" once and
+// every reference finds them; options follow the scene's resolution order.
 #include "urlab/mjcf/compose.h"
 
 #include <algorithm>
@@ -8,8 +8,7 @@
 
 #include "core/gcc_workarounds.h"
 #include "mujoco_test.h"
-#include "urlab/mjcf/reader.h"
-#include "urlab/mjcf/writer.h"
+#include "urlab/mjcf/spec.h"
 #include "urlab/physics/model.h"
 
 namespace urlab {
@@ -27,8 +26,7 @@ class ComposeTest : public testing::MujocoTest {
     fs::create_directories(dir_ + "/textures");
     fs::copy_file(corpus + "/meshes/tetra.stl", dir_ + "/meshes/pelvis.STL");
     fs::copy_file(corpus + "/meshes/octa.obj", dir_ + "/meshes/sub/foot.v2.obj");
-    // A file whose name holds a backslash (legal on Linux): 2.2.2 names it after the last '\'.
-    fs::copy_file(corpus + "/meshes/wedge.stl", dir_ + "/meshes/win\\knee.stl");
+    fs::copy_file(corpus + "/meshes/wedge.stl", dir_ + "/meshes/knee.stl");
     fs::copy_file(corpus + "/meshes/strip.skn", dir_ + "/meshes/strip.skn");
     fs::copy_file(corpus + "/hfields/terrain.png", dir_ + "/meshes/terrain.png");
     fs::copy_file(corpus + "/textures/checker.png", dir_ + "/textures/checker.png");
@@ -39,21 +37,28 @@ class ComposeTest : public testing::MujocoTest {
   mjcf::ComposeResult ComposeOne(const std::string& xml, const std::string& name = "r") {
     std::vector<mjcf::ArticulationInput> in(1);
     in[0].name = name;
-    in[0].doc = mjcf::ReadFile(testing::WriteTextFile(dir_, "robot.xml", xml));
+    in[0].file = testing::WriteTextFile(dir_, "robot.xml", xml);
+    in[0].spec = mjcf::ParseFile(in[0].file);
     return mjcf::Compose(std::move(in));
+  }
+
+  // MuJoCo's compilation of the composed root spec; Error with MuJoCo's message.
+  static physics::ModelPtr Compile(const mjcf::ComposeResult& composed) {
+    mjModel* m = mj_compile(composed.spec.get(), nullptr);
+    if (!m) throw Error(mjs_getError(composed.spec.get()));
+    return physics::ModelPtr(m);
   }
 
   std::string dir_;
 };
 
-// Every kind of implicitly named file asset: MuJoCo 2.2.2 strips the folder at the last '/' or
-// '\' and the extension at the last '.'.
+// Every kind of implicitly named file asset: MuJoCo strips the folder and the extension.
 constexpr const char* kImplicitAssets = R"(<mujoco model="implicit">
   <compiler meshdir="meshes" texturedir="textures"/>
   <asset>
     <mesh file="pelvis.STL"/>
     <mesh file="sub/foot.v2.obj"/>
-    <mesh file="win\knee.stl"/>
+    <mesh file="knee.stl"/>
     <skin file="strip.skn"/>
     <hfield file="terrain.png" size="1 1 .1 .1"/>
     <texture type="2d" file="checker.png"/>
@@ -84,8 +89,8 @@ TEST_F(ComposeTest, ImplicitFileAssetNamesArePrefixedOnce) {
   ASSERT_GE(mj_name2id(plain.get(), mjOBJ_MESH, "knee"), 0);
 
   mjcf::ComposeResult composed = ComposeOne(kImplicitAssets);
-  const std::string xml = mjcf::WriteString(composed.doc);
-  physics::ModelPtr m = physics::CompileXmlString(xml);
+  physics::ModelPtr m = Compile(composed);
+  const std::string xml = mjcf::SaveXml(composed.spec.get());
   for (auto [type, name] : std::vector<std::pair<mjtObj, const char*>>{{mjOBJ_MESH, "r_pelvis"},
                                                                        {mjOBJ_MESH, "r_foot.v2"},
                                                                        {mjOBJ_MESH, "r_knee"},
@@ -102,7 +107,7 @@ TEST_F(ComposeTest, ImplicitFileAssetNamesArePrefixedOnce) {
   EXPECT_EQ(m->ntex, plain->ntex);
   EXPECT_EQ(m->nhfield, plain->nhfield);
   EXPECT_EQ(m->nmeshvert, plain->nmeshvert);
-  // The SKN skin, written inline so that its bones could be prefixed, holds the file's numbers.
+  // The SKN skin holds the file's numbers, its bones the prefixed bodies.
   ASSERT_EQ(m->nskinvert, plain->nskinvert);
   ASSERT_EQ(m->nskinface, plain->nskinface);
   ASSERT_EQ(m->nskinbone, plain->nskinbone);
@@ -121,21 +126,19 @@ TEST_F(ComposeTest, ImplicitFileAssetNamesArePrefixedOnce) {
   }
 }
 
-// A truncated SKN file is refused with the skin's file and line, as MuJoCo refuses it.
-TEST_F(ComposeTest, TruncatedSkinFileIsAnInputError) {
+// A truncated SKN file is refused by MuJoCo naming the skin's file.
+TEST_F(ComposeTest, TruncatedSkinFileIsRefused) {
   const std::string skn = dir_ + "/meshes/strip.skn";
   fs::resize_file(skn, fs::file_size(skn) - 4);
   try {
-    ComposeOne(kImplicitAssets);
-    FAIL() << "composed a truncated skin file";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("robot.xml:7"), std::string::npos) << e.what();
+    Compile(ComposeOne(kImplicitAssets));
+    FAIL() << "compiled a truncated skin file";
+  } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("strip.skn"), std::string::npos) << e.what();
   }
 }
 
-// Two copies of a robot with implicit mesh names share one copy of each mesh, and both copies'
-// geoms find it.
+// Two copies of a robot with implicit mesh names: each copy's geoms find its own prefixed mesh.
 TEST_F(ComposeTest, TwoCopiesShareImplicitlyNamedMeshes) {
   const std::string path = testing::WriteTextFile(dir_, "robot.xml", kImplicitAssets);
   std::vector<mjcf::ArticulationInput> in(2);
@@ -144,24 +147,28 @@ TEST_F(ComposeTest, TwoCopiesShareImplicitlyNamedMeshes) {
     URLAB_GCC_IGNORE("-Wrestrict")
     in[i].name = i ? "b" : "a";
     URLAB_GCC_RESTORE
-    in[i].doc = mjcf::ReadFile(path);
+    in[i].spec = mjcf::ParseFile(path);
     in[i].placement.pos = {0, 3.0 * i, 0};
   }
   mjcf::ComposeResult composed = mjcf::Compose(std::move(in));
-  physics::ModelPtr m = physics::CompileXmlString(mjcf::WriteString(composed.doc));
-  EXPECT_EQ(m->nmesh, 3);
+  physics::ModelPtr m = Compile(composed);
+  EXPECT_EQ(m->nmesh, 6);
   EXPECT_EQ(m->nbody, 5);
-  const int mesh = mj_name2id(m.get(), mjOBJ_MESH, "a_pelvis");
-  ASSERT_GE(mesh, 0);
-  int users = 0;
-  for (int g = 0; g < m->ngeom; ++g) {
-    users += m->geom_type[g] == mjGEOM_MESH && m->geom_dataid[g] == mesh;
+  for (const char* prefix : {"a_", "b_"}) {
+    const int mesh = mj_name2id(m.get(), mjOBJ_MESH, (std::string(prefix) + "pelvis").c_str());
+    ASSERT_GE(mesh, 0) << prefix;
+    const int body = mj_name2id(m.get(), mjOBJ_BODY, (std::string(prefix) + "skin_a").c_str());
+    int users = 0;
+    for (int g = 0; g < m->ngeom; ++g) {
+      users +=
+          m->geom_type[g] == mjGEOM_MESH && m->geom_dataid[g] == mesh && m->geom_bodyid[g] == body;
+    }
+    EXPECT_EQ(users, 1) << prefix;
   }
-  EXPECT_EQ(users, 2);
 }
 
-// A name given explicitly keeps winning over the file name, and a skybox without a file (which
-// 2.2.2 leaves unnamed) stays unnamed.
+// A name given explicitly keeps winning over the file name, and a skybox without a file stays
+// unnamed.
 TEST_F(ComposeTest, ExplicitNamesAndUnnamedSkyboxAreUnchanged) {
   mjcf::ComposeResult composed = ComposeOne(R"(<mujoco>
   <compiler meshdir="meshes"/>
@@ -171,7 +178,7 @@ TEST_F(ComposeTest, ExplicitNamesAndUnnamedSkyboxAreUnchanged) {
   </asset>
   <worldbody><body><freejoint/><geom type="mesh" mesh="base"/></body></worldbody>
 </mujoco>)");
-  physics::ModelPtr m = physics::CompileXmlString(mjcf::WriteString(composed.doc));
+  physics::ModelPtr m = Compile(composed);
   EXPECT_GE(mj_name2id(m.get(), mjOBJ_MESH, "r_base"), 0);
   ASSERT_EQ(m->ntex, 1);
   EXPECT_STREQ(m->names + m->name_texadr[0], "");
@@ -188,10 +195,10 @@ TEST_F(ComposeTest, SceneOptionsSettleDisagreements) {
   auto inputs = [&] {
     std::vector<mjcf::ArticulationInput> in(2);
     in[0].name = "a";
-    in[0].doc = mjcf::ReadFile(testing::WriteTextFile(
+    in[0].spec = mjcf::ParseFile(testing::WriteTextFile(
         dir_, "a.xml", R"(<mujoco><option timestep="0.001" cone="elliptic"/></mujoco>)"));
     in[1].name = "b";
-    in[1].doc = mjcf::ReadFile(testing::WriteTextFile(dir_, "b.xml", "<mujoco/>"));
+    in[1].spec = mjcf::ParseFile(testing::WriteTextFile(dir_, "b.xml", "<mujoco/>"));
     return in;
   };
   auto warned = [](const mjcf::ComposeResult& r, const std::string& key) {
@@ -206,7 +213,7 @@ TEST_F(ComposeTest, SceneOptionsSettleDisagreements) {
   const mjcf::ComposeResult settled = mjcf::Compose(inputs(), {{"timestep", "0.004"}});
   EXPECT_FALSE(warned(settled, "timestep"));
   EXPECT_TRUE(warned(settled, "cone"));
-  physics::ModelPtr m = physics::CompileXmlString(mjcf::WriteString(settled.doc));
+  physics::ModelPtr m = Compile(settled);
   EXPECT_EQ(m->opt.timestep, 0.004);
   EXPECT_EQ(m->opt.cone, mjCONE_ELLIPTIC);
 }

@@ -1,4 +1,4 @@
-// Round trip: import then export every model under /usr/share/mujoco/model and the hand-written
+// Round trip: import then export every model of MuJoCo's corpus ($URLAB_MUJOCO_MODELS) and the hand-written
 // corpus; the output, loaded from another working directory, must give a model of the same sizes
 // whose 1000-step zero-control trajectory is bit-identical to the original's.
 #include <filesystem>
@@ -16,7 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 
 std::vector<std::string> ModelFiles() {
-  return testing::ModelFilesIn({"/usr/share/mujoco/model", URLAB_TEST_DATA_DIR "/mjcf/corpus"});
+  return testing::ModelFilesIn({testing::MujocoCorpusDir(), URLAB_TEST_DATA_DIR "/mjcf/corpus"});
 }
 
 class RoundTripTest : public testing::MujocoTest,

@@ -49,7 +49,7 @@ constexpr const char* kBotXml = R"(<mujoco model="bot">
 </mujoco>
 )";
 
-constexpr const char* kHumanoid = "/usr/share/mujoco/model/humanoid/humanoid.xml";
+constexpr const char* kHumanoid = URLAB_SOURCE_DIR "/examples/models/humanoid.xml";
 
 // Every line logged while it is installed.
 class LogLines : public spdlog::sinks::base_sink<std::mutex> {

@@ -563,7 +563,7 @@ TEST_F(StepServerTest, HelloIncludeAssetsShipsAModelThatCompilesElsewhere) {
 
 // A driver waiting for a step longer than the lease timeout keeps its lease (and its mode).
 TEST_F(StepServerTest, ALongStepDoesNotCostTheDriverItsLease) {
-  Play(200ms, "live", "", "/usr/share/mujoco/model/humanoid/humanoid.xml");
+  Play(200ms, "live", "", URLAB_SOURCE_DIR "/examples/models/humanoid.xml");
   Client c(ctx_, rpc());
   c.Hello({{"observations", "minimal"}});
   ASSERT_EQ(c.Op("set_mode", {{"mode", "direct"}})["op"], "set_mode_ok");

@@ -1,11 +1,11 @@
-// The scene export: the composed MJCF carries the physics options changed at run time (MuJoCo
-// 2.2.2 saves the XML as loaded), and nothing else changes.
+// The scene export: MuJoCo writes the composed scene from its spec with the physics options
+// changed at run time, and nothing else changes.
 #include "urlab/ops/scene_export.h"
 
 #include <mujoco/mujoco.h>
 
 #include "ops/ops_fixture.h"
-#include "urlab/mjcf/reader.h"
+#include "urlab/mjcf/spec.h"
 #include "urlab/ops/state.h"
 
 namespace urlab::ops::test {
@@ -27,7 +27,7 @@ TEST_F(SceneExportTest, UnchangedOptionsWriteTheComposedSceneAsIs) {
   std::vector<std::string> changed = {"sentinel"};
   const std::string xml = SceneXml(session(), {}, &changed);
   EXPECT_TRUE(changed.empty());
-  EXPECT_EQ(xml, mjcf::WriteString(session().scene().doc, {}));
+  EXPECT_EQ(xml, mjcf::SaveXml(session().scene().spec.get()));
 }
 
 TEST_F(SceneExportTest, OptionsChangedAtRunTimeAreWrittenAndCompileBack) {
@@ -40,7 +40,7 @@ TEST_F(SceneExportTest, OptionsChangedAtRunTimeAreWrittenAndCompileBack) {
   Wait(SetOptions(session(), change).seq);
   std::vector<std::string> changed;
   const std::string xml = SceneXml(session(), {}, &changed);
-  EXPECT_EQ(changed, (std::vector<std::string>{"timestep", "gravity", "integrator", "iterations"}));
+  EXPECT_EQ(changed, (std::vector<std::string>{"gravity", "integrator", "iterations", "timestep"}));
   mjModel* m = Compile(dir_, xml);
   ASSERT_NE(m, nullptr);
   const physics::Model now = session().engine().CopyModel();
@@ -55,12 +55,11 @@ TEST_F(SceneExportTest, OptionsChangedAtRunTimeAreWrittenAndCompileBack) {
   EXPECT_EQ(m->opt.disableflags, now->opt.disableflags);
   EXPECT_EQ(m->nbody, now->nbody);
   mj_deleteModel(m);
-  // The scene's own document is not touched by the export.
-  EXPECT_EQ(session().scene().doc.FindSection("option")->GetOr("timestep", ""), "0.002");
+  // The scene's own spec is not touched by the export.
+  EXPECT_EQ(session().scene().spec->option.timestep, 0.002);
 }
 
-TEST_F(SceneExportTest, FlagsAreWrittenByTheirMjcfNames) {
-  document::Document doc = mjcf::ReadString(kArmXml, "arm.xml");
+TEST_F(SceneExportTest, FlagsAreNamedByTheirMjcfNames) {
   mjOption compiled;
   mj_defaultOption(&compiled);
   mjOption now = compiled;
@@ -68,25 +67,16 @@ TEST_F(SceneExportTest, FlagsAreWrittenByTheirMjcfNames) {
   now.enableflags |= mjENBL_ENERGY;
   now.cone = mjCONE_ELLIPTIC;
   now.solver = mjSOL_CG;
-  const auto written = WriteOptionChanges(compiled, now, doc);
-  EXPECT_EQ(written, (std::vector<std::string>{"cone", "solver", "flag.contact", "flag.gravity",
-                                               "flag.energy"}));
-  const document::Element* option = doc.FindSection("option");
-  ASSERT_NE(option, nullptr);
-  EXPECT_EQ(option->GetOr("cone", ""), "elliptic");
-  EXPECT_EQ(option->GetOr("solver", ""), "CG");
-  const document::Element* flag = option->FirstChild("flag");
-  ASSERT_NE(flag, nullptr);
-  EXPECT_EQ(flag->GetOr("contact", ""), "disable");
-  EXPECT_EQ(flag->GetOr("gravity", ""), "disable");
-  EXPECT_EQ(flag->GetOr("energy", ""), "enable");
-  mjModel* m = Compile(urlab::testing::MakeTempDir("export"), mjcf::WriteString(doc, {}));
-  ASSERT_NE(m, nullptr);
-  EXPECT_EQ(m->opt.disableflags, now.disableflags);
-  EXPECT_EQ(m->opt.enableflags, now.enableflags);
-  EXPECT_EQ(m->opt.cone, mjCONE_ELLIPTIC);
-  EXPECT_EQ(m->opt.solver, mjSOL_CG);
-  mj_deleteModel(m);
+  EXPECT_EQ(ChangedOptions(compiled, now),
+            (std::vector<std::string>{"cone", "flag.contact", "flag.energy", "flag.gravity",
+                                      "solver"}));
+  // The same names set them back.
+  mjOption again = compiled;
+  for (const auto& [k, v] : mjcf::OptionText(now)) mjcf::SetOption(&again, k, v);
+  EXPECT_EQ(again.disableflags, now.disableflags);
+  EXPECT_EQ(again.enableflags, now.enableflags);
+  EXPECT_EQ(again.cone, mjCONE_ELLIPTIC);
+  EXPECT_EQ(again.solver, mjSOL_CG);
 }
 
 }  // namespace

@@ -294,11 +294,12 @@ TEST_F(EngineTest, MujocoErrorInLoopPausesAndIsReported) {
 }
 
 TEST_F(EngineTest, MujocoErrorFromEngineInternalsInStepSync) {
-  // A stack far too small for the model: mj_step calls mju_error("... stack overflow ...").
+  // mju_error from inside mj_step (here from MuJoCo's control callback, which mj_step calls).
   ModelPtr m = LoadXmlFile(kHumanoidPath);
   PhysicsEngine engine(std::move(m));
-  engine.WithLockedData([](mjModel*, mjData* d) { d->nstack = d->pstack + 8; });
+  mjcb_control = [](const mjModel*, mjData*) { mju_error("engine internals failed"); };
   EXPECT_THROW(engine.StepSync(1), MujocoError);
+  mjcb_control = nullptr;
   EXPECT_TRUE(engine.paused());
   auto events = engine.DrainEvents();
   ASSERT_EQ(events.size(), 1u);

@@ -82,18 +82,6 @@ TEST_F(StateTest, RestoreReproducesContinuationBitForBit) {
   EXPECT_GT(a_ncon, 0) << "the test should exercise contacts";
 }
 
-// mj_forward alone (without putting the warm start back) is not enough in MuJoCo 2.2.2.
-TEST_F(StateTest, ForwardAloneClobbersWarmstart) {
-  ModelPtr m = LoadXmlFile(kHumanoidPath);
-  DataPtr d = MakeData(m.get());
-  Excite(m.get(), d.get(), 1000);
-  const PhysicsState snap = CaptureState(m.get(), d.get());
-  const PhysicsState a = Continue(m.get(), d.get(), 100);
-  ApplyState(m.get(), d.get(), snap);
-  mj_forward(m.get(), d.get());
-  EXPECT_FALSE(Continue(m.get(), d.get(), 100).BitwiseEquals(a));
-}
-
 // Shows that the warm start is part of the state: dropping it changes the continuation.
 TEST_F(StateTest, WarmstartIsNecessary) {
   ModelPtr m = LoadXmlFile(kHumanoidPath);

@@ -127,7 +127,7 @@ TEST_F(StepCoreTest, EveryCommandKindHasOneNameAndItsValidation) {
   EXPECT_EQ(names.size(), std::variant_size_v<Command>);
   EXPECT_EQ(names.count(""), 0u);
   StepCore core(CompileXmlString(kArmXml));
-  EXPECT_THROW(core.Validate(cmd::SetQvel{core.model()->nv, {1.0}}), Error);
+  EXPECT_THROW(core.Validate(cmd::SetQvel{static_cast<int>(core.model()->nv), {1.0}}), Error);
   EXPECT_THROW(core.Validate(cmd::ResetKeyframe{99}), Error);
   EXPECT_THROW(core.Validate(cmd::Step{0}), Error);
   EXPECT_THROW(core.Validate(cmd::Inspect{}), Error);

@@ -4,7 +4,8 @@
 
 namespace urlab::testing {
 
-inline const char* kHumanoidPath = "/usr/share/mujoco/model/humanoid/humanoid.xml";
+// URLab's own humanoid (21 hinges on a free base: nq 28, nv 27, nu 21).
+inline const char* kHumanoidPath = URLAB_SOURCE_DIR "/examples/models/humanoid.xml";
 
 // A two-link arm with position/velocity sensors, a mocap body, user data, a filtered actuator
 // (activation state) and two named keyframes. Names start with "arm_" like an articulation.

@@ -4,11 +4,20 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 namespace urlab::testing {
+
+// MuJoCo's own model corpus (the model/ and test/ folders of the pinned release, brought by
+// tools/corpus_check), when $URLAB_MUJOCO_MODELS names it; "" otherwise (the tests then cover the
+// project's own models only).
+inline std::string MujocoCorpusDir() {
+  const char* dir = std::getenv("URLAB_MUJOCO_MODELS");
+  return dir ? dir : "";
+}
 
 // Every .xml below `dirs` (missing folders skipped), sorted; files under parts/ are only meant to
 // be included and are left out.
@@ -16,7 +25,7 @@ inline std::vector<std::string> ModelFilesIn(const std::vector<std::string>& dir
   namespace fs = std::filesystem;
   std::vector<std::string> out;
   for (const std::string& dir : dirs) {
-    if (!fs::is_directory(dir)) continue;
+    if (dir.empty() || !fs::is_directory(dir)) continue;
     for (const auto& e : fs::recursive_directory_iterator(dir)) {
       if (e.path().extension() != ".xml") continue;
       if (e.path().string().find("/parts/") != std::string::npos) continue;

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -1054,7 +1055,7 @@ TEST_F(ViewerTest, SavesMjbXmlAndPrintsModelAndData) {
             running.Hash())
       << "the saved MJB loads as the same model";
   // An option changed at run time (gravity off, as the panel's physics flags do) is saved too.
-  core().SetDisableFlag(6, true);  // mjDSBL_GRAVITY
+  core().SetDisableFlag(std::countr_zero(static_cast<unsigned>(mjDSBL_GRAVITY)), true);
   ASSERT_TRUE(TickUntil([&] { return engine().CopyModel()->opt.disableflags & mjDSBL_GRAVITY; }));
   Key(GLFW_KEY_S, GLFW_MOD_CONTROL);
   const std::string xml = dir_ + "/urlab_scene.xml";

@@ -9,7 +9,17 @@
 namespace urlab {
 
 // Installs the throwing error handler and the logging warning handler. Thread: main, at start-up.
+// It also loads MuJoCo's engine plugins (LoadEnginePlugins).
 void InstallMujocoHandlers();
+
+// The folder of MuJoCo's engine plugins (elasticity, SDF, sensor, actuator libraries):
+// $URLAB_MUJOCO_PLUGIN_DIR, else lib/mujoco_plugin of an installed URLab, else the plugins of the
+// release URLab was built with; "" when none exists.
+std::string EnginePluginDir();
+
+// Registers every engine plugin of EnginePluginDir() with MuJoCo, once per process (models that
+// name a plugin need it registered before they compile). Thread: any; the first call loads.
+void LoadEnginePlugins();
 
 // Routes a MuJoCo warning through URLab's handler: logged and captured. Any thread. Repeats of
 // one kind of warning (the same text up to its numbers) are logged at most once a second, with

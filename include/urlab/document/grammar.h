@@ -19,7 +19,7 @@
 //   e.g. "name:s class:s@class type:k{plane|sphere|box} size:r1-3 pos:r3 material:s@material"
 //
 // A second table (grammar_dialect_table.cc) holds what MJCF written for MuJoCo 3.x adds and the
-// dialect bridge (mjcf/bridge.h) translates: its rows are marked `dialect`, and a row whose id
+// reader accepts (the engine is MuJoCo 3): its rows are marked `dialect`, and a row whose id
 // starts with '+' extends the 2.2.2 row of that id with more children and attributes (also
 // marked `dialect`); naming an attribute the row already has adds keywords to it (listed in
 // `dialect_keywords`) or widens its value count (`dialect_count`, the 2.2.2 counts kept). The
@@ -166,7 +166,7 @@ bool IsActuatorTag(std::string_view tag);
 
 // The table itself (src/document/grammar_table.cc).
 std::span<const GrammarRow> GrammarTable();
-// MuJoCo 3.x additions the dialect bridge handles (src/document/grammar_dialect_table.cc).
+// MuJoCo 3.x additions (src/document/grammar_dialect_table.cc).
 std::span<const GrammarRow> DialectGrammarTable();
 // Value ranges of number attributes (src/document/grammar_table.cc).
 std::span<const RangeRow> ValueRangeTable();

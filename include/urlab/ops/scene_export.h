@@ -1,30 +1,27 @@
 #pragma once
-// Exports: the composed scene as MJCF with the physics options in effect now. MuJoCo 2.2.2 saves
-// the XML it loaded, so options changed at run time (the viewer's panel, set_sim_options) would
-// be lost; the export writes them into the document's <option> element and its <flag> child.
+// Exports: the composed scene as MJCF, written by MuJoCo from the scene's spec with the physics
+// options in effect now (changed at run time by the viewer's panel or set_sim_options).
 //
-// Threading: SceneXml on any thread but not from inside a physics callback (it copies the model
-// under the step mutex); WriteOptionChanges touches only its arguments.
+// Threading: SceneXml on the main thread (it reads the scene's spec) but not from inside a
+// physics callback (it copies the model under the step mutex); ChangedOptions touches only its
+// arguments.
 #include <mujoco/mujoco.h>
 
 #include <string>
 #include <vector>
 
-#include "urlab/document/document.h"
-#include "urlab/mjcf/writer.h"
 #include "urlab/world/session.h"
 
 namespace urlab::ops {
 
-// Writes every option of `now` that differs from `compiled` into doc's <option> (created when
-// absent; flags into <option><flag>), as MJCF attributes. Returns the attributes written, e.g.
-// "timestep", "flag.contact" (empty when nothing changed: the document is left untouched).
-std::vector<std::string> WriteOptionChanges(const mjOption& compiled, const mjOption& now,
-                                            document::Document& doc);
+// The MJCF attribute names of the options of `now` that differ from `compiled`, in the order of
+// mjcf::OptionText's keys (e.g. "gravity", "timestep", "flag.contact"); empty when none.
+std::vector<std::string> ChangedOptions(const mjOption& compiled, const mjOption& now);
 
-// The composed scene's MJCF with the options in effect now (the viewer's Save XML). `changed`,
-// when given, receives the attributes written (see WriteOptionChanges).
-std::string SceneXml(world::Session& session, const mjcf::WriteOptions& options,
+// The composed scene's MJCF with the options in effect now (the viewer's Save XML), asset paths
+// relative to `relative_to` (absolute when empty). `changed`, when given, receives
+// ChangedOptions.
+std::string SceneXml(world::Session& session, const std::string& relative_to = {},
                      std::vector<std::string>* changed = nullptr);
 
 }  // namespace urlab::ops

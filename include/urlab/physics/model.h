@@ -123,7 +123,7 @@ class Model {
   SoftwareSensorRegistration registration_;  // released before model_ (see the destructor)
 };
 
-// The version of the MuJoCo library actually loaded, e.g. "2.2.2".
+// The version of the MuJoCo library actually loaded, e.g. "3.17.0".
 std::string MujocoVersion();
 
 }  // namespace urlab::physics

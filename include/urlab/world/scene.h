@@ -1,19 +1,17 @@
 #pragma once
-// Building a compiled scene: read every articulation's MJCF, compose them with prefixes and
-// placements, apply the option resolution (MuJoCo defaults -> the first articulation's MJCF and
-// options -> the scene's overrides), compile with MuJoCo, write the articulations' keyframes,
-// and optionally save the debug XML/MJB. Thread: main (before the physics thread starts).
+// Building a compiled scene: parse every articulation's MJCF into its own spec, attach them to a
+// root spec with prefixes and placements (mjcf/compose.h), apply the option resolution (MuJoCo
+// defaults -> the first articulation's MJCF and options -> the scene's overrides), compile with
+// MuJoCo, and optionally save the debug XML/MJB. Thread: main (before the physics thread starts).
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "urlab/convert/prop.h"
 #include "urlab/core/diagnostics.h"
-#include "urlab/document/document.h"
-#include "urlab/mjcf/bridge.h"
 #include "urlab/mjcf/compose.h"
 #include "urlab/physics/model.h"
-#include "urlab/physics/software_sensors.h"
 #include "urlab/world/launchers.h"
 #include "urlab/world/scene_file.h"
 
@@ -39,24 +37,23 @@ struct TerrainLayout {
 };
 
 struct CompiledScene {
-  // The compiled model with its extensions: the sensors and passive forces 2.2.2 lacks (3.x
-  // jointactuatorfrc/tendonactuatorfrc, gravcomp, dead-band springs) that the runtime computes,
-  // and the site equalities' data (physics/model.h).
-  physics::Model model;
-  std::string bridge_report;  // what the dialect bridge changed ("" when nothing)
+  physics::Model model;  // what MuJoCo compiled from `spec`
+  // The root spec every articulation is attached to (MuJoCo's editable model of the scene): the
+  // scene's MJCF (mjcf::SaveXml) and recompiles come from it. Shared by copies of the scene.
+  std::shared_ptr<mjSpec> spec;
   // The scene's articulations in order, then its props (their layouts follow the articulations').
   std::vector<mjcf::ArticulationLayout> articulations;
   std::vector<PropLayout> props;
   std::vector<TerrainLayout> terrain;
   std::vector<LauncherLayout> launchers;          // the scene's `launchers:` in order
-  std::vector<document::Diagnostic> diagnostics;  // warnings worth showing the user
-  document::Document doc;  // the (composed) document MuJoCo compiled, e.g. for --save-xml
+  std::vector<Diagnostic> diagnostics;  // warnings worth showing the user
 };
 
-// What the runtime computes for a bridged model (software sensors, gravity compensation), with
-// every name given `prefix` (an articulation's "{name}_" in a scene), added to `spec`.
-void AddBridgeRuntime(const mjcf::BridgeReport& report, const std::string& prefix,
-                      physics::SoftwareModelSpec* spec);
+// The scene as MJCF, written by MuJoCo from its spec with the options the compiled model has now
+// (`model_options`, e.g. changed at run time; nullptr: the spec's own). Asset paths are absolute
+// unless `relative_to` names the folder the text will be saved in.
+std::string SceneXml(const CompiledScene& scene, const mjOption* model_options = nullptr,
+                     const std::string& relative_to = {});
 
 // Composes and compiles a scene. Throws InputError / CompileError with the articulation, element
 // and file:line of the problem (a prop's, terrain's or launcher's at its entry in the scene file).
@@ -64,14 +61,14 @@ void AddBridgeRuntime(const mjcf::BridgeReport& report, const std::string& prefi
 // convert::DefaultCacheDir()).
 CompiledScene BuildScene(const SceneConfig& scene, const std::string& cache_dir = {});
 
-// A single MJCF file compiled on its own, without a prefix: read, bridge, export, compile. Not a
+// A single MJCF file compiled on its own, without a prefix: parse, prepare meshes, compile. Not a
 // check (LoadSceneOrModel + BuildScene is the path every command checks and runs); `urlab compile
 // FILE.xml --save-xml/--save-mjb` exports this so the saved names are the user's own.
 CompiledScene BuildModel(const std::string& mjcf_path);
 
 // Every problem found in a scene or MJCF file, without stopping at the first (for
-// `urlab validate`): the scene file, per MJCF file the reader's checks, duplicate names, missing
-// files, bridge refusals and dangling references, then the scene checks begin-play runs
+// `urlab validate`): the scene file, per MJCF file what MuJoCo's parser refuses (its first
+// problem, at its line), then the scene checks begin-play runs
 // (world/scene_checks.h) and, when all that was clean, composition and compilation exactly as
 // `urlab run` does them (a single MJCF file is a scene of one articulation). Starts nothing and
 // writes no file: a scene's save_debug_xml is ignored, and meshes are converted and decomposed
@@ -79,13 +76,10 @@ CompiledScene BuildModel(const std::string& mjcf_path);
 // slowly as its first run, whatever the user's cache holds).
 struct ValidationReport {
   Diagnostics diagnostics;                  // errors and warnings, each with file:line
-  std::vector<std::string> sizes;           // "nq 28" ... when it compiled
-  std::vector<std::string> bridge;          // dialect bridge changes, when asked for
-  std::map<std::string, int> bridge_rules;  // rule id -> changes it made, when asked for
+  std::vector<std::string> sizes;  // "nq 28" ... when it compiled
   bool ok() const { return !diagnostics.has_errors(); }
 };
-// With `bridge_report`, lists every change the MuJoCo 3.x dialect bridge makes (file and line).
-ValidationReport Validate(const std::string& path, bool bridge_report = false);
+ValidationReport Validate(const std::string& path);
 
 // Every file a scene reads: the scene file, each articulation's MJCF, its includes and asset
 // files (outputs must never overwrite one of them).
