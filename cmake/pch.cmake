@@ -37,6 +37,10 @@ function(urlab_pch target)
     list(APPEND headers <CLI/CLI.hpp>)
   endif()
   target_precompile_headers(${target} PRIVATE ${headers})
+  # <mujoco/mujoco.h> is precompiled for every target, also those that do not link MuJoCo (wire,
+  # client): they see the pinned release's headers, never another copy on the system.
+  target_include_directories(${target} SYSTEM PRIVATE
+                             $<TARGET_PROPERTY:mujoco::mujoco,INTERFACE_INCLUDE_DIRECTORIES>)
   if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
     # GCC 12's flow-based buffer warnings misfire on std::string's inlined copies (string
     # concatenation: PR 105651 and its kin) once <string> comes from a precompiled header, where
