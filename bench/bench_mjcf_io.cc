@@ -19,8 +19,7 @@ using urlab::bench::Seconds;
 
 int main(int argc, char** argv) {
   urlab::InstallMujocoHandlers();
-  const std::string path =
-      argc > 1 ? argv[1] : URLAB_SOURCE_DIR "/examples/models/humanoid.xml";
+  const std::string path = argc > 1 ? argv[1] : URLAB_SOURCE_DIR "/examples/models/humanoid.xml";
   const int repeats = argc > 2 ? std::atoi(argv[2]) : 15;
   std::vector<double> ours, mujoco;
   size_t bytes = 0;

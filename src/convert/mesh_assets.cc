@@ -42,29 +42,17 @@ std::string Convert(const std::string& source, const std::string& why, const std
   return out;
 }
 
-std::string MeshText(const mjString* s) {
-  const char* c = s ? mjs_getString(s) : nullptr;
-  return c ? c : "";
-}
-
 // The name MuJoCo gives a mesh: its own, else its file's stem.
 std::string MeshName(const mjsMesh* mesh) {
-  const std::string name = MeshText(mjs_getName(mesh->element));
+  const std::string name = mjcf::SpecString(mjs_getName(mesh->element));
   if (!name.empty()) return name;
-  return fs::path(MeshText(mesh->file)).stem().string();
+  return fs::path(mjcf::SpecString(mesh->file)).stem().string();
 }
 
 }  // namespace
 
 std::string MeshFilePath(const mjSpec* spec, const mjsMesh* mesh) {
-  const std::string file = MeshText(mesh->file);
-  if (file.empty()) return "";
-  fs::path p(file);
-  if (p.is_absolute()) return p.lexically_normal().string();
-  fs::path base(MeshText(spec->modelfiledir));
-  const std::string meshdir = MeshText(spec->compiler.meshdir);
-  if (!meshdir.empty()) base = fs::path(meshdir).is_absolute() ? fs::path(meshdir) : base / meshdir;
-  return (base / p).lexically_normal().string();
+  return mjcf::ResolveAssetPath(spec, mjcf::SpecString(mesh->file), spec->compiler.meshdir);
 }
 
 MeshAssetReport PrepareMeshAssets(mjSpec* spec, const std::string& model_file,
@@ -75,12 +63,12 @@ MeshAssetReport PrepareMeshAssets(mjSpec* spec, const std::string& model_file,
   for (mjsElement* e = mjs_firstElement(spec, mjOBJ_MESH); e; e = mjs_nextElement(spec, e)) {
     mjsMesh* m = mjs_asMesh(e);
     meshes.push_back(m);
-    const std::string own = MeshText(mjs_getName(e));
+    const std::string own = mjcf::SpecString(mjs_getName(e));
     if (!own.empty()) names.insert(own);
   }
   // Implicit names (file stems) that clash get a suffix.
   for (mjsMesh* m : meshes) {
-    if (!MeshText(mjs_getName(m->element)).empty() || MeshText(m->file).empty()) {
+    if (!mjcf::SpecString(mjs_getName(m->element)).empty() || mjcf::SpecString(m->file).empty()) {
       continue;
     }
     const std::string stem = MeshName(m);
@@ -96,8 +84,8 @@ MeshAssetReport PrepareMeshAssets(mjSpec* spec, const std::string& model_file,
   }
   for (mjsMesh* m : meshes) {
     // Where the <mesh> names its file (MuJoCo does not say which line an element came from).
-    const int line =
-        mjcf::LineContaining(model_file, fs::path(MeshText(m->file)).filename().string() + "\"");
+    const int line = mjcf::LineContaining(
+        model_file, fs::path(mjcf::SpecString(m->file)).filename().string() + "\"");
     const std::string file = MeshFilePath(spec, m);
     if (file.empty()) continue;
     const std::string why =
@@ -114,7 +102,7 @@ MeshAssetReport PrepareMeshAssets(mjSpec* spec, const std::string& model_file,
       bool visual = true;
       for (mjsElement* g = mjs_firstElement(spec, mjOBJ_GEOM); g; g = mjs_nextElement(spec, g)) {
         const mjsGeom* geom = mjs_asGeom(g);
-        if (MeshText(geom->meshname) != name) continue;
+        if (mjcf::SpecString(geom->meshname) != name) continue;
         geoms.push_back(g);
         visual = visual && geom->contype == 0 && geom->conaffinity == 0;
       }

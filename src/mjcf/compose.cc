@@ -16,12 +16,7 @@ bool Placement::IsIdentity() const {
 
 namespace {
 
-std::string ComposeText(const mjString* s) {
-  const char* c = s ? mjs_getString(s) : nullptr;
-  return c ? c : "";
-}
-
-std::string NameOf(mjsElement* e) { return ComposeText(mjs_getName(e)); }
+std::string NameOf(mjsElement* e) { return SpecString(mjs_getName(e)); }
 
 std::vector<double> Values(const mjDoubleVec* v) {
   int n = 0;
@@ -280,7 +275,7 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs,
     CopyModelCompilerSettings(first->spec->compiler, &root->compiler);
   }
   apply(&root->option, scene_options, "scene: ");
-  if (first) mjs_setString(root->modelname, ComposeText(first->spec->modelname).c_str());
+  if (first) mjs_setString(root->modelname, SpecString(first->spec->modelname).c_str());
 
   int nkey = root->nkey;
   std::size_t articulations = 0;

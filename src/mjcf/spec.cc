@@ -121,28 +121,31 @@ std::string Format(double v) {
   return buf;
 }
 
-std::string SpecText(const mjString* s) {
+}  // namespace
+
+std::string SpecString(const mjString* s) {
   const char* c = s ? mjs_getString(s) : nullptr;
   return c ? c : "";
 }
 
-// `file` as MuJoCo resolves it from `spec`'s folder and `dir` (meshdir or texturedir).
-std::string Resolve(const mjSpec* spec, const std::string& file, const mjString* dir) {
+std::string ResolveAssetPath(const mjSpec* spec, const std::string& file, const mjString* dir) {
   namespace fs = std::filesystem;
   if (file.empty()) return file;
   fs::path p(file);
   if (p.is_absolute()) return p.lexically_normal().string();
   if (spec->strippath) p = p.filename();  // <compiler strippath="true">: the folder goes
-  fs::path base(SpecText(spec->modelfiledir));
-  const std::string d = SpecText(dir);
+  fs::path base(SpecString(spec->modelfiledir));
+  const std::string d = SpecString(dir);
   if (!d.empty()) base = fs::path(d).is_absolute() ? fs::path(d) : base / d;
   return (base / p).lexically_normal().string();
 }
 
+namespace {
+
 void Absolute(mjSpec* spec, mjString* file, const mjString* dir) {
-  const std::string f = SpecText(file);
+  const std::string f = SpecString(file);
   if (f.empty()) return;
-  const std::string resolved = Resolve(spec, f, dir);
+  const std::string resolved = ResolveAssetPath(spec, f, dir);
   if (resolved != f) mjs_setString(file, resolved.c_str());
 }
 
@@ -195,10 +198,10 @@ void RefuseAssetsThatAreNotFiles(mjSpec* spec, const std::string& path) {
   namespace fs = std::filesystem;
   for (mjtObj type : {mjOBJ_MESH, mjOBJ_HFIELD, mjOBJ_SKIN, mjOBJ_TEXTURE}) {
     for (mjsElement* e = mjs_firstElement(spec, type); e; e = mjs_nextElement(spec, e)) {
-      const std::string f = SpecText(type == mjOBJ_MESH     ? mjs_asMesh(e)->file
-                                     : type == mjOBJ_HFIELD ? mjs_asHField(e)->file
-                                     : type == mjOBJ_SKIN   ? mjs_asSkin(e)->file
-                                                            : mjs_asTexture(e)->file);
+      const std::string f = SpecString(type == mjOBJ_MESH     ? mjs_asMesh(e)->file
+                                       : type == mjOBJ_HFIELD ? mjs_asHField(e)->file
+                                       : type == mjOBJ_SKIN   ? mjs_asSkin(e)->file
+                                                              : mjs_asTexture(e)->file);
       std::error_code ec;
       if (f.empty() || !fs::exists(f, ec) || fs::is_regular_file(f, ec)) continue;
       const char* what = fs::is_directory(f, ec) ? "is a folder" : "is a device or FIFO";
@@ -303,7 +306,7 @@ std::vector<std::string> ModelInputFiles(const std::string& path) {
                             : type == mjOBJ_HFIELD ? mjs_asHField(e)->file
                             : type == mjOBJ_SKIN   ? mjs_asSkin(e)->file
                                                    : mjs_asTexture(e)->file;
-        if (!SpecText(f).empty()) files.insert(SpecText(f));
+        if (!SpecString(f).empty()) files.insert(SpecString(f));
       }
     }
   } catch (const Error&) {

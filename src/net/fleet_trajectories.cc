@@ -17,8 +17,12 @@ FleetContext::Trajectories FleetContext::MakeTrajectories(int envs, int sets, in
   if (envs < 1 || sets < 1 || warm < 0 || steps < 1 || hold < 1) {
     throw Error("bench fleet: trajectories need envs, sets, steps and hold >= 1");
   }
-  Trajectories t{
-      .envs = envs, .nu = static_cast<int>(m_->nu), .sets = sets, .warm = warm, .steps = steps, .hold = hold};
+  Trajectories t{.envs = envs,
+                 .nu = static_cast<int>(m_->nu),
+                 .sets = sets,
+                 .warm = warm,
+                 .steps = steps,
+                 .hold = hold};
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   t.actions.resize(static_cast<std::size_t>(sets) * static_cast<std::size_t>(envs) *

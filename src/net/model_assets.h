@@ -7,7 +7,6 @@
 #include <utility>
 #include <vector>
 
-
 namespace urlab::net {
 
 struct ModelWithAssets {
@@ -19,7 +18,6 @@ struct ModelWithAssets {
 // Two different files with the same base name get distinct names ("box.stl", "box_2.stl").
 // Throws InputError naming a file that cannot be read (or is larger than `max_file_bytes`).
 // `xml` is MJCF with absolute asset paths (world::SceneXml).
-ModelWithAssets FlattenAssets(const std::string& xml,
-                              std::uintmax_t max_file_bytes = 256ull << 20);
+ModelWithAssets FlattenAssets(const std::string& xml, std::uintmax_t max_file_bytes = 256ull << 20);
 
 }  // namespace urlab::net

@@ -162,8 +162,6 @@ Model Model::Copy() const {
 
 std::uint64_t Model::Hash() const { return ContentHash(Mjb(), extension_text_); }
 
-std::string MujocoVersion() {
-  return mj_versionString();
-}
+std::string MujocoVersion() { return mj_versionString(); }
 
 }  // namespace urlab::physics

@@ -101,9 +101,9 @@ class Reader {
 }  // namespace
 
 StateLayout StateLayout::Of(const mjModel* m) {
-  return StateLayout{static_cast<int>(m->nq),    static_cast<int>(m->nv),
-                     static_cast<int>(m->na),    static_cast<int>(m->nu),
-                     static_cast<int>(m->nbody), static_cast<int>(m->nmocap),
+  return StateLayout{static_cast<int>(m->nq),       static_cast<int>(m->nv),
+                     static_cast<int>(m->na),       static_cast<int>(m->nu),
+                     static_cast<int>(m->nbody),    static_cast<int>(m->nmocap),
                      static_cast<int>(m->nuserdata)};
 }
 

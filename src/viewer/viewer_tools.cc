@@ -126,9 +126,9 @@ void ViewerCore::Step() {
 std::string ViewerCore::SaveXml() {
   const std::string path = OutputPath("urlab_scene.xml");
   std::vector<std::string> changed;  // asset paths relative to the output folder
-  WriteFileAtomic(path, ops::SceneXml(*session_,
-                                      fs::absolute(path).parent_path().lexically_normal().string(),
-                                      &changed));
+  WriteFileAtomic(
+      path, ops::SceneXml(*session_, fs::absolute(path).parent_path().lexically_normal().string(),
+                          &changed));
   SetStatus("saved the composed scene to " + path +
             (changed.empty() ? ""
                              : fmt::format(" with the options changed at run time ({})",

@@ -229,9 +229,9 @@ TEST_F(CliBadInputTest, SignalsDuringALongCompileStopAtOnce) {
   for (int i = 0; i + 1 < kRings; ++i) {
     for (int j = 0; j < kRings; ++j) {
       const int a = i * kRings + j + 1, b = i * kRings + (j + 1) % kRings + 1;
-      obj += "f " + std::to_string(a) + " " + std::to_string(b) + " " +
-             std::to_string(b + kRings) + "\nf " + std::to_string(a) + " " +
-             std::to_string(b + kRings) + " " + std::to_string(a + kRings) + "\n";
+      obj += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(b + kRings) +
+             "\nf " + std::to_string(a) + " " + std::to_string(b + kRings) + " " +
+             std::to_string(a + kRings) + "\n";
     }
   }
   Write("ball.obj", obj);

@@ -6,8 +6,8 @@
 // the model with its extensions (software sensors, gravcomp and dead-band springs, site
 // equalities; physics/model.h), so the bridged models re-simulate as they ran.
 //
-// No model is excluded. Two models run at a time (the CI machine has 2 cores); each is recorded for one
-// wall-clock second at real-time pacing, so the whole test takes about 20 s plus loading.
+// No model is excluded. Two models run at a time (the CI machine has 2 cores); each is recorded for
+// one wall-clock second at real-time pacing, so the whole test takes about 20 s plus loading.
 #include <algorithm>
 #include <atomic>
 #include <filesystem>
@@ -26,7 +26,6 @@ namespace fs = std::filesystem;
 using testing::RunCommand;
 using testing::SourcePath;
 using testing::UrlabBinary;
-
 
 std::vector<std::string> ModelFiles(const fs::path& root) {
   std::vector<std::string> files;

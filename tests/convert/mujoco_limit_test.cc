@@ -13,7 +13,6 @@
 #include "urlab/convert/mesh_assets.h"
 #include "urlab/convert/mesh_io.h"
 #include "urlab/convert/prop.h"
-#include "urlab/mjcf/spec.h"
 #include "urlab/mjcf/reader.h"
 #include "urlab/mjcf/spec.h"
 #include "urlab/mjcf/writer.h"

@@ -1,6 +1,6 @@
-// Round trip: import then export every model of MuJoCo's corpus ($URLAB_MUJOCO_MODELS) and the hand-written
-// corpus; the output, loaded from another working directory, must give a model of the same sizes
-// whose 1000-step zero-control trajectory is bit-identical to the original's.
+// Round trip: import then export every model of MuJoCo's corpus ($URLAB_MUJOCO_MODELS) and the
+// hand-written corpus; the output, loaded from another working directory, must give a model of the
+// same sizes whose 1000-step zero-control trajectory is bit-identical to the original's.
 #include <filesystem>
 
 #include "model_files.h"

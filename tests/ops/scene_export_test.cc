@@ -67,9 +67,9 @@ TEST_F(SceneExportTest, FlagsAreNamedByTheirMjcfNames) {
   now.enableflags |= mjENBL_ENERGY;
   now.cone = mjCONE_ELLIPTIC;
   now.solver = mjSOL_CG;
-  EXPECT_EQ(ChangedOptions(compiled, now),
-            (std::vector<std::string>{"cone", "flag.contact", "flag.energy", "flag.gravity",
-                                      "solver"}));
+  EXPECT_EQ(
+      ChangedOptions(compiled, now),
+      (std::vector<std::string>{"cone", "flag.contact", "flag.energy", "flag.gravity", "solver"}));
   // The same names set them back.
   mjOption again = compiled;
   for (const auto& [k, v] : mjcf::OptionText(now)) mjcf::SetOption(&again, k, v);

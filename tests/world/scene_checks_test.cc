@@ -250,8 +250,9 @@ TEST_F(SceneChecksTest, KeyframesOfTheWrongLengthAreRefusedAsCompileRefusesThem)
   const world::ValidationReport r = world::Validate(model);
   std::vector<std::string> errors;
   for (const auto& e : r.diagnostics.errors()) errors.push_back(e.str());
-  EXPECT_TRUE(AnyContains(errors, "two.xml:8: two: keyframe 'long': qpos has 3 value(s), the "
-                                  "model has nq=2"))
+  EXPECT_TRUE(AnyContains(errors,
+                          "two.xml:8: two: keyframe 'long': qpos has 3 value(s), the "
+                          "model has nq=2"))
       << Joined(errors);
   EXPECT_TRUE(AnyContains(errors, "two.xml:10: two: keyframe 'longer': qpos has 4 value(s)"))
       << Joined(errors);

@@ -28,6 +28,14 @@ using SpecPtr = std::unique_ptr<mjSpec, SpecDeleter>;
 // Throws InputError at path:line with MuJoCo's message (or ours).
 SpecPtr ParseFile(const std::string& path);
 
+// The text of one of MuJoCo's spec strings ("" for none). Read them only through this (or
+// mjs_getString): mjString is MuJoCo's own std::string, built against another C++ library.
+std::string SpecString(const mjString* s);
+
+// `file` (as a <mesh>, <texture>, ... names it) resolved as MuJoCo resolves it from `spec`: the
+// model's folder, <compiler strippath>, then `dir` (the compiler's meshdir or texturedir).
+std::string ResolveAssetPath(const mjSpec* spec, const std::string& file, const mjString* dir);
+
 // Every asset file of `spec` (meshes, textures, height fields, skins) rewritten as the absolute
 // path MuJoCo resolves it to (the model's folder, then meshdir or texturedir), so that the spec
 // can be attached to another and saved anywhere. ParseFile does it.

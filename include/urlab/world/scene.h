@@ -45,8 +45,8 @@ struct CompiledScene {
   std::vector<mjcf::ArticulationLayout> articulations;
   std::vector<PropLayout> props;
   std::vector<TerrainLayout> terrain;
-  std::vector<LauncherLayout> launchers;          // the scene's `launchers:` in order
-  std::vector<Diagnostic> diagnostics;  // warnings worth showing the user
+  std::vector<LauncherLayout> launchers;  // the scene's `launchers:` in order
+  std::vector<Diagnostic> diagnostics;    // warnings worth showing the user
 };
 
 // The scene as MJCF, written by MuJoCo from its spec with the options the compiled model has now
@@ -75,7 +75,7 @@ CompiledScene BuildModel(const std::string& mjcf_path);
 // in a temporary folder removed before it returns (so a scene with large props validates as
 // slowly as its first run, whatever the user's cache holds).
 struct ValidationReport {
-  Diagnostics diagnostics;                  // errors and warnings, each with file:line
+  Diagnostics diagnostics;         // errors and warnings, each with file:line
   std::vector<std::string> sizes;  // "nq 28" ... when it compiled
   bool ok() const { return !diagnostics.has_errors(); }
 };
