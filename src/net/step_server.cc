@@ -688,6 +688,7 @@ std::size_t StepServer::CancelQueuedSteps(const std::string& client, const std::
 void StepServer::ForgetClient(const std::string& id, const std::string& why) {
   if (driver_ == id) ReleaseLease(why);
   replays_.Release(id);
+  if (shm_) shm_->Close(id);  // its channel, if any (after the reply it is serving)
   clients_.erase(id);
 }
 

@@ -17,6 +17,7 @@
 #include "support/step_server_fixture.h"
 #include "support/wait.h"
 #include "urlab/replay/recorder.h"
+#include "wire/shm_channel.h"
 
 // A namespace of their own: their plain nlohmann::json alias must not meet net::Json (the
 // ordered one) where a unity build puts several test files in one translation unit.
@@ -78,6 +79,7 @@ struct PlayOptions {
   bool recorder = false;
   std::size_t max_queued_steps = 100000;
   std::string state = "tcp://127.0.0.1:*", rpc = "tcp://127.0.0.1:*";
+  std::string shm_dir;  // "": /dev/shm
 };
 
 class StepServerHardeningTest : public urlab::testing::ServedSessionTest {
@@ -108,6 +110,7 @@ class StepServerHardeningTest : public urlab::testing::ServedSessionTest {
     o.rpc = p.rpc;
     o.files_dir = p.files_dir.empty() ? files_ : p.files_dir;
     o.max_queued_steps = p.max_queued_steps;
+    o.shm_dir = p.shm_dir;
     Serve("control_source: network\narticulations:\n  - {name: bot, mjcf: " + p.mjcf + "}\n", o,
           [&](NetworkSubsystem& net) { net.SetRecorder(recorder); });
   }
@@ -263,6 +266,28 @@ TEST_F(StepServerHardeningTest, OutOfRangeValuesAreRefusedWhole) {
   EXPECT_EQ(c.Op("step", {{"qpos", {0, 0, 1, 0, 0, 0, 0, 0}}})["code"], "bad_value");
   EXPECT_EQ(c.Op("forward")["time"], after["time"]);
   EXPECT_EQ(c.Op("step", {{"time", 3.5}})["time"], 3.5);
+}
+
+// Issue 38, case 8: a session forgotten to make room for a later hello (64 sessions at most)
+// takes its shared-memory channel with it. The channels used to stay open at the cap, so no
+// client was offered shared memory again.
+TEST_F(StepServerHardeningTest, ChannelsOfEvictedSessionsAreReleased) {
+  const std::string shm_dir = dir_ + "/shm";
+  fs::create_directories(shm_dir);
+  Play({.shm_dir = shm_dir});
+  std::vector<std::unique_ptr<Client>> clients;
+  std::vector<wire::ShmChannel> channels;
+  for (int i = 0; i < 70; ++i) {
+    clients.push_back(std::make_unique<Client>(ctx_, rpc()));
+    const Json r = clients.back()->Hello({{"shm", true}});
+    ASSERT_EQ(r["op"], "hello_ok") << r.dump();
+    ASSERT_TRUE(r.contains("shm")) << "hello " << i << " got no shared-memory channel";
+    channels.push_back(
+        wire::ShmChannel::Attach(r["shm"]["path"], r["shm"]["generation"].get<std::uint64_t>()));
+  }
+  // The first six sessions were forgotten: their channels are closed by the server.
+  for (int i = 0; i < 6; ++i) EXPECT_TRUE(channels[i].PeerGone()) << i;
+  EXPECT_FALSE(channels.back().PeerGone());
 }
 
 // Issue case 3: clients name files, never paths; only under the files folder; never over an
