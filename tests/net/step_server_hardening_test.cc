@@ -290,6 +290,31 @@ TEST_F(StepServerHardeningTest, ChannelsOfEvictedSessionsAreReleased) {
   EXPECT_FALSE(channels.back().PeerGone());
 }
 
+// Issue 38, case 2: a randomised reset's ranges are checked when the request is parsed (a
+// negative mass, armature or damping, gravity 1e308 used to get reset_ok and stop the run).
+TEST_F(StepServerHardeningTest, RandomisationRangesAreCheckedInTheRequest) {
+  Play({.mode = "direct"});
+  Client c(ctx_, rpc());
+  c.Hello();
+  const auto refused = [&](const Json& randomize, const std::string& field,
+                           const std::string& range) {
+    const Json r = c.Op("reset", {{"seed", 1}, {"randomize", randomize}});
+    EXPECT_EQ(r["code"], "bad_value") << randomize.dump() << " -> " << r.dump();
+    const std::string m = r.value("message", "");
+    EXPECT_NE(m.find(field), std::string::npos) << m;
+    EXPECT_NE(m.find(range), std::string::npos) << m;
+  };
+  refused({{"bot", {{"mass", {{"uniform", {-2, -1}}}}}}}, "randomize.bot.mass", "[0.001, 1000]");
+  refused({{"bot", {{"armature", {{"uniform", {-5, -1}}}}}}}, "randomize.bot.armature",
+          "[0, 1000]");
+  refused({{"bot", {{"damping", {{"normal", {-3, 1}}}}}}}, "randomize.bot.damping", "[0, 1000]");
+  refused({{"gravity", {{"z", {{"uniform", {1e308, 1e308}}}}}}}, "randomize.gravity.z",
+          "[-100, 100]");
+  const Json ok = c.Op("reset", {{"seed", 1}, {"randomize", {{"bot", {{"mass", {{"uniform",
+                                                                                {0.5, 2}}}}}}}}});
+  EXPECT_EQ(ok["op"], "reset_ok") << ok.dump();
+}
+
 // Issue case 3: clients name files, never paths; only under the files folder; never over an
 // existing file without overwrite and the lease; never over an input of the running scene.
 TEST_F(StepServerHardeningTest, FilesAreNamesUnderTheFilesFolder) {
