@@ -315,6 +315,27 @@ TEST_F(StepServerHardeningTest, RandomisationRangesAreCheckedInTheRequest) {
   EXPECT_EQ(ok["op"], "reset_ok") << ok.dump();
 }
 
+// Issue 38, case 3: a latency setting whose ticks would size a huge buffer (rate_hz 1e-5 took
+// 1.6 GB; 1e-6: std::bad_alloc) is refused naming the channel, the field and the limit.
+TEST_F(StepServerHardeningTest, LatencySettingsAreBounded) {
+  Play({.mode = "direct"});
+  Client c(ctx_, rpc());
+  c.Hello();
+  // One value every 1,500,000 steps at 2 ms: 64 MB of control slots before the bound.
+  Json r = c.Op("set_latency", {{"articulation", "bot"}, {"control", {{"rate_hz", 1.0 / 3000}}}});
+  EXPECT_EQ(r["code"], "bad_value") << r.dump();
+  std::string m = r.value("message", "");
+  EXPECT_NE(m.find("control"), std::string::npos) << m;
+  EXPECT_NE(m.find("rate_hz"), std::string::npos) << m;
+  EXPECT_NE(m.find("at most 1000000 steps"), std::string::npos) << m;
+  r = c.Op("set_latency", {{"articulation", "bot"}, {"observation", {{"delay_steps", 600000},
+                                                                       {"jitter_steps", 600000}}}});
+  EXPECT_EQ(r["code"], "bad_value") << r.dump();
+  EXPECT_NE(r.value("message", "").find("observation"), std::string::npos) << r.dump();
+  r = c.Op("set_latency", {{"articulation", "bot"}, {"control", {{"rate_hz", 50}}}});
+  EXPECT_EQ(r["op"], "set_latency_ok") << r.dump();
+}
+
 // Issue case 3: clients name files, never paths; only under the files folder; never over an
 // existing file without overwrite and the lease; never over an input of the running scene.
 TEST_F(StepServerHardeningTest, FilesAreNamesUnderTheFilesFolder) {
