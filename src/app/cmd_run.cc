@@ -137,8 +137,11 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
                 "off here");
   }
   if (args.no_network || !network_settings.enabled) NetworkSourcesToUi(scene);
+  // Removes at the end only the file this run wrote (also when the run fails).
+  std::optional<AnnounceFile> announce;
   if (!args.announce.empty()) {
     CheckOutputs({{args.announce, "--announce"}}, world::SceneInputFiles(scene));
+    announce.emplace(args.announce);
   }
   if (!args.video.empty()) {
     CheckOutputs({{args.video[1], "--video"}}, world::SceneInputFiles(scene));
@@ -232,10 +235,9 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
       network_options.scene_name = SceneName(args.scene);
       network_options.instance = args.instance;
     }
-    WriteFileAtomic(args.announce, AnnounceJson(network_options,
-                                                network_sub ? network_sub->endpoints()
-                                                            : net::NetworkSubsystem::Endpoints{},
-                                                cameras));
+    announce->Write(AnnounceJson(
+        network_options,
+        network_sub ? network_sub->endpoints() : net::NetworkSubsystem::Endpoints{}, cameras));
     spdlog::info("announced the endpoints in {}", args.announce);
   }
   std::unique_ptr<camera::CameraVideo> video;
@@ -346,11 +348,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   manager.EndPlay();
   if (reopen && viewer_sub) *reopen = viewer_sub->reload_request();
   FlushMujocoWarningCounts();
-  if (!args.announce.empty()) {  // nothing is served any more: no launcher may find it
-    std::error_code ec;
-    if (std::filesystem::is_regular_file(args.announce, ec))
-      std::filesystem::remove(args.announce, ec);
-  }
+  if (announce) announce->Remove();  // nothing is served any more: no launcher may find it
   // The run's products: each failure is reported with what was kept, and makes the exit code 1.
   std::vector<std::string> failures;
   if (video) {
