@@ -752,7 +752,11 @@ StepServer::Outcome StepServer::Hello(Request& r) {
     c.level = *level;
   }
   if (const auto it = r.body.find("arrays"); it != r.body.end()) {
-    c.binary_arrays = String(*it, "arrays") == "binary";
+    const std::string arrays = String(*it, "arrays");
+    if (arrays != "binary" && arrays != "list") {
+      Fail("bad_value", "arrays must be binary or list (got '" + arrays + "')");
+    }
+    c.binary_arrays = arrays == "binary";
   }
   if (clients_.size() >= options_.limits.max_clients) {  // forget the longest-silent observer
     auto oldest = clients_.end();

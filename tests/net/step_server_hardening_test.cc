@@ -336,6 +336,24 @@ TEST_F(StepServerHardeningTest, LatencySettingsAreBounded) {
   EXPECT_EQ(r["op"], "set_latency_ok") << r.dump();
 }
 
+// Issue 38, case 9: `arrays` in hello is "binary" or "list"; anything else (a 2026 hello with
+// "hex" was accepted as lists) is bad_value naming the field.
+TEST_F(StepServerHardeningTest, HelloArraysIsBinaryOrList) {
+  Play();
+  for (const Json& hello : {Json{{"arrays", "hex"}},
+                            Json{{"arrays", "hex"}, {"client_version", "urlab_bridge/1.0"}}}) {
+    Client c(ctx_, rpc());
+    const Json r = c.Hello(hello);
+    EXPECT_EQ(r["code"], "bad_value") << r.dump();
+    EXPECT_NE(r.value("message", "").find("arrays"), std::string::npos) << r.dump();
+    EXPECT_NE(r.value("message", "").find("binary or list"), std::string::npos) << r.dump();
+  }
+  for (const char* arrays : {"binary", "list"}) {
+    Client c(ctx_, rpc());
+    EXPECT_EQ(c.Hello({{"arrays", arrays}})["op"], "hello_ok") << arrays;
+  }
+}
+
 // Issue case 3: clients name files, never paths; only under the files folder; never over an
 // existing file without overwrite and the lease; never over an input of the running scene.
 TEST_F(StepServerHardeningTest, FilesAreNamesUnderTheFilesFolder) {
