@@ -154,8 +154,10 @@ def main():
         fail("the log does not say the shared-memory client went away:\n" + log)
     print("killed client: noticed, lease freed, no files left")
 
-    # 2. A killed server while a client waits on the channel.
-    proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
+    # 2. A killed server while a client waits on the channel (--duration counts the client's
+    # steps too: room for the 100,000-step requests below).
+    proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"),
+                                  duration=36000)
     c = StepClient(endpoints[3], timeout=120.0)
     if c.transport != "shm":
         fail(f"transport {c.transport}", proc)
