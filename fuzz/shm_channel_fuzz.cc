@@ -203,8 +203,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::vector<Write> header;
     for (std::size_t i = 0; i < writes && at + kWriteBytes <= size; ++i, at += kWriteBytes) {
       Write w{};
-      w.offset = (static_cast<std::size_t>(data[at]) | std::size_t{data[at + 1]} << 8) %
-                 L::kHeaderBytes;
+      w.offset =
+          (static_cast<std::size_t>(data[at]) | std::size_t{data[at + 1]} << 8) % L::kHeaderBytes;
       w.wide = (data[at + 2] & 1) != 0;
       w.offset &= w.wide ? ~std::size_t{7} : ~std::size_t{3};
       std::memcpy(&w.value, data + at + 3, sizeof(w.value));

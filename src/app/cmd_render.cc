@@ -76,7 +76,8 @@ int Render(const RenderArgs& args) {
   // written in place by ffmpeg (the user's name keeps the extension ffmpeg goes by).
   const OutputTarget target = ResolveOutput(args.video);
   const bool in_place = target.mode == OutputTarget::Mode::kInPlace;
-  const std::string temporary = in_place ? args.video : TemporaryFor(target.file, fs::path(args.video).extension().string());
+  const std::string temporary =
+      in_place ? args.video : TemporaryFor(target.file, fs::path(args.video).extension().string());
   if (!in_place && !fs::path(target.file).parent_path().empty()) {
     fs::create_directories(fs::path(target.file).parent_path());
   }

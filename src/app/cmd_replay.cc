@@ -142,8 +142,8 @@ int Info(const RecordingReader& r) {
       static_cast<unsigned long long>(dropped));
   // A damaged or forged chunk ends the readable prefix: reported above, and a failure (a
   // recorder that died leaves an unfinished file, which is not).
-  const bool damaged = !r.problem().empty() &&
-                       r.problem_reason() == replay::RecordingError::Reason::kCorrupt;
+  const bool damaged =
+      !r.problem().empty() && r.problem_reason() == replay::RecordingError::Reason::kCorrupt;
   if (!t.command_groups.empty()) {
     std::string raw;
     for (std::size_t g = 0; g < raw_steps.size(); ++g) {

@@ -2,6 +2,7 @@
 
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <chrono>
@@ -13,8 +14,6 @@
 #include <memory>
 #include <sstream>
 #include <vector>
-
-#include <zlib.h>
 
 #include "core/byte_io.h"
 #include "urlab/convert/mesh_io.h"
@@ -147,17 +146,14 @@ void CheckPngHeightMap(const std::string& path) {
     fail(fmt::format("{} x {} pixels; a height map is 1 to {} pixels a side", width, height,
                      kMaxPngSide));
   }
-  int channels = 0;
-  switch (type) {
-    case 0: channels = 1; break;  // grey
-    case 2: channels = 3; break;  // RGB
-    case 3: channels = 1; break;  // palette
-    case 4: channels = 2; break;  // grey + alpha
-    case 6: channels = 4; break;  // RGBA
-    default: fail(fmt::format("unknown PNG colour type {}", type));
+  // Samples per pixel by colour type: grey, -, RGB, palette, grey + alpha, -, RGBA.
+  static constexpr int kChannels[7] = {1, 0, 3, 1, 2, 0, 4};
+  if (type < 0 || type > 6 || kChannels[type] == 0) {
+    fail(fmt::format("unknown PNG colour type {}", type));
   }
-  const bool depth_ok = type == 0   ? depth == 1 || depth == 2 || depth == 4 || depth == 8 ||
-                                          depth == 16
+  const int channels = kChannels[type];
+  const bool depth_ok = type == 0
+                            ? depth == 1 || depth == 2 || depth == 4 || depth == 8 || depth == 16
                         : type == 3 ? depth == 1 || depth == 2 || depth == 4 || depth == 8
                                     : depth == 8 || depth == 16;
   if (!depth_ok || interlace > 1) {
@@ -166,7 +162,8 @@ void CheckPngHeightMap(const std::string& path) {
   }
   // The bytes the image data must inflate to: per row a filter byte and the packed pixels, per
   // pass of Adam7 when interlaced.
-  const std::uint64_t bits = static_cast<std::uint64_t>(depth) * static_cast<std::uint64_t>(channels);
+  const std::uint64_t bits =
+      static_cast<std::uint64_t>(depth) * static_cast<std::uint64_t>(channels);
   const auto rows_bytes = [&](std::uint64_t w, std::uint64_t h) -> std::uint64_t {
     return w == 0 || h == 0 ? 0 : h * (1 + (w * bits + 7) / 8);
   };
@@ -177,10 +174,10 @@ void CheckPngHeightMap(const std::string& path) {
     static constexpr int kPass[7][4] = {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4},
                                         {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}};
     for (const auto& p : kPass) {
-      const std::uint64_t w = (width + static_cast<std::uint64_t>(p[2] - p[0] - 1)) /
-                              static_cast<std::uint64_t>(p[2]);
-      const std::uint64_t h = (height + static_cast<std::uint64_t>(p[3] - p[1] - 1)) /
-                              static_cast<std::uint64_t>(p[3]);
+      const std::uint64_t w =
+          (width + static_cast<std::uint64_t>(p[2] - p[0] - 1)) / static_cast<std::uint64_t>(p[2]);
+      const std::uint64_t h =
+          (height + static_cast<std::uint64_t>(p[3] - p[1] - 1)) / static_cast<std::uint64_t>(p[3]);
       expected += rows_bytes(w, h);
     }
   }

@@ -63,8 +63,7 @@ void CopyOut(const urlab::world::BatchResult& r, urlab_batch_outputs* out) {
 void StartLogging(const char* level) {
   if (level) {
     const std::string_view l = level;
-    if (l != "trace" && l != "debug" && l != "info" && l != "warn" && l != "error" &&
-        l != "off") {
+    if (l != "trace" && l != "debug" && l != "info" && l != "warn" && l != "error" && l != "off") {
       throw urlab::Error("log_level: '" + std::string(l) +
                          "' is not one of trace, debug, info, warn, error, off");
     }

@@ -48,8 +48,8 @@ StepServer::Outcome StepServer::SetLatency(Request& r) {
   }
   // The ticks a delay line holds are bounded (physics/latency.h): refused, not allocated.
   const double dt = session_.engine().timestep();
-  for (const auto& [channel, setting] : {std::pair{"control", &l.control},
-                                         std::pair{"observation", &l.observation}}) {
+  for (const auto& [channel, setting] :
+       {std::pair{"control", &l.control}, std::pair{"observation", &l.observation}}) {
     if (const std::string problem = physics::CheckLatency(*setting, dt); !problem.empty()) {
       Fail("bad_value", std::string(channel) + ": " + problem);
     }

@@ -102,7 +102,8 @@ std::string CheckLatency(const LatencySetting& s, double timestep) {
     sep = ", ";
   }
   if (jitter > 0) {
-    m << sep << (s.jitter_in_steps ? "jitter_steps " : "jitter ") << s.jitter << ": " << Count(jitter);
+    m << sep << (s.jitter_in_steps ? "jitter_steps " : "jitter ") << s.jitter << ": "
+      << Count(jitter);
     sep = ", ";
   }
   if (interval > 1) m << sep << "rate_hz " << s.rate_hz << ": one value every " << Count(interval);

@@ -150,7 +150,7 @@ class ShmChannel {
   std::uint64_t generation_ = 0;
   bool server_ = false;
   bool attached_ = false;  // client: attached (only then does closing mark the client closed)
-  bool named_ = false;  // the server's file still has its name
+  bool named_ = false;     // the server's file still has its name
   // Client: the sequence of the last request, and whether its reply is outstanding.
   std::uint32_t seq_ = 0;
   bool awaiting_ = false;

@@ -114,10 +114,17 @@ std::optional<ParamLimits> LimitsOf(std::string_view key) {
     std::string_view key;
     ParamLimits limits;
   } kLimits[] = {
-      {"friction", {0, 100}},      {"mass", {0.001, 1000}},   {"damping", {0, 1000}},
-      {"armature", {0, 1000}},     {"frictionloss", {0, 1000}}, {"gain", {0, 100}},
-      {"kp", {0, 100}},            {"kv", {0, 100}},          {"qpos_noise", {-10, 10}},
-      {"obs_noise", {0, 10}},      {"gravity", {-100, 100}},
+      {"friction", {0, 100}},
+      {"mass", {0.001, 1000}},
+      {"damping", {0, 1000}},
+      {"armature", {0, 1000}},
+      {"frictionloss", {0, 1000}},
+      {"gain", {0, 100}},
+      {"kp", {0, 100}},
+      {"kv", {0, 100}},
+      {"qpos_noise", {-10, 10}},
+      {"obs_noise", {0, 10}},
+      {"gravity", {-100, 100}},
   };
   for (const auto& l : kLimits) {
     if (l.key == key) return l.limits;

@@ -125,8 +125,8 @@ void CheckCompiledScene(const SceneConfig& scene, const CompiledScene& compiled,
     }
     CheckController(a, m, prefix, sink);
     // Emulated latency: its ticks at this timestep are bounded (physics/latency.h).
-    for (const auto& [channel, setting] :
-         {std::pair{"control", &a.latency.control}, std::pair{"observation", &a.latency.observation}}) {
+    for (const auto& [channel, setting] : {std::pair{"control", &a.latency.control},
+                                           std::pair{"observation", &a.latency.observation}}) {
       if (const std::string problem = physics::CheckLatency(*setting, m->opt.timestep);
           !problem.empty()) {
         sink.Error(a.where, a.name + ".latency." + channel + ": " + problem);

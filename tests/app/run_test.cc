@@ -61,14 +61,12 @@ TEST(RunTest, DurationIsAnExactNumberOfSteps) {
   for (const char* pace : {"", " --max-speed", " --speed 50"}) {
     std::string out;
     ASSERT_EQ(RunCommand(UrlabBinary() + " run --no-network " +
-                             SourcePath("examples/models/servo_arm.xml") + " --duration 0.5" +
-                             pace,
+                             SourcePath("examples/models/servo_arm.xml") + " --duration 0.5" + pace,
                          &out),
               0)
         << out;
-    EXPECT_NE(out.find("summary: sim_time=0.500 s steps=250 "), std::string::npos)
-        << pace << "\n"
-        << out;
+    EXPECT_NE(out.find("summary: sim_time=0.500 s steps=250 "), std::string::npos) << pace << "\n"
+                                                                                   << out;
   }
 }
 

@@ -4,18 +4,18 @@
 // (no wedge), files of dead servers are reclaimed, bad attachments are refused.
 #include "wire/shm_channel.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
-#include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
-#include <cstring>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -283,9 +283,8 @@ TEST_F(ShmChannelTest, TheServerTakesNoSizeOrOffsetFromTheSharedPage) {
   ShmChannel client = ShmChannel::Attach(server.path(), server.generation());
   HostileView peer(server.path());
   const std::size_t file = peer.size();
-  for (const std::uint64_t forged :
-       {std::uint64_t{1} << 40, std::uint64_t{file - 4160}, std::uint64_t{file},
-        ~std::uint64_t{0}, std::uint64_t{0}}) {
+  for (const std::uint64_t forged : {std::uint64_t{1} << 40, std::uint64_t{file - 4160},
+                                     std::uint64_t{file}, ~std::uint64_t{0}, std::uint64_t{0}}) {
     peer.Put64(ShmLayout::kRequestCapacity, forged);
     peer.Put64(ShmLayout::kReplyCapacity, forged);
     EXPECT_EQ(server.request_capacity(), 4096u);

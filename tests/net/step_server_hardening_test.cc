@@ -310,8 +310,8 @@ TEST_F(StepServerHardeningTest, RandomisationRangesAreCheckedInTheRequest) {
   refused({{"bot", {{"damping", {{"normal", {-3, 1}}}}}}}, "randomize.bot.damping", "[0, 1000]");
   refused({{"gravity", {{"z", {{"uniform", {1e308, 1e308}}}}}}}, "randomize.gravity.z",
           "[-100, 100]");
-  const Json ok = c.Op("reset", {{"seed", 1}, {"randomize", {{"bot", {{"mass", {{"uniform",
-                                                                                {0.5, 2}}}}}}}}});
+  const Json ok =
+      c.Op("reset", {{"seed", 1}, {"randomize", {{"bot", {{"mass", {{"uniform", {0.5, 2}}}}}}}}});
   EXPECT_EQ(ok["op"], "reset_ok") << ok.dump();
 }
 
@@ -328,8 +328,8 @@ TEST_F(StepServerHardeningTest, LatencySettingsAreBounded) {
   EXPECT_NE(m.find("control"), std::string::npos) << m;
   EXPECT_NE(m.find("rate_hz"), std::string::npos) << m;
   EXPECT_NE(m.find("at most 1000000 steps"), std::string::npos) << m;
-  r = c.Op("set_latency", {{"articulation", "bot"}, {"observation", {{"delay_steps", 600000},
-                                                                       {"jitter_steps", 600000}}}});
+  r = c.Op("set_latency", {{"articulation", "bot"},
+                           {"observation", {{"delay_steps", 600000}, {"jitter_steps", 600000}}}});
   EXPECT_EQ(r["code"], "bad_value") << r.dump();
   EXPECT_NE(r.value("message", "").find("observation"), std::string::npos) << r.dump();
   r = c.Op("set_latency", {{"articulation", "bot"}, {"control", {{"rate_hz", 50}}}});
@@ -340,8 +340,8 @@ TEST_F(StepServerHardeningTest, LatencySettingsAreBounded) {
 // "hex" was accepted as lists) is bad_value naming the field.
 TEST_F(StepServerHardeningTest, HelloArraysIsBinaryOrList) {
   Play();
-  for (const Json& hello : {Json{{"arrays", "hex"}},
-                            Json{{"arrays", "hex"}, {"client_version", "urlab_bridge/1.0"}}}) {
+  for (const Json& hello :
+       {Json{{"arrays", "hex"}}, Json{{"arrays", "hex"}, {"client_version", "urlab_bridge/1.0"}}}) {
     Client c(ctx_, rpc());
     const Json r = c.Hello(hello);
     EXPECT_EQ(r["code"], "bad_value") << r.dump();

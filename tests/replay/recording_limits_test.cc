@@ -171,7 +171,6 @@ TEST(RecordingLimitsTest, MemoryFollowsTheBytesZstdProducesNotTheDeclaredSize) {
   static_assert(format::kDataChunkFlushBytes * 2 <= format::kMaxDataChunkRawBytes);
 }
 
-
 // Issue 38, case 9: a data chunk whose header claims 0xFFFFFFFF frames (with a checksum to
 // match) was reported as 4,294,968,295 steps by `replay --info`, exit 0. A chunk cannot hold
 // more frames than bytes, and the frames it holds must be the number it declares: the reader

@@ -3,6 +3,8 @@
 // (the network's) reads is the true state k steps earlier while the recorder's subscription sees
 // the true state; jitter stays within its bounds and never reorders; the same seed gives the
 // same trajectory; the scene's `latency:` section is parsed and checked with file:line.
+#include "urlab/physics/latency.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,7 +14,6 @@
 
 #include "mujoco_test.h"
 #include "urlab/core/error.h"
-#include "urlab/physics/latency.h"
 #include "urlab/world/scene.h"
 #include "urlab/world/scene_file.h"
 #include "urlab/world/session.h"

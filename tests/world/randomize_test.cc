@@ -312,8 +312,7 @@ TEST_F(RandomizeTest, EveryParameterHasARangeCheckedWhereParsed) {
   };
   fails("randomize:\n  arm:\n    mass: {uniform: [-2, -1]}\n", "randomize.arm.mass",
         "[0.001, 1000]");
-  fails("randomize:\n  arm:\n    mass: {uniform: [0, 0]}\n", "randomize.arm.mass",
-        "[0.001, 1000]");
+  fails("randomize:\n  arm:\n    mass: {uniform: [0, 0]}\n", "randomize.arm.mass", "[0.001, 1000]");
   fails("randomize:\n  arm:\n    armature: {uniform: [-1, 1]}\n", "randomize.arm.armature",
         "[0, 1000]");
   fails("randomize:\n  arm:\n    damping: {normal: [-1, 0.1]}\n", "randomize.arm.damping",
@@ -321,15 +320,16 @@ TEST_F(RandomizeTest, EveryParameterHasARangeCheckedWhereParsed) {
   fails("randomize:\n  arm:\n    kp: {uniform: [-1, 1]}\n", "randomize.arm.kp", "[0, 100]");
   fails("randomize:\n  arm:\n    obs_noise: {uniform: [0, 1e300]}\n", "randomize.arm.obs_noise",
         "[0, 10]");
-  fails("randomize:\n  arm:\n    qpos_noise: {normal: [0, 1e300]}\n",
-        "randomize.arm.qpos_noise", "[-10, 10]");
+  fails("randomize:\n  arm:\n    qpos_noise: {normal: [0, 1e300]}\n", "randomize.arm.qpos_noise",
+        "[-10, 10]");
   fails("randomize:\n  gravity:\n    z: {uniform: [0, 1e308]}\n", "randomize.gravity.z",
         "[-100, 100]");
   fails("randomize:\n  arm:\n    friction: {log_uniform: [1, 1e9]}\n", "randomize.arm.friction",
         "[0, 100]");
   // The edges are fine.
-  EXPECT_NO_THROW(Scene("randomize:\n  arm:\n    mass: {uniform: [0.001, 1000]}\n"
-                        "    damping: {uniform: [0, 1000]}\n"));
+  EXPECT_NO_THROW(
+      Scene("randomize:\n  arm:\n    mass: {uniform: [0.001, 1000]}\n"
+            "    damping: {uniform: [0, 1000]}\n"));
   // The C++ interface refuses them too (a config that never went through a parser).
   auto s = world::Session::Create(Scene(""));
   world::RandomizeConfig c;

@@ -174,9 +174,10 @@ TEST_F(TerrainTest, BadPngHeightMapsNameTheEntrysLine) {
   auto error_of = [&](const std::string& png_bytes) {
     std::ofstream(dir_ + "/map.png", std::ios::binary) << png_bytes;
     try {
-      (void)world::BuildScene(Scene("articulations:\n  - {name: ball, mjcf: ball.xml}\n"
-                                    "terrain:\n  - {name: g, png: map.png, size: [1, 1, 0.2, "
-                                    "0.1]}\n"));
+      (void)world::BuildScene(
+          Scene("articulations:\n  - {name: ball, mjcf: ball.xml}\n"
+                "terrain:\n  - {name: g, png: map.png, size: [1, 1, 0.2, "
+                "0.1]}\n"));
     } catch (const InputError& e) {
       return std::string(e.what());
     }
