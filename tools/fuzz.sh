@@ -4,8 +4,8 @@
 # seed corpus (fuzz/corpus/<target>; the MJCF reader also gets Debian's sample models),
 # URLAB_JOBS (default: the cores) at a time.
 # Usage: tools/fuzz.sh [SECONDS=60] [TARGET...]
-#   targets: fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_recording
-#   fuzz_mesh
+#   targets: fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_shm_channel
+#   fuzz_recording fuzz_mesh
 #   (default: all)
 # Exits non-zero when a target crashes (or leaks, or times out on one input), printing the
 # reproducer's path; rerun one with: build-fuzz/fuzz/<target> <reproducer>.
@@ -14,7 +14,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_TO_RUN="${1:-60}"
 shift || true
-ALL=(fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_recording fuzz_mesh)
+ALL=(fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_shm_channel fuzz_recording
+  fuzz_mesh)
 TARGETS=("$@")
 if [ ${#TARGETS[@]} -eq 0 ]; then TARGETS=("${ALL[@]}"); fi
 for t in "${TARGETS[@]}"; do
@@ -37,7 +38,7 @@ cmake --build "$BUILD_DIR" --target "${TARGETS[@]}" -j"${URLAB_JOBS:-$(nproc)}"
 # limits and everything below them are reached. The file-format targets take up to 64 KiB.
 max_len() {
   case "$1" in
-    fuzz_net_control | fuzz_step_request) URLAB_FUZZ_PRINT_MAX_LEN=1 "$BUILD_DIR/fuzz/$1" ;;
+    fuzz_net_control | fuzz_step_request | fuzz_shm_channel) URLAB_FUZZ_PRINT_MAX_LEN=1 "$BUILD_DIR/fuzz/$1" ;;
     *) echo 65536 ;;
   esac
 }

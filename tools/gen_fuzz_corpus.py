@@ -7,6 +7,8 @@
                       for the harness's arm (actuator ids 0..2)
   fuzz_step_request   step-server requests in msgpack and JSON, every operation of
                       docs/protocol.md; "@"*20 stands for the session id the harness obtains
+  fuzz_shm_channel    header writes of the shared-memory channel (forged capacities, lengths,
+                      sequences, flags) followed by step-server requests
 
 Usage: /usr/bin/python3 tools/gen_fuzz_corpus.py   (from anywhere; rewrites the folders)
 Needs python3-msgpack (Debian), as the Python client does.
@@ -195,11 +197,34 @@ def step_request():
     put(d, b"")
 
 
+def shm_write(offset, value, wide=True):
+    return struct.pack("<HBQ", offset, 1 if wide else 0, value)
+
+
+def shm_channel():
+    d = target_dir("fuzz_shm_channel")
+    # No header write: requests as over ZeroMQ.
+    for r in REQUESTS[:20]:
+        put(d, b"\x00" + msgpack.packb(r, use_bin_type=True))
+    hello = msgpack.packb({"op": "meta"}, use_bin_type=True)
+    size = 4096 + (1 << 20) + (64 << 20)  # the file the server makes by default
+    # Forged capacities (issue 38, case 1: the server wrote its reply at 4096 + this), lengths
+    # beyond the slot, sequences, closed flags.
+    for writes in ([shm_write(16, 1 << 40)], [shm_write(16, size - 4160)],
+                   [shm_write(16, 2**64 - 1), shm_write(24, 2**64 - 1)],
+                   [shm_write(200, 1 << 20 + 1)], [shm_write(200, 2**64 - 1)],
+                   [shm_write(192, 0, wide=False)], [shm_write(56, 1, wide=False)],
+                   [shm_write(12, 0, wide=False), shm_write(8, 7, wide=False)],
+                   [shm_write(264, 2**63), shm_write(256, 5, wide=False)]):
+        put(d, bytes([len(writes)]) + b"".join(writes) + hello)
+
+
 if __name__ == "__main__":
     mjcf_reader()
     scene()
     net_control()
     step_request()
+    shm_channel()
     for t in sorted(os.listdir(OUT)):
         n = len(os.listdir(os.path.join(OUT, t)))
         print(f"{t}: {n} seeds")

@@ -132,7 +132,8 @@ asan_stage() {  # also CI's clang build and its build with assertions on
     -DURLAB_BUILD_BENCH=OFF -DURLAB_UNITY_BUILD=ON "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1"
   cmake --build "$dir" -j"$JOBS" --target urlab urlab_tests_core urlab_tests_mjcf \
     urlab_tests_document urlab_tests_replay urlab_tests_control urlab_tests_embed \
-    fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_recording fuzz_mesh
+    fuzz_mjcf_reader fuzz_scene fuzz_net_control fuzz_step_request fuzz_shm_channel \
+    fuzz_recording fuzz_mesh
   ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1" \
     run_ctest "$dir" -L 'core|mjcf|document|replay|control|embed' \
     -j"$JOBS" --timeout 900

@@ -75,6 +75,9 @@ int Convert(const ConvertArgs& args) {
   spec.decompose.threads = args.threads;
   // Ctrl-C in graceful mode is polled by the decomposition's threads (an atomic load).
   spec.decompose.cancelled = [] { return StopSignal() != 0; };
+  // Where nothing is being written (reading, the visual mesh's check, the decomposition), a
+  // signal ends the process at once; writes (the cache, the parts) finish first.
+  spec.decompose.interruptible = [](bool on) { SetImmediateExit(on); };
   const bool tty = isatty(fileno(stderr));
   int last_percent = -1;
   spec.decompose.progress = [&](double f, std::string_view stage) {

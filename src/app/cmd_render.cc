@@ -19,6 +19,7 @@
 #include "render/render_thread.h"
 #include "render/video_writer.h"
 #include "render/view_camera.h"
+#include "urlab/core/files.h"
 #include "urlab/replay/frame_sampler.h"
 #include "urlab/replay/player.h"
 #include "urlab/replay/recording.h"
@@ -40,12 +41,12 @@ struct RenderArgs {
   bool shadows = false;
 };
 
-// The file ffmpeg writes until the video is complete: hidden, beside the output, same extension
-// (ffmpeg picks the container by it).
-std::string TemporaryFor(const std::string& out) {
+// The file ffmpeg writes until the video is complete: hidden, beside the file written (`out`,
+// links followed), with the extension of the name the user gave (ffmpeg picks the container by
+// it).
+std::string TemporaryFor(const std::string& out, const std::string& extension) {
   const fs::path p(out);
-  return (p.parent_path() / ("." + p.stem().string() + ".urlab-tmp" + p.extension().string()))
-      .string();
+  return (p.parent_path() / ("." + p.stem().string() + ".urlab-tmp" + extension)).string();
 }
 
 int Render(const RenderArgs& args) {
@@ -70,15 +71,22 @@ int Render(const RenderArgs& args) {
   settings.shadows = args.shadows;
   render::CameraRenderer renderer(model.get(), args.width, args.height, settings);
   renderer.MakeContext();
-  const std::string temporary = TemporaryFor(args.video);
-  if (!fs::path(args.video).parent_path().empty()) {
-    fs::create_directories(fs::path(args.video).parent_path());
+  // The output rule (core/files.h): a regular file or nothing (through a symbolic link: its
+  // target) gets a temporary beside it, renamed over it once complete; a device or FIFO is
+  // written in place by ffmpeg (the user's name keeps the extension ffmpeg goes by).
+  const OutputTarget target = ResolveOutput(args.video);
+  const bool in_place = target.mode == OutputTarget::Mode::kInPlace;
+  const std::string temporary =
+      in_place ? args.video : TemporaryFor(target.file, fs::path(args.video).extension().string());
+  if (!in_place && !fs::path(target.file).parent_path().empty()) {
+    fs::create_directories(fs::path(target.file).parent_path());
   }
   spdlog::info("render: {} -> {}: {} frames at {} frames/s ({:.3f} s recorded), {}x{}, {} ({})",
                args.file, args.video, frames, args.fps, sampler.duration(), args.width, args.height,
                camera.label, gl->Describe());
   SetImmediateExit(false);  // a signal stops the loop, which removes the partial video
-  auto discard = [&temporary] {
+  auto discard = [&temporary, in_place] {
+    if (in_place) return;  // a device is never removed
     std::error_code ec;
     fs::remove(temporary, ec);
   };
@@ -126,7 +134,7 @@ int Render(const RenderArgs& args) {
     }
   }
   std::error_code ec;
-  fs::rename(temporary, args.video, ec);
+  if (!in_place) fs::rename(temporary, target.file, ec);
   if (ec) {
     discard();
     throw Error(args.video + ": cannot move the video into place: " + ec.message());

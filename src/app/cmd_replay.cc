@@ -140,6 +140,10 @@ int Info(const RecordingReader& r) {
       "frames lost)\n",
       static_cast<unsigned long long>(markers), static_cast<unsigned long long>(gaps),
       static_cast<unsigned long long>(dropped));
+  // A damaged or forged chunk ends the readable prefix: reported above, and a failure (a
+  // recorder that died leaves an unfinished file, which is not).
+  const bool damaged =
+      !r.problem().empty() && r.problem_reason() == replay::RecordingError::Reason::kCorrupt;
   if (!t.command_groups.empty()) {
     std::string raw;
     for (std::size_t g = 0; g < raw_steps.size(); ++g) {
@@ -148,7 +152,7 @@ int Info(const RecordingReader& r) {
     std::printf("raw control: %s%s\n", raw.c_str(),
                 i.format_version < 3 ? " (format 2 does not record control_mode raw)" : "");
   }
-  return 0;
+  return damaged ? 1 : 0;
 }
 
 // What an export writes: one segment of the frames (a segment ends where the recorded time goes

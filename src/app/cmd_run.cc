@@ -9,6 +9,8 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -47,7 +49,7 @@ constexpr auto kLogPeriod = std::chrono::seconds(1);
 
 struct RunArgs {
   std::string scene;
-  double duration = 0;  // wall seconds, 0: until a signal
+  double duration = 0;  // simulated seconds (exactly round(D / timestep) steps), 0: until a signal
   int speed = 100;
   bool max_speed = false;
   bool paused = false;
@@ -110,6 +112,41 @@ void NetworkSourcesToUi(world::SceneConfig& scene) {
   if (changed) spdlog::info("no network: the network control source is replaced by ui");
 }
 
+// --duration D: exactly round(D / timestep) physics steps (the timestep the run starts with),
+// whatever the wall clock does. Registered before the physics thread starts, it counts every
+// step from the first and pauses the engine after the last one, from the physics thread itself,
+// so no further step runs; then it asks the host to stop.
+// Threading: the counter is written by the physics thread, read by the main thread.
+class DurationLimit : public world::Subsystem {
+ public:
+  explicit DurationLimit(double seconds) : seconds_(seconds) {}
+  std::string_view name() const override { return "duration"; }
+  void BeginPlay(world::Session& session) override {
+    physics::PhysicsEngine& engine = session.engine();
+    steps_ = std::max<std::uint64_t>(
+        1, static_cast<std::uint64_t>(std::llround(seconds_ / engine.timestep())));
+    callback_ = engine.AddOnPostStep([this, &engine](const mjModel*, mjData*) {
+      if (done_.load(std::memory_order_relaxed)) return;
+      if (++counted_ >= steps_) {
+        engine.SetPaused(true);  // before the next iteration: this was the last step
+        done_.store(true, std::memory_order_release);
+      }
+    });
+  }
+  void EndPlay(world::Session& session) override {
+    if (callback_) session.engine().RemoveCallback(*callback_);
+    callback_.reset();
+  }
+  bool RequestsStop() const override { return done_.load(std::memory_order_acquire); }
+
+ private:
+  double seconds_;
+  std::uint64_t steps_ = 0;
+  std::uint64_t counted_ = 0;  // physics thread only
+  std::atomic<bool> done_{false};
+  std::optional<physics::PhysicsEngine::CallbackId> callback_;
+};
+
 // `reopen`: the file the viewer asked to play next (its reload, a dropped scene), "" when none.
 int Run(const RunArgs& args, std::string* reopen = nullptr) {
   CurrentInput() = args.scene;
@@ -119,6 +156,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   options.start_paused = args.paused;
   options.reset_on_divergence = args.reset_on_divergence;
   world::Manager manager(options);
+  if (args.duration > 0) manager.AddSubsystem(std::make_unique<DurationLimit>(args.duration));
   // Loading and compiling: a signal ends the process at once (nothing runs, nothing is written).
   world::SceneConfig scene = world::LoadSceneOrModel(args.scene);
   net::NetworkConfig& network_settings = net::EditNetwork(scene);  // the command line changes it
@@ -137,8 +175,11 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
                 "off here");
   }
   if (args.no_network || !network_settings.enabled) NetworkSourcesToUi(scene);
+  // Removes at the end only the file this run wrote (also when the run fails).
+  std::optional<AnnounceFile> announce;
   if (!args.announce.empty()) {
     CheckOutputs({{args.announce, "--announce"}}, world::SceneInputFiles(scene));
+    announce.emplace(args.announce);
   }
   if (!args.video.empty()) {
     CheckOutputs({{args.video[1], "--video"}}, world::SceneInputFiles(scene));
@@ -232,10 +273,9 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
       network_options.scene_name = SceneName(args.scene);
       network_options.instance = args.instance;
     }
-    WriteFileAtomic(args.announce, AnnounceJson(network_options,
-                                                network_sub ? network_sub->endpoints()
-                                                            : net::NetworkSubsystem::Endpoints{},
-                                                cameras));
+    announce->Write(AnnounceJson(
+        network_options,
+        network_sub ? network_sub->endpoints() : net::NetworkSubsystem::Endpoints{}, cameras));
     spdlog::info("announced the endpoints in {}", args.announce);
   }
   std::unique_ptr<camera::CameraVideo> video;
@@ -317,8 +357,8 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
       next_log += kLogPeriod;
       if (next_log <= now) next_log = now + kLogPeriod;
     }
-    if (args.duration > 0 && now - start >= std::chrono::duration<double>(args.duration)) break;
-    if (manager.StopRequested()) break;  // the window closed, the screenshot was taken
+    // The window closed, the screenshot was taken, --duration's steps are done.
+    if (manager.StopRequested()) break;
     // The recording this command exists for failed (disk full...): stop, and say so.
     if (!args.record.empty() && recorder && recorder->recorder() &&
         recorder->recorder()->status().stopped_because.starts_with("error")) {
@@ -346,11 +386,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   manager.EndPlay();
   if (reopen && viewer_sub) *reopen = viewer_sub->reload_request();
   FlushMujocoWarningCounts();
-  if (!args.announce.empty()) {  // nothing is served any more: no launcher may find it
-    std::error_code ec;
-    if (std::filesystem::is_regular_file(args.announce, ec))
-      std::filesystem::remove(args.announce, ec);
-  }
+  if (announce) announce->Remove();  // nothing is served any more: no launcher may find it
   // The run's products: each failure is reported with what was kept, and makes the exit code 1.
   std::vector<std::string> failures;
   if (video) {
@@ -444,7 +480,9 @@ namespace {
 void AddRunOptions(CLI::App* cmd, RunArgs& args) {
   cmd->add_option("SCENE", args.scene, "scene file (.yaml) or MJCF model (.xml)")->required();
   cmd->add_option("--duration", args.duration,
-                  "stop after this many wall-clock seconds (default: run until Ctrl-C)")
+                  "stop after this many simulated seconds: exactly round(SECONDS / timestep) "
+                  "physics steps, at any pace (real time: as many wall-clock seconds); default: "
+                  "run until Ctrl-C")
       ->check(kFinitePositive);
   CLI::Option* speed =
       cmd->add_option("--speed", args.speed, "simulation speed in percent of real time (5-100)")

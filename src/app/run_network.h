@@ -33,4 +33,31 @@ std::string AnnounceJson(const net::NetworkOptions& options,
                          const net::NetworkSubsystem::Endpoints& bound,
                          const world::CameraStreams* cameras);
 
+// The announce file of one run. It removes only what this run wrote: the file (after following
+// symbolic links) it renamed into place, and only while that file is still there (the same
+// inode: a later run announcing in the same place replaced it with its own, which stays). It
+// never blocks: a FIFO is opened without waiting for a reader (none: logged, not announced).
+class AnnounceFile {
+ public:
+  // Checks the path before anything runs (core/files.h's output rule; throws Error naming it):
+  // a folder is refused, and so is a regular file that is there already and is not an announce
+  // file (the user's, which would be overwritten and then deleted); an announce file, a run's
+  // or a stale one, may be replaced.
+  explicit AnnounceFile(std::string path);
+  ~AnnounceFile();  // Remove()
+  AnnounceFile(const AnnounceFile&) = delete;
+  AnnounceFile& operator=(const AnnounceFile&) = delete;
+
+  // Writes `json` (a temporary renamed into place; in place on a FIFO or device, without
+  // blocking). Throws Error on a write error.
+  void Write(const std::string& json);
+  // Removes the file written, if it is still the one written; idempotent.
+  void Remove();
+
+ private:
+  std::string path_;
+  std::string written_;  // the file renamed into place ("": none)
+  unsigned long long device_ = 0, inode_ = 0;
+};
+
 }  // namespace urlab::app

@@ -981,6 +981,10 @@ void ThrowIfCancelled(const DecomposeOptions& options) {
   if (options.cancelled && options.cancelled()) throw Cancelled();
 }
 
+void Interruptible(const DecomposeOptions& options, bool on) {
+  if (options.interruptible) options.interruptible(on);
+}
+
 Decomposition Decompose(TriMesh mesh, const DecomposeOptions& options) {
   Prepared p = Prepare(std::move(mesh), options);
   const Context& ctx = p.ctx;

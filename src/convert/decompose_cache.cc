@@ -116,11 +116,13 @@ Decomposition DecomposeCached(const TriMesh& mesh, const DecomposeOptions& optio
     }
   }
   Decomposition d = Decompose(mesh, options);
+  Interruptible(options, false);  // the cache file is written whole, or not at all
   try {
     WriteFileAtomic(path, SerializeDecomposition(d, key));
   } catch (const Error& e) {
     spdlog::warn("cannot write the decomposition cache: {}", e.what());
   }
+  Interruptible(options, true);
   return d;
 }
 

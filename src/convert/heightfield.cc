@@ -2,6 +2,7 @@
 
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <chrono>
@@ -12,6 +13,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 #include "core/byte_io.h"
 #include "urlab/convert/mesh_io.h"
@@ -91,6 +93,119 @@ std::uint64_t CacheKey(const TerrainSpec& spec) {
     h = HashBytes(fs::path(m.file).extension().string(), h);
   }
   return h;
+}
+
+// The largest height map side we hand MuJoCo (its grid is nrow x ncol floats).
+constexpr std::uint32_t kMaxPngSide = 8192;
+
+std::uint32_t Be32(const std::string& b, std::size_t at) {
+  return static_cast<std::uint32_t>(static_cast<std::uint8_t>(b[at])) << 24 |
+         static_cast<std::uint32_t>(static_cast<std::uint8_t>(b[at + 1])) << 16 |
+         static_cast<std::uint32_t>(static_cast<std::uint8_t>(b[at + 2])) << 8 |
+         static_cast<std::uint32_t>(static_cast<std::uint8_t>(b[at + 3]));
+}
+
+// Checks a PNG height map as MuJoCo's decoder will read it, so that a bad one is an error at the
+// terrain's scene line (InputError at the file) instead of MuJoCo's, on the composed model: the
+// signature, an IHDR of a supported kind and size, every chunk's CRC, and image data that
+// inflates to exactly the bytes the header implies.
+void CheckPngHeightMap(const std::string& path) {
+  const std::string b = ReadInputFile(path, "png height map");
+  const auto fail = [&](const std::string& why) { throw InputError({path, 0}, why); };
+  if (b.size() < 8 || b.compare(0, 8, std::string("\x89PNG\r\n\x1a\n", 8)) != 0) {
+    fail("not a PNG (no PNG signature)");
+  }
+  std::uint32_t width = 0, height = 0;
+  int depth = 0, type = -1, interlace = 0;
+  std::string idat;
+  bool ended = false;
+  for (std::size_t at = 8; !ended;) {
+    if (b.size() - at < 12) fail("the file ends inside a chunk (truncated)");
+    const std::uint32_t length = Be32(b, at);
+    const std::string kind = b.substr(at + 4, 4);
+    if (length > b.size() - at - 12) fail("the file ends inside chunk " + kind + " (truncated)");
+    const std::uint32_t crc = static_cast<std::uint32_t>(
+        crc32(0, reinterpret_cast<const Bytef*>(b.data() + at + 4), length + 4));
+    if (crc != Be32(b, at + 8 + length)) fail("chunk " + kind + ": checksum mismatch");
+    const std::string data = b.substr(at + 8, length);
+    if (at == 8) {
+      if (kind != "IHDR" || length != 13) fail("not a PNG (no IHDR chunk first)");
+      width = Be32(data, 0);
+      height = Be32(data, 4);
+      depth = static_cast<std::uint8_t>(data[8]);
+      type = static_cast<std::uint8_t>(data[9]);
+      interlace = static_cast<std::uint8_t>(data[12]);
+    } else if (kind == "IDAT") {
+      idat += data;
+    } else if (kind == "IEND") {
+      ended = true;
+    }
+    at += 12 + length;
+  }
+  if (width < 1 || height < 1 || width > kMaxPngSide || height > kMaxPngSide) {
+    fail(fmt::format("{} x {} pixels; a height map is 1 to {} pixels a side", width, height,
+                     kMaxPngSide));
+  }
+  // Samples per pixel by colour type: grey, -, RGB, palette, grey + alpha, -, RGBA.
+  static constexpr int kChannels[7] = {1, 0, 3, 1, 2, 0, 4};
+  if (type < 0 || type > 6 || kChannels[type] == 0) {
+    fail(fmt::format("unknown PNG colour type {}", type));
+  }
+  const int channels = kChannels[type];
+  const bool depth_ok = type == 0
+                            ? depth == 1 || depth == 2 || depth == 4 || depth == 8 || depth == 16
+                        : type == 3 ? depth == 1 || depth == 2 || depth == 4 || depth == 8
+                                    : depth == 8 || depth == 16;
+  if (!depth_ok || interlace > 1) {
+    fail(fmt::format("unsupported PNG: colour type {}, bit depth {}, interlace {}", type, depth,
+                     interlace));
+  }
+  // The bytes the image data must inflate to: per row a filter byte and the packed pixels, per
+  // pass of Adam7 when interlaced.
+  const std::uint64_t bits =
+      static_cast<std::uint64_t>(depth) * static_cast<std::uint64_t>(channels);
+  const auto rows_bytes = [&](std::uint64_t w, std::uint64_t h) -> std::uint64_t {
+    return w == 0 || h == 0 ? 0 : h * (1 + (w * bits + 7) / 8);
+  };
+  std::uint64_t expected = 0;
+  if (interlace == 0) {
+    expected = rows_bytes(width, height);
+  } else {
+    static constexpr int kPass[7][4] = {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4},
+                                        {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}};
+    for (const auto& p : kPass) {
+      const std::uint64_t w =
+          (width + static_cast<std::uint64_t>(p[2] - p[0] - 1)) / static_cast<std::uint64_t>(p[2]);
+      const std::uint64_t h =
+          (height + static_cast<std::uint64_t>(p[3] - p[1] - 1)) / static_cast<std::uint64_t>(p[3]);
+      expected += rows_bytes(w, h);
+    }
+  }
+  // Inflate, counting (never holding more than a buffer of it), up to one byte past expected.
+  z_stream z{};
+  if (inflateInit(&z) != Z_OK) fail("cannot start zlib");
+  z.next_in = reinterpret_cast<Bytef*>(idat.data());
+  z.avail_in = static_cast<uInt>(idat.size());
+  std::vector<Bytef> buffer(1 << 16);
+  std::uint64_t produced = 0;
+  int rc = Z_OK;
+  while (rc == Z_OK && produced <= expected) {
+    z.next_out = buffer.data();
+    z.avail_out = static_cast<uInt>(buffer.size());
+    rc = inflate(&z, Z_NO_FLUSH);
+    produced += buffer.size() - z.avail_out;
+    if (rc == Z_BUF_ERROR && z.avail_in == 0) break;  // the data ends early
+    if (rc == Z_BUF_ERROR) rc = Z_OK;
+  }
+  inflateEnd(&z);
+  if (rc != Z_STREAM_END && rc != Z_OK && rc != Z_BUF_ERROR) {
+    fail("its image data is not a valid zlib stream");
+  }
+  if (produced != expected) {
+    fail(fmt::format("its image data holds {}{} bytes, {} x {} pixels need {}",
+                     produced > expected ? "more than " : "", std::min(produced, expected + 1),
+                     width, height, expected));
+  }
 }
 
 }  // namespace
@@ -223,6 +338,7 @@ TerrainDocument BuildTerrainDocument(const TerrainSpec& spec, const std::string&
   geom.SetReals("friction", std::vector<double>(spec.friction.begin(), spec.friction.end()));
   if (!spec.png.empty()) {
     CheckInputFile(spec.png, spec.name + ": png height map");
+    CheckPngHeightMap(spec.png);
     hfield.Set("file", spec.png);
     hfield.SetReals("size", std::vector<double>(spec.png_size.begin(), spec.png_size.end()));
     out.report.push_back(fmt::format("height map {} ({} x {} m, {} m high)", spec.png,

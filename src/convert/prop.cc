@@ -39,7 +39,7 @@ std::string Faces(const TriMesh& m) {
 // from an STL), named after the source and its content (so two sources with the same stem never
 // share a file).
 std::string VisualFile(const std::string& source, const TriMesh& mesh, const std::string& cache_dir,
-                       std::vector<std::string>* report) {
+                       const DecomposeOptions& options, std::vector<std::string>* report) {
   const std::string why =
       IsMujocoMeshFormat(source) ? MujocoStlRefusal(source) : "MuJoCo 2.2.2 loads STL, OBJ, MSH";
   if (why.empty()) return source;
@@ -51,7 +51,9 @@ std::string VisualFile(const std::string& source, const TriMesh& mesh, const std
           .string();
   std::error_code ec;
   if (!fs::is_regular_file(out, ec)) {
+    Interruptible(options, false);
     WriteFileAtomic(out, bytes);
+    Interruptible(options, true);
     report->push_back(fmt::format("visual mesh: converted {} to {} ({}{}{})", source, out, why,
                                   simplified.empty() ? "" : "; ", simplified));
   } else {
@@ -140,11 +142,13 @@ PropDocument BuildPropDocument(const PropSpec& spec, const std::string& cache_di
                                const std::string& parts_dir) {
   PropDocument out;
   const auto t0 = std::chrono::steady_clock::now();
+  // Reading, checking and decomposing write nothing but whole cache files.
+  Interruptible(spec.decompose, true);
   TriMesh mesh = ReadMesh(spec.mesh);
   out.report.push_back(fmt::format("read {}: {} triangles", spec.mesh, mesh.triangles.size()));
   ThrowIfCancelled(spec.decompose);
   // The visual mesh first: what MuJoCo refuses is found before the decomposition runs.
-  const std::string visual = VisualFile(spec.mesh, mesh, cache_dir, &out.report);
+  const std::string visual = VisualFile(spec.mesh, mesh, cache_dir, spec.decompose, &out.report);
   CheckVisualMesh(spec, visual);
   for (Vec3& v : mesh.vertices) {
     for (int k = 0; k < 3; ++k) v[k] *= spec.scale[k];
@@ -158,6 +162,7 @@ PropDocument BuildPropDocument(const PropSpec& spec, const std::string& cache_di
   } catch (const Error& e) {
     throw InputError({spec.mesh, 0}, e.what());
   }
+  Interruptible(spec.decompose, false);  // from here on the parts are written
   ThrowIfCancelled(spec.decompose);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -12,6 +12,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "urlab/core/mujoco_handlers.h"
@@ -60,6 +61,13 @@ void CopyOut(const urlab::world::BatchResult& r, urlab_batch_outputs* out) {
 }
 
 void StartLogging(const char* level) {
+  if (level) {
+    const std::string_view l = level;
+    if (l != "trace" && l != "debug" && l != "info" && l != "warn" && l != "error" && l != "off") {
+      throw urlab::Error("log_level: '" + std::string(l) +
+                         "' is not one of trace, debug, info, warn, error, off");
+    }
+  }
   // Logs go to the host program's stderr, as the `urlab` tool's do; quiet unless asked.
   if (!spdlog::get("urlab")) spdlog::set_default_logger(spdlog::stderr_color_mt("urlab"));
   spdlog::set_pattern("[%H:%M:%S.%e] [urlab] [%^%l%$] %v");

@@ -5,6 +5,9 @@
 #include <any>
 #include <cstdlib>
 #include <filesystem>
+#include <iterator>
+#include <string>
+#include <string_view>
 
 #include "world/scene_section.h"
 
@@ -46,6 +49,43 @@ const Choice kChoices[] = {
      "network.step_mode must be live or direct"},
 };
 
+// The port of a tcp:// or ws:// endpoint; 0 for "*" and for other transports.
+int TcpPort(const std::string& endpoint) {
+  if (!endpoint.starts_with("tcp://") && !endpoint.starts_with("ws://")) return 0;
+  const auto colon = endpoint.rfind(':');
+  if (colon == std::string::npos) return 0;
+  return std::atoi(endpoint.c_str() + colon + 1);
+}
+
+// "" when ZeroMQ can bind `endpoint` as written (or it is "", no socket), else what it should
+// look like.
+std::string EndpointProblem(const std::string& endpoint) {
+  if (endpoint.empty()) return "";
+  const std::string shapes = "tcp://HOST:PORT, ipc://PATH or inproc://NAME";
+  for (const char* scheme : {"ipc://", "inproc://"}) {
+    if (endpoint.starts_with(scheme)) {
+      return endpoint.size() > std::string_view(scheme).size() ? "" : shapes;
+    }
+  }
+  for (const char* scheme : {"tcp://", "ws://"}) {
+    if (!endpoint.starts_with(scheme)) continue;
+    const std::string rest = endpoint.substr(std::string_view(scheme).size());
+    const auto colon = rest.rfind(':');
+    if (colon == std::string::npos || colon == 0) return shapes;
+    std::string port = rest.substr(colon + 1);
+    const auto slash = port.find('/');  // ws://host:port/path
+    if (slash != std::string::npos && std::string_view(scheme) == "ws://") port.resize(slash);
+    if (port == "*") return "";
+    if (port.empty() || port.size() > 5 ||
+        port.find_first_not_of("0123456789") != std::string::npos) {
+      return "port 1 to 65535 or *";
+    }
+    const int p = std::atoi(port.c_str());
+    return p >= 1 && p <= 65535 ? "" : "port 1 to 65535 or *";
+  }
+  return shapes;
+}
+
 // network: {enabled, state, control, info, rpc, step_mode, full_state, camera_base_port,
 // files_dir, max_queued_steps}.
 std::any Parse(const SectionReader& r, const YAML::Node& n, const world::SceneConfig&) {
@@ -56,7 +96,32 @@ std::any Parse(const SectionReader& r, const YAML::Node& n, const world::SceneCo
                "camera_base_port", "files_dir", "max_queued_steps"});
   if (n["enabled"]) c.enabled = r.Bool(n["enabled"], "network.enabled");
   for (const Endpoint& e : kEndpoints) {
-    if (n[e.key]) c.*e.field = r.String(n[e.key], std::string("network.") + e.key);
+    const YAML::Node v = n[e.key];
+    if (!v) continue;
+    const std::string field = std::string("network.") + e.key;
+    c.*e.field = r.String(v, field);
+    if (const std::string problem = EndpointProblem(c.*e.field); !problem.empty()) {
+      r.Fail(v, field + ": '" + c.*e.field + "' is not an endpoint (" + problem + ")");
+    }
+  }
+  // Two sockets cannot bind one endpoint (or one TCP port): the later one is refused at its
+  // line, against the earlier one given or by default. Ports the system chooses (*) differ.
+  for (std::size_t i = 0; i < std::size(kEndpoints); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      const Endpoint& a = kEndpoints[j];
+      const Endpoint& b = kEndpoints[i];
+      const std::string& ea = c.*a.field;
+      const std::string& eb = c.*b.field;
+      if (ea.empty() || eb.empty()) continue;
+      const int pa = TcpPort(ea), pb = TcpPort(eb);
+      const bool same_port = pa > 0 && pa == pb;
+      if (ea != eb && !same_port) continue;
+      if (ea == eb && ea.starts_with("tcp://") && pa == 0) continue;  // "*": the system's
+      const YAML::Node at = n[b.key] ? n[b.key] : n[a.key] ? n[a.key] : n;
+      r.Fail(at, std::string("network.") + b.key + ": " + eb + " is network." + a.key + "'s " +
+                     (same_port ? "port " + std::to_string(pa) + " " : std::string()) +
+                     "too (each socket needs its own)");
+    }
   }
   for (const Choice& ch : kChoices) {
     const YAML::Node v = n[ch.key];

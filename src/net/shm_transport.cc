@@ -59,7 +59,14 @@ ShmTransport::Json ShmTransport::Offer(const std::string& session, Clock::time_p
 void ShmTransport::Poll(const std::function<void(std::uint64_t, const std::string&,
                                                  std::span<const std::uint8_t>)>& handle,
                         const std::function<void(std::uint64_t)>& bad) {
-  for (auto& [id, c] : channels_) {
+  // By id, not by iterator: a request may close channels, its own among them (bye, eviction).
+  std::vector<std::uint64_t> ids;
+  ids.reserve(channels_.size());
+  for (const auto& kv : channels_) ids.push_back(kv.first);
+  for (const std::uint64_t id : ids) {
+    const auto it = channels_.find(id);
+    if (it == channels_.end()) continue;
+    Channel& c = it->second;
     bool out_of_bounds = false;
     const auto bytes = c.channel.TakeRequest(&out_of_bounds);
     if (!bytes && !out_of_bounds) continue;
@@ -70,10 +77,16 @@ void ShmTransport::Poll(const std::function<void(std::uint64_t, const std::strin
     }
     c.last_request = now;
     c.answered = false;
+    polling_ = true;  // a channel closed while its request is handled goes after it
     if (bytes) {
-      handle(id, c.session, *bytes);
+      handle(id, std::string(c.session), *bytes);
     } else {
       bad(id);
+    }
+    polling_ = false;
+    if (const auto after = channels_.find(id);
+        after != channels_.end() && after->second.closing && after->second.answered) {
+      channels_.erase(after);
     }
   }
 }
@@ -85,6 +98,7 @@ bool ShmTransport::Reply(std::uint64_t channel, std::span<const std::uint8_t> by
   if (!it->second.channel.WriteReply(bytes)) return false;
   it->second.last_reply = now;
   it->second.answered = true;
+  if (it->second.closing && !polling_) channels_.erase(it);
   return true;
 }
 
@@ -148,7 +162,17 @@ std::vector<std::string> ShmTransport::Sweep(Clock::time_point now) {
 }
 
 void ShmTransport::Close(const std::string& session) {
-  std::erase_if(channels_, [&](const auto& kv) { return kv.second.session == session; });
+  for (auto it = channels_.begin(); it != channels_.end();) {
+    Channel& c = it->second;
+    if (c.session != session) {
+      ++it;
+    } else if (!c.answered) {
+      c.closing = true;  // Reply closes it
+      ++it;
+    } else {
+      it = channels_.erase(it);
+    }
+  }
 }
 
 }  // namespace urlab::net

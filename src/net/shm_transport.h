@@ -67,7 +67,8 @@ class ShmTransport {
   // the timeout, are closed (files removed); returns the sessions whose attached client went
   // away (an offer never taken ends no session). Attached files lose their name here.
   std::vector<std::string> Sweep(Clock::time_point now);
-  // Closes the channel of `session` (bye, evicted, expired).
+  // Closes the channel of `session` (bye, evicted, its client gone): at once, or right after the
+  // reply to the request it is serving (a `bye` sent over the channel itself gets its reply).
   void Close(const std::string& session);
 
  private:
@@ -77,6 +78,7 @@ class ShmTransport {
     Clock::time_point offered, last_reply{}, last_request{};
     Clock::duration think{};  // smoothed time from a reply to the next request
     bool answered = true;     // the last request taken was answered
+    bool closing = false;     // closed once the request it serves is answered
   };
   std::string folder_;
   ShmOptions options_;
@@ -84,6 +86,7 @@ class ShmTransport {
   std::map<std::uint64_t, Channel> channels_;
   std::uint64_t next_ = 1;
   Clock::time_point last_sweep_{};
+  bool polling_ = false;  // in Poll's handler: channels closing are erased by Poll
 };
 
 // The folder channels are made in: `folder`, or /dev/shm when writable, else the temporary

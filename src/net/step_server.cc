@@ -688,6 +688,7 @@ std::size_t StepServer::CancelQueuedSteps(const std::string& client, const std::
 void StepServer::ForgetClient(const std::string& id, const std::string& why) {
   if (driver_ == id) ReleaseLease(why);
   replays_.Release(id);
+  if (shm_) shm_->Close(id);  // its channel, if any (after the reply it is serving)
   clients_.erase(id);
 }
 
@@ -751,7 +752,11 @@ StepServer::Outcome StepServer::Hello(Request& r) {
     c.level = *level;
   }
   if (const auto it = r.body.find("arrays"); it != r.body.end()) {
-    c.binary_arrays = String(*it, "arrays") == "binary";
+    const std::string arrays = String(*it, "arrays");
+    if (arrays != "binary" && arrays != "list") {
+      Fail("bad_value", "arrays must be binary or list (got '" + arrays + "')");
+    }
+    c.binary_arrays = arrays == "binary";
   }
   if (clients_.size() >= options_.limits.max_clients) {  // forget the longest-silent observer
     auto oldest = clients_.end();

@@ -59,6 +59,10 @@ StepServer::Outcome StepServer::SetCameraDelay(Request& r) {
     const std::string key = CameraKey(*cameras_, name, &index);
     std::optional<std::uint64_t> seed;
     const physics::LatencySetting s = LatencySettingFromRequest(*value, "cameras." + name, &seed);
+    if (const std::string problem = physics::CheckLatency(s, session_.engine().timestep());
+        !problem.empty()) {
+      Fail("bad_value", "cameras." + name + ": " + problem);
+    }
     // Each camera draws its own jitter from the run's seed unless the request gives one.
     entries.push_back(
         {key, s, seed ? *seed : world::CameraDelaySeed(session_.latency_seed(), index)});

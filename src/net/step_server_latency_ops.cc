@@ -46,6 +46,14 @@ StepServer::Outcome StepServer::SetLatency(Request& r) {
       l.observation = LatencySettingFromRequest(value, "observation");
     }
   }
+  // The ticks a delay line holds are bounded (physics/latency.h): refused, not allocated.
+  const double dt = session_.engine().timestep();
+  for (const auto& [channel, setting] :
+       {std::pair{"control", &l.control}, std::pair{"observation", &l.observation}}) {
+    if (const std::string problem = physics::CheckLatency(*setting, dt); !problem.empty()) {
+      Fail("bad_value", std::string(channel) + ": " + problem);
+    }
+  }
   const std::optional<std::uint64_t> seed = Seed(r.body);
   session_.SetLatency(t.name, l, seed);
   Json reply = Describe(t.name, session_.Latency(t.name), session_.latency_seed());

@@ -15,7 +15,7 @@ using namespace request;
 
 namespace {
 
-world::RandomRange Range(const Json& v, const std::string& what) {
+world::RandomRange Range(const Json& v, const std::string& what, std::string_view key) {
   if (!v.is_object() || v.size() != 1) {
     Fail("bad_value", what +
                           " must be one of {\"uniform\": [low, high]}, {\"normal\": [mean, "
@@ -28,6 +28,9 @@ world::RandomRange Range(const Json& v, const std::string& what) {
   world::RandomRange r;
   const std::string problem = world::MakeRange(dist, n[0], n[1], &r);
   if (!problem.empty()) Fail("bad_value", what + ": " + problem);
+  if (const std::string outside = world::CheckLimits(key, r); !outside.empty()) {
+    Fail("bad_value", what + ": " + outside);
+  }
   return r;
 }
 
@@ -37,7 +40,8 @@ world::RandomizeConfig Config(const Json& v) {
   for (const auto& [name, params] : v.items()) {
     if (!params.is_object()) Fail("bad_value", "randomize." + name + " must be a map");
     for (const auto& [key, range] : params.items()) {
-      const world::RandomRange r = Range(range, "randomize." + name + "." + key);
+      const world::RandomRange r =
+          Range(range, "randomize." + name + "." + key, name == "gravity" ? "gravity" : key);
       if (name == "gravity") {
         c.gravity[key] = r;
       } else {

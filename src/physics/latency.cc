@@ -1,6 +1,7 @@
 #include "urlab/physics/latency.h"
 
 #include <cmath>
+#include <sstream>
 
 namespace urlab::physics {
 
@@ -21,10 +22,29 @@ constexpr KeyRow kKeys[] = {
     {"rate_hz", &LatencySetting::rate_hz, nullptr, false},
 };
 
-int ToSteps(double value, bool in_steps, double timestep) {
-  if (in_steps) return static_cast<int>(value);
+// Steps as a double (not yet bounded).
+double StepsOf(double value, bool in_steps, double timestep) {
+  if (in_steps) return value;
   if (timestep <= 0) return 0;
-  return static_cast<int>(std::llround(value / timestep));
+  return std::round(value / timestep);
+}
+double IntervalOf(double rate_hz, double timestep) {
+  if (!(rate_hz > 0) || !(timestep > 0)) return 0;
+  return std::ceil(1.0 / (rate_hz * timestep) - 1e-9);
+}
+// A step count for a message: whole numbers as such, huge ones in exponent form.
+std::string Count(double steps) {
+  std::ostringstream o;
+  if (steps < 1e15) {
+    o << static_cast<long long>(steps);
+  } else {
+    o << steps;
+  }
+  return o.str();
+}
+int Saturate(double steps) {
+  if (!(steps > 0)) return 0;
+  return steps >= kMaxLatencySteps ? kMaxLatencySteps : static_cast<int>(steps);
 }
 
 }  // namespace
@@ -67,13 +87,35 @@ std::map<std::string, double> LatencyFields(const LatencySetting& s) {
   return out;
 }
 
+std::string CheckLatency(const LatencySetting& s, double timestep) {
+  const double delay = StepsOf(s.delay, s.delay_in_steps, timestep);
+  const double jitter = StepsOf(s.jitter, s.jitter_in_steps, timestep);
+  const double interval = IntervalOf(s.rate_hz, timestep);
+  const double total = delay + jitter + (interval > 1 ? interval : 0);
+  if (total <= kMaxLatencySteps) return "";
+  std::ostringstream m;
+  m << "delay + jitter + the rate_hz interval come to " << Count(total) << " steps at timestep "
+    << timestep << " s (";
+  const char* sep = "";
+  if (delay > 0) {
+    m << sep << (s.delay_in_steps ? "delay_steps " : "delay ") << s.delay << ": " << Count(delay);
+    sep = ", ";
+  }
+  if (jitter > 0) {
+    m << sep << (s.jitter_in_steps ? "jitter_steps " : "jitter ") << s.jitter << ": "
+      << Count(jitter);
+    sep = ", ";
+  }
+  if (interval > 1) m << sep << "rate_hz " << s.rate_hz << ": one value every " << Count(interval);
+  m << "); at most " << kMaxLatencySteps << " steps";
+  return m.str();
+}
+
 DelaySpec ResolveLatency(const LatencySetting& s, double timestep, std::uint64_t seed) {
   DelaySpec spec;
-  spec.delay = ToSteps(s.delay, s.delay_in_steps, timestep);
-  spec.jitter = ToSteps(s.jitter, s.jitter_in_steps, timestep);
-  if (s.rate_hz > 0 && timestep > 0) {
-    spec.min_interval = static_cast<int>(std::ceil(1.0 / (s.rate_hz * timestep) - 1e-9));
-  }
+  spec.delay = Saturate(StepsOf(s.delay, s.delay_in_steps, timestep));
+  spec.jitter = Saturate(StepsOf(s.jitter, s.jitter_in_steps, timestep));
+  spec.min_interval = Saturate(IntervalOf(s.rate_hz, timestep));
   spec.seed = seed;
   return spec;
 }

@@ -62,6 +62,7 @@ RecordingReader RecordingReader::Open(const std::string& path, Options options) 
   const auto stop = [&](Reason reason, const std::string& message) {
     if (!options.allow_partial) throw RecordingError(reason, path, message);
     r.problem_ = message;
+    r.problem_reason_ = reason;
   };
 
   std::uint64_t offset = format::kFileHeaderSize;
@@ -140,6 +141,14 @@ RecordingReader RecordingReader::Open(const std::string& path, Options options) 
                          name, h.raw_size, format::kMaxDataChunkRawBytes >> 20));
         break;
       }
+      // Every frame takes bytes: a chunk cannot declare more frames than it has raw bytes (a
+      // forged count would be the recording's length in every report).
+      if (h.frames > h.raw_size) {
+        stop(Reason::kCorrupt,
+             fmt::format("{}: declares {} frames in {} bytes (damaged, or not written by URLab)",
+                         name, h.frames, h.raw_size));
+        break;
+      }
       ChunkInfo c;
       c.number = h.number;
       c.offset = offset;
@@ -206,13 +215,24 @@ std::vector<Record> RecordingReader::ReadChunk(std::size_t index) const {
                              ": checksum mismatch (the chunk is damaged; the chunks before "
                              "it are readable)");
   }
+  std::vector<Record> records;
   try {
-    return format::DecodeChunk(
+    records = format::DecodeChunk(
         format::Decompress(stored, h.codec, h.raw_size, format::kMaxDataChunkRawBytes),
         info_.tables, info_.sensordata, info_.format_version);
   } catch (const std::exception& e) {
     throw RecordingError(Reason::kCorrupt, path_, name + ": " + e.what());
   }
+  // The frames it holds are the number it declares (what frame_count() and the seek use).
+  std::uint64_t frames = 0;
+  for (const Record& rec : records) frames += std::holds_alternative<Frame>(rec) ? 1 : 0;
+  if (frames != h.frames) {
+    throw RecordingError(Reason::kCorrupt, path_,
+                         fmt::format("{}: declares {} frames, holds {} (damaged, or not written "
+                                     "by URLab)",
+                                     name, h.frames, frames));
+  }
+  return records;
 }
 
 void RecordingReader::Verify() const {

@@ -142,7 +142,10 @@ ShmChannel ShmChannel::Create(const std::string& path, std::size_t request_bytes
   Word(c.at(L::kHeaderBytesAt)).store(L::kHeaderBytes, std::memory_order_relaxed);
   Word64(c.at(L::kRequestCapacity)).store(request_cap, std::memory_order_relaxed);
   Word64(c.at(L::kReplyCapacity)).store(reply_cap, std::memory_order_relaxed);
-  Word64(c.at(L::kGeneration)).store(RandomNonZero(), std::memory_order_relaxed);
+  c.request_cap_ = request_cap;
+  c.reply_cap_ = reply_cap;
+  c.generation_ = RandomNonZero();
+  Word64(c.at(L::kGeneration)).store(c.generation_, std::memory_order_relaxed);
   Word(c.at(L::kServerPid)).store(static_cast<std::uint32_t>(getpid()), std::memory_order_relaxed);
   std::memcpy(c.at(L::kWakeName), wake_name.data(), wake_name.size());
   // The magic last (a release store): a reader that sees it sees the whole header.
@@ -182,6 +185,9 @@ ShmChannel ShmChannel::Attach(const std::string& path, std::uint64_t generation)
   if (req > c.size_ || rep > c.size_ || L::kHeaderBytes + req + rep != c.size_) {
     throw ShmError("shared memory " + path + ": its sizes do not add up to the file's");
   }
+  c.request_cap_ = static_cast<std::size_t>(req);
+  c.reply_cap_ = static_cast<std::size_t>(rep);
+  c.generation_ = generation;
   if (Word64(c.at(L::kGeneration)).load(std::memory_order_relaxed) != generation) {
     throw ShmError("shared memory " + path + ": another channel than the one offered");
   }
@@ -202,6 +208,7 @@ ShmChannel ShmChannel::Attach(const std::string& path, std::uint64_t generation)
   }
   Word(c.at(L::kClientPid)).store(static_cast<std::uint32_t>(getpid()), std::memory_order_relaxed);
   Word(c.at(L::kClientAttached)).store(1, std::memory_order_release);
+  c.attached_ = true;
   return c;
 }
 
@@ -214,12 +221,17 @@ ShmChannel& ShmChannel::operator=(ShmChannel&& o) noexcept {
     fd_ = std::exchange(o.fd_, -1);
     base_ = std::exchange(o.base_, nullptr);
     size_ = std::exchange(o.size_, 0);
+    request_cap_ = o.request_cap_;
+    reply_cap_ = o.reply_cap_;
+    generation_ = o.generation_;
     server_ = o.server_;
+    attached_ = std::exchange(o.attached_, false);
     named_ = std::exchange(o.named_, false);
     seq_ = o.seq_;
     awaiting_ = o.awaiting_;
     wake_fd_ = std::exchange(o.wake_fd_, -1);
     taken_ = o.taken_;
+    request_ = std::move(o.request_);
   }
   return *this;
 }
@@ -231,7 +243,8 @@ void ShmChannel::Release() {
     if (server_) {
       Word(at(L::kServerClosed)).store(1, std::memory_order_seq_cst);
       FutexWake(at(L::kReplySeq));  // a client asleep on its reply sees the server closed
-    } else {
+    } else if (attached_) {
+      // (A client whose attach failed leaves the header alone: the channel may be another's.)
       Word(at(L::kClientClosed)).store(1, std::memory_order_seq_cst);
     }
     munmap(base_, size_);
@@ -250,16 +263,6 @@ void ShmChannel::Unlink() {
   unlink(path_.c_str());
 }
 
-std::uint64_t ShmChannel::generation() const {
-  return Word64(at(L::kGeneration)).load(std::memory_order_relaxed);
-}
-std::size_t ShmChannel::request_capacity() const {
-  return Word64(at(L::kRequestCapacity)).load(std::memory_order_relaxed);
-}
-std::size_t ShmChannel::reply_capacity() const {
-  return Word64(at(L::kReplyCapacity)).load(std::memory_order_relaxed);
-}
-
 bool ShmChannel::PeerGone() const {
   if (server_) {
     if (Word(at(L::kClientClosed)).load(std::memory_order_acquire) != 0) return true;
@@ -274,9 +277,9 @@ bool ShmChannel::PeerGone() const {
 
 void ShmChannel::SendRequest(std::span<const std::uint8_t> bytes) {
   if (awaiting_) throw ShmError("shared memory " + path_ + ": a reply is still outstanding");
-  if (bytes.size() > request_capacity()) {
+  if (bytes.size() > request_cap_) {
     throw ShmError("shared memory " + path_ + ": a request of " + std::to_string(bytes.size()) +
-                   " bytes (capacity " + std::to_string(request_capacity()) + ")");
+                   " bytes (capacity " + std::to_string(request_cap_) + ")");
   }
   if (!bytes.empty()) std::memcpy(at(L::kHeaderBytes), bytes.data(), bytes.size());
   Word64(at(L::kRequestLen)).store(bytes.size(), std::memory_order_relaxed);
@@ -325,8 +328,8 @@ std::span<const std::uint8_t> ShmChannel::WaitReply(std::chrono::nanoseconds tim
   }
   awaiting_ = false;
   const std::uint64_t len = Word64(at(L::kReplyLen)).load(std::memory_order_relaxed);
-  if (len > reply_capacity()) throw ShmError("shared memory " + path_ + ": a reply beyond bounds");
-  return {at(L::kHeaderBytes + request_capacity()), static_cast<std::size_t>(len)};
+  if (len > reply_cap_) throw ShmError("shared memory " + path_ + ": a reply beyond bounds");
+  return {at(L::kHeaderBytes + request_cap_), static_cast<std::size_t>(len)};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -345,17 +348,19 @@ std::optional<std::span<const std::uint8_t>> ShmChannel::TakeRequest(bool* bad) 
   if (seq == taken_) return std::nullopt;
   taken_ = seq;
   const std::uint64_t len = Word64(at(L::kRequestLen)).load(std::memory_order_relaxed);
-  if (len > request_capacity()) {
+  if (len > request_cap_) {
     if (bad) *bad = true;
     return std::nullopt;
   }
-  return std::span<const std::uint8_t>(at(L::kHeaderBytes), static_cast<std::size_t>(len));
+  // A private copy: the client may rewrite the slot while the server decodes.
+  request_.assign(at(L::kHeaderBytes), at(L::kHeaderBytes) + len);
+  return std::span<const std::uint8_t>(request_);
 }
 
 bool ShmChannel::WriteReply(std::span<const std::uint8_t> bytes) {
-  if (bytes.size() > reply_capacity()) return false;
+  if (bytes.size() > reply_cap_) return false;
   if (!bytes.empty()) {
-    std::memcpy(at(L::kHeaderBytes + request_capacity()), bytes.data(), bytes.size());
+    std::memcpy(at(L::kHeaderBytes + request_cap_), bytes.data(), bytes.size());
   }
   Word64(at(L::kReplyLen)).store(bytes.size(), std::memory_order_relaxed);
   Word(at(L::kReplySeq)).store(taken_, std::memory_order_seq_cst);

@@ -31,6 +31,12 @@
 // unlocked belongs to no live server (ReclaimStale). The server unlinks the file as soon as the
 // client attached (both keep their mappings), so a crash of both leaves nothing behind.
 //
+// Trust: each side takes every size and offset it uses (capacities, the file's size, where the
+// reply starts) from its own memory, set when it made or attached the channel, never from the
+// shared page, which the other side can rewrite at any time; lengths read from the page are
+// checked against those before use, and the server copies a request out of the mapping before
+// it is decoded (the client cannot change it under the decoder).
+//
 // Threading: a channel object is used by one thread at a time; the two ends are in different
 // threads or processes and meet only through the atomics of the mapped header.
 #include <chrono>
@@ -41,6 +47,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace urlab::wire {
 
@@ -87,9 +94,9 @@ class ShmChannel {
   ~ShmChannel();
 
   const std::string& path() const { return path_; }
-  std::uint64_t generation() const;
-  std::size_t request_capacity() const;
-  std::size_t reply_capacity() const;
+  std::uint64_t generation() const { return generation_; }
+  std::size_t request_capacity() const { return request_cap_; }
+  std::size_t reply_capacity() const { return reply_cap_; }
   std::size_t file_bytes() const { return size_; }
 
   // ---- Client ----
@@ -109,8 +116,9 @@ class ShmChannel {
   bool attached() const;
   // A request is waiting that TakeRequest has not returned.
   bool request_waiting() const;
-  // The new request, if any; its bytes stay valid until WriteReply. Nothing when none waits or
-  // the client published a length beyond the capacity (then `*bad` is set).
+  // The new request, if any: a copy in this object's memory, valid until the next TakeRequest.
+  // Nothing when none waits or the client published a length beyond the capacity (then `*bad`
+  // is set).
   std::optional<std::span<const std::uint8_t>> TakeRequest(bool* bad = nullptr);
   // Answers the request taken last; false (nothing written) when `bytes` exceed the capacity.
   bool WriteReply(std::span<const std::uint8_t> bytes);
@@ -137,14 +145,19 @@ class ShmChannel {
   int fd_ = -1;
   std::uint8_t* base_ = nullptr;
   std::size_t size_ = 0;
+  // Set when the channel was made or attached; the header's copies are for the other side only.
+  std::size_t request_cap_ = 0, reply_cap_ = 0;
+  std::uint64_t generation_ = 0;
   bool server_ = false;
-  bool named_ = false;  // the server's file still has its name
+  bool attached_ = false;  // client: attached (only then does closing mark the client closed)
+  bool named_ = false;     // the server's file still has its name
   // Client: the sequence of the last request, and whether its reply is outstanding.
   std::uint32_t seq_ = 0;
   bool awaiting_ = false;
   int wake_fd_ = -1;  // client: the datagram socket that wakes the server
   // Server: the sequence of the last request taken.
   std::uint32_t taken_ = 0;
+  std::vector<std::uint8_t> request_;  // server: the request taken last, copied
 };
 
 // The server's wake socket: an abstract unix datagram socket (no file) named

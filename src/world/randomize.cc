@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "urlab/physics/delay_line.h"
 
@@ -106,6 +107,59 @@ const std::vector<RandomParamInfo>& RandomParams() {
        false},
   };
   return table;
+}
+
+std::optional<ParamLimits> LimitsOf(std::string_view key) {
+  static constexpr struct {
+    std::string_view key;
+    ParamLimits limits;
+  } kLimits[] = {
+      {"friction", {0, 100}},
+      {"mass", {0.001, 1000}},
+      {"damping", {0, 1000}},
+      {"armature", {0, 1000}},
+      {"frictionloss", {0, 1000}},
+      {"gain", {0, 100}},
+      {"kp", {0, 100}},
+      {"kv", {0, 100}},
+      {"qpos_noise", {-10, 10}},
+      {"obs_noise", {0, 10}},
+      {"gravity", {-100, 100}},
+  };
+  for (const auto& l : kLimits) {
+    if (l.key == key) return l.limits;
+  }
+  return std::nullopt;
+}
+
+std::string CheckLimits(std::string_view key, const RandomRange& r) {
+  const auto l = LimitsOf(key);
+  if (!l) return "";
+  const auto num = [](double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  };
+  const std::string allowed = "[" + num(l->lo) + ", " + num(l->hi) + "]";
+  const std::string given =
+      std::string(DistributionName(r.dist)) + " [" + num(r.a) + ", " + num(r.b) + "]";
+  if (r.dist == Distribution::kNormal) {
+    if (!(r.a >= l->lo && r.a <= l->hi)) {
+      return given + ": the mean leaves the allowed range " + allowed;
+    }
+    if (!(r.b <= l->hi - l->lo)) {
+      return given + ": the std exceeds the width of the allowed range " + allowed;
+    }
+    return "";
+  }
+  if (!(r.a >= l->lo && r.b <= l->hi)) return given + " leaves the allowed range " + allowed;
+  return "";
+}
+
+double DrawParam(std::string_view key, const RandomRange& r, std::uint64_t* state) {
+  const double v = Draw(r, state);
+  const auto l = LimitsOf(key);
+  return l ? std::clamp(v, l->lo, l->hi) : v;
 }
 
 bool IsRandomParam(std::string_view key, bool prop) {

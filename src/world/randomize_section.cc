@@ -13,7 +13,8 @@ namespace urlab::world {
 namespace {
 
 // A range: {uniform: [low, high]}, {normal: [mean, std]} or {log_uniform: [low, high]}.
-RandomRange Range(const SectionReader& r, const YAML::Node& n, const std::string& where) {
+RandomRange Range(const SectionReader& r, const YAML::Node& n, const std::string& where,
+                  std::string_view key) {
   const auto entries = r.Entries(n, where);
   if (entries.size() != 1) {
     r.Fail(n, where +
@@ -25,6 +26,9 @@ RandomRange Range(const SectionReader& r, const YAML::Node& n, const std::string
   RandomRange out;
   const std::string problem = MakeRange(dist, ab[0], ab[1], &out);
   if (!problem.empty()) r.Fail(v, where + ": " + problem);
+  if (const std::string outside = CheckLimits(key, out); !outside.empty()) {
+    r.Fail(v, where + ": " + outside);
+  }
   return out;
 }
 
@@ -37,7 +41,7 @@ std::any Parse(const SectionReader& r, const YAML::Node& n, const SceneConfig& s
     if (name == "gravity") {
       r.CheckKeys(v, where, {"x", "y", "z"});
       for (const auto& [axis, range] : r.Entries(v, where)) {
-        c.gravity[axis] = Range(r, range, where + "." + axis);
+        c.gravity[axis] = Range(r, range, where + "." + axis, "gravity");
       }
       continue;
     }
@@ -63,7 +67,7 @@ std::any Parse(const SectionReader& r, const YAML::Node& n, const SceneConfig& s
           art->controller.type != "gait") {
         r.Fail(range, where + "." + key + " needs a PD controller (controller type pd or gait)");
       }
-      params[key] = Range(r, range, where + "." + key);
+      params[key] = Range(r, range, where + "." + key, key);
     }
   }
   return settings;

@@ -37,6 +37,9 @@ std::string Randomizer::Check(const RandomizeConfig& config) const {
     if (axis != "x" && axis != "y" && axis != "z") {
       return "gravity: unknown component '" + axis + "' (x, y or z)";
     }
+    if (const std::string outside = CheckLimits("gravity", range); !outside.empty()) {
+      return "gravity." + axis + ": " + outside;
+    }
   }
   for (const auto& [name, params] : config.targets) {
     const Target* t = Find(name);
@@ -49,6 +52,9 @@ std::string Randomizer::Check(const RandomizeConfig& config) const {
         }
         return name + ": unknown parameter '" + key + "' for " +
                (t->prop ? "a prop" : "an articulation") + " (known: " + known + ")";
+      }
+      if (const std::string outside = CheckLimits(key, range); !outside.empty()) {
+        return name + "." + key + ": " + outside;
       }
       if ((key == "kp" || key == "kv") && !t->pd) {
         return name + ": '" + key + "' needs a PD controller (controller type pd)";
@@ -93,7 +99,7 @@ Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64
   for (int k = 0; k < 3; ++k) {
     const auto it = config.gravity.find(kAxes[k]);
     if (it == config.gravity.end()) continue;
-    const double v = Draw(it->second, &state);
+    const double v = DrawParam("gravity", it->second, &state);
     m->opt.gravity[k] = gravity_[k] + v;
     out.draws.gravity[kAxes[k]] = v;
   }
@@ -107,13 +113,13 @@ Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64
       const RandomRange& range = it->second;
       if (p.key == "qpos_noise") {  // one draw per joint
         for (const auto& [joint, adr] : t.joints) {
-          const double v = Draw(range, &state);
+          const double v = DrawParam(p.key, range, &state);
           drawn["qpos_noise." + joint] = v;
           out.qpos_offsets.emplace_back(adr, v);
         }
         continue;
       }
-      const double v = Draw(range, &state);
+      const double v = DrawParam(p.key, range, &state);
       drawn[std::string(p.key)] = v;
       if (p.key == "friction") {
         for (int g : t.geoms) m->geom_friction[3 * g] = friction_[3 * g] * v;

@@ -1,7 +1,9 @@
 #include "urlab/world/scene_checks.h"
 
 #include <string>
+#include <utility>
 
+#include "urlab/physics/latency.h"
 #include "urlab/world/controller_factory.h"
 #include "urlab/world/names.h"
 #include "world/binding_checks.h"
@@ -57,6 +59,14 @@ void CheckCompiledScene(const SceneConfig& scene, const CompiledScene& compiled,
       CheckArticulationBindings(scene, a, compiled.articulations[i], m, sink);
     }
     CheckController(a, m, prefix, sink);
+    // Emulated latency: its ticks at this timestep are bounded (physics/latency.h).
+    for (const auto& [channel, setting] : {std::pair{"control", &a.latency.control},
+                                           std::pair{"observation", &a.latency.observation}}) {
+      if (const std::string problem = physics::CheckLatency(*setting, m->opt.timestep);
+          !problem.empty()) {
+        sink.Error(a.where, a.name + ".latency." + channel + ": " + problem);
+      }
+    }
   }
   // What the subsystems' sections name (the cameras of `cameras.streams`, ...).
   CheckSceneSections(scene, compiled, sink);

@@ -660,7 +660,8 @@ class Parser : public SectionReader {
     }
     if (root["control_source"]) s.control_source = Source(root["control_source"]);
     if (const auto n = root["seed"]) {
-      const double v = Number(n, "seed", Range{0, 9007199254740992.0});
+      // A whole number a double holds exactly: the step server's and the batch's seed range.
+      const double v = Number(n, "seed", Range{0, 9007199254740991.0});
       if (v != std::floor(v)) Fail(n, "seed must be a whole number, not " + n.Scalar());
       s.seed = static_cast<std::uint64_t>(v);
     }

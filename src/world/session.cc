@@ -386,6 +386,13 @@ void Session::ApplyHostPoses(mjData* d) {
 void Session::SetLatency(std::string_view name, const physics::ArticulationLatency& latency,
                          std::optional<std::uint64_t> seed) {
   const Articulation& a = Require(name);
+  for (const auto& [channel, setting] :
+       {std::pair{"control", &latency.control}, std::pair{"observation", &latency.observation}}) {
+    if (const std::string problem = physics::CheckLatency(*setting, engine_->timestep());
+        !problem.empty()) {
+      throw Error(a.name() + ".latency." + channel + ": " + problem);
+    }
+  }
   const auto index = static_cast<std::size_t>(&a - articulations_.data());
   const int group = observation_delay_->Find(a.name());
   std::uint64_t s = 0;

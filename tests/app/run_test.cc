@@ -54,6 +54,22 @@ TEST(RunTest, RunsAPlainMjcfFileAtMaxSpeed) {
   EXPECT_NE(out.find("summary:"), std::string::npos) << out;
 }
 
+// Issue 38: `--duration D` is exactly round(D / timestep) physics steps, whatever the wall clock
+// does (it was wall-clock seconds: 2500 or 2501 steps for 5 s at 500 Hz, and any number at
+// --max-speed). servo_arm.xml steps at 500 Hz.
+TEST(RunTest, DurationIsAnExactNumberOfSteps) {
+  for (const char* pace : {"", " --max-speed", " --speed 50"}) {
+    std::string out;
+    ASSERT_EQ(RunCommand(UrlabBinary() + " run --no-network " +
+                             SourcePath("examples/models/servo_arm.xml") + " --duration 0.5" + pace,
+                         &out),
+              0)
+        << out;
+    EXPECT_NE(out.find("summary: sim_time=0.500 s steps=250 "), std::string::npos) << pace << "\n"
+                                                                                   << out;
+  }
+}
+
 TEST(RunTest, SigtermStopsItCleanly) {
   const std::string dir = testing::MakeTempDir("run_sigterm");
   const std::string log = dir + "/out.txt";

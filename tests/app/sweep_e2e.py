@@ -102,7 +102,7 @@ timeout: 120
     with open(bad, "w") as f:
         f.write("scenes: []\nseeds: [0]\nduration: 1\npolicies: []\nworkers: 3\n")
     b = sweep(bad)
-    if b.returncode != 1 or f"{bad}: unknown key(s) ['workers']" not in b.stderr:
+    if b.returncode != 1 or f"{bad}:5: unknown key 'workers'" not in b.stderr:
         fail(f"a bad sweep file: {b.returncode}\n{b.stderr}")
     print("PASS")
 

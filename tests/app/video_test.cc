@@ -265,6 +265,42 @@ TEST(RenderRecording, FourSecondsAt30FpsAre120FramesEachShowingItsTime) {
   fs::remove_all(dir);
 }
 
+// Issue 38, case 4: `render --video` follows the one output rule of core/files.h (it renamed
+// its temporary over the name, replacing a symbolic link, or a device node, with a file): a
+// link is written through and stays a link, a device is written in place, a folder is refused.
+TEST(RenderRecording, TheVideoFollowsTheOutputRule) {
+  const std::string dir = testing::MakeTempDir("render_rule");
+  const physics::ModelPtr model = physics::CompileXmlString(kPendulumXml);
+  std::vector<std::vector<double>> qpos;
+  WritePendulumRecording(model.get(), dir + "/fall.urrec", 30, &qpos);
+  const auto render = [&](const std::string& out, std::string* log) {
+    return testing::RunCommand(testing::UrlabBinary() + " render " + dir + "/fall.urrec --video " +
+                                   out + " --fps 30 --camera side --width 64 --height 48",
+                               log);
+  };
+  std::string log;
+  // A symbolic link: its target gets the video, the link stays.
+  fs::create_directories(dir + "/videos");
+  fs::create_symlink(dir + "/videos/real.mp4", dir + "/link.mp4");
+  ASSERT_EQ(render(dir + "/link.mp4", &log), 0) << log;
+  EXPECT_TRUE(fs::is_symlink(dir + "/link.mp4")) << "the link was replaced by a file";
+  EXPECT_TRUE(fs::is_regular_file(dir + "/videos/real.mp4"));
+  EXPECT_GT(fs::file_size(dir + "/videos/real.mp4"), 0u);
+  EXPECT_FALSE(fs::exists(dir + "/.link.urlab-tmp.mp4"));
+  EXPECT_FALSE(fs::exists(dir + "/videos/.real.urlab-tmp.mp4"));
+  // A device (through a link named *.mp4): written in place, never replaced.
+  fs::create_symlink("/dev/null", dir + "/null.mp4");
+  ASSERT_EQ(render(dir + "/null.mp4", &log), 0) << log;
+  EXPECT_TRUE(fs::is_symlink(dir + "/null.mp4")) << "the link to /dev/null was replaced";
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  // A folder named *.mp4: refused, nothing written.
+  fs::create_directories(dir + "/folder.mp4");
+  EXPECT_EQ(render(dir + "/folder.mp4", &log), 1) << log;
+  EXPECT_NE(log.find("folder"), std::string::npos) << log;
+  EXPECT_TRUE(fs::is_empty(dir + "/folder.mp4"));
+  fs::remove_all(dir);
+}
+
 TEST(RenderRecording, UnknownCameraIsAClearErrorAndWritesNothing) {
   const std::string dir = testing::MakeTempDir("render_bad");
   const physics::ModelPtr model = physics::CompileXmlString(kPendulumXml);

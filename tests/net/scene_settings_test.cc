@@ -57,6 +57,39 @@ TEST_F(NetworkSceneSection, BadInputIsRefusedAtItsLine) {
     testing::ExpectSceneRefusedAt(c.yaml, dir_ + "/s.yaml", c.line, c.message);
 }
 
+// Issue 38, case 9: two sockets on one endpoint (state equal to control passed validate and the
+// run blamed its own pid for the port) and endpoints ZeroMQ cannot bind (a garbage endpoint
+// failed at run time, with no scene line) are refused at their line.
+TEST_F(NetworkSceneSection, EndpointsAreCheckedAtTheirLine) {
+  struct Case {
+    std::string yaml;
+    int line;
+    const char* message;
+  };
+  const Case cases[] = {
+      {WithArm("network:\n  state: tcp://127.0.0.1:6000\n  control: tcp://127.0.0.1:6000\n"), 6,
+       "network.control: tcp://127.0.0.1:6000 is network.state's port 6000 too"},
+      {WithArm("network:\n  rpc: tcp://*:5556\n"), 5,
+       "network.rpc: tcp://*:5556 is network.control's port 5556 too"},
+      {WithArm("network:\n  info: ipc:///tmp/a\n  rpc: ipc:///tmp/a\n"), 6,
+       "network.rpc: ipc:///tmp/a is network.info's too"},
+      {WithArm("network: {state: garbage}\n"), 4,
+       "network.state: 'garbage' is not an endpoint (tcp://HOST:PORT, ipc://PATH or "
+       "inproc://NAME)"},
+      {WithArm("network: {rpc: \"tcp://127.0.0.1\"}\n"), 4, "network.rpc: 'tcp://127.0.0.1'"},
+      {WithArm("network: {rpc: \"tcp://127.0.0.1:70000\"}\n"), 4, "port 1 to 65535 or *"},
+      {WithArm("network: {rpc: \"tcp://:5559\"}\n"), 4, "network.rpc"},
+      {WithArm("network: {rpc: \"ipc://\"}\n"), 4, "network.rpc"},
+  };
+  for (const Case& c : cases)
+    testing::ExpectSceneRefusedAt(c.yaml, dir_ + "/s.yaml", c.line, c.message);
+  // Ports the system chooses may repeat; "" is no socket; ipc and inproc names are fine.
+  EXPECT_NO_THROW(world::ParseScene(
+      WithArm("network:\n  state: tcp://127.0.0.1:*\n  control: tcp://127.0.0.1:*\n"
+              "  info: \"\"\n  rpc: ipc:///tmp/urlab-rpc\n"),
+      dir_ + "/ok.yaml"));
+}
+
 TEST_F(NetworkSceneSection, GoodValuesReachTheNetworksSettings) {
   const world::SceneConfig s = world::ParseScene(
       WithArm("network:\n  enabled: false\n  state: tcp://*:6000\n  rpc: ipc:///tmp/x.rpc\n"

@@ -4,15 +4,18 @@
 // (no wedge), files of dead servers are reclaimed, bad attachments are refused.
 #include "wire/shm_channel.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/mman.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -244,6 +247,89 @@ TEST_F(ShmChannelTest, BadAttachmentsAndSizesAreRefused) {
   EXPECT_TRUE(server.WriteReply(Bytes("ok")));
   const auto reply = client.WaitReply(1s, 0us);
   EXPECT_EQ(std::string(reply.begin(), reply.end()), "ok");
+}
+
+// The client's side of the file as a hostile peer sees it: the whole mapping, writable.
+class HostileView {
+ public:
+  explicit HostileView(const std::string& path) {
+    fd_ = open(path.c_str(), O_RDWR | O_CLOEXEC);
+    size_ = static_cast<std::size_t>(lseek(fd_, 0, SEEK_END));
+    base_ = static_cast<std::uint8_t*>(
+        mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, 0));
+  }
+  ~HostileView() {
+    munmap(base_, size_);
+    close(fd_);
+  }
+  void Put64(std::size_t at, std::uint64_t v) { std::memcpy(base_ + at, &v, sizeof(v)); }
+  void Put32(std::size_t at, std::uint32_t v) { std::memcpy(base_ + at, &v, sizeof(v)); }
+  std::uint8_t* base() const { return base_; }
+  std::size_t size() const { return size_; }
+
+ private:
+  int fd_ = -1;
+  std::uint8_t* base_ = nullptr;
+  std::size_t size_ = 0;
+};
+
+// Issue 38, case 1: the client rewrites the capacities in the header (the server used to read
+// them back on every request and write its reply at 4096 + that value: 2^40 crashed it at once,
+// file size - 4160 wrote past the mapping). The server keeps the sizes it made the channel
+// with: replies land where they always did, lengths beyond its own capacity are refused.
+TEST_F(ShmChannelTest, TheServerTakesNoSizeOrOffsetFromTheSharedPage) {
+  ShmWakeSocket wake;
+  ShmChannel server = ShmChannel::Create(NewPath(), 4096, 8192, wake.name());
+  ShmChannel client = ShmChannel::Attach(server.path(), server.generation());
+  HostileView peer(server.path());
+  const std::size_t file = peer.size();
+  for (const std::uint64_t forged : {std::uint64_t{1} << 40, std::uint64_t{file - 4160},
+                                     std::uint64_t{file}, ~std::uint64_t{0}, std::uint64_t{0}}) {
+    peer.Put64(ShmLayout::kRequestCapacity, forged);
+    peer.Put64(ShmLayout::kReplyCapacity, forged);
+    EXPECT_EQ(server.request_capacity(), 4096u);
+    EXPECT_EQ(server.reply_capacity(), 8192u);
+    client.SendRequest(Bytes("ping"));
+    const auto request = server.TakeRequest();
+    ASSERT_TRUE(request.has_value()) << forged;
+    EXPECT_EQ(std::string(request->begin(), request->end()), "ping");
+    EXPECT_FALSE(server.WriteReply(std::vector<std::uint8_t>(8193)));
+    ASSERT_TRUE(server.WriteReply(std::vector<std::uint8_t>(8192, 'r'))) << forged;
+    const auto reply = client.WaitReply(1s, 0us);
+    EXPECT_EQ(reply.size(), 8192u);
+    // The reply is where the server put it when it made the channel, not beyond.
+    EXPECT_EQ(peer.base()[ShmLayout::kHeaderBytes + 4096], 'r');
+  }
+  // A length beyond the server's own capacity is a bad request, whatever the header claims.
+  peer.Put64(ShmLayout::kRequestCapacity, std::uint64_t{1} << 40);
+  peer.Put64(ShmLayout::kRequestLen, 4097);
+  peer.Put32(ShmLayout::kRequestSeq, 999);
+  bool bad = false;
+  EXPECT_FALSE(server.TakeRequest(&bad).has_value());
+  EXPECT_TRUE(bad);
+}
+
+// The request the server decodes is its own copy: rewriting the slot afterwards changes nothing.
+TEST_F(ShmChannelTest, TheServerDecodesItsOwnCopyOfARequest) {
+  ShmWakeSocket wake;
+  ShmChannel server = ShmChannel::Create(NewPath(), 4096, 4096, wake.name());
+  ShmChannel client = ShmChannel::Attach(server.path(), server.generation());
+  HostileView peer(server.path());
+  client.SendRequest(Bytes("abcd"));
+  const auto request = server.TakeRequest();
+  ASSERT_TRUE(request.has_value());
+  std::memcpy(peer.base() + ShmLayout::kHeaderBytes, "wxyz", 4);
+  EXPECT_EQ(std::string(request->begin(), request->end()), "abcd");
+}
+
+// A second client whose attach is refused leaves the channel alone (it used to mark the client
+// closed on its way out, so the server dropped the client that had attached).
+TEST_F(ShmChannelTest, ARefusedSecondAttachDoesNotCloseTheFirstClient) {
+  ShmWakeSocket wake;
+  ShmChannel server = ShmChannel::Create(NewPath(), 4096, 4096, wake.name());
+  ShmChannel client = ShmChannel::Attach(server.path(), server.generation());
+  EXPECT_THROW(ShmChannel::Attach(server.path(), server.generation()), ShmError);
+  EXPECT_FALSE(server.PeerGone());
 }
 
 }  // namespace

@@ -8,6 +8,8 @@ ephemeral ports, Python clients in their own processes), killed with SIGKILL on 
    file of the server's is left in /dev/shm.
 2. A client waits for a long step when the server is killed: it gets ShmError (the server died),
    not a timeout, and nothing is left in /dev/shm.
+4. (Issue 38, case 8) A second client attaching to a channel already attached gets ShmError
+   (not AttributeError), and the first client's channel stays open.
 3. A server stopped with SIGINT removes the file of an offer not taken; one killed with SIGKILL
    leaves it, and the next server removes it when it starts.
 First, the Python client's wait policy (urlab_client.shm.spin_budget) against the C++ one's
@@ -29,7 +31,8 @@ sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 import msgpack  # noqa: E402
 import zmq  # noqa: E402
 from urlab_client import StepClient  # noqa: E402
-from urlab_client.shm import ShmError, available, spare_core, spin_budget  # noqa: E402
+from urlab_client.shm import (ShmChannel, ShmError, available, spare_core,  # noqa: E402
+                              spin_budget)
 from urlab_process import arm_scene, fail, start_urlab  # noqa: E402
 
 CLIENT = r"""
@@ -106,6 +109,29 @@ def main():
         fail("the rollouts over shared memory and ZeroMQ differ", proc)
     print("the same 200-request rollout over shared memory and over ZeroMQ")
 
+    # 4. A second attach to a channel in use.
+    z = zmq.Context.instance().socket(zmq.REQ)
+    z.setsockopt(zmq.LINGER, 0)
+    z.setsockopt(zmq.RCVTIMEO, 20000)
+    z.connect(rpc)
+    z.send(msgpack.packb({"op": "hello", "shm": True}))
+    offer = msgpack.unpackb(z.recv())["shm"]
+    first = ShmChannel(offer["path"], offer["generation"])
+    try:
+        ShmChannel(offer["path"], offer["generation"])
+        fail("a second attach to one channel succeeded", proc)
+    except ShmError as e:
+        if "another client attached already" not in str(e):
+            fail(f"a second attach: {e}", proc)
+    except Exception as e:  # noqa: BLE001
+        fail(f"a second attach raised {type(e).__name__}: {e}, not ShmError", proc)
+    time.sleep(0.6)  # past the server's sweep (200 ms)
+    if first.server_gone():
+        fail("the refused second attach closed the first client's channel", proc)
+    first.close()
+    z.close()
+    print("a second attach: ShmError, the first client's channel stays open")
+
     # 1. A killed client.
     client = subprocess.Popen([sys.executable, "-c", CLIENT, os.path.join(SOURCE, "clients",
                                                                           "python"), rpc],
@@ -128,8 +154,10 @@ def main():
         fail("the log does not say the shared-memory client went away:\n" + log)
     print("killed client: noticed, lease freed, no files left")
 
-    # 2. A killed server while a client waits on the channel.
-    proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
+    # 2. A killed server while a client waits on the channel (--duration counts the client's
+    # steps too: room for the 100,000-step requests below).
+    proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"),
+                                  duration=36000)
     c = StepClient(endpoints[3], timeout=120.0)
     if c.transport != "shm":
         fail(f"transport {c.transport}", proc)

@@ -17,6 +17,7 @@
 #include "support/step_server_fixture.h"
 #include "support/wait.h"
 #include "urlab/replay/recorder.h"
+#include "wire/shm_channel.h"
 
 // A namespace of their own: their plain nlohmann::json alias must not meet net::Json (the
 // ordered one) where a unity build puts several test files in one translation unit.
@@ -78,6 +79,7 @@ struct PlayOptions {
   bool recorder = false;
   std::size_t max_queued_steps = 100000;
   std::string state = "tcp://127.0.0.1:*", rpc = "tcp://127.0.0.1:*";
+  std::string shm_dir;  // "": /dev/shm
 };
 
 class StepServerHardeningTest : public urlab::testing::ServedSessionTest {
@@ -108,6 +110,7 @@ class StepServerHardeningTest : public urlab::testing::ServedSessionTest {
     o.rpc = p.rpc;
     o.files_dir = p.files_dir.empty() ? files_ : p.files_dir;
     o.max_queued_steps = p.max_queued_steps;
+    o.shm_dir = p.shm_dir;
     Serve("control_source: network\narticulations:\n  - {name: bot, mjcf: " + p.mjcf + "}\n", o,
           [&](NetworkSubsystem& net) { net.SetRecorder(recorder); });
   }
@@ -263,6 +266,92 @@ TEST_F(StepServerHardeningTest, OutOfRangeValuesAreRefusedWhole) {
   EXPECT_EQ(c.Op("step", {{"qpos", {0, 0, 1, 0, 0, 0, 0, 0}}})["code"], "bad_value");
   EXPECT_EQ(c.Op("forward")["time"], after["time"]);
   EXPECT_EQ(c.Op("step", {{"time", 3.5}})["time"], 3.5);
+}
+
+// Issue 38, case 8: a session forgotten to make room for a later hello (64 sessions at most)
+// takes its shared-memory channel with it. The channels used to stay open at the cap, so no
+// client was offered shared memory again.
+TEST_F(StepServerHardeningTest, ChannelsOfEvictedSessionsAreReleased) {
+  const std::string shm_dir = dir_ + "/shm";
+  fs::create_directories(shm_dir);
+  Play({.shm_dir = shm_dir});
+  std::vector<std::unique_ptr<Client>> clients;
+  std::vector<wire::ShmChannel> channels;
+  for (int i = 0; i < 70; ++i) {
+    clients.push_back(std::make_unique<Client>(ctx_, rpc()));
+    const Json r = clients.back()->Hello({{"shm", true}});
+    ASSERT_EQ(r["op"], "hello_ok") << r.dump();
+    ASSERT_TRUE(r.contains("shm")) << "hello " << i << " got no shared-memory channel";
+    channels.push_back(
+        wire::ShmChannel::Attach(r["shm"]["path"], r["shm"]["generation"].get<std::uint64_t>()));
+  }
+  // The first six sessions were forgotten: their channels are closed by the server.
+  for (int i = 0; i < 6; ++i) EXPECT_TRUE(channels[i].PeerGone()) << i;
+  EXPECT_FALSE(channels.back().PeerGone());
+}
+
+// Issue 38, case 2: a randomised reset's ranges are checked when the request is parsed (a
+// negative mass, armature or damping, gravity 1e308 used to get reset_ok and stop the run).
+TEST_F(StepServerHardeningTest, RandomisationRangesAreCheckedInTheRequest) {
+  Play({.mode = "direct"});
+  Client c(ctx_, rpc());
+  c.Hello();
+  const auto refused = [&](const Json& randomize, const std::string& field,
+                           const std::string& range) {
+    const Json r = c.Op("reset", {{"seed", 1}, {"randomize", randomize}});
+    EXPECT_EQ(r["code"], "bad_value") << randomize.dump() << " -> " << r.dump();
+    const std::string m = r.value("message", "");
+    EXPECT_NE(m.find(field), std::string::npos) << m;
+    EXPECT_NE(m.find(range), std::string::npos) << m;
+  };
+  refused({{"bot", {{"mass", {{"uniform", {-2, -1}}}}}}}, "randomize.bot.mass", "[0.001, 1000]");
+  refused({{"bot", {{"armature", {{"uniform", {-5, -1}}}}}}}, "randomize.bot.armature",
+          "[0, 1000]");
+  refused({{"bot", {{"damping", {{"normal", {-3, 1}}}}}}}, "randomize.bot.damping", "[0, 1000]");
+  refused({{"gravity", {{"z", {{"uniform", {1e308, 1e308}}}}}}}, "randomize.gravity.z",
+          "[-100, 100]");
+  const Json ok =
+      c.Op("reset", {{"seed", 1}, {"randomize", {{"bot", {{"mass", {{"uniform", {0.5, 2}}}}}}}}});
+  EXPECT_EQ(ok["op"], "reset_ok") << ok.dump();
+}
+
+// Issue 38, case 3: a latency setting whose ticks would size a huge buffer (rate_hz 1e-5 took
+// 1.6 GB; 1e-6: std::bad_alloc) is refused naming the channel, the field and the limit.
+TEST_F(StepServerHardeningTest, LatencySettingsAreBounded) {
+  Play({.mode = "direct"});
+  Client c(ctx_, rpc());
+  c.Hello();
+  // One value every 1,500,000 steps at 2 ms: 64 MB of control slots before the bound.
+  Json r = c.Op("set_latency", {{"articulation", "bot"}, {"control", {{"rate_hz", 1.0 / 3000}}}});
+  EXPECT_EQ(r["code"], "bad_value") << r.dump();
+  std::string m = r.value("message", "");
+  EXPECT_NE(m.find("control"), std::string::npos) << m;
+  EXPECT_NE(m.find("rate_hz"), std::string::npos) << m;
+  EXPECT_NE(m.find("at most 1000000 steps"), std::string::npos) << m;
+  r = c.Op("set_latency", {{"articulation", "bot"},
+                           {"observation", {{"delay_steps", 600000}, {"jitter_steps", 600000}}}});
+  EXPECT_EQ(r["code"], "bad_value") << r.dump();
+  EXPECT_NE(r.value("message", "").find("observation"), std::string::npos) << r.dump();
+  r = c.Op("set_latency", {{"articulation", "bot"}, {"control", {{"rate_hz", 50}}}});
+  EXPECT_EQ(r["op"], "set_latency_ok") << r.dump();
+}
+
+// Issue 38, case 9: `arrays` in hello is "binary" or "list"; anything else (a 2026 hello with
+// "hex" was accepted as lists) is bad_value naming the field.
+TEST_F(StepServerHardeningTest, HelloArraysIsBinaryOrList) {
+  Play();
+  for (const Json& hello :
+       {Json{{"arrays", "hex"}}, Json{{"arrays", "hex"}, {"client_version", "urlab_bridge/1.0"}}}) {
+    Client c(ctx_, rpc());
+    const Json r = c.Hello(hello);
+    EXPECT_EQ(r["code"], "bad_value") << r.dump();
+    EXPECT_NE(r.value("message", "").find("arrays"), std::string::npos) << r.dump();
+    EXPECT_NE(r.value("message", "").find("binary or list"), std::string::npos) << r.dump();
+  }
+  for (const char* arrays : {"binary", "list"}) {
+    Client c(ctx_, rpc());
+    EXPECT_EQ(c.Hello({{"arrays", arrays}})["op"], "hello_ok") << arrays;
+  }
 }
 
 // Issue case 3: clients name files, never paths; only under the files folder; never over an

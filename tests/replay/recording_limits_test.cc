@@ -171,5 +171,54 @@ TEST(RecordingLimitsTest, MemoryFollowsTheBytesZstdProducesNotTheDeclaredSize) {
   static_assert(format::kDataChunkFlushBytes * 2 <= format::kMaxDataChunkRawBytes);
 }
 
+// Issue 38, case 9: a data chunk whose header claims 0xFFFFFFFF frames (with a checksum to
+// match) was reported as 4,294,968,295 steps by `replay --info`, exit 0. A chunk cannot hold
+// more frames than bytes, and the frames it holds must be the number it declares: the reader
+// stops before it (strict: an error naming the chunk), and `replay --info` exits 1.
+TEST(RecordingLimitsTest, AChunkClaimingMoreFramesThanItHoldsIsDamaged) {
+  const std::string dir = testing::MakeTempDir("limits_frames");
+  const std::string seed =
+      testing::ReadTextFile(URLAB_SOURCE_DIR "/fuzz/corpus/fuzz_recording/zstd_keyframes.urrec");
+  // The first data chunk (after the header chunk), its frame count forged, its CRC recomputed.
+  std::size_t offset = format::kFileHeaderSize;
+  std::string forged;
+  std::uint64_t real_frames = 0;
+  for (int chunk = 0; offset < seed.size(); ++chunk) {
+    format::ChunkHeader h;
+    ASSERT_TRUE(format::DecodeChunkHeader(
+        std::span(reinterpret_cast<const std::uint8_t*>(seed.data()) + offset,
+                  format::kChunkHeaderSize),
+        &h));
+    const std::size_t size = format::kChunkHeaderSize + h.stored_size;
+    if (h.kind == format::ChunkKind::kData) real_frames += h.frames;
+    if (chunk == 1) {
+      ASSERT_EQ(h.kind, format::ChunkKind::kData);
+      const std::string stored = seed.substr(offset + format::kChunkHeaderSize, h.stored_size);
+      h.frames = 0xFFFFFFFFu;
+      forged = seed.substr(0, offset) + format::EncodeChunk(h, stored) + seed.substr(offset + size);
+    }
+    offset += size;
+  }
+  ASSERT_FALSE(forged.empty());
+  ASSERT_GT(real_frames, 0u);
+  const std::string path = dir + "/forged.urrec";
+  std::ofstream(path, std::ios::binary) << forged;
+  try {
+    (void)RecordingReader::Open(path);
+    FAIL() << "opened";
+  } catch (const RecordingError& e) {
+    EXPECT_EQ(e.reason(), RecordingError::Reason::kCorrupt);
+    EXPECT_NE(std::string(e.what()).find("4294967295 frames"), std::string::npos) << e.what();
+  }
+  const RecordingReader partial = RecordingReader::Open(path, {true});
+  EXPECT_LT(partial.frame_count(), real_frames);
+  EXPECT_NE(partial.problem().find("frames"), std::string::npos) << partial.problem();
+  std::string log;
+  EXPECT_EQ(testing::RunCommand(testing::UrlabBinary() + " replay " + path + " --info", &log), 1)
+      << log;
+  EXPECT_EQ(log.find("4294968"), std::string::npos) << log;
+  EXPECT_NE(log.find("4294967295 frames"), std::string::npos) << log;
+}
+
 }  // namespace
 }  // namespace urlab::replay

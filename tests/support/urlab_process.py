@@ -97,10 +97,11 @@ def fail(message, proc=None):
     sys.exit(1)
 
 
-def start_urlab(urlab, scene, *extra, timeout=30):
-    """Runs `urlab run SCENE --duration 60 EXTRA...`; returns (process, (state, control, info,
-    rpc)) once its log names the bound endpoints."""
-    proc = subprocess.Popen([urlab, "run", scene, "--duration", "60", *extra],
+def start_urlab(urlab, scene, *extra, timeout=30, duration=60):
+    """Runs `urlab run SCENE --duration DURATION EXTRA...` (simulated seconds: exactly that many
+    steps, a client's lockstep steps included); returns (process, (state, control, info, rpc))
+    once its log names the bound endpoints."""
+    proc = subprocess.Popen([urlab, "run", scene, "--duration", str(duration), *extra],
                             stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:

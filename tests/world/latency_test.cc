@@ -3,6 +3,8 @@
 // (the network's) reads is the true state k steps earlier while the recorder's subscription sees
 // the true state; jitter stays within its bounds and never reorders; the same seed gives the
 // same trajectory; the scene's `latency:` section is parsed and checked with file:line.
+#include "urlab/physics/latency.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,6 +14,7 @@
 
 #include "mujoco_test.h"
 #include "urlab/core/error.h"
+#include "urlab/world/scene.h"
 #include "urlab/world/scene_file.h"
 #include "urlab/world/session.h"
 
@@ -189,6 +192,45 @@ TEST_F(LatencyTest, BadLatencySectionsNameTheirLine) {
   fails("    latency:\n      actuators: {}\n", "unknown key 'actuators'");
   fails("    latency: 3\n", "mapping");
   fails("    latency:\n      cameras: {eye: {delay: 0.1}}\n", "unknown key 'cameras'");
+}
+
+// Issue 38, case 3: a latency's ticks (delay + jitter + the rate cap's interval) size a buffer,
+// so they are bounded: a tiny rate_hz (1e-5 Hz held values for 50,000,000 steps, 1.6 GB) or a
+// delay in seconds over a tiny timestep is refused by validate and by the session, naming the
+// articulation, the channel, the fields and the limit; resolving never overflows an int.
+TEST_F(LatencyTest, LatencyTicksAreBounded) {
+  const auto refused = [&](const std::string& extra, const std::string& field,
+                           const std::string& top = "") {
+    testing::WriteTextFile(dir_, "bounded.yaml",
+                           top + "articulations:\n  - name: arm\n    mjcf: arm.xml\n" + extra);
+    const world::ValidationReport r = world::Validate(dir_ + "/bounded.yaml");
+    EXPECT_FALSE(r.ok()) << extra;
+    std::string all;
+    for (const auto& d : r.diagnostics.all()) all += d.where.str() + ": " + d.message + "\n";
+    EXPECT_NE(all.find("bounded.yaml:"), std::string::npos) << all;
+    EXPECT_NE(all.find("arm.latency." + field), std::string::npos) << all;
+    EXPECT_NE(all.find("1000000 steps"), std::string::npos) << all;
+  };
+  refused("    latency:\n      observation: {rate_hz: 0.00001}\n", "observation");
+  refused("    latency:\n      control: {rate_hz: 1e-12}\n", "control");
+  refused("    latency:\n      control: {delay_steps: 600000, jitter_steps: 600000}\n", "control");
+  // Within the limit: fine (delay 1000000 steps alone would be too, with nothing beside it).
+  testing::WriteTextFile(dir_, "fine.yaml",
+                         "articulations:\n  - name: arm\n    mjcf: arm.xml\n    latency:\n"
+                         "      observation: {rate_hz: 1, delay_steps: 5}\n");
+  EXPECT_TRUE(world::Validate(dir_ + "/fine.yaml").ok());
+
+  // ResolveLatency saturates instead of overflowing (a caller that did not check).
+  physics::LatencySetting tiny;
+  ASSERT_EQ(physics::SetLatencyKey(&tiny, "rate_hz", 1e-12), "");
+  const physics::DelaySpec spec = physics::ResolveLatency(tiny, 0.002, 1);
+  EXPECT_GT(spec.min_interval, 1);
+  EXPECT_LE(spec.min_interval, 1000000);  // physics::kMaxLatencySteps
+  physics::LatencySetting long_delay;
+  ASSERT_EQ(physics::SetLatencyKey(&long_delay, "delay", 60), "");
+  const physics::DelaySpec d = physics::ResolveLatency(long_delay, 1e-12, 1);
+  EXPECT_GT(d.delay, 0);
+  EXPECT_LE(d.delay, 1000000);
 }
 
 }  // namespace

@@ -294,5 +294,63 @@ TEST_F(RandomizeTest, BadSectionsNameTheirLine) {
   fails("randomize:\n  gravity:\n    w: {uniform: [0, 1]}\n", "unknown key 'w'");
 }
 
+// Issue 38, case 2: every drawn parameter has a range, checked where the section is parsed
+// (negative or zero masses, negative damping, armature, gains or noise, gravity 1e308 used to
+// pass validate and make the run diverge).
+TEST_F(RandomizeTest, EveryParameterHasARangeCheckedWhereParsed) {
+  const auto fails = [&](const std::string& randomize, const std::string& field,
+                         const std::string& range) {
+    try {
+      Scene(randomize);
+      ADD_FAILURE() << "accepted: " << randomize;
+    } catch (const InputError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("scene.yaml:"), std::string::npos) << m;
+      EXPECT_NE(m.find(field), std::string::npos) << m;
+      EXPECT_NE(m.find(range), std::string::npos) << m;
+    }
+  };
+  fails("randomize:\n  arm:\n    mass: {uniform: [-2, -1]}\n", "randomize.arm.mass",
+        "[0.001, 1000]");
+  fails("randomize:\n  arm:\n    mass: {uniform: [0, 0]}\n", "randomize.arm.mass", "[0.001, 1000]");
+  fails("randomize:\n  arm:\n    armature: {uniform: [-1, 1]}\n", "randomize.arm.armature",
+        "[0, 1000]");
+  fails("randomize:\n  arm:\n    damping: {normal: [-1, 0.1]}\n", "randomize.arm.damping",
+        "[0, 1000]");
+  fails("randomize:\n  arm:\n    kp: {uniform: [-1, 1]}\n", "randomize.arm.kp", "[0, 100]");
+  fails("randomize:\n  arm:\n    obs_noise: {uniform: [0, 1e300]}\n", "randomize.arm.obs_noise",
+        "[0, 10]");
+  fails("randomize:\n  arm:\n    qpos_noise: {normal: [0, 1e300]}\n", "randomize.arm.qpos_noise",
+        "[-10, 10]");
+  fails("randomize:\n  gravity:\n    z: {uniform: [0, 1e308]}\n", "randomize.gravity.z",
+        "[-100, 100]");
+  fails("randomize:\n  arm:\n    friction: {log_uniform: [1, 1e9]}\n", "randomize.arm.friction",
+        "[0, 100]");
+  // The edges are fine.
+  EXPECT_NO_THROW(
+      Scene("randomize:\n  arm:\n    mass: {uniform: [0.001, 1000]}\n"
+            "    damping: {uniform: [0, 1000]}\n"));
+  // The C++ interface refuses them too (a config that never went through a parser).
+  auto s = world::Session::Create(Scene(""));
+  world::RandomizeConfig c;
+  c.targets["arm"]["mass"] = {world::Distribution::kUniform, -2, -1};
+  try {
+    s->ResetRandomized(1, &c);
+    ADD_FAILURE() << "a negative mass was drawn";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("[0.001, 1000]"), std::string::npos) << e.what();
+  }
+}
+
+// A normal distribution's tails are cut at the parameter's range: a draw never leaves it.
+TEST_F(RandomizeTest, NormalDrawsStayInTheParametersRange) {
+  auto s = world::Session::Create(Scene("randomize:\n  arm:\n    mass: {normal: [0.01, 5]}\n"));
+  for (int i = 0; i < 200; ++i) {
+    const double mass = s->ResetRandomized(std::nullopt).draws.targets.at("arm").at("mass");
+    EXPECT_GE(mass, 0.001);
+    EXPECT_LE(mass, 1000);
+  }
+}
+
 }  // namespace
 }  // namespace urlab

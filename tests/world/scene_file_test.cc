@@ -134,6 +134,17 @@ TEST_F(SceneFileTest, BadInputIsRefusedAtItsLine) {
     testing::ExpectSceneRefusedAt(c.yaml, dir_ + "/s.yaml", c.line, c.message);
 }
 
+// Issue 38, case 9: a scene's seed is a whole number a double holds exactly, as the step
+// server's and the batch's seeds (2^53 was accepted here and refused there).
+TEST_F(SceneFileTest, TheSeedHasTheServersRange) {
+  testing::ExpectSceneRefusedAt(WithArm("seed: 9007199254740992\n"), dir_ + "/s.yaml", 4,
+                                "seed must be 0 to 9007199254740991");
+  testing::ExpectSceneRefusedAt(WithArm("seed: 18446744073709551616\n"), dir_ + "/s.yaml", 4,
+                                "seed must be 0 to 9007199254740991");
+  EXPECT_EQ(world::ParseScene(WithArm("seed: 9007199254740991\n"), dir_ + "/s.yaml").seed,
+            9007199254740991ull);
+}
+
 // The subsystems' sections are parsed by the modules above world once a program registers them
 // (the `urlab` tool registers all); a program that did not is told which registration is missing.
 TEST_F(SceneFileTest, AnUnregisteredSubsystemSectionNamesItsRegistration) {

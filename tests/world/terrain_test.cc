@@ -142,5 +142,62 @@ TEST_F(TerrainTest, BadEntriesNameTheLine) {
             std::string::npos);
 }
 
+// A PNG chunk: length, type, data, CRC-32 (computed here bit by bit).
+std::string PngChunk(const std::string& type, const std::string& data) {
+  auto be32 = [](std::uint32_t v) {
+    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16),
+                       static_cast<char>(v >> 8), static_cast<char>(v)};
+  };
+  std::uint32_t crc = 0xFFFFFFFFu;
+  for (const char c : type + data) {
+    crc ^= static_cast<std::uint8_t>(c);
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  return be32(static_cast<std::uint32_t>(data.size())) + type + data + be32(~crc);
+}
+
+// An 8-bit grey PNG of `width` x `height` whose IDAT is `idat` (a zlib stream).
+std::string Png(std::uint32_t width, std::uint32_t height, const std::string& idat) {
+  auto be32 = [](std::uint32_t v) {
+    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16),
+                       static_cast<char>(v >> 8), static_cast<char>(v)};
+  };
+  return std::string("\x89PNG\r\n\x1a\n", 8) +
+         PngChunk("IHDR", be32(width) + be32(height) + std::string("\x08\x00\x00\x00\x00", 5)) +
+         PngChunk("IDAT", idat) + PngChunk("IEND", "");
+}
+
+// Issue 38, case 9: a PNG height map MuJoCo cannot decode (not a PNG; image data of the wrong
+// size) was MuJoCo's error on the composed model's line, with no line of the scene file in its
+// first line. It is checked when the terrain is built: the entry's line, the file, the reason.
+TEST_F(TerrainTest, BadPngHeightMapsNameTheEntrysLine) {
+  auto error_of = [&](const std::string& png_bytes) {
+    std::ofstream(dir_ + "/map.png", std::ios::binary) << png_bytes;
+    try {
+      (void)world::BuildScene(
+          Scene("articulations:\n  - {name: ball, mjcf: ball.xml}\n"
+                "terrain:\n  - {name: g, png: map.png, size: [1, 1, 0.2, "
+                "0.1]}\n"));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  // zlib's stored block of 3 bytes (one filter byte and two pixels): a valid 2 x 1 image.
+  const std::string stored2x1("\x78\x01\x01\x03\x00\xfc\xff\x00\x10\x20\x00\x43\x00\x31", 14);
+  EXPECT_EQ(error_of(Png(2, 1, stored2x1)), "");
+  const std::string prefix = "scene.yaml:4: g: " + dir_ + "/map.png: ";
+  std::string e = error_of("hello, not a png at all");
+  EXPECT_NE(e.find(prefix + "not a PNG"), std::string::npos) << e;
+  e = error_of(Png(100000, 100000, stored2x1));
+  EXPECT_NE(e.find(prefix), std::string::npos) << e;
+  EXPECT_NE(e.find("100000 x 100000"), std::string::npos) << e;
+  e = error_of(Png(3, 1, stored2x1));  // 3 pixels wide, 2 pixels of data
+  EXPECT_NE(e.find(prefix), std::string::npos) << e;
+  EXPECT_NE(e.find("image data"), std::string::npos) << e;
+  e = error_of(Png(2, 1, stored2x1).substr(0, 40));
+  EXPECT_NE(e.find(prefix), std::string::npos) << e;
+}
+
 }  // namespace
 }  // namespace urlab

@@ -33,6 +33,25 @@ _F8 = np.dtype("<f8")
 _U4 = np.dtype("<u4")
 _NAME = "liburlab_batch.so"
 
+# Every integer is checked here, before ctypes (which wraps what does not fit: 2**32 + 1
+# environments would be one, seed 2**64 would be 0). The limits are the library's and the step
+# server's: seeds are whole numbers a double holds exactly, n_steps at most 100,000 a call.
+_INT_MAX = 2 ** 31 - 1
+MAX_SEED = 2 ** 53 - 1
+MAX_N_STEPS = 100000
+LOG_LEVELS = ("trace", "debug", "info", "warn", "error", "off")
+
+
+def _whole(name, value, low, high):
+    """`value` as an int in [low, high]; ValueError naming `name` and the range otherwise
+    (floats, bools and strings are not whole numbers here)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name}: {value!r} is not a whole number in [{low}, {high}]")
+    v = int(value)
+    if not low <= v <= high:
+        raise ValueError(f"{name}: {v} is not a whole number in [{low}, {high}]")
+    return v
+
 
 class _Options(ctypes.Structure):
     _fields_ = [("envs", ctypes.c_int), ("threads", ctypes.c_int), ("auto_reset", ctypes.c_int),
@@ -127,18 +146,24 @@ class InProcessBatch(BatchCalls):
 
     def __init__(self, scene, envs=1, threads=0, seed=None, max_episode_steps=0, reset_noise=0.0,
                  auto_reset=True, n_steps=1, library=None, log_level="warn"):
-        if int(envs) < 1:
-            raise ValueError(f"num_envs must be at least 1 (got {envs})")
-        if seed is not None and int(seed) < 0:
-            raise ValueError(f"seed: {seed} is not a whole number of 0 or more")
+        envs = _whole("envs", envs, 1, _INT_MAX)
+        threads = _whole("threads", threads, 0, _INT_MAX)
+        if seed is not None:
+            seed = _whole("seed", seed, 0, MAX_SEED)
+        max_episode_steps = _whole("max_episode_steps", max_episode_steps, 0, _INT_MAX)
+        n_steps = _whole("n_steps", n_steps, 1, MAX_N_STEPS)
+        reset_noise = float(reset_noise)
+        if not np.isfinite(reset_noise) or reset_noise < 0:
+            raise ValueError(f"reset_noise: {reset_noise} is not a finite number >= 0")
+        if log_level not in LOG_LEVELS:
+            raise ValueError(f"log_level: {log_level!r} is not one of {', '.join(LOG_LEVELS)}")
         self._lib = load_library(library)
         self._lock = threading.Lock()  # calls from several threads take turns
         self.endpoint = "in-process:" + str(scene)
         self.transport = "in-process"
-        self.n_steps = int(n_steps)
-        options = _Options(int(envs), int(threads), 1 if auto_reset else 0,
-                           int(max_episode_steps), float(reset_noise), seed is not None,
-                           int(seed or 0), log_level.encode())
+        self.n_steps = n_steps
+        options = _Options(envs, threads, 1 if auto_reset else 0, max_episode_steps, reset_noise,
+                           seed is not None, seed or 0, log_level.encode())
         self._error = ctypes.create_string_buffer(4096)
         handle = self._lib.urlab_batch_open(os.fsencode(scene), ctypes.byref(options),
                                             self._error, len(self._error))
@@ -229,7 +254,11 @@ class InProcessBatch(BatchCalls):
         if auto_reset is not None:
             self._lib.urlab_batch_set_auto_reset(self._handle, 1 if auto_reset else 0)
             self.info["auto_reset"] = bool(auto_reset)
-        listed = None if envs is None else np.ascontiguousarray(envs, dtype=np.intc)
+        listed = None
+        if envs is not None:
+            indices = [_whole("envs", e, 0, self.envs - 1) for e in np.ravel(np.asarray(
+                envs, dtype=object))]
+            listed = np.ascontiguousarray(indices, dtype=np.intc)
         count = 0 if listed is None else listed.size
         if listed is not None and count == 0:
             raise ValueError("reset: an empty list of environments")
@@ -239,9 +268,7 @@ class InProcessBatch(BatchCalls):
             seeds = list(seeds)
             if len(seeds) != k:
                 raise ValueError(f"{len(seeds)} seeds for {k} environments")
-            for s in seeds:
-                if s is not None and int(s) < 0:
-                    raise ValueError(f"seeds: {s} is not a whole number of 0 or more")
+            seeds = [None if s is None else _whole("seeds", s, 0, MAX_SEED) for s in seeds]
             has = np.array([s is not None for s in seeds], dtype=np.uint8)
             seed_values = np.array([0 if s is None else int(s) for s in seeds], dtype=np.uint64)
         arrays = self._fresh()

@@ -108,10 +108,14 @@ class ShmChannel:
     def __init__(self, path, generation):
         if not available():
             raise ShmError("shared memory: this platform is not supported (Linux x86_64 only)")
-        self._fd = os.open(path, os.O_RDWR | os.O_CLOEXEC | os.O_NOFOLLOW)
+        try:
+            self._fd = os.open(path, os.O_RDWR | os.O_CLOEXEC | os.O_NOFOLLOW)
+        except OSError as e:
+            raise ShmError(f"shared memory {path}: cannot open: {e.strerror}") from None
         self._mm = None
         self._words = []
         self._wake = None
+        self._attached_here = False  # only an attached client marks the channel closed
         try:
             self._attach(path, generation)
         except BaseException:
@@ -144,7 +148,10 @@ class ShmChannel:
         self._attached = word(ctypes.c_uint32, _CLIENT_ATTACHED)
         if self._attached.value != 0:
             raise ShmError(f"shared memory {path}: another client attached already")
-        fcntl.fcntl(self._fd, _F_OFD_SETLK, _flock(_F_WRLCK, 1))
+        try:
+            fcntl.fcntl(self._fd, _F_OFD_SETLK, _flock(_F_WRLCK, 1))
+        except OSError:
+            raise ShmError(f"shared memory {path}: another client attached already") from None
         self._server_closed = word(ctypes.c_uint32, _SERVER_CLOSED)
         self._client_closed = word(ctypes.c_uint32, _CLIENT_CLOSED)
         self._sleeping = word(ctypes.c_uint32, _SERVER_SLEEPING)
@@ -168,6 +175,7 @@ class ShmChannel:
         self.path = path
         struct.pack_into("<I", mm, _CLIENT_PID, os.getpid())
         self._attached.value = 1
+        self._attached_here = True
 
     def _keep(self, w):
         self._words.append(w)
@@ -285,8 +293,10 @@ class ShmChannel:
 
     def close(self):
         """Tells the server this side is closed and unmaps the file."""
-        if self._mm is not None and self._words:
+        if self._mm is not None and self._attached_here:
+            # (A refused attach leaves the header alone: the channel is another client's.)
             self._client_closed.value = 1
+            self._attached_here = False
         if getattr(self, "_view", None) is not None:
             self._view.release()
             self._view = None

@@ -35,51 +35,187 @@ import sys
 import time
 
 
+MAX_SWEEP_BYTES = 1 << 20  # a sweep file is a page of YAML
+MAX_WORKERS = 64          # a LocalCluster's workers (processes on this machine)
+MAX_SECONDS = 86400.0     # duration and timeout: a day at most
+MAX_SEED = 2 ** 53 - 1    # seeds are whole numbers a double holds exactly (as the server's)
+NAME = re.compile(r"[A-Za-z0-9_.-]+")
+ARTICULATION = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]*")
+
+
+class SweepError(ValueError):
+    """A bad sweep file: the message names the file, the line and the field."""
+
+
+def _read_text(path):
+    """The sweep file's text: a regular file (a FIFO or device is refused before it is opened,
+    so nothing waits on it), at most MAX_SWEEP_BYTES, UTF-8 text."""
+    import stat
+    st = os.stat(path)
+    if not stat.S_ISREG(st.st_mode):
+        raise SweepError(f"{path}: not a regular file (a sweep file is a YAML text file)")
+    if st.st_size > MAX_SWEEP_BYTES:
+        raise SweepError(f"{path}: {st.st_size} bytes; a sweep file is at most "
+                         f"{MAX_SWEEP_BYTES} bytes of YAML")
+    with open(path, "rb") as f:
+        data = f.read(MAX_SWEEP_BYTES + 1)
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise SweepError(f"{path}: not a text file (not UTF-8 at byte {e.start})") from None
+    if "\0" in text:
+        raise SweepError(f"{path}: not a text file (a NUL byte at {text.index(chr(0))})")
+    return text
+
+
 def load_sweep(path):
-    """The sweep file as a dict with absolute paths; ValueError naming the file and the key."""
+    """The sweep file as a dict with absolute paths; SweepError (a ValueError) naming the file,
+    the line and the field, like a scene file's errors."""
+    import math
+
     import yaml
-    with open(path) as f:
-        spec = yaml.safe_load(f) or {}
+    text = _read_text(path)
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark or e.context_mark
+        line = f":{mark.line + 1}" if mark else ""
+        raise SweepError(f"{path}{line}: YAML syntax error: {e.problem or e.context}") from None
+    except yaml.YAMLError as e:
+        raise SweepError(f"{path}: YAML error: {e}") from None
+    except RecursionError:
+        raise SweepError(f"{path}: nested too deeply to be a sweep file") from None
     where = os.path.dirname(os.path.abspath(path))
+    constructor = yaml.constructor.SafeConstructor()
 
-    def need(key, kind):
+    def fail(node, field, message):
+        line = f":{node.start_mark.line + 1}" if node is not None else ""
+        raise SweepError(f"{path}{line}: {field}: {message}")
+
+    def value(node, field):
+        try:
+            return constructor.construct_object(node, deep=True)
+        except yaml.YAMLError as e:
+            fail(node, field, str(e).splitlines()[0])
+        except RecursionError:
+            fail(node, field, "nested too deeply")
+
+    def seq(node, field):
+        if not isinstance(node, yaml.SequenceNode):
+            fail(node, field, "must be a list")
+        return node.value
+
+    def mapping(node, field):
+        if not isinstance(node, yaml.MappingNode):
+            fail(node, field, "must be a mapping (key: value)")
+        out = {}
+        for k, v in node.value:
+            key = value(k, field)
+            if not isinstance(key, str):
+                fail(k, field, f"key {key!r} is not a string")
+            if key in out:
+                fail(k, f"{field}.{key}" if field else key, "given twice")
+            out[key] = v
+        return out
+
+    def string(node, field, pattern=None):
+        v = value(node, field)
+        if not isinstance(v, str) or not v:
+            fail(node, field, f"must be a non-empty string (got {v!r})")
+        if pattern is not None and not pattern.fullmatch(v):
+            fail(node, field, f"'{v}': letters, digits, _ . - only")
+        return v
+
+    def number(node, field, high):
+        v = value(node, field)
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            fail(node, field, f"must be a number of seconds in (0, {high:g}] (got {v!r})")
+        if not (math.isfinite(v) and 0 < v <= high):
+            fail(node, field, f"{v} is not in (0, {high:g}] (seconds)")
+        return float(v)
+
+    def whole(node, field, low, high):
+        v = value(node, field)
+        if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
+            fail(node, field, f"{v!r} is not a whole number in [{low}, {high}]")
+        return v
+
+    if root is None:
+        raise SweepError(f"{path}: empty; 'scenes', 'seeds', 'duration' and 'policies' are "
+                         "required")
+    if not isinstance(root, yaml.MappingNode):
+        fail(root, "the sweep file", "must be a mapping (scenes, seeds, duration, policies...)")
+    spec = mapping(root, "")
+    known = ["scenes", "seeds", "duration", "policies", "articulation", "output", "cluster",
+             "urlab", "timeout"]
+    for key, node in spec.items():
+        if key not in known:
+            fail(node, f"unknown key '{key}'", f"known: {', '.join(known)}")
+    for key in ("scenes", "seeds", "duration", "policies"):
         if key not in spec:
-            raise ValueError(f"{path}: '{key}' is required")
-        if not isinstance(spec[key], kind):
-            raise ValueError(f"{path}: '{key}' must be a {kind.__name__ if isinstance(kind, type) else 'list'}")
-        return spec[key]
+            raise SweepError(f"{path}: '{key}' is required")
 
-    known = {"scenes", "seeds", "duration", "policies", "articulation", "output", "cluster",
-             "urlab", "timeout"}
-    unknown = sorted(set(spec) - known)
-    if unknown:
-        raise ValueError(f"{path}: unknown key(s) {unknown}; known: {sorted(known)}")
-    scenes = [os.path.normpath(os.path.join(where, s)) for s in need("scenes", list)]
-    for s in scenes:
+    scenes, stems = [], {}
+    for i, n in enumerate(seq(spec["scenes"], "scenes")):
+        field = f"scenes[{i}]"
+        s = os.path.normpath(os.path.join(where, string(n, field)))
         if not os.path.isfile(s):
-            raise ValueError(f"{path}: scenes: no file {s}")
-    seeds = need("seeds", list)
-    if not all(isinstance(x, int) for x in seeds):
-        raise ValueError(f"{path}: seeds must be integers")
-    duration = need("duration", (int, float))
-    if not duration > 0:
-        raise ValueError(f"{path}: duration must be > 0 (simulated seconds)")
+            fail(n, field, f"no file {s}")
+        stem = os.path.splitext(os.path.basename(s))[0]
+        if stem in stems:  # cells and recordings are named by it
+            fail(n, field, f"{s}: its name '{stem}' is scenes[{stems[stem]}]'s too (each "
+                           "cell and recording is named after its scene)")
+        stems[stem] = i
+        scenes.append(s)
+    seeds = []
+    for i, n in enumerate(seq(spec["seeds"], "seeds")):
+        seed = whole(n, f"seeds[{i}]", 0, MAX_SEED)
+        if seed in seeds:
+            fail(n, "seeds", f"{seed} given twice")
+        seeds.append(seed)
+    duration = number(spec["duration"], "duration", MAX_SECONDS)
     policies = []
-    for i, p in enumerate(need("policies", list)):
-        if not isinstance(p, dict) or not isinstance(p.get("command"), str):
-            raise ValueError(f"{path}: policies[{i}] needs a 'command' (and a 'name')")
-        name = str(p.get("name", f"policy{i}"))
-        if not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
-            raise ValueError(f"{path}: policies[{i}].name '{name}': letters, digits, _ . - only")
-        policies.append({"name": name, "command": p["command"]})
-    cluster = spec.get("cluster", {"workers": 2})
-    if not isinstance(cluster, dict) or set(cluster) - {"workers", "scheduler"}:
-        raise ValueError(f"{path}: cluster: {{workers: N}} or {{scheduler: ADDRESS}}")
-    return {"scenes": scenes, "seeds": seeds, "duration": float(duration), "policies": policies,
-            "articulation": spec.get("articulation"), "where": where,
-            "output": os.path.normpath(os.path.join(where, spec.get("output", "sweep-out"))),
-            "cluster": cluster,
-            "urlab": spec.get("urlab"), "timeout": float(spec.get("timeout", 600))}
+    for i, n in enumerate(seq(spec["policies"], "policies")):
+        entry = mapping(n, f"policies[{i}]")
+        for key, node in entry.items():
+            if key not in ("name", "command"):
+                fail(node, f"policies[{i}]", f"unknown key '{key}' (name, command)")
+        if "command" not in entry:
+            fail(n, f"policies[{i}]", "needs a 'command' (and a 'name')")
+        command = string(entry["command"], f"policies[{i}].command")
+        name = f"policy{i}"
+        if "name" in entry:
+            name = string(entry["name"], f"policies[{i}].name", NAME)
+        for j, other in enumerate(policies):
+            if other["name"] == name:
+                fail(entry.get("name", n), f"policies[{i}].name",
+                     f"'{name}' is policies[{j}]'s name too (each cell and recording is "
+                     "named after its policy)")
+        policies.append({"name": name, "command": command})
+    articulation = None
+    if "articulation" in spec:
+        articulation = string(spec["articulation"], "articulation", ARTICULATION)
+    output = "sweep-out"
+    if "output" in spec:
+        output = string(spec["output"], "output")
+    output = os.path.normpath(os.path.join(where, output))
+    if os.path.exists(output) and not os.path.isdir(output):
+        fail(spec.get("output"), "output", f"{output} is not a folder (the recordings and "
+                                           "results.csv go in it)")
+    cluster = {"workers": 2}
+    if "cluster" in spec:
+        entries = mapping(spec["cluster"], "cluster")
+        if set(entries) - {"workers", "scheduler"} or len(entries) != 1:
+            fail(spec["cluster"], "cluster", "{workers: N} or {scheduler: ADDRESS}")
+        if "workers" in entries:
+            cluster = {"workers": whole(entries["workers"], "cluster.workers", 1, MAX_WORKERS)}
+        else:
+            cluster = {"scheduler": string(entries["scheduler"], "cluster.scheduler")}
+    urlab = string(spec["urlab"], "urlab") if "urlab" in spec else None
+    timeout = number(spec["timeout"], "timeout", MAX_SECONDS) if "timeout" in spec else 600.0
+    return {"scenes": scenes, "seeds": seeds, "duration": duration, "policies": policies,
+            "articulation": articulation, "where": where, "output": output,
+            "cluster": cluster, "urlab": urlab, "timeout": timeout}
 
 
 def cells(spec):
@@ -182,16 +318,24 @@ def main(argv=None):
     args = p.parse_args(argv)
     try:
         spec = load_sweep(args.sweep)
-    except (OSError, ValueError) as e:
+        if args.workers is not None and not 1 <= args.workers <= MAX_WORKERS:
+            raise SweepError(f"--workers {args.workers}: a whole number in [1, {MAX_WORKERS}]")
+        if args.output:
+            spec["output"] = os.path.abspath(args.output)
+            if os.path.exists(spec["output"]) and not os.path.isdir(spec["output"]):
+                raise SweepError(f"--output {args.output}: not a folder")
+        os.makedirs(spec["output"], exist_ok=True)
+    except OSError as e:
+        print(f"urlab sweep: error: {e.filename or args.sweep}: {e.strerror or e}",
+              file=sys.stderr)
+        return 1
+    except ValueError as e:
         print(f"urlab sweep: error: {e}", file=sys.stderr)
         return 1
-    if args.output:
-        spec["output"] = os.path.abspath(args.output)
     urlab = args.urlab or os.environ.get("URLAB_BINARY") or spec["urlab"] or "urlab"
-    os.makedirs(spec["output"], exist_ok=True)
     import distributed
     cluster = None
-    if args.scheduler or (not args.workers and spec["cluster"].get("scheduler")):
+    if args.scheduler or (args.workers is None and spec["cluster"].get("scheduler")):
         client = distributed.Client(args.scheduler or spec["cluster"]["scheduler"])
     else:
         cluster = distributed.LocalCluster(n_workers=args.workers or spec["cluster"].get("workers", 2),

@@ -48,10 +48,17 @@ struct DecomposeOptions {
   // true the decomposition stops within one unit of work and throws Cancelled. Not part of the
   // result (nor of OptionsKey).
   std::function<bool()> cancelled;
+  // Called with true where the work writes nothing (reading, checking, decomposing) and with
+  // false before it writes a file (the cache, the parts), on the calling thread: a host may let
+  // a stop signal end the process at once in the first (nothing is half-written, and no unit of
+  // work is waited for) and finish the writes first (`urlab convert`). Not part of the result.
+  std::function<void(bool)> interruptible;
 };
 
 // Throws Cancelled when `options.cancelled` says so.
 void ThrowIfCancelled(const DecomposeOptions& options);
+// Calls `options.interruptible(on)` when there is one.
+void Interruptible(const DecomposeOptions& options, bool on);
 
 struct ConvexPart {
   TriMesh hull;          // outward triangles

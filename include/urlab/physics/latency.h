@@ -42,7 +42,16 @@ std::string SetLatencyKey(LatencySetting* setting, std::string_view key, double 
 // The setting as the keys it was given with (for replies): {"delay_steps": 3, ...}.
 std::map<std::string, double> LatencyFields(const LatencySetting& setting);
 
-// Resolves a setting for a model stepping at `timestep` seconds.
+// A delay line holds up to delay + jitter + the rate cap's interval values: at most this many
+// steps in all (a setting beyond it is refused where it meets a timestep: the compiled scene's
+// checks and set_latency).
+inline constexpr int kMaxLatencySteps = 1000000;
+// "" when the setting resolves to at most kMaxLatencySteps steps at `timestep`, else the
+// problem, naming the fields and the limit.
+std::string CheckLatency(const LatencySetting& setting, double timestep);
+
+// Resolves a setting for a model stepping at `timestep` seconds. Each count saturates at
+// kMaxLatencySteps (never an int overflow, whatever the caller checked).
 DelaySpec ResolveLatency(const LatencySetting& setting, double timestep, std::uint64_t seed);
 
 // The channels of one articulation.

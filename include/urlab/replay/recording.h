@@ -179,8 +179,10 @@ class RecordingReader {
   const std::vector<ChunkInfo>& chunks() const { return chunks_; }
   // True when the file ended with its end chunk (a finished recording).
   bool finished() const { return finished_; }
-  // What is wrong with a partial file ("" when nothing is).
+  // What is wrong with a partial file ("" when nothing is), and why the readable prefix ends
+  // (kUnfinished or kTruncated: a recorder that died; kCorrupt: damaged or forged).
   const std::string& problem() const { return problem_; }
+  RecordingError::Reason problem_reason() const { return problem_reason_; }
   std::uint64_t frame_count() const;
   double first_time() const;
   double last_time() const;
@@ -200,6 +202,7 @@ class RecordingReader {
   std::vector<ChunkInfo> chunks_;
   bool finished_ = false;
   std::string problem_;
+  RecordingError::Reason problem_reason_ = RecordingError::Reason::kUnfinished;
   std::uint64_t file_size_ = 0;
 };
 

@@ -32,6 +32,23 @@ std::optional<Distribution> ParseDistribution(std::string_view name);
 const char* DistributionName(Distribution d);
 // A range from its distribution name and two numbers; an error message ("" when valid).
 std::string MakeRange(std::string_view dist, double a, double b, RandomRange* out);
+
+// The values a parameter may take (a key of RandomParams(), or "gravity" for a gravity
+// component): scales of friction, gain, kp, kv in [0, 100]; of mass in [0.001, 1000] (zero or
+// negative masses break the model); of damping, armature, frictionloss in [0, 1000];
+// qpos_noise in [-10, 10]; obs_noise (a standard deviation) in [0, 10]; gravity components
+// (added, m/s^2) in [-100, 100]. Nothing for an unknown key.
+struct ParamLimits {
+  double lo, hi;
+};
+std::optional<ParamLimits> LimitsOf(std::string_view key);
+// "" when every draw of `r` can lie in the limits of `key` (uniform and log_uniform: both ends
+// within; normal: the mean within and std at most the limits' width; its tails are cut, see
+// DrawParam), else the problem, e.g. "uniform [-2, -1] leaves the allowed range [0.001, 1000]".
+// Unknown keys pass (their name is checked elsewhere).
+std::string CheckLimits(std::string_view key, const RandomRange& r);
+// One draw of `r` for `key`, clamped to the key's limits (only a normal's tails can leave them).
+double DrawParam(std::string_view key, const RandomRange& r, std::uint64_t* state);
 // One draw. `state` is a splitmix64 state (physics/delay_line.h).
 double Draw(const RandomRange& r, std::uint64_t* state);
 // The distribution's cumulative distribution function at x.
