@@ -14,7 +14,7 @@ camera streams (numpy images from discovery's camera_list):
     from urlab_client import CameraClient
     image, meta = CameraClient(robots["arm"].cameras[0]).receive()
 
-and the step server (lockstep learning loops), shaped like gymnasium (without requiring it):
+and the step server (lockstep learning loops) as gymnasium environments:
 
     from urlab_client import UrlabEnv
     with UrlabEnv("arm", max_episode_steps=100) as env:   # tcp://127.0.0.1:5559, direct mode
@@ -25,6 +25,13 @@ UrlabVectorEnv steps many servers together (urlab_client.vector), the environmen
 servers (urlab_client.batch), or a batch inside this process with no server
 (UrlabVectorEnv.in_process, urlab_client.inproc); urlab_client.cluster starts servers on a Dask
 cluster and returns one; urlab_client.rollout runs in-process batches as Dask rollout workers.
+
+Importing the package registers the bundled tasks (urlab_client.tasks) with gymnasium:
+
+    import gymnasium
+    env = gymnasium.make("URLab/ArmReach-v0")                        # its own urlab server
+    envs = gymnasium.make_vec("URLab/ArmReach-v0", num_envs=16,
+                              vectorization_mode="vector_entry_point")  # in this process
 """
 from urlab_client.camera import CameraClient, decode_frame
 from urlab_client.step import StepClient, UrlabError
@@ -32,6 +39,9 @@ from urlab_client.env import UrlabEnv
 from urlab_client.vector import UrlabVectorEnv
 from urlab_client.stream import Robot, StreamClient
 from urlab_client import wire
+from urlab_client import tasks
+
+tasks.register()
 
 __all__ = ["CameraClient", "decode_frame", "Robot", "StepClient", "StreamClient", "UrlabEnv", "UrlabError",
            "UrlabVectorEnv", "wire"]
