@@ -19,12 +19,13 @@ environments in this process (UrlabVectorEnv.in_process: URLab's C library, one 
 process). make(id) reset with seed s runs the episode environment i of make_vec(id) reset with
 seed s - i runs, bit for bit, for the same actions.
 
-| id | scene | reward | terminated |
-|---|---|---|---|
-| URLab/ArmReach-v0 | arm_reach.yaml | minus the tip's distance to a target (m) drawn at reset | within 5 cm, or diverged |
-| URLab/HumanoidStand-v0 | humanoid_pd.yaml | 1 per step alive | torso below 1 m, or diverged |
-| URLab/QuadrupedWalk-v0 | quadruped_walk.yaml | forward velocity (m/s) + 1 alive | base below 0.17 m, or diverged |
-| URLab/Go2Walk-v0 | go2_network.yaml | forward velocity (m/s) + 1 alive | base below 0.16 m, or diverged |
+- URLab/ArmReach-v0 (arm_reach.yaml): reward minus the tip's distance (m) to a target drawn
+  at reset; terminated within 5 cm of it, or diverged.
+- URLab/HumanoidStand-v0 (humanoid_pd.yaml): 1 per step alive; terminated when the torso is
+  below 1 m, or diverged.
+- URLab/QuadrupedWalk-v0 (quadruped_walk.yaml): the base's forward velocity (m/s) + 1 alive;
+  terminated when the base is below 0.17 m, or diverged.
+- URLab/Go2Walk-v0 (go2_network.yaml): the same, the base below 0.16 m.
 
 The scenes are the repository's (found from this package's place in a checkout, or
 $URLAB_SOURCE_DIR); the urlab binary as urlab_client.tasks.find_urlab says, the in-process
