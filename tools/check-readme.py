@@ -1,15 +1,19 @@
 #!/usr/bin/env python3
 """Runs README.md's quick start word for word: every line of the shell blocks directly under
-"## Quick start", then every Python snippet of the README against the scene its text names
-("`./build/urlab run SCENE`" before the snippet, started in the background until the snippet
-ends). Each runs from the repository root with bash or /usr/bin/python3; any non-zero exit (or a
-line running longer than --timeout seconds) fails the check, naming the line.
+"## Quick start", then every Python snippet of README.md and docs/*.md, each saved as a script
+(so that Dask's worker processes can import it) and run against the scene its text names
+("`./build/urlab run SCENE`" in the prose since the previous fenced block, started in the
+background until the snippet ends), or by itself when the text names none. Each runs from the
+repository root with bash or this script's own Python (ctest: ${URLAB_PYTHON}, the project's
+.venv, where the quick start installs urlab_client); any non-zero exit (or a line running longer
+than --timeout seconds) fails the check, naming the line.
 
-    /usr/bin/python3 tools/check-readme.py [--root DIR] [--build DIR] [--timeout S] [--list]
+    .venv/bin/python tools/check-readme.py [--root DIR] [--build DIR] [--timeout S] [--list]
+                                           [--snippets]
 
 ctest runs it as `readme.quick_start` (label readme). The README's lines name ./build, so the
 check only means something against the build in ROOT/build: given another --build it skips
-(exit 77, ctest's skip code).
+(exit 77, ctest's skip code). --snippets runs the Python snippets alone.
 """
 import argparse
 import fcntl
@@ -53,19 +57,28 @@ def shell_lines(text):
     return out
 
 
-def python_snippets(text):
-    """(server command, snippet) for every Python block: the last `./build/urlab run ...` in
-    backticks in the prose since the previous fenced block."""
+def python_snippets(text, name="README.md"):
+    """(document, server command or None, snippet) for every Python block: the last
+    `./build/urlab run ...` in backticks in the prose since the previous fenced block."""
     out = []
     for start, body in blocks(text, "python"):
         before = text[:start]
         fence = before.rfind("```\n", 0, len(before) - 1)
         prose = before[fence + 4:] if fence >= 0 else before
         servers = re.findall(r"`(\./build/urlab run [^`]+)`", prose)
-        if not servers:
-            raise SystemExit("a Python snippet of README.md names no `./build/urlab run` scene "
-                             f"before it:\n{body}")
-        out.append((servers[-1], body))
+        out.append((name, servers[-1] if servers else None, body))
+    return out
+
+
+def documents(root):
+    """README.md, then docs/*.md: (name, text)."""
+    names = ["README.md"] + sorted(os.path.join("docs", n)
+                                   for n in os.listdir(os.path.join(root, "docs"))
+                                   if n.endswith(".md"))
+    out = []
+    for name in names:
+        with open(os.path.join(root, name), encoding="utf-8") as f:
+            out.append((name, f.read()))
     return out
 
 
@@ -100,27 +113,34 @@ def wait_for_port(port, proc, seconds):
     return False
 
 
-def run_snippet(server, snippet, root, timeout):
-    print(f"$ {server} &", flush=True)
-    proc = subprocess.Popen(["bash", "-c", "exec " + server], cwd=root, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)
+def run_snippet(document, server, snippet, root, timeout):
+    where = f"{document}, " + (f"server {server}" if server else "no server")
+    proc = None
+    if server:
+        print(f"$ {server} &", flush=True)
+        proc = subprocess.Popen(["bash", "-c", "exec " + server], cwd=root,
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
-        if not wait_for_port(5559, proc, 120):  # the step server: the scene is playing
+        if proc and not wait_for_port(5559, proc, 120):  # the step server: the scene is playing
             out = proc.communicate(timeout=10)[0] if proc.poll() is not None else ""
             return f"the server did not start: {server}\n{out[-3000:]}"
-        print("$ /usr/bin/python3 <<'EOF'\n" + snippet + "EOF", flush=True)
-        try:
-            r = subprocess.run(["/usr/bin/python3", "-"], input=snippet, cwd=root,
-                               timeout=timeout, stdout=subprocess.PIPE,
-                               stderr=subprocess.STDOUT, text=True)
-        except subprocess.TimeoutExpired:
-            return f"a Python snippet ran longer than {timeout} s (server {server})"
+        with tempfile.TemporaryDirectory(prefix="urlab_snippet_") as folder:
+            script = os.path.join(folder, "snippet.py")
+            with open(script, "w", encoding="utf-8") as f:
+                f.write(snippet)
+            print(f"$ cat > snippet.py <<'EOF'\n{snippet}EOF\n$ {sys.executable} snippet.py",
+                  flush=True)
+            try:
+                r = subprocess.run([sys.executable, script], cwd=root, timeout=timeout,
+                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            except subprocess.TimeoutExpired:
+                return f"a Python snippet ran longer than {timeout} s ({where})"
         print(r.stdout[-3000:], flush=True)
         if r.returncode != 0:
-            return f"a Python snippet exited {r.returncode} (server {server})"
+            return f"a Python snippet exited {r.returncode} ({where})"
         return None
     finally:
-        if proc.poll() is None:
+        if proc is not None and proc.poll() is None:
             proc.send_signal(signal.SIGINT)
             try:
                 proc.wait(timeout=30)
@@ -136,22 +156,23 @@ def main():
     ap.add_argument("--build", help="the build folder ctest runs from (skip unless ROOT/build)")
     ap.add_argument("--timeout", type=float, default=600, help="seconds per line or snippet")
     ap.add_argument("--list", action="store_true", help="print what would run, run nothing")
+    ap.add_argument("--snippets", action="store_true", help="the Python snippets only")
     args = ap.parse_args()
     root = os.path.abspath(args.root)
-    with open(os.path.join(root, "README.md"), encoding="utf-8") as f:
-        text = f.read()
-    lines = shell_lines(text)
-    snippets = python_snippets(text)
+    docs = documents(root)
+    lines = [] if args.snippets else shell_lines(docs[0][1])
+    snippets = [s for name, text in docs for s in python_snippets(text, name)]
     if args.list:
         for line in lines:
             print(line)
-        for server, snippet in snippets:
-            print(f"{server} &\n/usr/bin/python3 <<'EOF'\n{snippet}EOF")
+        for document, server, snippet in snippets:
+            print(f"# {document}\n" + (f"{server} &\n" if server else "") +
+                  f"{sys.executable} <<'EOF'\n{snippet}EOF")
         return 0
     if args.build and os.path.realpath(args.build) != os.path.realpath(os.path.join(root, "build")):
         print(f"skipped: the README's lines use ./build, this build is {args.build}")
         return SKIP
-    if not lines or not snippets:
+    if (not lines and not args.snippets) or not snippets:
         print("README.md: no quick-start lines or no Python snippets found")
         return 1
     # The README plays scenes on the default ports, which only one run can hold: a second check on
@@ -167,8 +188,8 @@ def main():
         problem = run_line(line, root, args.timeout)
         if problem:
             failures.append(problem)
-    for server, snippet in snippets:
-        problem = run_snippet(server, snippet, root, args.timeout)
+    for document, server, snippet in snippets:
+        problem = run_snippet(document, server, snippet, root, args.timeout)
         if problem:
             failures.append(problem)
     print(f"{len(lines)} quick-start lines and {len(snippets)} Python snippets: "

@@ -1,11 +1,11 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Learns to reach: PPO (PyTorch) drives a servo arm's tip to random targets through
 UrlabVectorEnv, over several URLab servers started here.
 
-    /usr/bin/python3 examples/python/learn_reach.py --urlab ./build/urlab
-    /usr/bin/python3 examples/python/learn_reach.py --urlab ./build/urlab --updates 3  # smoke
+    .venv/bin/python examples/python/learn_reach.py --urlab ./build/urlab
+    .venv/bin/python examples/python/learn_reach.py --urlab ./build/urlab --updates 3  # smoke
 
-Needs Debian's python3-torch (and python3-zmq, python3-numpy like every client). Each update
+Needs the project's .venv (tools/install-deps.sh: gymnasium, Debian's python3-torch). Each update
 collects `--steps` steps from each of `--envs` environments (each its own `urlab run` of
 examples/scenes/arm_reach.yaml in lockstep, ports chosen by the system), then improves a small
 Gaussian policy with PPO's clipped objective. Every update prints one line (mean episode return,
@@ -13,8 +13,8 @@ mean final distance to the target, environment steps per second); `--plot FILE.p
 learning curve (matplotlib, optional), `--csv FILE` the same figures as a table.
 
 The task (written here, on top of the environment): at each reset the target is drawn from the
-environment's seeded generator in front of the arm, in its plane, within reach; the observation is the
-joint angles and velocities, the tip position and the target; the reward is minus the distance
+environment's seeded generator in front of the arm, in its plane, within reach; the observation
+is the joint angles and velocities, the tip position and the target; the reward is minus the distance
 from the tip to the target at each step (metres), so a return of -2 over an episode of 20 steps
 (1 s; each step holds the action for 25 physics steps) means 10 cm on average.
 """
@@ -30,7 +30,8 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(ROOT, "clients", "python"))
-from urlab_client import UrlabEnv, UrlabVectorEnv, spaces  # noqa: E402
+from gymnasium import spaces  # noqa: E402
+from urlab_client import UrlabEnv, UrlabVectorEnv  # noqa: E402
 from urlab_client.cluster import start_server  # noqa: E402
 
 SHOULDER = np.array([0.0, 1.1])  # the shoulder's (x, z) in the arm's plane (servo_arm.xml)

@@ -1,8 +1,8 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """A lockstep rollout loop: collects 10,000 steps of (observation, action) through the step server.
 
 Start the simulator first:   urlab run examples/scenes/go2_network.yaml
-Then:                        /usr/bin/python3 examples/python/rollout.py [--out rollout.npz]
+Then:                        .venv/bin/python examples/python/rollout.py [--out rollout.npz]
 
 The simulator switches to direct (lockstep) mode: its physics advances only when this script asks,
 so no step is lost and the data do not depend on this machine's speed. Each step sends one action

@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """A policy command for `urlab sweep` (examples/sweeps/arm.yaml): drives the cell's server for
 the cell's duration with sinusoidal position targets and prints its return as JSON.
 

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "app/commands.h"
+#include "app/python_env.h"
 #include "urlab/camera/camera_bench.h"
 #include "urlab/net/broadcast_bench.h"
 #include "urlab/net/fleet_bench.h"
@@ -263,6 +264,7 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
   static std::string fleet_scene;
 #ifdef URLAB_PYTHON_CLIENT_DIR
   fleet_args.python_client = URLAB_PYTHON_CLIENT_DIR;
+  fleet_args.python = PythonInterpreter();
 #endif
   fleet->add_option("SCENE", fleet_scene, "scene file (.yaml) or MJCF model (.xml)")
       ->required()
@@ -273,7 +275,10 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 1000));
   fleet->add_option("--samples", fleet_args.samples, "round trips per latency figure")
       ->check(CLI::Range(10, 10000000));
-  fleet->add_option("--python", fleet_args.python, "the Python interpreter for the Python client")
+  fleet
+      ->add_option("--python", fleet_args.python,
+                   "the Python interpreter for the Python client (default: $URLAB_PYTHON, else the "
+                   "checkout's .venv, else /usr/bin/python3)")
       ->capture_default_str();
   fleet_args.batch_library = BatchLibraryBesideThisProgram();
   fleet

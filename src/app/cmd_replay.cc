@@ -319,6 +319,13 @@ world::SceneConfig SceneForView(const ReplayArgs& args, const RecordingReader& r
 // handler, the timeline driving the player. `reopen` gets the file the viewer asks to open next
 // (one dropped on its window), "" when none.
 int View(const ReplayArgs& args, const RecordingReader& r, std::string* reopen) {
+  // A shot past the last frame would wait for a time the timeline never reaches.
+  if (!args.viewer.screenshot.empty() && args.viewer.screenshot_at > r.last_time() + 1e-9) {
+    throw InputError({r.path(), 0},
+                     fmt::format("--at {}: past the recording's last frame "
+                                 "(it holds {} to {} s)",
+                                 args.viewer.screenshot_at, r.first_time(), r.last_time()));
+  }
   std::string temporary;
   const world::SceneConfig scene = SceneForView(args, r, &temporary);
   world::Manager manager;

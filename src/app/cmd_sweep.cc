@@ -1,7 +1,8 @@
 // `urlab sweep SWEEP.yaml`: an evaluation grid over a Dask cluster. The sweep itself is Python
 // (clients/python/urlab_client/sweep.py, on Debian's python3-distributed); this subcommand runs
-// it with /usr/bin/python3 and the client's folder on PYTHONPATH, passing every argument through
-// (so `urlab sweep --help` is the program's own help) and this binary as the servers' urlab.
+// it with the project's Python (app/python_env.h) and the client's folder on PYTHONPATH, passing
+// every argument through (so `urlab sweep --help` is the program's own help) and this binary as the
+// servers' urlab.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -14,16 +15,11 @@
 #include <vector>
 
 #include "app/commands.h"
+#include "app/python_env.h"
 
 namespace urlab::app {
 
 namespace {
-
-// The folder holding the urlab_client package: $URLAB_PYTHON_CLIENT, else the source tree's.
-std::string PythonClientDir() {
-  if (const char* env = std::getenv("URLAB_PYTHON_CLIENT"); env && *env) return env;
-  return URLAB_PYTHON_CLIENT_DIR;
-}
 
 int RunSweep(const std::vector<std::string>& args) {
   const std::string dir = PythonClientDir();
@@ -40,7 +36,7 @@ int RunSweep(const std::vector<std::string>& args) {
   std::error_code self_ec;
   const auto self = std::filesystem::read_symlink("/proc/self/exe", self_ec);
   if (!self_ec && !std::getenv("URLAB_BINARY")) ::setenv("URLAB_BINARY", self.c_str(), 1);
-  std::vector<std::string> argv_s = {"/usr/bin/python3", "-m", "urlab_client.sweep"};
+  std::vector<std::string> argv_s = {PythonInterpreter(), "-m", "urlab_client.sweep"};
   argv_s.insert(argv_s.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (std::string& a : argv_s) argv.push_back(a.data());

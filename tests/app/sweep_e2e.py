@@ -48,8 +48,8 @@ seeds: [0, 1]
 duration: 0.5
 articulation: servo_arm
 policies:
-  - {{name: sine, command: /usr/bin/python3 {policy} --amplitude 0.5}}
-  - {{name: still, command: /usr/bin/python3 {policy} --amplitude 0}}
+  - {{name: sine, command: {sys.executable} {policy} --amplitude 0.5}}
+  - {{name: still, command: {sys.executable} {policy} --amplitude 0}}
   - {{name: broken, command: exit 3}}
 output: out
 cluster: {{workers: 2}}

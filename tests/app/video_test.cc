@@ -371,10 +371,19 @@ TEST(ReplayView, WatchesARecordingWithTheTimelineAtAnExactTime) {
   const std::string rec = dir + "/fall.urrec";
   std::string log;
   ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " record --ports auto " + xml + " -o " +
-                                    rec + " --no-network --no-cameras --max-speed --duration 0.3",
+                                    rec + " --no-network --no-cameras --max-speed --duration 0.6",
                                 &log),
             0)
       << log;
+  // A shot past the recording's end is refused at once (it used to wait for ever).
+  ASSERT_EQ(
+      testing::RunCommand(testing::XvfbRun("1024x768x24") + testing::UrlabBinary() + " replay " +
+                              rec + " --view --screenshot " + dir + "/late.png --at 0.7",
+                          &log),
+      1)
+      << log;
+  EXPECT_NE(log.find("--at 0.7: past the recording's last frame"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(dir + "/late.png"));
   const std::string shot = dir + "/timeline.png";
   ASSERT_EQ(testing::RunCommand(
                 testing::XvfbRun("1024x768x24") + testing::UrlabBinary() + " replay " + rec +

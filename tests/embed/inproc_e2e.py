@@ -59,7 +59,8 @@ def main():
                                       "--max-episode-steps", str(LIMIT))
     PROCS.append(proc)
     served = UrlabVectorEnv.over_batch(announced["endpoints"]["rpc"], shared_memory=True)
-    local = UrlabVectorEnv.in_process(SCENE, ENVS, threads=2, library=LIBRARY, reset_noise=0.05,
+    local = UrlabVectorEnv.in_process(SCENE, ENVS, threads=2, library=LIBRARY,
+                                      reset_noise_scale=0.05,
                                       server_max_episode_steps=LIMIT)
     check(local.envs[0].transport == "in-process", f"transport {local.envs[0].transport}")
     check(local.single_action_space == served.single_action_space,

@@ -49,12 +49,12 @@ def main():
     raises("max_episode_steps", lambda: opened(envs=1, max_episode_steps=2 ** 32))
     raises("max_episode_steps", lambda: opened(envs=1, max_episode_steps=-1))
     raises("log_level", lambda: opened(envs=1, log_level="bogus"), "warn")
-    raises("n_steps", lambda: opened(envs=1, n_steps=10 ** 7), "100000")
-    raises("n_steps", lambda: opened(envs=1, n_steps=0))
-    raises("reset_noise", lambda: opened(envs=1, reset_noise=float("nan")))
+    raises("frame_skip", lambda: opened(envs=1, frame_skip=10 ** 7), "100000")
+    raises("frame_skip", lambda: opened(envs=1, frame_skip=0))
+    raises("reset_noise_scale", lambda: opened(envs=1, reset_noise_scale=float("nan")))
 
     b = InProcessBatch(SCENE, envs=2, seed=2 ** 53 - 1, max_episode_steps=2 ** 31 - 1,
-                       n_steps=100000 // 100000, library=LIBRARY)
+                       frame_skip=100000 // 100000, library=LIBRARY)
     try:
         nu = b.nu
         b.reset()

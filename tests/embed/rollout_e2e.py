@@ -48,7 +48,7 @@ def main():
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
                       silence_logs=40) as c, Client(c) as client:
         pids = client.run(os.getpid)  # {worker address: pid}
-        options = dict(library=LIBRARY, reset_noise=0.05, reward_fn=height)
+        options = dict(library=LIBRARY, reset_noise_scale=0.05, reward_fn=height)
         with RolloutPool(client, SCENE, envs_per_worker=ENVS, seed=3, **options) as pool:
             if pool.n != 2 or pool.nu != 21:
                 fail(f"{pool.n} workers, nu {pool.nu}")

@@ -1,6 +1,6 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """End to end: UrlabEnv and UrlabVectorEnv against real `urlab run` processes, checked against
-gymnasium's documented contract (gymnasium itself is not needed):
+gymnasium's documented contract:
 
 - the spaces contain the observations reset and step return, and the action space is the
   actuators' target ranges (the joints' ranges under the PD controller);

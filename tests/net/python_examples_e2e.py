@@ -47,7 +47,7 @@ def main():
             print("FAIL: no network line in urlab's log")
             return 1
         stand = subprocess.run(
-            ["/usr/bin/python3", os.path.join(EXAMPLES, "pd_stand.py"), "--state", endpoints[0],
+            [sys.executable, os.path.join(EXAMPLES, "pd_stand.py"), "--state", endpoints[0],
              "--control", endpoints[1], "--info", endpoints[2]],
             capture_output=True, text=True, timeout=60)
         print(stand.stdout, stand.stderr)
@@ -56,7 +56,7 @@ def main():
             return 1
         out = os.path.join(tmp, "rollout.npz")
         rollout = subprocess.run(
-            ["/usr/bin/python3", os.path.join(EXAMPLES, "rollout.py"), "--endpoint", endpoints[3],
+            [sys.executable, os.path.join(EXAMPLES, "rollout.py"), "--endpoint", endpoints[3],
              "--out", out], capture_output=True, text=True, timeout=300)
         print(rollout.stdout, rollout.stderr)
         if rollout.returncode != 0:

@@ -41,8 +41,6 @@ import time
 import uuid
 from urllib.parse import urlparse
 
-from urlab_client.env import UrlabEnv
-from urlab_client.vector import UrlabVectorEnv
 
 
 def _die_with_parent():
@@ -230,6 +228,7 @@ class ServerPool:
 
     def env(self, i, articulation, not_session=None, **env_options):
         """A UrlabEnv on slot i's server, requiring that server's identity."""
+        from urlab_client.env import UrlabEnv
         info = self.announced(i, not_session=not_session)
         env = UrlabEnv(articulation, endpoint=info["endpoints"]["rpc"],
                        require={"server_session": info["session"]}, **env_options)
@@ -254,6 +253,7 @@ class ServerPool:
             return self.env(i, articulation, not_session=getattr(old, "server_session", None),
                             **env_options)
 
+        from urlab_client.vector import UrlabVectorEnv
         vec = UrlabVectorEnv(envs, replace=replace, on_close=self.close if close_pool else None)
         return vec
 
@@ -270,7 +270,7 @@ class ServerPool:
                          max_episode_steps=None, **options):
         """A UrlabVectorEnv over every environment of every slot (start the pool with
         envs_per_server): environments k*M .. k*M+M-1 are slot k's. options: BatchClient's
-        (n_steps, timeout, shared_memory, ...). A lost server's environments end truncated and
+        (frame_skip, timeout, shared_memory, ...). A lost server's environments end truncated and
         come back on its slot's replacement."""
         from urlab_client.batch import BatchBackend
         options.setdefault("timeout", 10.0)
@@ -290,6 +290,7 @@ class ServerPool:
 
         backend = BatchBackend(clients, replace=replace, reward_fn=reward_fn,
                                terminated_fn=terminated_fn, max_episode_steps=max_episode_steps)
+        from urlab_client.vector import UrlabVectorEnv
         return UrlabVectorEnv(backend=backend, on_close=self.close if close_pool else None)
 
     def close(self, timeout=60.0):

@@ -1,4 +1,4 @@
-"""UrlabEnv: one articulation of a URLab step server as an environment shaped like gymnasium's.
+"""UrlabEnv: one articulation of a URLab step server as a gymnasium environment.
 
     from urlab_client import UrlabEnv
     with UrlabEnv("arm", endpoint="tcp://127.0.0.1:5559", max_episode_steps=200) as env:
@@ -8,8 +8,8 @@
             if terminated or truncated:
                 obs, info = env.reset()
 
-When gymnasium is importable UrlabEnv is a gymnasium.Env (its wrappers and checks apply);
-otherwise it has the same API, duck-typed, with the spaces of urlab_client.spaces.
+UrlabEnv is a gymnasium.Env (gymnasium's wrappers and env checker apply), its spaces
+gymnasium.spaces.
 
 - The server runs in lockstep (direct mode) while the env holds the driver lease; close() (or
   leaving the `with` block) says bye, which releases the lease and returns the server to the
@@ -30,66 +30,12 @@ from collections import OrderedDict
 
 import numpy as np
 
-from urlab_client import spaces
+import gymnasium
+from gymnasium import spaces
+
 from urlab_client.step import StepClient, decode_observation
 
-try:  # pragma: no cover - depends on the machine
-    import gymnasium as _gym
-except ImportError:
-    _gym = None
-
 UNBOUNDED = 100.0  # hello's target_range uses -100/100 for "no limit"
-
-
-class _DuckEnv:
-    """gymnasium.Env's behaviour where gymnasium is missing: np_random seeded by reset(seed=),
-    unwrapped, metadata, the context manager."""
-
-    metadata = {"render_modes": []}
-    render_mode = None
-    spec = None
-    _np_random = None
-    _np_random_seed = None
-
-    @property
-    def np_random(self):
-        if self._np_random is None:
-            self._np_random_seed = int(np.random.SeedSequence().entropy % 2**63)
-            self._np_random = np.random.default_rng(self._np_random_seed)
-        return self._np_random
-
-    @np_random.setter
-    def np_random(self, value):
-        self._np_random = value
-
-    @property
-    def np_random_seed(self):
-        return self._np_random_seed if self._np_random_seed is not None else -1
-
-    def reset(self, *, seed=None, options=None):
-        if seed is not None:
-            self._np_random_seed = seed
-            self._np_random = np.random.default_rng(seed)
-
-    @property
-    def unwrapped(self):
-        return self
-
-    def render(self):
-        return None
-
-    def close(self):
-        pass
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
-
-
-EnvBase = _gym.Env if _gym is not None else _DuckEnv
 
 
 def _space_of(value):
@@ -114,13 +60,12 @@ def _space_of(value):
 def _conform(value, space):
     """`value` restricted to the keys and dtypes of `space` (a key the server adds later, such
     as a twist once a twist controller is attached, is left out)."""
-    if isinstance(space, (spaces.OwnDict,) + ((spaces.Dict,) if spaces.Dict is not spaces.OwnDict
-                                              else ())):
+    if isinstance(space, spaces.Dict):
         return OrderedDict((k, _conform(value[k], s)) for k, s in space.items())
     return np.asarray(value, dtype=space.dtype).reshape(space.shape)
 
 
-class UrlabEnv(EnvBase):
+class UrlabEnv(gymnasium.Env):
     """One articulation of a URLab step server in lockstep (see the module's docstring).
 
     articulation: its name in the scene. endpoint: the step server (tcp://, ipc://).
@@ -239,10 +184,15 @@ class UrlabEnv(EnvBase):
         except Exception:  # noqa: BLE001 - interpreter shutdown
             pass
 
+    def _need_open(self):
+        if self.client is None:
+            raise RuntimeError(f"this UrlabEnv ({self.endpoint}) is closed")
+
     # ---- the same in two halves, so a vector env sends to every server, then gathers
     def send_reset(self, options=None, seed=None):
+        self._need_open()
         if seed is not None:
-            EnvBase.reset(self, seed=seed)  # the generator of the initial noise
+            gymnasium.Env.reset(self, seed=seed)  # the generator of the initial noise
         options = dict(options or {})
         keyframe = options.pop("keyframe", self.keyframe)
         qpos = dict(options.pop("qpos", {}) or {})
@@ -287,6 +237,7 @@ class UrlabEnv(EnvBase):
         raise KeyError(joint["name"])
 
     def send_step(self, action):
+        self._need_open()
         a = np.asarray(action, dtype=np.float64).reshape(-1)
         if a.shape != self.action_space.shape:
             raise ValueError(f"action of shape {a.shape} for {self.action_space.shape} "

@@ -14,9 +14,10 @@ autoreset, episode limit, latency and randomisation, so environment i with seed 
 episode as in a batched server. One in-process batch at a time per process (close() the first).
 The arrays a step returns are fresh (a rollout buffer may keep them).
 
-The library is found from `library=`, then $URLAB_BATCH_LIBRARY, then beside the `urlab` found
-on PATH (its own folder: a build tree; ../lib and ../lib/*: an installation), then the system's
-library path.
+The library is found from `library=`, then $URLAB_BATCH_LIBRARY, then in the build folder of
+the repository this package lives in (a fresh checkout's `tools/build.sh` output: build/, and
+build-*/), then beside the `urlab` found on PATH (its own folder: a build tree; ../lib and
+../lib/*: an installation), then the system's library path; the error lists every path tried.
 """
 import ctypes
 import glob
@@ -26,7 +27,7 @@ import threading
 
 import numpy as np
 
-from urlab_client.batch import BatchBackend, BatchCalls
+from urlab_client.batch import BatchBackend, BatchCalls, renamed
 
 ABI = 1
 _F8 = np.dtype("<f8")
@@ -72,6 +73,23 @@ class _Outputs(ctypes.Structure):
                 ("seconds", ctypes.c_double)]
 
 
+def checkout_root():
+    """The URLab checkout this package lives in (clients/python/urlab_client), or None."""
+    root = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+    return root if os.path.exists(os.path.join(root, "CMakeLists.txt")) else None
+
+
+def repository_builds(name):
+    """`name` in the build folders of the repository holding this package (clients/python/
+    urlab_client in a checkout: build/ first, then build-*/), for an editable install or a
+    PYTHONPATH into the checkout; [] for an installed package."""
+    root = checkout_root()
+    if root is None:
+        return []
+    return [os.path.join(root, "build", name)] + \
+        sorted(glob.glob(os.path.join(root, "build-*", name)))
+
+
 def library_candidates(library=None):
     """The paths tried for liburlab_batch.so, in order."""
     if library:
@@ -79,6 +97,7 @@ def library_candidates(library=None):
     out = []
     if os.environ.get("URLAB_BATCH_LIBRARY"):
         out.append(os.environ["URLAB_BATCH_LIBRARY"])
+    out.extend(repository_builds(_NAME))
     urlab = shutil.which("urlab")
     if urlab:
         here = os.path.dirname(os.path.realpath(urlab))
@@ -144,24 +163,30 @@ class InProcessBatch(BatchCalls):
     waits for one under way. Errors in what it is given raise ValueError with
     the library's message (naming the field, or the scene file and line)."""
 
-    def __init__(self, scene, envs=1, threads=0, seed=None, max_episode_steps=0, reset_noise=0.0,
-                 auto_reset=True, n_steps=1, library=None, log_level="warn"):
+    def __init__(self, scene, envs=1, threads=0, seed=None, max_episode_steps=0,
+                 reset_noise_scale=None, auto_reset=True, frame_skip=None, library=None,
+                 log_level="warn", **deprecated):
+        deprecated.update(reset_noise_scale=reset_noise_scale, frame_skip=frame_skip)
+        reset_noise = renamed(deprecated, "reset_noise", "reset_noise_scale", 0.0)
+        frame_skip = renamed(deprecated, "n_steps", "frame_skip", 1)
+        if deprecated:
+            raise TypeError(f"unknown option(s) {sorted(deprecated)}")
         envs = _whole("envs", envs, 1, _INT_MAX)
         threads = _whole("threads", threads, 0, _INT_MAX)
         if seed is not None:
             seed = _whole("seed", seed, 0, MAX_SEED)
         max_episode_steps = _whole("max_episode_steps", max_episode_steps, 0, _INT_MAX)
-        n_steps = _whole("n_steps", n_steps, 1, MAX_N_STEPS)
+        frame_skip = _whole("frame_skip", frame_skip, 1, MAX_N_STEPS)
         reset_noise = float(reset_noise)
         if not np.isfinite(reset_noise) or reset_noise < 0:
-            raise ValueError(f"reset_noise: {reset_noise} is not a finite number >= 0")
+            raise ValueError(f"reset_noise_scale: {reset_noise} is not a finite number >= 0")
         if log_level not in LOG_LEVELS:
             raise ValueError(f"log_level: {log_level!r} is not one of {', '.join(LOG_LEVELS)}")
         self._lib = load_library(library)
         self._lock = threading.Lock()  # calls from several threads take turns
         self.endpoint = "in-process:" + str(scene)
         self.transport = "in-process"
-        self.n_steps = n_steps
+        self.frame_skip = frame_skip
         options = _Options(envs, threads, 1 if auto_reset else 0, max_episode_steps, reset_noise,
                            seed is not None, seed or 0, log_level.encode())
         self._error = ctypes.create_string_buffer(4096)
@@ -189,7 +214,7 @@ class InProcessBatch(BatchCalls):
                      "obs_size": self.obs_size, "timestep": self.timestep,
                      "actuators": self.actuators, "auto_reset": bool(auto_reset),
                      "max_episode_steps": int(max_episode_steps),
-                     "reset_noise": float(reset_noise)}
+                     "reset_noise": reset_noise}
         self._out = _Outputs()
         self._result = None
         self._step_seconds = 0.0
@@ -238,11 +263,11 @@ class InProcessBatch(BatchCalls):
         arrays = self._fresh()
         self._check(self._lib.urlab_batch_step(
             self._handle, actions.ctypes.data, None if flags is None else flags.ctypes.data,
-            self.n_steps, ctypes.byref(self._out), self._error, len(self._error)))
+            self.frame_skip, ctypes.byref(self._out), self._error, len(self._error)))
         self._result = arrays
         self._step_seconds = self._out.seconds
         self._busy += self._out.seconds
-        self._env_steps += self.envs * self.n_steps
+        self._env_steps += self.envs * self.frame_skip
 
     def send_reset(self, envs=None, seeds=None, auto_reset=None):
         """envs: indices (None: all); seeds: one int or None per listed environment."""
@@ -279,9 +304,13 @@ class InProcessBatch(BatchCalls):
             len(self._error)))
         self._result = arrays
 
+    @property
+    def n_steps(self):  # the old name of frame_skip
+        return self.frame_skip
+
     def _parts(self):
-        obs, done, _, time, _ = self._result
-        return obs, done, time
+        obs, done, _, time, steps = self._result
+        return obs, done, time, steps
 
     def receive_step_parts(self):
         return self._parts()
@@ -326,19 +355,31 @@ class InProcessBatch(BatchCalls):
             pass
 
 
-def in_process_backend(scene, num_envs, threads=0, seed=None, n_steps=1, reward_fn=None,
+def in_process_backend(scene, num_envs, threads=0, seed=None, frame_skip=None, reward_fn=None,
                        terminated_fn=None, max_episode_steps=None, server_max_episode_steps=0,
-                       reset_noise=0.0, library=None, log_level="warn"):
+                       reset_noise_scale=None, library=None, log_level="warn", task=None,
+                       **deprecated):
     """UrlabVectorEnv's batched backend over one InProcessBatch (UrlabVectorEnv.in_process)."""
+    deprecated.update(frame_skip=frame_skip, reset_noise_scale=reset_noise_scale)
+    frame_skip = renamed(deprecated, "n_steps", "frame_skip", None)
+    reset_noise_scale = renamed(deprecated, "reset_noise", "reset_noise_scale", None)
+    if deprecated:
+        raise TypeError(f"unknown option(s) {sorted(deprecated)}")
+    if frame_skip is None:
+        frame_skip = task.frame_skip if task is not None else 1
+    if reset_noise_scale is None:
+        reset_noise_scale = task.reset_noise_scale if task is not None else 0.0
     batch = InProcessBatch(scene, envs=num_envs, threads=threads, seed=seed,
-                           max_episode_steps=server_max_episode_steps, reset_noise=reset_noise,
-                           n_steps=n_steps, library=library, log_level=log_level)
+                           max_episode_steps=server_max_episode_steps,
+                           reset_noise_scale=reset_noise_scale, frame_skip=frame_skip,
+                           library=library, log_level=log_level)
     try:
         return BatchBackend([batch], reward_fn=reward_fn, terminated_fn=terminated_fn,
-                            max_episode_steps=max_episode_steps)
+                            max_episode_steps=max_episode_steps, task=task)
     except BaseException:
         batch.close()
         raise
 
 
-__all__ = ["InProcessBatch", "in_process_backend", "load_library", "library_candidates"]
+__all__ = ["InProcessBatch", "in_process_backend", "load_library", "library_candidates",
+           "repository_builds", "checkout_root"]

@@ -1,5 +1,5 @@
-"""UrlabVectorEnv: many environments stepped together, numpy-batched, shaped like gymnasium's
-vector envs (a gymnasium.vector.VectorEnv when gymnasium is importable).
+"""UrlabVectorEnv: many environments stepped together, numpy-batched: a
+gymnasium.vector.VectorEnv.
 
     from urlab_client import UrlabVectorEnv
     envs = UrlabVectorEnv.over_servers(["tcp://127.0.0.1:41001", "tcp://127.0.0.1:41002"], "arm")
@@ -9,7 +9,8 @@ vector envs (a gymnasium.vector.VectorEnv when gymnasium is importable).
 
 - step() sends every sub-environment's request first, then gathers the replies, so N servers
   (N processes, on one machine or many) step in parallel.
-- Autoreset is gymnasium's default, next-step (metadata["autoreset_mode"]): the step after a
+- Autoreset is gymnasium's default, next-step (metadata["autoreset_mode"] is
+  gymnasium.vector.AutoresetMode.NEXT_STEP): the step after a
   sub-environment's episode ended ignores its action, resets it (unseeded, no options) and
   returns its first observation with reward 0 and terminated = truncated = False.
 - infos: {key: array over envs, "_key": bool mask of the envs that gave it}.
@@ -39,22 +40,15 @@ from collections import OrderedDict
 import numpy as np
 import zmq
 
-from urlab_client import spaces
+import gymnasium
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
 from urlab_client.env import UrlabEnv
 from urlab_client.step import UrlabError
 
-try:  # pragma: no cover - depends on the machine
-    import gymnasium as _gym
-    from gymnasium.vector import VectorEnv as _VectorBase
-    try:
-        from gymnasium.vector import AutoresetMode as _AutoresetMode
-        NEXT_STEP = _AutoresetMode.NEXT_STEP
-    except ImportError:
-        NEXT_STEP = "NextStep"
-except ImportError:
-    _gym = None
-    _VectorBase = object
-    NEXT_STEP = "NextStep"
+NEXT_STEP = AutoresetMode.NEXT_STEP
 
 # What a lost server looks like to a client: no reply in time, or a socket that cannot go on.
 LOST = (TimeoutError, zmq.ZMQError, ConnectionError)  # ConnectionError: shm.ShmError
@@ -107,12 +101,11 @@ class _ServerBackend:
             env.close()
 
 
-class UrlabVectorEnv(_VectorBase):
+class UrlabVectorEnv(VectorEnv):
     """num_envs sub-environments with identical spaces (see the module's docstring)."""
 
     metadata = {"autoreset_mode": NEXT_STEP, "render_modes": []}
     render_mode = None
-    spec = None
 
     def __init__(self, envs=None, replace=None, on_close=None, backend=None):
         """envs: UrlabEnv instances (one per server). replace(i): a new UrlabEnv for
@@ -120,16 +113,14 @@ class UrlabVectorEnv(_VectorBase):
         once by close() after the envs (a cluster's shutdown). backend: a batched backend
         instead of envs (see over_batch)."""
         self._on_close = on_close
-        self._closed = False
+        self.closed = False
         if backend is not None:  # batched servers: the backend does reset and step whole
             self._backend = backend
             self.num_envs = len(backend)
             self.single_observation_space = backend.single_observation_space
             self.single_action_space = backend.single_action_space
-            self.observation_space = spaces.batch_space(self.single_observation_space,
-                                                        self.num_envs)
-            self.action_space = spaces.batch_space(self.single_action_space, self.num_envs)
-            self._np_random = None
+            self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+            self.action_space = batch_space(self.single_action_space, self.num_envs)
             return
         self._backend = _ServerBackend(envs, replace)
         self.num_envs = len(self._backend)
@@ -142,11 +133,10 @@ class UrlabVectorEnv(_VectorBase):
                 raise ValueError(f"environment {i} has other spaces than environment 0")
         self.single_observation_space = first.observation_space
         self.single_action_space = first.action_space
-        self.observation_space = spaces.batch_space(first.observation_space, self.num_envs)
-        self.action_space = spaces.batch_space(first.action_space, self.num_envs)
+        self.observation_space = batch_space(first.observation_space, self.num_envs)
+        self.action_space = batch_space(first.action_space, self.num_envs)
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
         self._last_obs = [None] * self.num_envs
-        self._closed = False
 
     @classmethod
     def over_servers(cls, endpoints, articulation, replace=None, on_close=None, **env_options):
@@ -168,8 +158,8 @@ class UrlabVectorEnv(_VectorBase):
     def over_batch(cls, endpoints, replace=None, on_close=None, **options):
         """A vector env over every environment of one batched server (`urlab run SCENE --envs
         N`), or of several (a list of endpoints: N servers x M environments, in order).
-        options: BatchBackend.connect's (require, n_steps, reward_fn, terminated_fn,
-        max_episode_steps; StepClient's timeout, shared_memory, ...); replace(k): a new
+        options: BatchBackend.connect's (require, frame_skip, reward_fn, terminated_fn,
+        max_episode_steps, task; StepClient's timeout, shared_memory, ...); replace(k): a new
         urlab_client.batch.BatchClient for server k when it was lost."""
         from urlab_client.batch import BatchBackend
         backend = BatchBackend.connect(endpoints, replace=replace, **options)
@@ -179,10 +169,11 @@ class UrlabVectorEnv(_VectorBase):
     def in_process(cls, scene, num_envs, threads=0, seed=None, on_close=None, **options):
         """A vector env over `num_envs` environments of `scene` stepped inside this process
         (urlab_client.inproc: URLab's C library, no server). threads: stepping threads (0: the
-        cores); seed: environment i starts with seed + i (None: the scene's). options: n_steps,
-        reward_fn, terminated_fn, max_episode_steps (vector steps, truncation),
+        cores); seed: environment i starts with seed + i (None: the scene's). options:
+        frame_skip, reward_fn, terminated_fn, max_episode_steps (vector steps, truncation),
         server_max_episode_steps (physics steps, as `urlab run --max-episode-steps`),
-        reset_noise, library, log_level."""
+        reset_noise_scale, task (urlab_client.tasks), library, log_level. The old names
+        n_steps and reset_noise still work, with a FutureWarning."""
         from urlab_client.inproc import in_process_backend
         backend = in_process_backend(scene, num_envs, threads=threads, seed=seed, **options)
         return cls(backend=backend, on_close=on_close)
@@ -203,19 +194,24 @@ class UrlabVectorEnv(_VectorBase):
 
     @property
     def np_random(self):
-        if self._batched:
-            if self._np_random is None:
-                self._np_random = np.random.default_rng()
-            return self._np_random
-        return self._backend.envs[0].np_random
+        """The vector env's generator (seeded by reset(seed=int)); each environment draws from
+        its own (environment i's from seed + i)."""
+        if self._np_random is None:
+            self._np_random, self._np_random_seed = seeding.np_random()
+        return self._np_random
+
+    @np_random.setter
+    def np_random(self, value):
+        self._np_random = value
 
     # ---- gymnasium's vector API
     def reset(self, *, seed=None, options=None):
         """seed: None, an int (env i gets seed + i) or a list; options: UrlabEnv.reset's, plus
         "reset_mask" (reset only those envs; the others keep their observation)."""
+        self._need_open("reset")
+        if isinstance(seed, (int, np.integer)):
+            self._np_random, self._np_random_seed = seeding.np_random(int(seed))
         if self._batched:
-            if isinstance(seed, (int, np.integer)):
-                self._np_random = np.random.default_rng(int(seed))
             return self._backend.reset(seed, options)
         if seed is None:
             seeds = [None] * self.num_envs
@@ -237,6 +233,7 @@ class UrlabVectorEnv(_VectorBase):
         return _stack(self._last_obs), _batch_infos(infos)
 
     def step(self, actions):
+        self._need_open("step")
         if self._batched:
             return self._backend.step(actions)
         actions = np.asarray(actions, dtype=np.float64)
@@ -294,6 +291,7 @@ class UrlabVectorEnv(_VectorBase):
         """Sends a step for the environments env_id (whole servers' environments, in order, as
         recv() gave them in infos["env_id"]; None: every environment) and returns at once.
         actions: (len(env_id), nu). At most one send() per server waits for its recv()."""
+        self._need_open("send")
         self._require_batched("send")
         self._backend.send(actions, env_id)
 
@@ -301,21 +299,28 @@ class UrlabVectorEnv(_VectorBase):
         """The replies to send(), one server at a time in the order sent: (obs, rewards,
         terminated, truncated, infos) over that server's environments, infos["env_id"] their
         indices. Autoreset and flags are step()'s, environment by environment."""
+        self._need_open("recv")
         self._require_batched("recv")
         return self._backend.recv()
 
     def step_async(self, actions):
         """gymnasium's first half of step(): sends every environment's action, returns at once."""
+        self._need_open("step_async")
         self._require_batched("step_async")
         self._backend.send(actions, None)
 
     def step_wait(self):
         """The second half: step()'s result for the actions step_async sent."""
+        self._need_open("step_wait")
         self._require_batched("step_wait")
         parts = [self._backend.recv() for _ in range(len(self._backend.clients))]
         order = np.argsort([int(p[4]["env_id"][0]) for p in parts], kind="stable")
         parts = [parts[i] for i in order]
-        obs = OrderedDict((key, np.concatenate([p[0][key] for p in parts])) for key in parts[0][0])
+        if isinstance(parts[0][0], dict):
+            obs = OrderedDict((key, np.concatenate([p[0][key] for p in parts]))
+                              for key in parts[0][0])
+        else:  # a task's observation array
+            obs = np.concatenate([p[0] for p in parts])
         rewards, terminated, truncated = (np.concatenate([p[j] for p in parts]) for j in (1, 2, 3))
         infos = {}
         keys = [k for p in parts for k in p[4] if not k.startswith("_") and k != "env_id"]
@@ -351,10 +356,14 @@ class UrlabVectorEnv(_VectorBase):
         if self._last_obs[i] is None:
             self._last_obs[i] = env.observation_space.sample()
 
+    def _need_open(self, what):
+        if getattr(self, "closed", False):
+            raise RuntimeError(f"{what}() on a closed UrlabVectorEnv")
+
     def close(self, **kwargs):
-        if self._closed:
+        if getattr(self, "closed", True):
             return
-        self._closed = True
+        self.closed = True
         try:
             if self._batched:
                 self._backend.close()
