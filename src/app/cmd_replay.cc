@@ -68,23 +68,15 @@ int Info(const RecordingReader& r) {
   const replay::ModelTables& t = i.tables;
   std::printf("file:        %s (%llu bytes)\n", r.path().c_str(),
               static_cast<unsigned long long>(fs::file_size(r.path())));
-  std::printf("kind:        %s, format %u, written by URLab %s, %s\n", i.kind.c_str(),
-              i.format_version, i.urlab_version.c_str(), i.created.c_str());
+  std::printf("kind:        %s, format %u, written by URLab %s on MuJoCo %s, %s\n", i.kind.c_str(),
+              i.format_version, i.urlab_version.c_str(), i.mujoco_version.c_str(),
+              i.created.c_str());
   std::printf("scene:       %s\n", i.scene.empty() ? "(not recorded)" : i.scene.c_str());
   std::printf(
       "model:       hash %s, nq %d, nv %d, na %d, nu %d, nbody %d, nmocap %d, "
       "nsensordata %d, timestep %g\n",
       replay::HashText(i.model_hash).c_str(), t.nq, t.nv, t.na, t.nu, t.nbody, t.nmocap,
       t.nsensordata, t.timestep);
-  if (i.extensions.empty()) {
-    std::printf("extensions:  none%s\n", i.format_version < 2 ? " (format 1 records none)" : "");
-  } else {
-    const physics::SoftwareModelSpec e = physics::ParseExtensions(i.extensions);
-    std::printf(
-        "extensions:  %zu software sensor(s), %zu gravity-compensated body(ies), %zu dead-band "
-        "spring(s), %zu site equality(ies) (in the hash)\n",
-        e.sensors.size(), e.gravcomp.size(), e.deadband_springs.size(), e.site_equalities.size());
-  }
   std::string arts;
   for (const std::string& a : t.articulations) arts += (arts.empty() ? "" : ", ") + a;
   std::printf("articulations: %s; %zu joints, %zu actuators, %zu sensors\n",
@@ -149,8 +141,7 @@ int Info(const RecordingReader& r) {
     for (std::size_t g = 0; g < raw_steps.size(); ++g) {
       raw += fmt::format("{}{} {} steps", g ? ", " : "", t.command_groups[g].name, raw_steps[g]);
     }
-    std::printf("raw control: %s%s\n", raw.c_str(),
-                i.format_version < 3 ? " (format 2 does not record control_mode raw)" : "");
+    std::printf("raw control: %s\n", raw.c_str());
   }
   return damaged ? 1 : 0;
 }
@@ -469,7 +460,7 @@ void RegisterReplayCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("FILE", args.file, "the recording (.urrec)")->required();
   cmd->add_option("--scene", args.scene,
                   "play (or --check) on this scene's model instead of the recorded one (it must "
-                  "be the same model with the same extensions: the hashes are compared, the "
+                  "be the same model: the hashes are compared, the "
                   "physics options apart, which the recording re-applies)");
   cmd->add_option("--speed", args.speed, "recorded seconds per second of wall time (default 1)")
       ->check(CLI::PositiveNumber);

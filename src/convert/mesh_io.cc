@@ -228,11 +228,10 @@ std::string MujocoStlRefusal(const std::string& path) {
   if (size < 84 || !in.read(header, 84)) return "shorter than a binary STL header";
   std::uint32_t n = 0;
   std::memcpy(&n, header + 80, 4);
-  if (84 + 50ull * n != size) return "not a binary STL (MuJoCo 2.2.2 reads no ASCII STL)";
+  if (84 + 50ull * n != size) return "not a binary STL (MuJoCo reads no ASCII STL)";
   if (n == 0) return "a binary STL without faces";
   if (n > kMujocoMaxStlFaces) {
-    return fmt::format("a binary STL of {} faces (MuJoCo 2.2.2 reads at most {})", n,
-                       kMujocoMaxStlFaces);
+    return fmt::format("a binary STL of {} faces (MuJoCo reads at most {})", n, kMujocoMaxStlFaces);
   }
   return {};
 }
@@ -245,7 +244,7 @@ TriMesh LimitForMujoco(TriMesh mesh, std::string* note) {
   const std::size_t dropped = MakeEdgesOrientable(small);
   if (note) {
     *note = fmt::format(
-        "simplified from {} to {} triangles for MuJoCo 2.2.2 (vertex clustering on a {}-cell "
+        "simplified from {} to {} triangles for MuJoCo (vertex clustering on a {}-cell "
         "grid{})",
         before, small.triangles.size(), cells,
         dropped ? fmt::format("; {} triangles on non-manifold edges dropped", dropped) : "");

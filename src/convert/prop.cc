@@ -35,13 +35,13 @@ std::string Faces(const TriMesh& m) {
 }
 
 // The file MuJoCo reads for the visual mesh: the source when MuJoCo loads it as it is, else an
-// OBJ written into the cache (simplified when the mesh has more faces than MuJoCo 2.2.2 takes
+// OBJ written into the cache (simplified when the mesh has more faces than MuJoCo takes
 // from an STL), named after the source and its content (so two sources with the same stem never
 // share a file).
 std::string VisualFile(const std::string& source, const TriMesh& mesh, const std::string& cache_dir,
                        const DecomposeOptions& options, std::vector<std::string>* report) {
   const std::string why =
-      IsMujocoMeshFormat(source) ? MujocoStlRefusal(source) : "MuJoCo 2.2.2 loads STL, OBJ, MSH";
+      IsMujocoMeshFormat(source) ? MujocoStlRefusal(source) : "MuJoCo loads STL, OBJ, MSH";
   if (why.empty()) return source;
   std::string simplified;
   const std::string bytes = ObjBytes(LimitForMujoco(mesh, &simplified));
@@ -63,7 +63,7 @@ std::string VisualFile(const std::string& source, const TriMesh& mesh, const std
 }
 
 // The visual mesh alone, compiled by MuJoCo as the prop's model will compile it: a mesh MuJoCo
-// 2.2.2 refuses (flat: no volume; faces it finds inconsistently oriented) is reported before
+// refuses (flat: no volume; faces it finds inconsistently oriented) is reported before
 // minutes of decomposition, not after.
 void CheckVisualMesh(const PropSpec& spec, const std::string& file) {
   document::Document doc(spec.name);
@@ -94,7 +94,7 @@ void CheckVisualMesh(const PropSpec& spec, const std::string& file) {
     std::string hint;
     if (message.find("volume") != std::string::npos) {
       hint =
-          "; the mesh is flat or encloses no volume: MuJoCo 2.2.2 needs a closed solid, so "
+          "; the mesh is flat or encloses no volume: MuJoCo needs a closed solid, so "
           "give the surface a thickness (e.g. extrude it) before converting";
     } else if (message.find("orientation") != std::string::npos) {
       hint =
@@ -102,7 +102,7 @@ void CheckVisualMesh(const PropSpec& spec, const std::string& file) {
           "(e.g. merge duplicate vertices, remove faces sharing an edge three ways)";
     }
     throw InputError({spec.mesh, 0},
-                     "MuJoCo 2.2.2 cannot use this mesh as the visual mesh: " + message + hint);
+                     "MuJoCo cannot use this mesh as the visual mesh: " + message + hint);
   }
 }
 

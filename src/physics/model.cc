@@ -55,13 +55,6 @@ ModelPtr CompileXmlString(const std::string& xml) {
   return FinishLoad(m, error);
 }
 
-ModelPtr TryCompileXmlString(const std::string& xml, std::string* error) {
-  char buf[kErrorSize] = "";
-  ModelPtr m(LoadFromMemory(xml, buf));
-  if (!m) *error = buf[0] ? buf : "MuJoCo could not compile the model";
-  return m;
-}
-
 ModelPtr LoadXmlFile(const std::string& path) {
   if (!std::filesystem::exists(path)) throw CompileError(path + ": file not found");
   char error[kErrorSize] = "";
@@ -100,16 +93,12 @@ ModelPtr LoadMjbBytes(std::string_view mjb) {
   return ModelPtr(m);
 }
 
-std::uint64_t ContentHash(std::string_view mjb, std::string_view extensions) {
+std::uint64_t ContentHash(std::string_view mjb) {
   std::uint64_t h = 1469598103934665603ull;
-  const auto add = [&h](std::string_view bytes) {
-    for (unsigned char c : bytes) {
-      h ^= c;
-      h *= 1099511628211ull;
-    }
-  };
-  add(mjb);
-  add(extensions);  // nothing when empty: a model without extensions hashes as its MJB
+  for (unsigned char c : mjb) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
   return h;
 }
 
@@ -117,50 +106,16 @@ std::uint64_t ContentHash(std::string_view mjb, std::string_view extensions) {
 
 Model::Model(ModelPtr model) : model_(std::move(model)) {}
 
-Model::Model(ModelPtr model, SoftwareModelSpec extensions) : model_(std::move(model)) {
-  if (!model_) throw Error("no model");
-  ApplySiteEqualities(model_.get(), extensions);
-  registration_ = RegisterSoftwareModel(model_.get(), extensions);
-  extension_text_ = SerializeExtensions(extensions);
-  extensions_ = std::make_shared<const SoftwareModelSpec>(std::move(extensions));
-}
-
-Model Model::FromMjb(std::string_view mjb, std::string_view extensions) {
-  return Model(LoadMjbBytes(mjb), ParseExtensions(extensions));
-}
-
-Model::Model(Model&& o) noexcept
-    : model_(std::move(o.model_)),
-      extensions_(o.extensions_),
-      extension_text_(std::move(o.extension_text_)),
-      registration_(std::move(o.registration_)) {}
-
-Model& Model::operator=(Model&& o) noexcept {
-  if (this != &o) {
-    registration_ = SoftwareSensorRegistration();  // unregistered before the model is freed
-    model_ = std::move(o.model_);
-    extensions_ = o.extensions_;
-    extension_text_ = std::move(o.extension_text_);
-    registration_ = std::move(o.registration_);
-  }
-  return *this;
-}
-
-Model::~Model() { registration_ = SoftwareSensorRegistration(); }
+Model Model::FromMjb(std::string_view mjb) { return Model(LoadMjbBytes(mjb)); }
 
 Model Model::Copy() const {
   if (!model_) throw Error("copy of an empty model");
   ModelPtr copy(mj_copyModel(nullptr, model_.get()));
   if (!copy) throw Error("MuJoCo could not copy the model");
-  Model out(std::move(copy));
-  out.extensions_ = extensions_;
-  out.extension_text_ = extension_text_;
-  // The copy has the site equalities' data already (mj_copyModel copied eq_data).
-  out.registration_ = RegisterSoftwareModel(out.model_.get(), *extensions_);
-  return out;
+  return Model(std::move(copy));
 }
 
-std::uint64_t Model::Hash() const { return ContentHash(Mjb(), extension_text_); }
+std::uint64_t Model::Hash() const { return ContentHash(Mjb()); }
 
 std::string MujocoVersion() { return mj_versionString(); }
 

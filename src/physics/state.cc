@@ -16,8 +16,8 @@ static_assert(std::endian::native == std::endian::little, "state format assumes 
 namespace {
 
 constexpr char kMagic[4] = {'U', 'R', 'L', 'S'};
-// magic + version + header size + 7 layout ints + time + payload size.
-constexpr std::size_t kHeaderSize = 4 + 4 + 4 + 7 * 4 + 8 + 8;
+// magic + version + header size + 10 layout ints + time + payload size.
+constexpr std::size_t kHeaderSize = 4 + 4 + 4 + 10 * 4 + 8 + 8;
 constexpr std::size_t kChecksumSize = 8;
 // Guards against absurd layouts in corrupt headers before any allocation happens.
 constexpr std::int64_t kMaxArrayLength = std::int64_t{1} << 28;
@@ -31,7 +31,8 @@ std::uint64_t Fnv1a(const std::uint8_t* p, std::size_t n) {
   return h;
 }
 
-// The arrays of a state in serialisation order with their expected lengths.
+// The arrays of a state in serialisation order with their expected lengths and MuJoCo's state
+// component.
 template <typename State>
 auto Arrays(State& s) {
   const StateLayout& l = s.layout;
@@ -41,23 +42,23 @@ auto Arrays(State& s) {
     const char* name;
     Vec* vec;
     std::int64_t length;
+    int component;  // mjtState
   };
-  return std::array<ArrayEntry, 10>{{
-      {"qpos", &s.qpos, l.nq},
-      {"qvel", &s.qvel, l.nv},
-      {"act", &s.act, l.na},
-      {"qacc_warmstart", &s.qacc_warmstart, l.nv},
-      {"ctrl", &s.ctrl, l.nu},
-      {"qfrc_applied", &s.qfrc_applied, l.nv},
-      {"xfrc_applied", &s.xfrc_applied, std::int64_t{6} * l.nbody},
-      {"mocap_pos", &s.mocap_pos, std::int64_t{3} * l.nmocap},
-      {"mocap_quat", &s.mocap_quat, std::int64_t{4} * l.nmocap},
-      {"userdata", &s.userdata, l.nuserdata},
+  return std::array<ArrayEntry, 13>{{
+      {"qpos", &s.qpos, l.nq, mjSTATE_QPOS},
+      {"qvel", &s.qvel, l.nv, mjSTATE_QVEL},
+      {"act", &s.act, l.na, mjSTATE_ACT},
+      {"qacc_warmstart", &s.qacc_warmstart, l.nv, mjSTATE_WARMSTART},
+      {"ctrl", &s.ctrl, l.nu, mjSTATE_CTRL},
+      {"qfrc_applied", &s.qfrc_applied, l.nv, mjSTATE_QFRC_APPLIED},
+      {"xfrc_applied", &s.xfrc_applied, std::int64_t{6} * l.nbody, mjSTATE_XFRC_APPLIED},
+      {"mocap_pos", &s.mocap_pos, std::int64_t{3} * l.nmocap, mjSTATE_MOCAP_POS},
+      {"mocap_quat", &s.mocap_quat, std::int64_t{4} * l.nmocap, mjSTATE_MOCAP_QUAT},
+      {"userdata", &s.userdata, l.nuserdata, mjSTATE_USERDATA},
+      {"history", &s.history, l.nhistory, mjSTATE_HISTORY},
+      {"eq_active", &s.eq_active, l.neq, mjSTATE_EQ_ACTIVE},
+      {"plugin_state", &s.plugin_state, l.npluginstate, mjSTATE_PLUGIN},
   }};
-}
-
-void Copy(const mjtNum* src, std::int64_t n, std::vector<mjtNum>* dst) {
-  dst->assign(src, src + n);
 }
 
 void Put(std::vector<std::uint8_t>* out, const void* p, std::size_t n) {
@@ -101,16 +102,26 @@ class Reader {
 }  // namespace
 
 StateLayout StateLayout::Of(const mjModel* m) {
-  return StateLayout{static_cast<int>(m->nq),       static_cast<int>(m->nv),
-                     static_cast<int>(m->na),       static_cast<int>(m->nu),
-                     static_cast<int>(m->nbody),    static_cast<int>(m->nmocap),
-                     static_cast<int>(m->nuserdata)};
+  StateLayout l;
+  l.nq = static_cast<int>(m->nq);
+  l.nv = static_cast<int>(m->nv);
+  l.na = static_cast<int>(m->na);
+  l.nu = static_cast<int>(m->nu);
+  l.nbody = static_cast<int>(m->nbody);
+  l.nmocap = static_cast<int>(m->nmocap);
+  l.nuserdata = static_cast<int>(m->nuserdata);
+  l.nhistory = mj_stateSize(m, mjSTATE_HISTORY);
+  l.neq = static_cast<int>(m->neq);
+  l.npluginstate = static_cast<int>(m->npluginstate);
+  return l;
 }
 
 std::string StateLayout::str() const {
   return "nq=" + std::to_string(nq) + " nv=" + std::to_string(nv) + " na=" + std::to_string(na) +
          " nu=" + std::to_string(nu) + " nbody=" + std::to_string(nbody) +
-         " nmocap=" + std::to_string(nmocap) + " nuserdata=" + std::to_string(nuserdata);
+         " nmocap=" + std::to_string(nmocap) + " nuserdata=" + std::to_string(nuserdata) +
+         " nhistory=" + std::to_string(nhistory) + " neq=" + std::to_string(neq) +
+         " npluginstate=" + std::to_string(npluginstate);
 }
 
 bool PhysicsState::BitwiseEquals(const PhysicsState& other) const {
@@ -139,16 +150,10 @@ PhysicsState CaptureState(const mjModel* m, const mjData* d) {
   PhysicsState s;
   s.layout = StateLayout::Of(m);
   s.time = d->time;
-  Copy(d->qpos, m->nq, &s.qpos);
-  Copy(d->qvel, m->nv, &s.qvel);
-  Copy(d->act, m->na, &s.act);
-  Copy(d->qacc_warmstart, m->nv, &s.qacc_warmstart);
-  Copy(d->ctrl, m->nu, &s.ctrl);
-  Copy(d->qfrc_applied, m->nv, &s.qfrc_applied);
-  Copy(d->xfrc_applied, std::int64_t{6} * m->nbody, &s.xfrc_applied);
-  Copy(d->mocap_pos, std::int64_t{3} * m->nmocap, &s.mocap_pos);
-  Copy(d->mocap_quat, std::int64_t{4} * m->nmocap, &s.mocap_quat);
-  Copy(d->userdata, m->nuserdata, &s.userdata);
+  for (auto& e : Arrays(s)) {
+    e.vec->resize(static_cast<std::size_t>(e.length));
+    if (e.length) mj_getState(m, d, e.vec->data(), e.component);
+  }
   return s;
 }
 
@@ -159,20 +164,10 @@ void ApplyState(const mjModel* m, mjData* d, const PhysicsState& state) {
                      ", model has " + expected.str());
   }
   if (!state.IsConsistent()) throw StateError("state arrays do not match their layout");
-  auto put = [](const std::vector<mjtNum>& v, mjtNum* dst) {
-    if (!v.empty()) std::memcpy(dst, v.data(), v.size() * sizeof(mjtNum));
-  };
   d->time = state.time;
-  put(state.qpos, d->qpos);
-  put(state.qvel, d->qvel);
-  put(state.act, d->act);
-  put(state.qacc_warmstart, d->qacc_warmstart);
-  put(state.ctrl, d->ctrl);
-  put(state.qfrc_applied, d->qfrc_applied);
-  put(state.xfrc_applied, d->xfrc_applied);
-  put(state.mocap_pos, d->mocap_pos);
-  put(state.mocap_quat, d->mocap_quat);
-  put(state.userdata, d->userdata);
+  for (const auto& e : Arrays(state)) {
+    if (e.length) mj_setState(m, d, e.vec->data(), e.component);
+  }
 }
 
 void RestoreState(const mjModel* m, mjData* d, const PhysicsState& state) {
@@ -180,12 +175,9 @@ void RestoreState(const mjModel* m, mjData* d, const PhysicsState& state) {
   mj_forward(m, d);
   // mj_forward normalises the quaternions in qpos in place; the next mj_step does that itself,
   // and normalising twice is not the identity in the last bit.
-  if (!state.qpos.empty()) {
-    std::memcpy(d->qpos, state.qpos.data(), state.qpos.size() * sizeof(mjtNum));
-  }
+  if (!state.qpos.empty()) mj_setState(m, d, state.qpos.data(), mjSTATE_QPOS);
   if (!state.qacc_warmstart.empty()) {
-    std::memcpy(d->qacc_warmstart, state.qacc_warmstart.data(),
-                state.qacc_warmstart.size() * sizeof(mjtNum));
+    mj_setState(m, d, state.qacc_warmstart.data(), mjSTATE_WARMSTART);
   }
 }
 
@@ -201,7 +193,10 @@ std::vector<std::uint8_t> SerializeState(const PhysicsState& state) {
   Put(&out, &version, 4);
   Put(&out, &header, 4);
   const StateLayout& l = state.layout;
-  for (std::int32_t v : {l.nq, l.nv, l.na, l.nu, l.nbody, l.nmocap, l.nuserdata}) Put(&out, &v, 4);
+  for (std::int32_t v : {l.nq, l.nv, l.na, l.nu, l.nbody, l.nmocap, l.nuserdata, l.nhistory, l.neq,
+                         l.npluginstate}) {
+    Put(&out, &v, 4);
+  }
   Put(&out, &state.time, 8);
   Put(&out, &payload, 8);
   for (const auto& e : Arrays(state)) {
@@ -230,7 +225,8 @@ PhysicsState DeserializeState(std::span<const std::uint8_t> bytes) {
   }
   PhysicsState s;
   StateLayout& l = s.layout;
-  for (int* f : {&l.nq, &l.nv, &l.na, &l.nu, &l.nbody, &l.nmocap, &l.nuserdata}) {
+  for (int* f : {&l.nq, &l.nv, &l.na, &l.nu, &l.nbody, &l.nmocap, &l.nuserdata, &l.nhistory, &l.neq,
+                 &l.npluginstate}) {
     *f = r.Get<std::int32_t>("layout");
   }
   s.time = r.Get<double>("time");

@@ -19,12 +19,8 @@ void InitBase(View* v, mjModel* m, mjData* d, int i) {
   v->data = d;
 }
 
-// Activation address of actuator i in MuJoCo 2.2.2: actuators with dynamics come last.
-int ActAdr(const mjModel* m, int i) {
-  if (m->actuator_dyntype[i] == mjDYN_NONE) return -1;
-  const int adr = i - (m->nu - m->na);
-  return adr >= 0 && adr < m->na ? adr : -1;
-}
+// Activation address of actuator i (MuJoCo's actuator_actadr; -1 without activation).
+int ActAdr(const mjModel* m, int i) { return m->actuator_actadr[i]; }
 
 }  // namespace
 

@@ -1,6 +1,7 @@
 #include "replay/format.h"
 
 #include <fmt/format.h>
+#include <mujoco/mujoco.h>
 #include <zlib.h>
 #include <zstd.h>
 
@@ -125,12 +126,22 @@ std::uint32_t CheckFileHeader(std::span<const std::uint8_t> bytes, const std::st
   }
   std::uint32_t version = 0;
   std::memcpy(&version, bytes.data() + 8, 4);
+  if (version >= 1 && version < kOldestRecordingFormatVersion) {
+    throw RecordingError(RecordingError::Reason::kVersion, path,
+                         fmt::format("recording format version {} was written by a URLab on "
+                                     "MuJoCo 2.2.2, whose model this URLab's MuJoCo {} cannot "
+                                     "load (it reads format {}): play it with the URLab that "
+                                     "recorded it",
+                                     version, mj_versionString(), kRecordingFormatVersion));
+  }
   if (version < kOldestRecordingFormatVersion || version > kRecordingFormatVersion) {
     throw RecordingError(RecordingError::Reason::kVersion, path,
-                         "recording format version " + std::to_string(version) +
-                             " is not supported (this URLab reads versions " +
-                             std::to_string(kOldestRecordingFormatVersion) + " to " +
-                             std::to_string(kRecordingFormatVersion) + ")");
+                         fmt::format("recording format version {} is not supported (this URLab "
+                                     "reads version {}{})",
+                                     version, kOldestRecordingFormatVersion,
+                                     kOldestRecordingFormatVersion == kRecordingFormatVersion
+                                         ? std::string()
+                                         : fmt::format(" to {}", kRecordingFormatVersion)));
   }
   return version;
 }
@@ -302,6 +313,7 @@ std::string EncodeInfo(const RecordingInfo& info) {
   nlohmann::json j = {{"format_version", kRecordingFormatVersion},
                       {"kind", info.kind},
                       {"urlab_version", info.urlab_version},
+                      {"mujoco_version", info.mujoco_version},
                       {"model_hash", HashText(info.model_hash)},
                       {"created", info.created},
                       {"scene", info.scene},
@@ -332,27 +344,22 @@ std::string EncodeInfo(const RecordingInfo& info) {
   out += info.mjcf;
   Put<std::uint64_t>(&out, info.mjb.size());
   out += info.mjb;
-  Put<std::uint64_t>(&out, info.extensions.size());
-  out += info.extensions;
   return out;
 }
 
-RecordingInfo DecodeInfo(std::string_view payload, std::uint32_t version) {
+RecordingInfo DecodeInfo(std::string_view payload) {
   Cursor c(payload, "header chunk");
   const std::string_view text = c.GetBytes(c.Get<std::uint64_t>());
   RecordingInfo info;
   info.mjcf = std::string(c.GetBytes(c.Get<std::uint64_t>()));
   info.mjb = std::string(c.GetBytes(c.Get<std::uint64_t>()));
-  if (version >= 2) info.extensions = std::string(c.GetBytes(c.Get<std::uint64_t>()));
-  if (!c.done()) {
-    throw std::runtime_error(version >= 2 ? "header chunk has bytes after the model's extensions"
-                                          : "header chunk has bytes after the model");
-  }
+  if (!c.done()) throw std::runtime_error("header chunk has bytes after the model");
   try {
     const nlohmann::json j = nlohmann::json::parse(text);
     info.format_version = j.at("format_version").get<std::uint32_t>();
     info.kind = j.at("kind").get<std::string>();
     info.urlab_version = j.at("urlab_version").get<std::string>();
+    info.mujoco_version = j.at("mujoco_version").get<std::string>();
     const std::string hash = j.at("model_hash").get<std::string>();
     std::size_t used = 0;
     info.model_hash = std::stoull(hash, &used, 16);
@@ -602,8 +609,7 @@ void ChunkEncoder::Add(const Gap& g) {
 
 // ---- DecodeChunk ----
 
-std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool sensordata,
-                                std::uint32_t version) {
+std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool sensordata) {
   std::vector<Record> records;
   Cursor c(raw, "chunk");
   const auto z = [](int n) { return std::vector<double>(static_cast<std::size_t>(n), 0.0); };
@@ -629,10 +635,6 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
           const auto groups = r.Get<std::uint8_t>();
           if (groups & ~kAllGroups) {
             throw std::runtime_error("unknown frame fields");
-          }
-          if ((groups & kGroupRaw) && version < 3) {
-            throw std::runtime_error("raw flags in a format " + std::to_string(version) +
-                                     " recording (they came with format 3)");
           }
           const auto unxor = [&](std::vector<double>* out, std::vector<double>* prev) {
             r.GetDoubles(out, prev->size());
@@ -726,7 +728,7 @@ std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& t, bool
           const std::string_view bytes = r.GetBytes(r.remaining());
           if (bytes.size() != sizeof(mjOption)) {
             throw std::runtime_error("physics options of " + std::to_string(bytes.size()) +
-                                     " bytes (MuJoCo 2.2.2's are " +
+                                     " bytes (this MuJoCo's are " +
                                      std::to_string(sizeof(mjOption)) + ")");
           }
           OptionsRecord o;

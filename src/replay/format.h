@@ -74,9 +74,8 @@ std::string EncodeEndChunk(std::uint32_t number, std::string_view totals_json);
 // The header chunk's payload (format 2): u64 length + JSON, u64 length + MJCF, u64 length + MJB,
 // u64 length + the model's extensions. Always written in the current format.
 std::string EncodeInfo(const RecordingInfo& info);
-// Reads a header chunk of format `version` (1: without the extensions section). Throws
-// std::runtime_error naming the field at fault.
-RecordingInfo DecodeInfo(std::string_view payload, std::uint32_t version = kRecordingFormatVersion);
+// Reads a header chunk. Throws std::runtime_error naming the field at fault.
+RecordingInfo DecodeInfo(std::string_view payload);
 
 // Encodes records into one chunk's raw payload. Array fields of a frame are stored XORed with
 // the previous frame's bits (zstd then compresses the mostly-zero bytes well); mocap poses and
@@ -119,9 +118,7 @@ class ChunkEncoder {
   std::vector<double> mocap_pos_, mocap_quat_, qfrc_, xfrc_;
 };
 
-// Decodes one chunk's raw payload, written in format `version` (raw flags from format 3). Throws
-// std::runtime_error saying which record is bad.
-std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& tables, bool sensordata,
-                                std::uint32_t version = kRecordingFormatVersion);
+// Decodes one chunk's raw payload. Throws std::runtime_error saying which record is bad.
+std::vector<Record> DecodeChunk(std::string_view raw, const ModelTables& tables, bool sensordata);
 
 }  // namespace urlab::replay::format

@@ -110,15 +110,17 @@ physics::Model LoadRecordedModel(const RecordingReader& reader) {
   if (info.mjb.empty()) {
     throw RecordingError(Reason::kCorrupt, reader.path(), "the recording holds no model");
   }
-  if (physics::ContentHash(info.mjb, info.extensions) != info.model_hash) {
+  if (physics::ContentHash(info.mjb) != info.model_hash) {
     throw RecordingError(Reason::kCorrupt, reader.path(),
                          "the recorded model does not match the header's model hash");
   }
   try {
-    return physics::Model::FromMjb(info.mjb, info.extensions);
+    return physics::Model::FromMjb(info.mjb);
   } catch (const Error& e) {
     throw RecordingError(Reason::kCorrupt, reader.path(),
-                         std::string("the recorded model cannot be loaded: ") + e.what());
+                         fmt::format("the recorded model (MuJoCo {}) cannot be loaded by MuJoCo "
+                                     "{}: {}",
+                                     info.mujoco_version, physics::MujocoVersion(), e.what()));
   }
 }
 
@@ -140,7 +142,7 @@ void CheckSameModel(const RecordingReader& reader, const physics::Model& m, bool
     physics::ModelPtr probe(mj_copyModel(nullptr, m.get()));
     if (!probe) throw Error("MuJoCo could not copy the model");
     probe->opt = recorded->opt;
-    h = physics::ContentHash(physics::MjbBytes(probe.get()), m.extension_text());
+    h = physics::ContentHash(physics::MjbBytes(probe.get()));
   }
   if (h != info.model_hash) {
     throw RecordingError(

@@ -19,9 +19,9 @@ using Reason = RecordingError::Reason;
 
 void DescribeModel(const physics::Model& m, RecordingInfo* info) {
   info->urlab_version = kVersion;
+  info->mujoco_version = physics::MujocoVersion();
   info->mjb = m.Mjb();
-  info->extensions = m.extension_text();
-  info->model_hash = physics::ContentHash(info->mjb, info->extensions);
+  info->model_hash = physics::ContentHash(info->mjb);
 }
 
 std::string HashText(std::uint64_t hash) { return fmt::format("{:016x}", hash); }
@@ -116,8 +116,7 @@ RecordingReader RecordingReader::Open(const std::string& path, Options options) 
       }
       try {
         r.info_ = format::DecodeInfo(
-            format::Decompress(stored, h.codec, h.raw_size, format::kMaxHeaderChunkRawBytes),
-            file_version);
+            format::Decompress(stored, h.codec, h.raw_size, format::kMaxHeaderChunkRawBytes));
       } catch (const std::exception& e) {
         throw RecordingError(Reason::kCorrupt, path, name + " (header): " + e.what());
       }
@@ -219,7 +218,7 @@ std::vector<Record> RecordingReader::ReadChunk(std::size_t index) const {
   try {
     records = format::DecodeChunk(
         format::Decompress(stored, h.codec, h.raw_size, format::kMaxDataChunkRawBytes),
-        info_.tables, info_.sensordata, info_.format_version);
+        info_.tables, info_.sensordata);
   } catch (const std::exception& e) {
     throw RecordingError(Reason::kCorrupt, path_, name + ": " + e.what());
   }

@@ -178,6 +178,30 @@ void Panel::DrawOptions(ViewerCore& core) {
   if (ImGui::SliderInt("noslip iterations", &noslip, 0, 100)) {
     core.SetOptions([noslip](mjOption& o) { o.noslip_iterations = noslip; }, "noslip_iterations");
   }
+  // MuJoCo 3's solver settings simulate shows: line search, convex collision (CCD) and SDF
+  // collision iterations.
+  const auto whole = [&](const char* label, int value, int low, int high, int mjOption::*field,
+                         const char* name) {
+    if (ImGui::SliderInt(label, &value, low, high)) {
+      core.SetOptions([value, field](mjOption& o) { o.*field = value; }, name);
+    }
+  };
+  whole("ls iterations", opt.ls_iterations, 0, 100, &mjOption::ls_iterations, "ls_iterations");
+  whole("ccd iterations", opt.ccd_iterations, 1, 200, &mjOption::ccd_iterations, "ccd_iterations");
+  whole("sdf iterations", opt.sdf_iterations, 1, 100, &mjOption::sdf_iterations, "sdf_iterations");
+  whole("sdf initpoints", opt.sdf_initpoints, 1, 100, &mjOption::sdf_initpoints, "sdf_initpoints");
+  const auto tolerance = [&](const char* label, mjtNum value, mjtNum mjOption::*field,
+                             const char* name) {
+    double v = value;
+    if (ImGui::InputDouble(label, &v, 0, 0, "%.3g", ImGuiInputTextFlags_EnterReturnsTrue) &&
+        std::isfinite(v) && v >= 0) {
+      core.SetOptions([v, field](mjOption& o) { o.*field = v; }, name);
+    }
+  };
+  tolerance("ls tolerance", opt.ls_tolerance, &mjOption::ls_tolerance, "ls_tolerance");
+  tolerance("noslip tolerance", opt.noslip_tolerance, &mjOption::noslip_tolerance,
+            "noslip_tolerance");
+  tolerance("ccd tolerance", opt.ccd_tolerance, &mjOption::ccd_tolerance, "ccd_tolerance");
   // Numbers take effect on Enter (a half-typed value never reaches the simulation).
   const auto number = [&](const char* label, double value, const char* format,
                           std::optional<double> ops::OptionsChange::*field) {

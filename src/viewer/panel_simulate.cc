@@ -196,10 +196,13 @@ void Panel::DrawVisualisation(ViewerCore& core) {
 void Panel::DrawGroups(ViewerCore& core) {
   if (!ImGui::CollapsingHeader("Groups")) return;
   mjvOption& opt = core.view().option();
-  const std::pair<const char*, mjtByte*> rows[] = {
-      {"geom (Alt+0-5)", opt.geomgroup}, {"site (Alt+Shift+0-5)", opt.sitegroup},
-      {"joint", opt.jointgroup},         {"tendon", opt.tendongroup},
-      {"actuator", opt.actuatorgroup},   {"skin", opt.skingroup}};
+  const std::pair<const char*, mjtByte*> rows[] = {{"geom (Alt+0-5)", opt.geomgroup},
+                                                   {"site (Alt+Shift+0-5)", opt.sitegroup},
+                                                   {"joint", opt.jointgroup},
+                                                   {"tendon", opt.tendongroup},
+                                                   {"actuator", opt.actuatorgroup},
+                                                   {"flex", opt.flexgroup},
+                                                   {"skin", opt.skingroup}};
   for (const auto& [name, groups] : rows) {
     ImGui::PushID(name);
     for (int g = 0; g < mjNGROUP; ++g) {

@@ -140,8 +140,7 @@ std::string ViewerCore::SaveMjb() {
   const std::string path = OutputPath("urlab_scene.mjb");
   const physics::Model model = session_->engine().CopyModel();  // under the step mutex
   WriteFileAtomic(path, model.Mjb());
-  SetStatus("saved the model to " + path +
-            (model.extensions().empty() ? "" : " (its software sensors are not in an MJB)"));
+  SetStatus("saved the model to " + path);
   return path;
 }
 

@@ -100,7 +100,7 @@ TEST_F(ConvertCliTest, AFlatMeshIsRefusedBeforeTheDecomposition) {
             1)
       << out;
   EXPECT_TRUE(Has(out, "urlab: error: " + mesh +
-                           ": MuJoCo 2.2.2 cannot use this mesh as the "
+                           ": MuJoCo cannot use this mesh as the "
                            "visual mesh"))
       << out;
   EXPECT_TRUE(Has(out, "flat")) << out;

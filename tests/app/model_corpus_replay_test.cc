@@ -1,13 +1,12 @@
-// Every model of the MuJoCo 3.x bridge tests (tests/data/mjcf/bridge3x), the robot-style corpus,
-// the examples' models and, when $URLAB_MUJOCO_MODELS names it, MuJoCo's own corpus (model/ and
-// test/ of the pinned release, brought by tools/corpus_check), recorded for one second through
+// Every model of the MuJoCo 3.x constructs corpus (tests/data/mjcf/bridge3x), the robot-style
+// corpus, the examples' models and, when $URLAB_MUJOCO_MODELS names it, MuJoCo's own corpus (model/
+// and test/ of the pinned release, brought by tools/corpus_check), recorded for one second through
 // a scene by the real binary (`urlab record MODEL.xml`: a scene of one articulation) and checked
-// with `urlab replay FILE --check`: every one re-simulates bit for bit. The recording carries
-// the model with its extensions (software sensors, gravcomp and dead-band springs, site
-// equalities; physics/model.h), so the bridged models re-simulate as they ran.
+// with `urlab replay FILE --check`: every one re-simulates bit for bit from the MJB the recording
+// carries.
 //
 // No model is excluded. Two models run at a time (the CI machine has 2 cores); each is recorded for
-// one wall-clock second at real-time pacing, so the whole test takes about 20 s plus loading.
+// one simulated second at real-time pacing, so the whole test takes about 20 s plus loading.
 #include <algorithm>
 #include <atomic>
 #include <filesystem>

@@ -1,4 +1,4 @@
-// Meshes MuJoCo 2.2.2 refuses as they are (an ASCII STL, a binary STL over 200,000 faces) become
+// Meshes MuJoCo refuses as they are (an ASCII STL, a binary STL over 200,000 faces) become
 // OBJ files it loads: in MJCF models (PrepareMeshAssets), as a prop's visual mesh
 // (BuildPropDocument), and the simplification that bounds them (LimitForMujoco).
 #include <gtest/gtest.h>
@@ -52,7 +52,7 @@ std::size_t RepeatedDirectedEdges(const TriMesh& m) {
   return repeated;
 }
 
-// 320,000 triangles: more than MuJoCo 2.2.2 reads from an STL.
+// 320,000 triangles: more than MuJoCo reads from an STL.
 constexpr double kR = 0.05, kr = 0.015;
 TriMesh BigTorus() { return Torus(kR, kr, 800, 200); }
 

@@ -110,7 +110,7 @@ class PropChecks : public urlab::testing::MujocoTest {};
 
 TEST_F(PropChecks, AFlatMeshIsRefusedBeforeTheDecompositionRuns) {
   TempDir dir;
-  // A flat square: MuJoCo 2.2.2 cannot compute its volume.
+  // A flat square: MuJoCo cannot compute its volume.
   Write(dir / "flat.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
   PropSpec spec;
   spec.name = "flat";

@@ -20,7 +20,7 @@ class ComposeTest : public testing::MujocoTest {
  protected:
   void SetUp() override {
     dir_ = testing::MakeTempDir("compose");
-    // Real asset files of every kind 2.2.2 names after their file.
+    // Real asset files of every kind MuJoCo names after their file.
     const std::string corpus = testing::TestData("mjcf/corpus/assets");
     fs::create_directories(dir_ + "/meshes/sub");
     fs::create_directories(dir_ + "/textures");
@@ -216,6 +216,57 @@ TEST_F(ComposeTest, SceneOptionsSettleDisagreements) {
   physics::ModelPtr m = Compile(settled);
   EXPECT_EQ(m->opt.timestep, 0.004);
   EXPECT_EQ(m->opt.cone, mjCONE_ELLIPTIC);
+}
+
+// What MuJoCo 3.17's attach loses and Compose puts back or refuses at its line (found on MuJoCo's
+// own test corpus): two unnamed keys, a weld to body2="world", a light aimed at the world, the
+// equality of a flex; a radial flexcomp directly in the world body (which it drops) is refused.
+TEST_F(ComposeTest, WorldReferencesUnnamedKeysAndFlexEqualitiesSurviveTheAttach) {
+  const mjcf::ComposeResult composed = ComposeOne(R"(<mujoco>
+  <worldbody>
+    <light name="spot" mode="targetbodycom" target="world" pos="0 0 4"/>
+    <body name="box" pos="0 0 1">
+      <freejoint/>
+      <geom type="box" size=".1 .1 .1"/>
+    </body>
+    <body name="cloth" pos="0 0 2">
+      <flexcomp name="sheet" type="grid" count="3 3 1" spacing=".1 .1 .1" mass="1" dim="2">
+        <edge equality="true"/>
+      </flexcomp>
+    </body>
+  </worldbody>
+  <equality><weld name="hold" body1="box" body2="world"/></equality>
+  <keyframe><key time="1"/><key time="2"/></keyframe>
+</mujoco>)");
+  const physics::ModelPtr model = Compile(composed);
+  const mjModel* m = model.get();
+  const int hold = mj_name2id(m, mjOBJ_EQUALITY, "r_hold");
+  ASSERT_GE(hold, 0);
+  EXPECT_EQ(m->eq_obj2id[hold], 0);  // the world
+  const int spot = mj_name2id(m, mjOBJ_LIGHT, "r_spot");
+  ASSERT_GE(spot, 0);
+  EXPECT_EQ(m->light_targetbodyid[spot], 0);
+  EXPECT_EQ(m->nkey, 2);
+  EXPECT_GE(mj_name2id(m, mjOBJ_KEY, "r_key0"), 0);
+  EXPECT_GE(mj_name2id(m, mjOBJ_KEY, "r_key1"), 0);
+  ASSERT_EQ(m->nflex, 1);
+  int flex_equalities = 0;
+  for (int e = 0; e < m->neq; ++e) flex_equalities += m->eq_type[e] == mjEQ_FLEX;
+  EXPECT_EQ(flex_equalities, 1);
+
+  try {
+    ComposeOne(R"(<mujoco>
+  <worldbody>
+    <flexcomp name="loose" type="box" count="4 4 4" spacing=".2 .2 .2" radius=".01" dim="3"
+              dof="radial"/>
+  </worldbody>
+</mujoco>)");
+    ADD_FAILURE() << "composed a flex the attach leaves out";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("robot.xml:3: r: "), std::string::npos) << what;
+    EXPECT_NE(what.find("leaves out the flex 'loose'"), std::string::npos) << what;
+  }
 }
 
 }  // namespace

@@ -83,6 +83,47 @@ TEST_F(StateTest, RestoreReproducesContinuationBitForBit) {
 }
 
 // Shows that the warm start is part of the state: dropping it changes the continuation.
+// MuJoCo 3's state beyond 2.2.2's: the history buffers of delayed actuators and sensors, and
+// equality constraints switched off at run time, travel with the state (mj_getState's
+// components): a restore continues bit for bit, and without them it would not.
+TEST_F(StateTest, HistoryAndEqActiveAreState) {
+  ModelPtr m = CompileXmlString(R"(<mujoco>
+  <option timestep="0.002"/>
+  <worldbody>
+    <body name="a"><joint name="h" axis="0 1 0"/><geom size=".1" pos=".2 0 0"/></body>
+    <body name="b" pos="0 0 1"><freejoint/><geom size=".1"/></body>
+  </worldbody>
+  <equality><weld name="hold" body1="b"/></equality>
+  <actuator><motor joint="h" nsample="4" delay="0.006"/></actuator>
+  <sensor><jointpos joint="h" nsample="3" delay="0.004"/></sensor>
+</mujoco>)");
+  DataPtr d = MakeData(m.get());
+  for (int i = 0; i < 50; ++i) {
+    d->ctrl[0] = std::sin(0.3 * i);
+    mj_step(m.get(), d.get());
+  }
+  d->eq_active[0] = 0;  // the box falls from here on
+  const PhysicsState s = CaptureState(m.get(), d.get());
+  EXPECT_GT(s.layout.nhistory, 0);
+  EXPECT_EQ(s.history.size(), static_cast<std::size_t>(s.layout.nhistory));
+  ASSERT_EQ(s.eq_active.size(), 1u);
+  EXPECT_EQ(s.eq_active[0], 0.0);
+  const auto run = [&](mjData* data) {
+    for (int i = 0; i < 20; ++i) {
+      data->ctrl[0] = 0;
+      mj_step(m.get(), data);
+    }
+    return CaptureState(m.get(), data);
+  };
+  const PhysicsState reference = run(d.get());
+  DataPtr restored = MakeData(m.get());
+  RestoreState(m.get(), restored.get(), s);
+  // (A fresh mjData's history holds no controls: without it the delayed motor acts otherwise.)
+  EXPECT_TRUE(run(restored.get()).BitwiseEquals(reference));
+  // The serialised form carries them.
+  EXPECT_TRUE(DeserializeState(SerializeState(s)).BitwiseEquals(s));
+}
+
 TEST_F(StateTest, WarmstartIsNecessary) {
   ModelPtr m = LoadXmlFile(kHumanoidPath);
   DataPtr d = MakeData(m.get());

@@ -1,7 +1,6 @@
-// Recording format 3: each command frame's raw flag (control_mode raw: the targets were the
-// actuators' controls, the controller did not run) is recorded with the frame, in every chunk;
-// a run with raw steps re-simulates bit for bit; format 2 files (no raw flags) are still read,
-// every frame as not raw, and a format 2 file carrying raw flags is refused as damaged.
+// Each command frame's raw flag (control_mode raw: the targets were the actuators' controls, the
+// controller did not run) is recorded with the frame, in every chunk; a run with raw steps
+// re-simulates bit for bit.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -66,36 +65,10 @@ class RawFlagTest : public urlab::testing::MujocoTest {
   std::string dir_ = urlab::testing::MakeTempDir("raw_flag");
 };
 
-// The file as format 2 wrote it: the same chunks under version 2 in the file header and the
-// header chunk's JSON (format 3 changed only the data records of raw frames).
-std::string AsFormat2(const std::string& path, const std::string& out) {
-  std::ifstream in(path, std::ios::binary);
-  const std::string bytes(std::istreambuf_iterator<char>(in), {});
-  format::ChunkHeader h;
-  EXPECT_TRUE(format::DecodeChunkHeader(
-      std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()) + format::kFileHeaderSize,
-                format::kChunkHeaderSize),
-      &h));
-  const std::size_t rest = format::kFileHeaderSize + format::kChunkHeaderSize + h.stored_size;
-  std::string payload = format::EncodeInfo(RecordingReader::Open(path).info());
-  const std::string key = "\"format_version\":" + std::to_string(kRecordingFormatVersion);
-  const std::size_t at = payload.find(key);
-  EXPECT_NE(at, std::string::npos);
-  payload.replace(at, key.size(), "\"format_version\":2");
-  std::string file = format::FileHeader();
-  file[8] = 2;  // version 2 (u32, little-endian)
-  format::ChunkHeader header;
-  header.kind = format::ChunkKind::kHeader;
-  header.raw_size = payload.size();
-  file += format::EncodeChunk(header, payload) + bytes.substr(rest);
-  std::ofstream(out, std::ios::binary) << file;
-  return out;
-}
-
 TEST_F(RawFlagTest, EachFramesRawFlagIsRecordedInEveryChunkAndReplaysBitForBit) {
   const Run run = RecordRun("raw.urrec", true);
   const RecordingReader reader = RecordingReader::Open(run.path);
-  EXPECT_EQ(reader.info().format_version, 3u);
+  EXPECT_EQ(reader.info().format_version, kRecordingFormatVersion);
   ASSERT_GT(reader.chunks().size(), 2u);
   std::size_t raw_frames = 0, after = 0, chunks_with_raw = 0;
   for (std::size_t c = 0; c < reader.chunks().size(); ++c) {
@@ -116,35 +89,6 @@ TEST_F(RawFlagTest, EachFramesRawFlagIsRecordedInEveryChunkAndReplaysBitForBit) 
   EXPECT_GT(raw_frames, 0u);
   EXPECT_GT(after, 0u) << "the frame patched back is not raw";
   EXPECT_GE(chunks_with_raw, 1u);
-  const ResimReport r = Resimulate(reader);
-  EXPECT_TRUE(r.identical) << r.str();
-
-  // Relabelled as format 2, whose records had no raw flags: refused as damaged, naming why.
-  const RecordingReader v2 = RecordingReader::Open(AsFormat2(run.path, dir_ + "/raw_v2.urrec"));
-  bool refused = false;
-  for (std::size_t c = 0; c < v2.chunks().size(); ++c) {
-    try {
-      v2.ReadChunk(c);
-    } catch (const RecordingError& e) {
-      refused = true;
-      EXPECT_EQ(e.reason(), RecordingError::Reason::kCorrupt);
-      EXPECT_NE(std::string(e.what()).find("raw flags in a format 2 recording"), std::string::npos)
-          << e.what();
-    }
-  }
-  EXPECT_TRUE(refused);
-}
-
-TEST_F(RawFlagTest, Format2RecordingsAreStillReadEveryFrameNotRaw) {
-  const Run run = RecordRun("plain.urrec", false);
-  const RecordingReader reader =
-      RecordingReader::Open(AsFormat2(run.path, dir_ + "/plain_v2.urrec"));
-  EXPECT_EQ(reader.info().format_version, 2u);
-  const std::vector<Frame> frames = FramesOf(ReadAllRecords(reader));
-  ASSERT_FALSE(frames.empty());
-  for (const Frame& f : frames) {
-    ASSERT_EQ(f.commands.raw, (std::vector<std::uint8_t>{0}));
-  }
   const ResimReport r = Resimulate(reader);
   EXPECT_TRUE(r.identical) << r.str();
 }

@@ -27,20 +27,20 @@ TriMesh ReadMesh(const std::string& path);
 TriMesh ParseStl(std::string_view bytes, const std::string& name);
 TriMesh ParseObj(std::string_view bytes, const std::string& name);
 
-// True for the formats MuJoCo 2.2.2 loads itself (.stl, .obj, .msh).
+// True for the formats MuJoCo loads itself (.stl, .obj, .msh).
 bool IsMujocoMeshFormat(const std::string& path);
 // True when ReadMesh can read the file's extension.
 bool IsReadableMeshFormat(const std::string& path);
 
-// MuJoCo 2.2.2 reads a binary STL of at most this many faces, and no ASCII STL.
+// MuJoCo reads a binary STL of at most this many faces, and no ASCII STL.
 constexpr std::size_t kMujocoMaxStlFaces = 200'000;
-// Why MuJoCo 2.2.2 cannot load the STL file `path` (ASCII, or more than kMujocoMaxStlFaces
+// Why MuJoCo cannot load the STL file `path` (ASCII, or more than kMujocoMaxStlFaces
 // faces), judged from its size and header as MuJoCo does; empty when it can, and when `path` is
 // not an .stl or cannot be opened (ReadMesh names those errors).
 std::string MujocoStlRefusal(const std::string& path);
 // `mesh` unchanged when it has at most kMujocoMaxStlFaces triangles; else simplified to at most
 // that many for MuJoCo to load and draw (SimplifyToAtMost from a 1024-cell grid, then
-// MakeEdgesOrientable so that 2.2.2's orientation check passes), and `note` says how.
+// MakeEdgesOrientable so that MuJoCo's orientation check passes), and `note` says how.
 TriMesh LimitForMujoco(TriMesh mesh, std::string* note);
 
 // The OBJ text with the faces ParseObj turned into the triangles `flip` marks reversed: such a

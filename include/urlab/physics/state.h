@@ -1,15 +1,12 @@
 #pragma once
-// Full physics state capture and restore for MuJoCo 2.2.2, which has no mj_getState/mj_setState.
+// Full physics state capture and restore, through MuJoCo's mj_getState/mj_setState.
 //
-// A PhysicsState holds every mjData field that mj_step reads before overwriting: time, qpos, qvel,
-// act, qacc_warmstart (the constraint solver's warm start), ctrl, qfrc_applied, xfrc_applied,
-// mocap_pos, mocap_quat and userdata. Everything else in mjData (kinematics, contacts, sensor
-// data, energy, actuator forces) is recomputed from these by mj_forward, so ApplyState followed
-// by mj_forward and stepping reproduces the original continuation bit for bit. 2.2.2 has no
-// plugin state and no separate activation address table (activations are the last `na`
-// actuators), so nothing else is needed. One caveat: with mjENBL_SENSORNOISE, 2.2.2 draws sensor
-// noise from the C library's global rand() state, which no state capture can cover; the
-// integrated state stays reproducible unless a controller feeds noisy sensors back.
+// A PhysicsState holds MuJoCo's integration state (mjSTATE_INTEGRATION) one component per array:
+// time, qpos, qvel, act, the history buffers of delayed controls and sensors, qacc_warmstart (the
+// constraint solver's warm start), ctrl, qfrc_applied, xfrc_applied, eq_active, mocap_pos,
+// mocap_quat, userdata and the engine plugins' state. Everything else in mjData (kinematics,
+// contacts, sensor data, energy, actuator forces) is recomputed from these by mj_forward, so
+// RestoreState followed by stepping reproduces the original continuation bit for bit.
 //
 // The functions are pure and may be called from any thread, but the mjData passed in must not be
 // stepped concurrently (see engine.h: use PhysicsEngine::Snapshot/Restore while it runs).
@@ -39,6 +36,9 @@ struct StateLayout {
   int nbody = 0;
   int nmocap = 0;
   int nuserdata = 0;
+  int nhistory = 0;      // mj_stateSize(m, mjSTATE_HISTORY)
+  int neq = 0;           // eq_active entries
+  int npluginstate = 0;  // plugin state entries
 
   // The layout of model `m`.
   static StateLayout Of(const mjModel* m);
@@ -61,6 +61,9 @@ struct PhysicsState {
   std::vector<mjtNum> mocap_pos;       // 3 * nmocap
   std::vector<mjtNum> mocap_quat;      // 4 * nmocap
   std::vector<mjtNum> userdata;        // nuserdata
+  std::vector<mjtNum> history;         // nhistory
+  std::vector<mjtNum> eq_active;       // neq (0 or 1)
+  std::vector<mjtNum> plugin_state;    // npluginstate
 
   // True when both states hold exactly the same bits (NaNs compare equal to identical NaNs).
   bool BitwiseEquals(const PhysicsState& other) const;
@@ -76,16 +79,17 @@ PhysicsState CaptureState(const mjModel* m, const mjData* d);
 void ApplyState(const mjModel* m, mjData* d, const PhysicsState& state);
 
 // ApplyState, then mj_forward so that every derived quantity (poses, contacts, sensors) matches
-// the state, then writes qpos and qacc_warmstart back: in MuJoCo 2.2.2 mj_forward normalises the
-// quaternions in qpos in place and overwrites the warm start with the new qacc, either of which
-// would make the next mj_step differ in the last bits from the original continuation. Throws
-// StateError like ApplyState.
+// the state, then writes qpos and qacc_warmstart back: mj_forward normalises the quaternions in
+// qpos in place and overwrites the warm start with the new qacc, either of which would make the
+// next mj_step differ in the last bits from the original continuation. Throws StateError like
+// ApplyState.
 void RestoreState(const mjModel* m, mjData* d, const PhysicsState& state);
 
 // Serialised format, little-endian: magic "URLS", u32 version, u32 header size, the layout
-// (7 x i32), f64 time, u64 payload byte count, the arrays in PhysicsState's order as f64, then a
-// u64 FNV-1a checksum of everything before it.
-inline constexpr std::uint32_t kStateFormatVersion = 1;
+// (10 x i32), f64 time, u64 payload byte count, the arrays in PhysicsState's order as f64, then a
+// u64 FNV-1a checksum of everything before it. Version 2 added history, eq_active and
+// plugin_state (MuJoCo 3); version 1 is refused.
+inline constexpr std::uint32_t kStateFormatVersion = 2;
 
 // Serialises `state` to bytes. Throws StateError when the state is inconsistent.
 std::vector<std::uint8_t> SerializeState(const PhysicsState& state);

@@ -1,8 +1,7 @@
 #pragma once
 // Playing recordings back.
 //
-// - LoadRecordedModel: the model a recording carries (its MJB and its extensions, physics/model.h),
-//   so playback needs no other file.
+// - LoadRecordedModel: the model a recording carries (its MJB), so playback needs no other file.
 // - Resimulate: dynamic re-simulation without a physics thread: restore the first state, then
 //   for every recorded step re-apply its inputs (ctrl, mocap poses, applied forces; the states
 //   and options recorded at each jump) and advance one iteration of a physics::StepCore (the
@@ -33,7 +32,7 @@
 
 namespace urlab::replay {
 
-// The recording's compiled model with its extensions, checked against the header's model hash.
+// The recording's compiled model, checked against the header's model hash.
 // Throws RecordingError (kCorrupt) when they do not match or MuJoCo refuses the MJB.
 physics::Model LoadRecordedModel(const RecordingReader& reader);
 
@@ -67,8 +66,8 @@ struct ResimOptions {
   std::uint64_t progress_every = 10000;
 };
 
-// Re-simulates the whole recording on a copy of `m` (with its extensions; the recorded model
-// when null). Throws RecordingError for a damaged chunk or another model.
+// Re-simulates the whole recording on a copy of `m` (the recorded model when null). Throws
+// RecordingError for a damaged chunk or another model.
 ResimReport Resimulate(const RecordingReader& reader, const physics::Model* m = nullptr,
                        const ResimOptions& options = {});
 

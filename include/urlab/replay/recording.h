@@ -6,26 +6,21 @@
 // codec, stored and raw payload sizes, a CRC-32 of the header's other fields and the stored
 // payload, and the chunk's first/last step, first/last time and frame count) and its payload,
 // zstd-compressed or stored:
-// - chunk 0, the header, four sections each a u64 length and its bytes: JSON metadata (format,
-//   URLab version, model hash, creation time, scene, options, the name tables), the composed
-//   scene's MJCF text, the compiled model (MJB) as it was when the recording started (its
-//   physics options included), and the model's extensions (physics/model.h: the software
-//   sensors, passive forces and site equalities URLab computes beside MuJoCo, as canonical JSON;
-//   empty when it has none), so a recording replays without the files it was made from. The
-//   model hash is physics::ContentHash over the MJB and the extensions' text: a model without
-//   extensions hashes as its MJB alone, as in format 1;
+// - chunk 0, the header, three sections each a u64 length and its bytes: JSON metadata (format,
+//   URLab and MuJoCo versions, model hash, creation time, scene, options, the name tables), the
+//   composed scene's MJCF text, and the compiled model (MJB, of the MuJoCo named) as it was when
+//   the recording started (its physics options included), so a recording replays without the
+//   files it was made from. The model hash is physics::ContentHash of the MJB;
 // - data chunks: records in order. Every data chunk normally starts with a full PhysicsState
 //   (a keyframe: seeking restores it), then frames (one per physics step: time, step, qpos,
 //   qvel, act, ctrl, and when they changed the mocap poses and applied forces; sensordata when
-//   recorded; when they changed, the command frames applied, with their raw flags from format 3),
+//   recorded; when they changed, the command frames applied, with their raw flags),
 //   markers where the state jumped (reset, restore, set state, options), the state
 //   right after each jump, changed physics options, and gaps (frames the recorder's ring lost);
 // - an end chunk (totals) once the recording was finished and renamed into place.
-// Format 1 (before the extensions section: three header sections) is still read, as a model
-// without extensions; a recording of a model that had some replays without them (it diverges
-// where they act). Format 2 (before the raw flags: its command frames say nothing of
-// control_mode raw) is still read, every frame as not raw; its data chunks are format 3's for a
-// run that never stepped raw. Other versions are refused, naming the version.
+// Format 4 came with MuJoCo 3 (the MJB is MuJoCo 3's; the header names the MuJoCo version).
+// Formats 1 to 3 hold MuJoCo 2.2.2 models, which MuJoCo 3 cannot load: they are refused with a
+// message saying so, as is any other version.
 // A recorder writes "NAME.part" and renames it when finished; a crash leaves the .part file with
 // every chunk flushed before it (a chunk spans at most about a second). A truncated or damaged
 // chunk ends the readable prefix: the chunks before it stay readable, and the error names it.
@@ -47,8 +42,8 @@
 namespace urlab::replay {
 
 // The version written; kOldestRecordingFormatVersion..kRecordingFormatVersion are read.
-inline constexpr std::uint32_t kRecordingFormatVersion = 3;
-inline constexpr std::uint32_t kOldestRecordingFormatVersion = 1;
+inline constexpr std::uint32_t kRecordingFormatVersion = 4;
+inline constexpr std::uint32_t kOldestRecordingFormatVersion = 4;
 
 // A file that is not a readable recording (bad magic, unsupported version, damaged or truncated
 // chunk, wrong model). what() names the file, and the chunk when one is at fault.
@@ -75,19 +70,19 @@ struct RecordingInfo {
   std::uint32_t format_version = kRecordingFormatVersion;
   std::string kind = "recording";  // "recording" or "snapshot"
   std::string urlab_version;
+  std::string mujoco_version;    // of the MuJoCo that wrote the MJB, e.g. "3.17.0"
   std::uint64_t model_hash = 0;  // physics::Model::Hash of the recorded model
   std::string created;           // UTC, ISO 8601
   std::string scene;             // the scene file it was recorded from ("" when unknown)
   std::string mjcf;              // the composed scene's MJCF
   std::string mjb;               // the compiled model, MuJoCo binary
-  std::string extensions;        // its extensions' canonical text ("" : none; format 1: none)
   ModelTables tables;
   bool sensordata = false;           // frames carry sensordata
   double keyframe_interval = 1;      // simulated seconds between keyframes
   std::string compression = "zstd";  // "zstd" or "none"
 };
 
-// Sets info->urlab_version, info->mjb, info->extensions and info->model_hash from `m` (saving
+// Sets info->urlab_version, info->mujoco_version, info->mjb and info->model_hash from `m` (saving
 // the model once). Reads the mjModel: where its owner allows (the engine's: WithLockedData).
 void DescribeModel(const physics::Model& m, RecordingInfo* info);
 // 16 hexadecimal digits.
@@ -130,8 +125,8 @@ struct Marker {
 // True for a jump whose state the recorder did not capture (kMarkerNotCaptured).
 bool IsUncapturedJump(const Marker& m);
 
-// Physics options changed (the whole mjOption after the change, raw bytes of MuJoCo 2.2.2's
-// struct).
+// Physics options changed (the whole mjOption after the change, raw bytes of the struct of the
+// MuJoCo the header names).
 struct OptionsRecord {
   std::vector<std::uint8_t> option;
 };

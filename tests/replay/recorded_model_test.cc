@@ -1,8 +1,9 @@
-// Recordings carry the model with its extensions (physics/model.h) and hash both: a recording of
-// a model with software sensors and passive forces re-simulates bit for bit from the file alone;
-// a model whose extensions differ is "another model"; a recording started after the physics
-// options changed at run time is accepted by the engine that made it and replays those options;
-// format 1 files (no extensions section) are still read; other versions are refused by number.
+// Recordings carry the compiled model (MuJoCo 3's MJB, the MuJoCo version named) and its hash: a
+// recording of a model using gravity compensation, a dead-band spring and a joint actuator force
+// sensor (which MuJoCo computes itself) re-simulates bit for bit from the file alone; a model
+// that differs only in gravcomp is "another model"; a recording started after the physics options
+// changed at run time is accepted by the engine that made it and replays those options; formats
+// 1 to 3 (MuJoCo 2.2.2 models) are refused saying so, newer versions by number.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <string>
 
 #include "replay/format.h"
 #include "support/mujoco_test.h"
@@ -28,12 +30,12 @@ namespace fs = std::filesystem;
 using physics::PhysicsEngine;
 
 // An arm held up by gravity compensation, a ball hanging from a dead-band rope spring, and a
-// joint actuator force sensor (3.x constructs the runtime computes for 2.2.2).
-constexpr const char* kExtensionsXml = R"(<mujoco>
+// joint actuator force sensor (3.x constructs URLab once computed beside MuJoCo 2.2.2).
+constexpr const char* kModelXml = R"(<mujoco>
   <option timestep="0.002"/>
   <worldbody>
     <site name="anchor" pos="0 0 2"/>
-    <body name="arm" pos="1 0 1">
+    <body name="arm" pos="1 0 1" gravcomp="%GRAVCOMP%">
       <joint name="h" axis="0 1 0" damping="0.1"/>
       <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.05" mass="1"/>
     </body>
@@ -44,25 +46,23 @@ constexpr const char* kExtensionsXml = R"(<mujoco>
     </body>
   </worldbody>
   <tendon>
-    <spatial name="rope"><site site="anchor"/><site site="top"/></spatial>
+    <spatial name="rope" stiffness="200" springlength="0.8 0.95"><site site="anchor"/><site site="top"/></spatial>
   </tendon>
   <actuator>
     <motor name="m" joint="h" gear="2"/>
   </actuator>
   <sensor>
-    <user name="h_force" objtype="joint" objname="h" datatype="real" needstage="acc" dim="1"/>
+    <jointactuatorfrc name="h_force" joint="h"/>
   </sensor>
 </mujoco>)";
 
 physics::Model Compile(double gravcomp = 1.0) {
-  physics::SoftwareModelSpec e;
-  e.sensors = {{"h_force", physics::SoftwareSensorKind::kJointActuatorForce, {}}};
-  e.gravcomp = {{"arm", gravcomp}};
-  e.deadband_springs = {{"rope", 200, 0.8, 0.95}};
-  return physics::Model(physics::CompileXmlString(kExtensionsXml), std::move(e));
+  std::string xml = kModelXml;
+  xml.replace(xml.find("%GRAVCOMP%"), 10, std::to_string(gravcomp));
+  return physics::Model(physics::CompileXmlString(xml));
 }
 
-class ModelExtensionsTest : public urlab::testing::MujocoTest {
+class RecordedModelTest : public urlab::testing::MujocoTest {
  protected:
   // Records `steps` steps of `engine` (driven with changing controls) to `name`.
   // `before_start` runs between the recorder's construction (in begin-play) and its Start.
@@ -79,19 +79,19 @@ class ModelExtensionsTest : public urlab::testing::MujocoTest {
     recording.Step(steps);
     return recording.Finish();
   }
-  std::string dir_ = urlab::testing::MakeTempDir("model_extensions");
+  std::string dir_ = urlab::testing::MakeTempDir("recorded_model");
 };
 
-TEST_F(ModelExtensionsTest, ARecordingReSimulatesWithItsExtensionsFromTheFileAlone) {
+TEST_F(RecordedModelTest, ARecordingReSimulatesFromTheFileAlone) {
   PhysicsEngine engine(Compile());
   engine.SetPaused(true);
   const std::string path = RecordRun(engine, "ext.urrec", 400);
   const RecordingReader reader = RecordingReader::Open(path);
   EXPECT_EQ(reader.info().format_version, kRecordingFormatVersion);
-  EXPECT_EQ(reader.info().extensions, engine.owned_model().extension_text());
+  EXPECT_EQ(reader.info().mujoco_version, physics::MujocoVersion());
   EXPECT_EQ(reader.info().model_hash, engine.owned_model().Hash());
   EXPECT_EQ(reader.frame_count(), 400u);
-  // The software sensor was computed while recording (not left at 0).
+  // MuJoCo computed the sensor while recording (not left at 0).
   bool sensor_moved = false;
   for (const Record& r : ReadAllRecords(reader)) {
     if (const auto* f = std::get_if<Frame>(&r))
@@ -105,17 +105,16 @@ TEST_F(ModelExtensionsTest, ARecordingReSimulatesWithItsExtensionsFromTheFileAlo
   const physics::Model same = Compile();
   const ResimReport on_scene = Resimulate(reader, &same);
   EXPECT_TRUE(on_scene.identical) << on_scene.str();
-  // The loaded model carries them.
   const physics::Model loaded = LoadRecordedModel(reader);
-  EXPECT_EQ(loaded.extensions().gravcomp.size(), 1u);
+  EXPECT_EQ(loaded->body_gravcomp[mj_name2id(loaded.get(), mjOBJ_BODY, "arm")], 1.0);
   EXPECT_EQ(loaded.Hash(), reader.info().model_hash);
 }
 
-TEST_F(ModelExtensionsTest, OtherExtensionsAreAnotherModel) {
+TEST_F(RecordedModelTest, AnotherGravityCompensationIsAnotherModel) {
   PhysicsEngine engine(Compile(1.0));
   engine.SetPaused(true);
   const RecordingReader reader = RecordingReader::Open(RecordRun(engine, "a.urrec", 50));
-  const physics::Model half = Compile(0.5);  // the same MJB, other gravity compensation
+  const physics::Model half = Compile(0.5);
   try {
     Resimulate(reader, &half);
     FAIL() << "re-simulated on another model";
@@ -125,7 +124,7 @@ TEST_F(ModelExtensionsTest, OtherExtensionsAreAnotherModel) {
   }
 }
 
-TEST_F(ModelExtensionsTest, OptionsChangedAtRunTimeAreRecordedAndReplayed) {
+TEST_F(RecordedModelTest, OptionsChangedAtRunTimeAreRecordedAndReplayed) {
   PhysicsEngine engine(Compile());
   engine.SetPaused(true);
   // As the step server's set_sim_options does while the simulation plays, before the recording
@@ -147,65 +146,35 @@ TEST_F(ModelExtensionsTest, OptionsChangedAtRunTimeAreRecordedAndReplayed) {
   EXPECT_TRUE(on_fresh.identical) << on_fresh.str();
 }
 
-// Rewrites a recording of a model without extensions as format 1 wrote it: file header version
-// 1, the header chunk without the extensions section, the data and end chunks as they are.
 std::string Slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-std::string AsFormat1(const std::string& path, const std::string& out) {
-  const std::string bytes = Slurp(path);
-  format::ChunkHeader h;
-  EXPECT_TRUE(format::DecodeChunkHeader(
-      std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()) + format::kFileHeaderSize,
-                format::kChunkHeaderSize),
-      &h));
-  const std::size_t rest = format::kFileHeaderSize + format::kChunkHeaderSize + h.stored_size;
-  const RecordingInfo info = RecordingReader::Open(path).info();
-  EXPECT_TRUE(info.extensions.empty());
-  std::string payload = format::EncodeInfo(info);
-  payload.resize(payload.size() - 8);  // the empty extensions section: its length only
-  const std::string key = "\"format_version\":" + std::to_string(kRecordingFormatVersion);
-  const std::size_t at = payload.find(key);
-  EXPECT_NE(at, std::string::npos);
-  payload.replace(at, key.size(), "\"format_version\":1");
-  std::string file = format::FileHeader();
-  file[8] = 1;  // version 1 (u32, little-endian)
-  format::ChunkHeader header;
-  header.kind = format::ChunkKind::kHeader;
-  header.raw_size = payload.size();
-  file += format::EncodeChunk(header, payload) + bytes.substr(rest);
-  std::ofstream(out, std::ios::binary) << file;
-  return out;
-}
-
-TEST_F(ModelExtensionsTest, Format1RecordingsAreStillReadAndOthersRefusedByVersion) {
-  PhysicsEngine engine(
-      physics::CompileXmlString(kExtensionsXml));  // no extensions, as format 1 knew
+TEST_F(RecordedModelTest, FormatsOfMujoco222AndNewerOnesAreRefusedSayingWhy) {
+  PhysicsEngine engine(Compile());
   engine.SetPaused(true);
-  const std::string now = RecordRun(engine, "now.urrec", 100, false);
-  const std::string v1 = AsFormat1(now, dir_ + "/v1.urrec");
-  const RecordingReader reader = RecordingReader::Open(v1);
-  EXPECT_EQ(reader.info().format_version, 1u);
-  EXPECT_EQ(reader.info().model_hash, RecordingReader::Open(now).info().model_hash);
-  const ResimReport r = Resimulate(reader);
-  EXPECT_TRUE(r.identical) << r.str();
-
-  std::string bytes = Slurp(now);
-  const std::uint32_t next = kRecordingFormatVersion + 1;
-  bytes[8] = static_cast<char>(next);
-  const std::string newer = dir_ + "/newer.urrec";
-  std::ofstream(newer, std::ios::binary) << bytes;
-  try {
-    RecordingReader::Open(newer);
-    FAIL() << "read a format this build does not know";
-  } catch (const RecordingError& e) {
-    EXPECT_EQ(e.reason(), RecordingError::Reason::kVersion);
-    EXPECT_NE(std::string(e.what()).find("format version " + std::to_string(next)),
-              std::string::npos)
-        << e.what();
+  const std::string bytes = Slurp(RecordRun(engine, "now.urrec", 100, false));
+  const auto refused = [&](std::uint32_t version, const std::string& expected) {
+    std::string copy = bytes;
+    copy[8] = static_cast<char>(version);  // the file header's version (u32, little-endian)
+    const std::string path = dir_ + "/v" + std::to_string(version) + ".urrec";
+    std::ofstream(path, std::ios::binary) << copy;
+    try {
+      RecordingReader::Open(path);
+      ADD_FAILURE() << "read format " << version;
+    } catch (const RecordingError& e) {
+      EXPECT_EQ(e.reason(), RecordingError::Reason::kVersion);
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+  };
+  for (std::uint32_t v : {1u, 2u, 3u}) {
+    refused(v, "recording format version " + std::to_string(v) +
+                   " was written by a URLab on MuJoCo 2.2.2");
   }
+  refused(kRecordingFormatVersion + 1,
+          "format version " + std::to_string(kRecordingFormatVersion + 1) + " is not supported");
 }
 
 }  // namespace
