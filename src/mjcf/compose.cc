@@ -1,7 +1,6 @@
 #include "urlab/mjcf/compose.h"
 
 #include <algorithm>
-#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -76,80 +75,25 @@ void NameUnnamed(mjSpec* spec) {
   }
 }
 
-// What MuJoCo 3.17's mjs_attach loses that Compose puts back: it prefixes a reference to the world
-// body by name ("world" becomes "{prefix}world", which names nothing, and the element is dropped
-// or the compile fails), and it leaves out the equalities of a flex.
-struct AttachRepairs {
-  struct FlexEquality {
-    std::string name, flex;
-    mjtEq type;
-    mjtBool active;
-    std::array<double, mjNEQDATA> data;
-    std::array<mjtNum, mjNREF> solref;
-    std::array<mjtNum, mjNIMP> solimp;
-  };
-  std::vector<FlexEquality> flex_equalities;
-  std::vector<std::string> flexes;  // every flex of the articulation
-};
-
-// Before the attach: a connect or weld to body2 "world" names the world the default way (no
-// body2); the flex equalities are noted.
-AttachRepairs PrepareAttach(mjSpec* child) {
-  AttachRepairs out;
-  for (mjsElement* e = mjs_firstElement(child, mjOBJ_FLEX); e; e = mjs_nextElement(child, e)) {
-    out.flexes.push_back(NameOf(e));
-  }
+// MuJoCo 3.17's mjs_attach prefixes a reference to the world body by name too ("world" becomes
+// "{prefix}world", which names nothing: the element is dropped, or the compile fails). Before
+// the attach, a connect or weld to body2 "world" names the world the default way (no body2).
+void PrepareAttach(mjSpec* child) {
   for (mjsElement* e = mjs_firstElement(child, mjOBJ_EQUALITY); e; e = mjs_nextElement(child, e)) {
     mjsEquality* q = mjs_asEquality(e);
     if ((q->type == mjEQ_CONNECT || q->type == mjEQ_WELD) && q->objtype == mjOBJ_BODY &&
         SpecString(q->name2) == "world" && SpecString(q->name1) != "world") {
       mjs_setString(q->name2, "");
     }
-    if (q->type == mjEQ_FLEX || q->type == mjEQ_FLEXVERT || q->type == mjEQ_FLEXSTRAIN) {
-      AttachRepairs::FlexEquality f{NameOf(e), SpecString(q->name1), q->type, q->active, {}, {},
-                                    {}};
-      std::copy(q->data, q->data + mjNEQDATA, f.data.begin());
-      std::copy(q->solref, q->solref + mjNREF, f.solref.begin());
-      std::copy(q->solimp, q->solimp + mjNIMP, f.solimp.begin());
-      out.flex_equalities.push_back(std::move(f));
-    }
   }
-  return out;
 }
 
-// After the attach: lights aimed at "{prefix}world" aim at the world again; flex equalities the
-// attach left out are added to the scene under their prefixed names.
-void FinishAttach(mjSpec* root, const std::string& prefix, const AttachRepairs& repairs,
-                  const std::string& file, const std::string& articulation) {
+// After the attach: lights aimed at "{prefix}world" aim at the world again.
+void FinishAttach(mjSpec* root, const std::string& prefix) {
   const std::string lost_world = prefix + "world";
   for (mjsElement* e = mjs_firstElement(root, mjOBJ_LIGHT); e; e = mjs_nextElement(root, e)) {
     mjsLight* light = mjs_asLight(e);
     if (SpecString(light->targetbody) == lost_world) mjs_setString(light->targetbody, "world");
-  }
-  for (const std::string& flex : repairs.flexes) {
-    if (!mjs_findElement(root, mjOBJ_FLEX, (prefix + flex).c_str())) {
-      // The attach drops a flex whose <flexcomp> sits in the world body itself with radial or
-      // trilinear degrees of freedom (measured on MuJoCo 3.17.0).
-      throw InputError(
-          {file, LineContaining(file, "<flexcomp")},
-          articulation + ": MuJoCo " + mj_versionString() + "'s mjs_attach leaves out the flex '" +
-              flex +
-              "' (a <flexcomp dof=\"radial\" or \"trilinear\"> directly in <worldbody>): "
-              "put it inside a named <body>");
-    }
-  }
-  for (const AttachRepairs::FlexEquality& f : repairs.flex_equalities) {
-    const std::string name = prefix + f.name;
-    if (mjs_findElement(root, mjOBJ_EQUALITY, name.c_str())) continue;
-    mjsEquality* q = mjs_addEquality(root, nullptr);
-    mjs_setName(q->element, name.c_str());
-    q->type = f.type;
-    q->objtype = mjOBJ_FLEX;
-    mjs_setString(q->name1, (prefix + f.flex).c_str());
-    q->active = f.active;
-    std::copy(f.data.begin(), f.data.end(), q->data);
-    std::copy(f.solref.begin(), f.solref.end(), q->solref);
-    std::copy(f.solimp.begin(), f.solimp.end(), q->solimp);
   }
 }
 
@@ -452,7 +396,7 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs,
       layout.own_counts[type] = n;
     }
 
-    const AttachRepairs repairs = PrepareAttach(child);
+    PrepareAttach(child);
     mjsFrame* frame = mjs_addFrame(world, nullptr);
     std::copy(in.placement.pos.begin(), in.placement.pos.end(), frame->pos);
     std::copy(in.placement.quat.begin(), in.placement.quat.end(), frame->quat);
@@ -461,7 +405,7 @@ ComposeResult Compose(std::vector<ArticulationInput> inputs,
       throw InputError({in.file, 0}, in.name + ": MuJoCo could not attach it: " +
                                          TidyMujocoMessage(mjs_getError(root)));
     }
-    FinishAttach(root, prefix, repairs, in.file, in.name);
+    FinishAttach(root, prefix);
     in.spec.reset();
     result.articulations.push_back(std::move(layout));
   }

@@ -26,6 +26,7 @@ void CopyFrameToData(const mjModel* m, mjData* d, const physics::StateFrame& f) 
   mj_kinematics(m, d);
   mj_comPos(m, d);
   mj_camlight(m, d);
+  mj_flex(m, d);  // the flexes' vertex positions, which a flex is drawn from
   mj_tendon(m, d);
   mj_transmission(m, d);
 }
