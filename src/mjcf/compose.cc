@@ -1,6 +1,7 @@
 #include "urlab/mjcf/compose.h"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
