@@ -4,7 +4,9 @@
 // and its schema, actuator kinds, original names, cameras as a map and the free-base fields;
 // then one per free body of no articulation, net/free_bodies.h),
 // `global_cameras`, and on request the `raw_joints` / `raw_actuators` tables of the compiled
-// model. Built from the step server's tables and the compiled model.
+// model. Every element of `entities` carries its own raw tables (raw_model, raw_joints,
+// raw_actuators, raw_sensors): the 2026 client builds its name maps from them, unasked. Built
+// from the step server's tables and the compiled model.
 // Thread: the step server's I/O thread (reads the controllers' gains through ops::Gains).
 #include <mujoco/mujoco.h>
 
@@ -27,6 +29,15 @@ Json Entities(world::Session& session, const std::vector<ArticulationTopics>& ta
               const Json& ours);
 // Cameras that belong to no articulation, as a map like camera_topics.
 Json GlobalCameras(const mjModel* m, const world::CameraStreams* cameras);
+// One articulation's raw tables, in the order of its own vectors (arts[prefix].qpos, .ctrl,
+// .sensors), names short, ids and addresses the compiled model's:
+// joints {name, id, type (mjtJoint), qpos_adr, qvel_adr, range, body_id, qpos_index, qvel_index},
+// actuators {name, id, ctrlrange, gear [6], joint (short; null without one), index},
+// sensors {name, id, type (mjtSensor), adr, dim}.
+struct RawTables {
+  Json joints = Json::array(), actuators = Json::array(), sensors = Json::array();
+};
+RawTables EntityRawTables(const mjModel* m, const ArticulationTopics& t);
 // Every joint: {name (short), id, type (mjtJoint), qpos_adr, qvel_adr, range, body_id}.
 Json RawJoints(const world::Session& session);
 // Every actuator: {name (short), id, ctrlrange, gear, joint (short; null without one)}.

@@ -49,6 +49,23 @@ NetworkFiles::NetworkFiles(const std::string& dir, std::vector<std::string> inpu
   while (dir_.size() > 1 && dir_.back() == '/') dir_.pop_back();
 }
 
+std::string NetworkFiles::NameOf(const std::string& given, const char* field) const {
+  fs::path p(given);
+  if (given.empty() || !p.is_absolute()) return given;
+  p = p.lexically_normal();
+  const std::string leaf = p.filename().string();
+  const fs::path folder = p.parent_path();
+  std::error_code ec;
+  // The same folder by another spelling (a link to it, a bind mount) writes and reads in it
+  // too: the file is always opened as dir_/leaf, never through `given`.
+  if (!leaf.empty() && (folder == fs::path(dir_) || fs::equivalent(folder, dir_, ec))) {
+    return leaf;
+  }
+  Fail("bad_file_name", std::string("'") + field + "': " + given +
+                            " is not a file in the server's files folder " + dir_ +
+                            " (network.files_dir); give a file name, or a path directly in it");
+}
+
 std::string NetworkFiles::PathOf(const std::string& name, const char* field) const {
   const auto refuse = [&](const std::string& why) {
     Fail("bad_file_name", std::string("'") + field +

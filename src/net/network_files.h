@@ -33,6 +33,12 @@ class NetworkFiles {
 
   const std::string& dir() const { return dir_; }
 
+  // The file name a path a client gave names (request field `field`), for the clients that send
+  // the absolute paths their users type (the 2026 dialect's recording_save and replay_load): an
+  // absolute path whose folder is this folder (after removing "." and "..", or the same folder
+  // reached another way) is its last component, judged then as any name; an absolute path
+  // elsewhere is refused (bad_file_name, naming the folder); anything else is returned as it is.
+  std::string NameOf(const std::string& given, const char* field) const;
   // The path of the file a client called `name` (request field `field`); throws bad_file_name.
   std::string PathOf(const std::string& name, const char* field) const;
   // A file to read: an existing regular file (not a link) under the folder.

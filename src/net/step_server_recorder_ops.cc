@@ -111,6 +111,11 @@ StepServer::Outcome StepServer::RecordingStop(Request&) {
 
 StepServer::Outcome StepServer::RecordingSave(Request& r) {
   RequireRecorder();
+  // The 2026 client sends the path its user gives, usually absolute: one in the files folder is
+  // the name there (NetworkFiles::NameOf); WritablePath then judges it as any name.
+  if (const auto it = r.body.find("path"); r.v2026 && it != r.body.end() && it->is_string()) {
+    *it = files_.NameOf(it->get<std::string>(), "path");
+  }
   const std::string path = WritablePath(r);
   std::string saved;
   RunFileOp([&] { saved = ops::SaveRecording(recorder_, path); });
@@ -158,18 +163,9 @@ StepServer::Outcome StepServer::SnapshotLoad(Request& r) {
 
 StepServer::Outcome StepServer::ReplayLoad(Request& r) {
   std::string name = String(r.body["path"], "path");
-  if (r.v2026) {
-    // The 2026 client names a file by the absolute_path recording_save answered: one inside
-    // the files folder is the name under it (any other stays refused as a path).
-    std::error_code ec;
-    const std::filesystem::path dir =
-        std::filesystem::absolute(files_.dir(), ec).lexically_normal();
-    const std::filesystem::path given(name);
-    if (!ec && given.is_absolute()) {
-      const std::filesystem::path rel = given.lexically_normal().lexically_relative(dir);
-      if (!rel.empty() && *rel.begin() != "..") name = rel.string();
-    }
-  }
+  // The 2026 client sends the path its user gives (often recording_save's absolute_path): one
+  // in the files folder is the name there; any other stays refused.
+  if (r.v2026) name = files_.NameOf(name, "path");
   const std::string path = files_.ForReading(name, "path");
   std::string id;
   const replay::RecordingReader* rd = nullptr;

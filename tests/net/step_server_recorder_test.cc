@@ -130,6 +130,48 @@ TEST_F(StepServerRecorderTest, RecorderErrorsHaveTheirCodes) {
   EXPECT_EQ(c().Op("recording_status")["active"], false);
 }
 
+// The 2026 client sends the path its user gives: recording_save and replay_load take an
+// absolute path directly in the files folder in its sessions; every other path, operation and
+// client keeps its refusal.
+TEST_F(StepServerRecorderTest, A2026SessionSavesAndLoadsByAnAbsolutePathInTheFilesFolder) {
+  Play();  // our session: c()
+  Client v2026(ctx_, rpc());
+  ASSERT_EQ(v2026.Hello({{"client_version", "urlab_bridge/2026.1.0"}})["op"], "hello_ok");
+  ASSERT_EQ(v2026.Op("set_mode", {{"mode", "stepped"}})["op"], "set_mode_ok");
+  ASSERT_EQ(v2026.Op("recording_start")["op"], "recording_start_ok");
+  ASSERT_TRUE(WaitFor([&] {
+    v2026.Op("step", {{"n_steps", 1}});
+    return v2026.Op("recording_status")["frames"] > 2;
+  }));
+  ASSERT_EQ(v2026.Op("recording_stop")["op"], "recording_stop_ok");
+
+  const std::string target = dir_ + "/typed.urrec";
+  const Json saved = v2026.Op("recording_save", {{"path", target}});
+  ASSERT_EQ(saved["op"], "recording_save_ok") << saved.dump();
+  EXPECT_EQ(saved["absolute_path"], target);
+  EXPECT_TRUE(fs::is_regular_file(target));
+  const Json again = v2026.Op("recording_save", {{"path", dir_ + "/./typed.urrec"}});
+  EXPECT_EQ(again["code"], "file_exists") << again.dump();
+  const Json loaded = v2026.Op("replay_load", {{"path", target}});
+  EXPECT_EQ(loaded["op"], "replay_load_ok") << loaded.dump();
+
+  // Outside the folder, into a subfolder, out through a link, a link at the name: refused.
+  const std::string outside = urlab::testing::MakeTempDir("outside");
+  EXPECT_EQ(v2026.Op("recording_save", {{"path", outside + "/x.urrec"}})["code"], "bad_file_name");
+  EXPECT_EQ(v2026.Op("recording_save", {{"path", dir_ + "/../x.urrec"}})["code"], "bad_file_name");
+  fs::create_directory_symlink(outside, dir_ + "/out");
+  EXPECT_EQ(v2026.Op("recording_save", {{"path", dir_ + "/out/x.urrec"}})["code"], "bad_file_name");
+  fs::create_symlink(outside + "/y.urrec", dir_ + "/link.urrec");
+  EXPECT_EQ(v2026.Op("recording_save", {{"path", dir_ + "/link.urrec"}})["code"],
+            "path_not_writable");
+  EXPECT_EQ(v2026.Op("replay_load", {{"path", outside + "/x.urrec"}})["code"], "bad_file_name");
+  EXPECT_TRUE(fs::is_empty(outside));
+  // Snapshots take names only, in both vocabularies.
+  EXPECT_EQ(v2026.Op("snapshot_save", {{"path", dir_ + "/snap.bin"}})["code"], "bad_file_name");
+  // Our vocabulary: names only (replay_load needs the lease, which the 2026 session holds).
+  EXPECT_EQ(c().Op("recording_save", {{"path", dir_ + "/ours.urrec"}})["code"], "bad_file_name");
+}
+
 TEST_F(StepServerRecorderTest, WithoutARecorderRecordingIsNotReadyButSnapshotsWork) {
   Play(/*with_recorder=*/false);
   const Json r = c().Op("recording_start");

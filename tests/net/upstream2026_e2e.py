@@ -143,8 +143,10 @@ def exercise(ctx, a, tmp, art, keyframe, free_base):
     names = [u["name"] for u in sorted(actuators, key=lambda u: u["id"])]
     check(set(e["actuator_types"]) == set(names), f"actuator_types {e['actuator_types']}")
     check(any(j["type"] == 0 for j in joints) == free_base, "free joint type (mjJNT_FREE 0)")
-    # Names the client matches by prefix.
-    check(all(v.startswith(art + "_") for v in e["original_names"].values()),
+    # Names the client matches by prefix: by category, live (prefixed) -> original (short).
+    check(all(live.startswith(art + "_") and not orig.startswith(art + "_")
+              for cat in ("actuators", "joints", "sensors", "bodies")
+              for live, orig in e["original_names"][cat].items()),
           f"original names {e['original_names']}")
 
     meta = c.call("meta")
