@@ -14,7 +14,7 @@ reset it at the next step (URLab's autoreset mode); the adapter resets the ended
 once through the reset option "reset_mask".
 
 Before training and after it, the deterministic policy runs one episode in each environment
-from the same seeds (--eval-seed + i); the mean return is printed both times. During training
+from the same seeds (--eval-seed + i); the mean return and length are printed both times. During training
 one line per PPO update gives the environment steps, the mean return of the last 100 episodes
 and the steps per second. --plot FILE.png draws the learning curve (matplotlib), --csv FILE
 writes its points. Needs the project's .venv (tools/install-deps.sh: gymnasium, Debian's
@@ -111,17 +111,19 @@ class GymnasiumVecEnv(VecEnv):
 
 def evaluate(model, env, seed):
     """One episode per environment from seeds seed + i with the deterministic policy: the
-    returns (the first episode each environment ends; the others keep stepping meanwhile)."""
+    returns and lengths (of the first episode each environment ends; the others keep stepping
+    meanwhile)."""
     env.seed(seed)
     obs = env.reset()
     n = env.num_envs
-    returns, finished = np.zeros(n), np.zeros(n, dtype=bool)
+    returns, lengths, finished = np.zeros(n), np.zeros(n, dtype=int), np.zeros(n, dtype=bool)
     while not finished.all():
         actions, _ = model.predict(obs, deterministic=True)
         obs, rewards, dones, _ = env.step(actions)
         returns[~finished] += rewards[~finished]
+        lengths[~finished] += 1
         finished |= dones
-    return returns
+    return returns, lengths
 
 
 def main():
@@ -142,7 +144,7 @@ def main():
     p.add_argument("--seed", type=int, default=0,
                    help="the policy's and training environments' seed (default %(default)s)")
     p.add_argument("--eval-seed", type=int, default=10_000,
-                   help="environment i's evaluation episodes start from this seed + i "
+                   help="environment i's evaluation episode starts from this seed + i "
                         "(default %(default)s)")
     p.add_argument("--eval-episodes", type=int, default=None,
                    help="the evaluation's episodes, one per environment (default: --envs); "
@@ -175,9 +177,10 @@ def main():
                 learning_rate=3e-4, gamma=0.99, gae_lambda=0.95, ent_coef=0.0, seed=args.seed,
                 device="cpu", verbose=0)
 
-    before = evaluate(model, env, args.eval_seed)[:episodes]
+    before, length = (a[:episodes] for a in evaluate(model, env, args.eval_seed))
     print(f"before training: mean return {before.mean():.2f} over {episodes} episodes "
-          f"(seeds {args.eval_seed}..{args.eval_seed + episodes - 1})", flush=True)
+          f"(seeds {args.eval_seed}..{args.eval_seed + episodes - 1}), mean length "
+          f"{length.mean():.1f} steps", flush=True)
 
     curve = []  # (environment steps, wall seconds, mean return of the last 100 episodes)
     start = time.monotonic()
@@ -199,8 +202,9 @@ def main():
 
     model.learn(total_timesteps=args.timesteps, callback=Progress())
     wall = time.monotonic() - start
-    after = evaluate(model, env, args.eval_seed)[:episodes]
-    print(f"after training: mean return {after.mean():.2f} over the same {episodes} episodes")
+    after, length = (a[:episodes] for a in evaluate(model, env, args.eval_seed))
+    print(f"after training: mean return {after.mean():.2f} over the same {episodes} episodes, "
+          f"mean length {length.mean():.1f} steps")
     print(f"trained {model.num_timesteps} environment steps in {wall:.1f} s "
           f"({model.num_timesteps / wall:.0f} steps/s, learning included)")
     print(f"sb3_ppo: env_id={args.env_id} envs={args.envs} steps={model.num_timesteps} "
@@ -228,8 +232,8 @@ def main():
         ax.axhline(after.mean(), color="green", linestyle="--", label="evaluation after")
         ax.set_xlabel("environment steps")
         ax.set_ylabel("mean episode return")
-        ax.set_title(f"stable-baselines3 PPO on {args.env_id} ({args.envs} environments in "
-                     f"process, {wall / 60:.1f} min)")
+        ax.set_title(f"stable-baselines3 PPO on {args.env_id}\n{args.envs} environments in "
+                     f"process, {model.num_timesteps} steps in {wall / 60:.1f} min", fontsize=10)
         ax.grid(alpha=0.3)
         ax.legend(loc="lower right")
         fig.tight_layout()
