@@ -10,7 +10,9 @@
   (a finite difference of mj_kinematics' positions), after mj_forward on the copy;
 - it is a copy: writing to it or stepping it changes nothing in the batch; data(i, out=d)
   refills an MjData; a bad index, an MjData of another model and a closed env are refused;
-- `gymnasium.make(id).unwrapped.model` (a server: from the MJB of its hello) is the same model.
+- `gymnasium.make(id).unwrapped.model`, `UrlabEnv.model` and a vector env over a batched
+  server's `model` (from the MJB of the server's hello) are the same model; data(i) over servers
+  says it needs an in-process env.
 Usage: mujoco_interop_e2e.py URLAB_BINARY SOURCE_DIR LIBRARY
 """
 import os
@@ -28,8 +30,8 @@ import gymnasium  # noqa: E402
 import mujoco  # noqa: E402
 
 import urlab_client  # noqa: E402,F401
-from urlab_client import UrlabVectorEnv  # noqa: E402
-from urlab_process import check, stop_all  # noqa: E402
+from urlab_client import UrlabEnv, UrlabVectorEnv  # noqa: E402
+from urlab_process import PROCS, check, start_announced, stop_all  # noqa: E402
 
 SCENE = os.path.join(SOURCE, "examples", "scenes", "arm_reach.yaml")
 
@@ -139,6 +141,24 @@ def over_server(in_process_model):
     finally:
         env.close()
     print("gymnasium.make(id).unwrapped.model: the server's MJB, the same model as in process")
+    proc, announced = start_announced(URLAB, SCENE, "--no-cameras")
+    PROCS.append(proc)
+    rpc = announced["endpoints"]["rpc"]
+    with UrlabEnv("arm", endpoint=rpc) as env:
+        model = env.model
+        check(np.array_equal(model.body_mass, in_process_model.body_mass) and
+              model.nq == in_process_model.nq, "UrlabEnv.model is the batch's model")
+    proc.terminate()
+    proc.wait()
+    proc, announced = start_announced(URLAB, SCENE, "--no-cameras", "--envs", "2")
+    PROCS.append(proc)
+    with UrlabVectorEnv.over_batch(announced["endpoints"]["rpc"]) as envs:
+        check(np.array_equal(envs.model.body_mass, in_process_model.body_mass),
+              "over_batch's model is the batch's model")
+        raises(NotImplementedError, "in-process", lambda: envs.data(0))
+    proc.terminate()
+    proc.wait()
+    print("UrlabEnv.model and over_batch(...).model: the same model from the server's MJB")
 
 
 def main():
