@@ -352,9 +352,11 @@ class InProcessBatch(BatchCalls):
 
     def data(self, env=0, out=None):
         """Environment `env`'s mjData now, as a mujoco.MjData of `model`: a copy (mj_copyData)
-        of all of it (state, the positions and sensors computed from it, contacts), taken between
-        steps. Writing to it changes nothing in the batch; call again after a step. out: an
-        MjData (of `model`, or of a model of the same sizes) to fill instead of a new one."""
+        of all of it, taken between steps: state, contacts, and the positions and sensors as the
+        last step computed them (at its start, as mj_step does: the observation's sensordata is
+        this; mj_forward on the copy brings them to its qpos). Writing to it changes nothing in
+        the batch; call again after a step. out: an MjData (of `model`, or of a model of the
+        same sizes) to fill instead of a new one."""
         mujoco = self._mujoco()
         env = _whole("env", env, 0, self.envs - 1)
         model = self.model

@@ -230,10 +230,11 @@ class UrlabVectorEnv(VectorEnv):
 
     def data(self, i=0, out=None):
         """Environment i's mjData now as a mujoco.MjData of `model`: a copy of all of it
-        (state, positions and sensors computed from it, contacts), for mujoco.Renderer or the
-        bindings' functions; writing to it changes nothing in the environments, and a step
-        does not update it (call again). out: an MjData to fill instead of a new one. In-process
-        vector envs only (UrlabVectorEnv.in_process, gymnasium.make_vec of a URLab id)."""
+        (state, contacts, positions and sensors as the last step computed them: mj_forward on it
+        brings them to its qpos), for mujoco.Renderer or the bindings' functions; writing to it
+        changes nothing in the environments, and a step does not update it (call again). out:
+        an MjData to fill instead of a new one. In-process vector envs only
+        (UrlabVectorEnv.in_process, gymnasium.make_vec of a URLab id)."""
         self._need_open("data")
         batch = self._in_process_batch()
         if batch is None:

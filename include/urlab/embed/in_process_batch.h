@@ -74,7 +74,7 @@ class InProcessBatch {
   // keep this header free of MuJoCo's; both read the environment while nothing steps it.
   // - CopyModel: a copy (mj_copyModel) of environment `env`'s model (its own when the scene
   //   randomises, else the one they share), an mjModel* the caller owns (mj_deleteModel).
-  // - CopyData: environment `env`'s whole mjData (state, the quantities computed from it,
+  // - CopyData: environment `env`'s whole mjData (state, what its last step computed,
   //   contacts; mj_copyData) into `data`, an mjData* made for a model of the same sizes (from
   //   CopyModel's copy). Throws Error for a bad index, or an mjData of other sizes.
   void* CopyModel(int env);

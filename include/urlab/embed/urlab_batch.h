@@ -88,7 +88,7 @@ URLAB_BATCH_API int urlab_batch_set_auto_reset(urlab_batch* batch, int on);
  * - urlab_batch_copy_model: a copy (mj_copyModel) of the environment's model (its own when the
  *   scene randomises), an mjModel* the caller owns and frees with mj_deleteModel; NULL with the
  *   reason on failure.
- * - urlab_batch_copy_data: the environment's whole mjData (state, the quantities computed from it,
+ * - urlab_batch_copy_data: the environment's whole mjData (state, what its last step computed,
  *   contacts; mj_copyData) into `data`, an mjData* made (mj_makeData) for a model of the same
  *   sizes (urlab_batch_copy_model's copy). */
 URLAB_BATCH_API int urlab_batch_mujoco_version(void);
