@@ -19,6 +19,8 @@ PACKAGES=(
   python3-distributed python3-yaml
   # examples/python/learn_reach.py (PPO through the vector env; CI runs a short smoke of it)
   python3-torch
+  # examples/python/sb3_ppo.py: stable-baselines3's own dependencies (its logger imports both)
+  python3-matplotlib python3-pandas
   libglfw3-dev libimgui-dev libstb-dev libgl1-mesa-dri xvfb xauth ffmpeg
   libassimp-dev libembree-dev libbullet-extras-dev libbullet-dev
   # cameras: off-screen rendering (EGL surfaceless on Mesa, OSMesa fallback)
@@ -34,17 +36,21 @@ fi
 echo "install-deps: ${#PACKAGES[@]} packages present"
 
 # The Python environment: made once; the pinned packages installed again only when
-# tools/requirements.txt changed (its hash is kept in the environment).
+# tools/requirements.txt or tools/requirements-nodeps.txt changed (their hash is kept in the
+# environment).
 cd "$(dirname "$0")/.."
 VENV=.venv
 REQ=tools/requirements.txt
+NODEPS=tools/requirements-nodeps.txt  # after REQ, with --no-deps (the reason is in the file)
 STAMP="$VENV/.urlab-requirements.sha256"
-WANT=$(sha256sum "$REQ" | cut -d' ' -f1)
+WANT=$(cat "$REQ" "$NODEPS" | sha256sum | cut -d' ' -f1)
 if [ ! -x "$VENV/bin/python" ]; then
   /usr/bin/python3 -m venv --system-site-packages "$VENV"
 fi
 if [ "$(cat "$STAMP" 2>/dev/null)" != "$WANT" ]; then
   "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-input -r "$REQ"
+  "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-input --no-deps \
+    -r "$NODEPS"
   echo "$WANT" >"$STAMP"
 fi
 echo "install-deps: $VENV ($("$VENV/bin/python" -c 'import mujoco; print("mujoco", mujoco.__version__)'))"

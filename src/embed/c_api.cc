@@ -1,5 +1,6 @@
 // liburlab_batch.so's C interface (urlab/embed/urlab_batch.h) over InProcessBatch: every C++
 // exception becomes -1 (or NULL) and its message; nothing throws across the boundary.
+#include <mujoco/mujoco.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -187,6 +188,23 @@ int urlab_batch_set_auto_reset(urlab_batch* batch, int on) {
   std::lock_guard<std::mutex> hold(batch->lock);
   batch->batch->SetAutoReset(on != 0);
   return 0;
+}
+
+int urlab_batch_mujoco_version(void) { return mj_version(); }
+
+void* urlab_batch_copy_model(urlab_batch* batch, int env, char* error, std::size_t error_size) {
+  void* model = nullptr;
+  if (!batch) return nullptr;
+  std::lock_guard<std::mutex> hold(batch->lock);
+  Guard(error, error_size, [&] { model = batch->batch->CopyModel(env); });
+  return model;
+}
+
+int urlab_batch_copy_data(urlab_batch* batch, int env, void* data, char* error,
+                          std::size_t error_size) {
+  if (!batch) return -1;
+  std::lock_guard<std::mutex> hold(batch->lock);
+  return Guard(error, error_size, [&] { batch->batch->CopyData(env, data); });
 }
 
 }  // extern "C"

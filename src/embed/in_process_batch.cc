@@ -109,6 +109,27 @@ std::vector<std::string> InProcessBatch::actuator_names() const {
 
 void InProcessBatch::SetAutoReset(bool on) { playing_->batch->SetAutoReset(on); }
 
+void* InProcessBatch::CopyModel(int env) {
+  mjModel* copy = nullptr;
+  playing_->batch->WithEnvironment(
+      env, [&](const mjModel* m, const mjData*) { copy = mj_copyModel(nullptr, m); });
+  if (!copy) throw Error("environment " + std::to_string(env) + ": could not copy its model");
+  return copy;
+}
+
+void InProcessBatch::CopyData(int env, void* data) {
+  if (!data) throw Error("data: no mjData given");
+  mjData* dest = static_cast<mjData*>(data);
+  playing_->batch->WithEnvironment(env, [&](const mjModel* m, const mjData* d) {
+    // mj_copyData's own checks, here as an Error rather than MuJoCo's error callback.
+    if (dest->nbuffer != d->nbuffer || dest->narena != d->narena) {
+      throw Error("data: an mjData of other sizes than environment " + std::to_string(env) +
+                  "'s (make it for the batch's model copy)");
+    }
+    mj_copyData(dest, m, d);
+  });
+}
+
 const world::BatchResult& InProcessBatch::Step(std::span<const double> actions,
                                                std::span<const std::uint8_t> reset, int n_steps) {
   world::BatchSubsystem& b = *playing_->batch;

@@ -80,6 +80,23 @@ BatchSubsystem::~BatchSubsystem() {
 
 int BatchSubsystem::threads() const { return others_ ? others_->threads() : 1; }
 
+void BatchSubsystem::WithEnvironment(int env,
+                                     const std::function<void(const mjModel*, const mjData*)>& fn) {
+  if (env < 0 || env >= options_.envs) {
+    throw Error("batch: no environment " + std::to_string(env) + " (have " +
+                std::to_string(options_.envs) + ")");
+  }
+  if (!session_) throw Error("batch: not playing");
+  session_->engine().WithLockedData([&](mjModel* m, mjData* d) {
+    if (!detached() && env == options_.engine_env) {
+      fn(m, d);
+      return;
+    }
+    const int j = Other(env);
+    fn(others_->model(j), others_->env(j).data());
+  });
+}
+
 void BatchSubsystem::BeginPlay(Session& session) {
   session_ = &session;
   physics::PhysicsEngine& engine = session.engine();

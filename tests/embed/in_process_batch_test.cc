@@ -4,6 +4,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
 
 #include <cmath>
 #include <cstring>
@@ -249,6 +250,70 @@ TEST_F(InProcessBatchTest, TheCInterfaceStepsAndReportsErrors) {
   const int bad[1] = {2};
   EXPECT_EQ(urlab_batch_reset(b, bad, 1, nullptr, nullptr, &out, error, sizeof error), -1);
   EXPECT_THAT(error, HasSubstr("no environment 2"));
+  urlab_batch_close(b);
+}
+
+// urlab_batch_copy_model / copy_data (MuJoCo's Python bindings take these): an exact copy of an
+// environment's model and whole mjData, between steps; bad indices and mismatched data refused.
+TEST_F(InProcessBatchTest, TheCInterfaceCopiesAnEnvironmentsModelAndData) {
+  EXPECT_EQ(urlab_batch_mujoco_version(), mj_version());
+  char error[512] = {};
+  urlab_batch_options o{};
+  o.envs = 3;
+  o.threads = 2;
+  o.auto_reset = 1;
+  urlab_batch* b = urlab_batch_open(Humanoid().c_str(), &o, error, sizeof error);
+  ASSERT_NE(b, nullptr) << error;
+  urlab_batch_sizes sizes{};
+  ASSERT_EQ(urlab_batch_get_sizes(b, &sizes), 0);
+  std::vector<double> obs(3 * static_cast<std::size_t>(sizes.obs_size));
+  urlab_batch_outputs out{obs.data(), nullptr, nullptr, nullptr, nullptr, 0};
+  const std::uint64_t seeds[3] = {1, 2, 3};
+  ASSERT_EQ(urlab_batch_reset(b, nullptr, 0, seeds, nullptr, &out, error, sizeof error), 0);
+  std::vector<double> actions(3 * static_cast<std::size_t>(sizes.nu), 0.2);
+  ASSERT_EQ(urlab_batch_step(b, actions.data(), nullptr, 5, &out, error, sizeof error), 0);
+
+  mjModel* m = static_cast<mjModel*>(urlab_batch_copy_model(b, 2, error, sizeof error));
+  ASSERT_NE(m, nullptr) << error;
+  EXPECT_EQ(m->nq, sizes.nq);
+  EXPECT_EQ(m->nv, sizes.nv);
+  EXPECT_EQ(m->nu, sizes.nu);
+  EXPECT_DOUBLE_EQ(m->opt.timestep, sizes.timestep);
+  mjData* d = mj_makeData(m);
+  ASSERT_NE(d, nullptr);
+  for (int env = 0; env < 3; ++env) {
+    ASSERT_EQ(urlab_batch_copy_data(b, env, d, error, sizeof error), 0) << error;
+    const double* row = obs.data() + static_cast<std::size_t>(env) * sizes.obs_size;
+    for (int i = 0; i < sizes.nq; ++i) EXPECT_EQ(d->qpos[i], row[i]) << "env " << env;
+    for (int i = 0; i < sizes.nv; ++i) EXPECT_EQ(d->qvel[i], row[sizes.nq + i]);
+    for (int i = 0; i < sizes.nsensordata; ++i) {
+      EXPECT_EQ(d->sensordata[i], row[sizes.nq + sizes.nv + i]);
+    }
+    EXPECT_DOUBLE_EQ(d->time, 5 * sizes.timestep);
+  }
+  // A copy: stepping it moves nothing in the batch.
+  mj_step(m, d);
+  mjData* again = mj_makeData(m);
+  ASSERT_EQ(urlab_batch_copy_data(b, 2, again, error, sizeof error), 0) << error;
+  EXPECT_DOUBLE_EQ(again->time, 5 * sizes.timestep);
+  mj_deleteData(again);
+
+  EXPECT_EQ(urlab_batch_copy_model(b, 3, error, sizeof error), nullptr);
+  EXPECT_THAT(error, HasSubstr("no environment 3"));
+  EXPECT_EQ(urlab_batch_copy_data(b, -1, d, error, sizeof error), -1);
+  EXPECT_THAT(error, HasSubstr("no environment -1"));
+  EXPECT_EQ(urlab_batch_copy_data(b, 0, nullptr, error, sizeof error), -1);
+  EXPECT_THAT(error, HasSubstr("no mjData"));
+  mjModel* other = mj_loadXML(urlab::testing::SourcePath("examples/models/servo_arm.xml").c_str(),
+                              nullptr, error, sizeof error);
+  ASSERT_NE(other, nullptr) << error;
+  mjData* small = mj_makeData(other);
+  EXPECT_EQ(urlab_batch_copy_data(b, 0, small, error, sizeof error), -1);
+  EXPECT_THAT(error, HasSubstr("other sizes"));
+  mj_deleteData(small);
+  mj_deleteModel(other);
+  mj_deleteData(d);
+  mj_deleteModel(m);
   urlab_batch_close(b);
 }
 

@@ -65,6 +65,24 @@ def _conform(value, space):
     return np.asarray(value, dtype=space.dtype).reshape(space.shape)
 
 
+def model_from_hello(info):
+    """The server's model as a mujoco.MjModel, loaded from the MJB its hello_ok carries
+    (`mjb`; MJB files load only in the MuJoCo release that wrote them: the server's
+    `mujoco_version` must be this `mujoco` module's)."""
+    import mujoco
+    theirs = info.get("mujoco_version")
+    if theirs is not None and theirs != mujoco.__version__:
+        raise RuntimeError(f"the server runs MuJoCo {theirs}, the `mujoco` module here is "
+                           f"{mujoco.__version__}: its MJB does not load here")
+    mjb = info.get("mjb")
+    if mjb is None and info.get("mjb_base64") is not None:
+        import base64
+        mjb = base64.b64decode(info["mjb_base64"])
+    if mjb is None:
+        raise RuntimeError("the server sent no model (no mjb in hello_ok)")
+    return mujoco.MjModel.from_binary_path("model.mjb", {"model.mjb": bytes(mjb)})
+
+
 class UrlabEnv(gymnasium.Env):
     """One articulation of a URLab step server in lockstep (see the module's docstring).
 
@@ -171,6 +189,17 @@ class UrlabEnv(gymnasium.Env):
     def step(self, action):
         self.send_step(action)
         return self.receive_step()
+
+    @property
+    def model(self):
+        """The server's whole model (every articulation of the scene) as a mujoco.MjModel,
+        loaded once from the MJB the server sent at hello (model_from_hello): for MuJoCo's
+        Python tools (mujoco.Renderer with an MjData of it, the bindings' functions). A copy:
+        changing it changes nothing on the server."""
+        if getattr(self, "_mj_model", None) is None:
+            self._need_open()
+            self._mj_model = model_from_hello(self.client.info)
+        return self._mj_model
 
     def close(self):
         """Says bye: the lease is released and the server returns to the scene's step mode."""

@@ -14,6 +14,12 @@ autoreset, episode limit, latency and randomisation, so environment i with seed 
 episode as in a batched server. One in-process batch at a time per process (close() the first).
 The arrays a step returns are fresh (a rollout buffer may keep them).
 
+For MuJoCo's own Python package: `model` (a mujoco.MjModel) and `data(i)` (a mujoco.MjData of
+environment i now) are copies of the batch's (mj_copyModel, mj_copyData through the library:
+MuJoCo 3.17's bindings wrap no mjData they did not allocate, and MjModel._from_model_ptr owns
+and frees the model it wraps), for mujoco.Renderer or the bindings' functions; writing to them
+changes nothing in the batch (UrlabVectorEnv.model and .data(i) give the same).
+
 The library is found from `library=`, then $URLAB_BATCH_LIBRARY, then in the build folder of
 the repository this package lives in (a fresh checkout's `tools/build.sh` output: build/, and
 build-*/), then beside the `urlab` found on PATH (its own folder: a build tree; ../lib and
@@ -29,7 +35,7 @@ import numpy as np
 
 from urlab_client.batch import BatchBackend, BatchCalls, renamed
 
-ABI = 1
+ABI = 2  # urlab/embed/urlab_batch.h's URLAB_BATCH_ABI
 _F8 = np.dtype("<f8")
 _U4 = np.dtype("<u4")
 _NAME = "liburlab_batch.so"
@@ -149,6 +155,12 @@ def load_library(library=None):
                                           ctypes.POINTER(_Outputs), ctypes.c_char_p,
                                           ctypes.c_size_t]
         lib.urlab_batch_set_auto_reset.argtypes = [ctypes.c_void_p, ctypes.c_int]
+        lib.urlab_batch_mujoco_version.restype = ctypes.c_int
+        lib.urlab_batch_copy_model.restype = ctypes.c_void_p
+        lib.urlab_batch_copy_model.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_char_p,
+                                               ctypes.c_size_t]
+        lib.urlab_batch_copy_data.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p,
+                                              ctypes.c_char_p, ctypes.c_size_t]
         _LIB[path] = lib
         return lib
     raise OSError("URLab's in-process library (" + _NAME + ") was not found; tried: " +
@@ -303,6 +315,66 @@ class InProcessBatch(BatchCalls):
             None if has is None else has.ctypes.data, ctypes.byref(self._out), self._error,
             len(self._error)))
         self._result = arrays
+
+    # ---- MuJoCo's Python bindings (the `mujoco` package) on the batch's environments
+    def _mujoco(self):
+        import mujoco
+        ours = self._lib.urlab_batch_mujoco_version()
+        if mujoco.mj_version() != ours:
+            raise RuntimeError(f"the batch runs MuJoCo {ours}, the `mujoco` module here is "
+                               f"{mujoco.mj_version()} ({mujoco.__version__}): their structs "
+                               "differ (install the pinned mujoco of tools/requirements.txt)")
+        if not hasattr(mujoco.MjModel, "_from_model_ptr"):
+            raise RuntimeError(f"mujoco {mujoco.__version__} cannot take a model from a "
+                               "pointer (MjModel._from_model_ptr)")
+        return mujoco
+
+    def model_of(self, env=0):
+        """A mujoco.MjModel: a copy (mj_copyModel) of environment `env`'s model (its own when
+        the scene randomises, else the one they all share), owned by Python. Changing it changes
+        nothing in the batch."""
+        mujoco = self._mujoco()
+        env = _whole("env", env, 0, self.envs - 1)
+        with self._lock:
+            self._need_open()
+            ptr = self._lib.urlab_batch_copy_model(self._handle, env, self._error,
+                                                   len(self._error))
+            if not ptr:
+                raise ValueError(self._error.value.decode(errors="replace"))
+        return mujoco.MjModel._from_model_ptr(ptr)  # the wrapper frees it (mj_deleteModel)
+
+    @property
+    def model(self):
+        """The batch's model as a mujoco.MjModel (environment 0's: model_of), copied once."""
+        if getattr(self, "_model", None) is None:
+            self._model = self.model_of(0)
+        return self._model
+
+    def data(self, env=0, out=None):
+        """Environment `env`'s mjData now, as a mujoco.MjData of `model`: a copy (mj_copyData)
+        of all of it, taken between steps: state, contacts, and the positions and sensors as the
+        last step computed them (at its start, as mj_step does: the observation's sensordata is
+        this; mj_forward on the copy brings them to its qpos). Writing to it changes nothing in
+        the batch; call again after a step. out: an MjData (of `model`, or of a model of the
+        same sizes) to fill instead of a new one."""
+        mujoco = self._mujoco()
+        env = _whole("env", env, 0, self.envs - 1)
+        model = self.model
+        if out is None:
+            out = mujoco.MjData(model)
+        elif not isinstance(out, mujoco.MjData):
+            raise TypeError(f"out: a mujoco.MjData, not {type(out).__name__}")
+        else:
+            mine = (model.nq, model.nv, model.nu, model.na, model.nbody, model.nsensordata)
+            theirs = out.model
+            if mine != (theirs.nq, theirs.nv, theirs.nu, theirs.na, theirs.nbody,
+                        theirs.nsensordata):
+                raise ValueError("out: an MjData of a model of other sizes than the batch's")
+        with self._lock:
+            self._need_open()
+            self._check(self._lib.urlab_batch_copy_data(self._handle, env, out._address,
+                                                        self._error, len(self._error)))
+        return out
 
     @property
     def n_steps(self):  # the old name of frame_skip

@@ -273,6 +273,16 @@ class UrlabTaskEnv(gymnasium.Env):
         return obs[0], float(rewards[0]), bool(terminated[0]), bool(truncated[0]), \
             self._info(infos)
 
+    @property
+    def model(self):
+        """The scene's model as a mujoco.MjModel, from the MJB its server sent at hello (a copy:
+        changing it changes nothing in the environment; urlab_client.env.model_from_hello)."""
+        if getattr(self, "_mj_model", None) is None:
+            from urlab_client.env import model_from_hello
+            self._need_open()
+            self._mj_model = model_from_hello(self._backend.clients[0].client.info)
+        return self._mj_model
+
     def _need_open(self):
         if self._backend is None:
             raise RuntimeError(f"this {self.task.name} environment is closed")

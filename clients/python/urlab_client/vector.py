@@ -204,6 +204,45 @@ class UrlabVectorEnv(VectorEnv):
     def np_random(self, value):
         self._np_random = value
 
+    # ---- MuJoCo's Python bindings (the `mujoco` package)
+    def _in_process_batch(self):
+        from urlab_client.inproc import InProcessBatch
+        if self._batched and isinstance(self._backend.clients[0], InProcessBatch):
+            return self._backend.clients[0]
+        return None
+
+    @property
+    def model(self):
+        """The environments' model as a mujoco.MjModel (a copy: changing it changes nothing
+        in the environments). In process: the batch's (urlab_client.inproc.InProcessBatch.model;
+        model_of(i) there for environment i's own when the scene randomises); over servers: the
+        first server's, from the MJB it sent at hello."""
+        if getattr(self, "_mj_model", None) is None:
+            batch = self._in_process_batch()
+            if batch is not None:
+                self._mj_model = batch.model
+            elif self._batched:
+                from urlab_client.env import model_from_hello
+                self._mj_model = model_from_hello(self._backend.clients[0].client.info)
+            else:
+                self._mj_model = self._backend.envs[0].model
+        return self._mj_model
+
+    def data(self, i=0, out=None):
+        """Environment i's mjData now as a mujoco.MjData of `model`: a copy of all of it
+        (state, contacts, positions and sensors as the last step computed them: mj_forward on it
+        brings them to its qpos), for mujoco.Renderer or the bindings' functions; writing to it
+        changes nothing in the environments, and a step does not update it (call again). out:
+        an MjData to fill instead of a new one. In-process vector envs only
+        (UrlabVectorEnv.in_process, gymnasium.make_vec of a URLab id)."""
+        self._need_open("data")
+        batch = self._in_process_batch()
+        if batch is None:
+            raise NotImplementedError("data(i) needs an in-process vector env "
+                                      "(UrlabVectorEnv.in_process); over servers, `model` "
+                                      "is the servers' model")
+        return batch.data(i, out=out)
+
     # ---- gymnasium's vector API
     def reset(self, *, seed=None, options=None):
         """seed: None, an int (env i gets seed + i) or a list; options: UrlabEnv.reset's, plus

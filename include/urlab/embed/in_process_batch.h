@@ -70,6 +70,16 @@ class InProcessBatch {
                                   std::span<const std::optional<std::uint64_t>> seeds = {});
   void SetAutoReset(bool on);
 
+  // For MuJoCo's own tools (its Python bindings: urlab_client's model / data(i)). void pointers
+  // keep this header free of MuJoCo's; both read the environment while nothing steps it.
+  // - CopyModel: a copy (mj_copyModel) of environment `env`'s model (its own when the scene
+  //   randomises, else the one they share), an mjModel* the caller owns (mj_deleteModel).
+  // - CopyData: environment `env`'s whole mjData (state, what its last step computed,
+  //   contacts; mj_copyData) into `data`, an mjData* made for a model of the same sizes (from
+  //   CopyModel's copy). Throws Error for a bad index, or an mjData of other sizes.
+  void* CopyModel(int env);
+  void CopyData(int env, void* data);
+
  private:
   struct Playing;
   std::unique_ptr<Playing> playing_;

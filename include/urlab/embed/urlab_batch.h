@@ -22,8 +22,9 @@ extern "C" {
 
 #define URLAB_BATCH_API __attribute__((visibility("default")))
 
-/* The interface's version: a caller checks it before anything else. */
-#define URLAB_BATCH_ABI 1
+/* The interface's version: a caller checks it before anything else (2: copy_model, copy_data
+ * and mujoco_version added). */
+#define URLAB_BATCH_ABI 2
 URLAB_BATCH_API int urlab_batch_abi(void);
 
 typedef struct urlab_batch urlab_batch;
@@ -80,6 +81,21 @@ URLAB_BATCH_API int urlab_batch_reset(urlab_batch* batch, const int* envs, int c
                                       const uint64_t* seeds, const uint8_t* has_seed,
                                       urlab_batch_outputs* out, char* error, size_t error_size);
 URLAB_BATCH_API int urlab_batch_set_auto_reset(urlab_batch* batch, int on);
+
+/* For MuJoCo's own tools (its Python bindings: urlab_client's `model` and `data(i)`), reading
+ * environment `env` while nothing steps it. The pointers are MuJoCo's types (this header does not
+ * include MuJoCo's), for the MuJoCo urlab_batch_mujoco_version names (mj_version()).
+ * - urlab_batch_copy_model: a copy (mj_copyModel) of the environment's model (its own when the
+ *   scene randomises), an mjModel* the caller owns and frees with mj_deleteModel; NULL with the
+ *   reason on failure.
+ * - urlab_batch_copy_data: the environment's whole mjData (state, what its last step computed,
+ *   contacts; mj_copyData) into `data`, an mjData* made (mj_makeData) for a model of the same
+ *   sizes (urlab_batch_copy_model's copy). */
+URLAB_BATCH_API int urlab_batch_mujoco_version(void);
+URLAB_BATCH_API void* urlab_batch_copy_model(urlab_batch* batch, int env, char* error,
+                                             size_t error_size);
+URLAB_BATCH_API int urlab_batch_copy_data(urlab_batch* batch, int env, void* data, char* error,
+                                          size_t error_size);
 
 #ifdef __cplusplus
 }

@@ -42,6 +42,7 @@
 //   the requester's, when the loop is not running) while the requester waits for it.
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <random>
@@ -152,6 +153,11 @@ class BatchSubsystem : public Subsystem {
   // The episodes that ended in the last completed step (read by the requester after the job
   // completed; auto-reset resets them at the next step).
   void NoteCompleted(const BatchResult& out);
+  // Runs `fn` with environment `env`'s model (its own when the scene randomises) and data, the
+  // engine's step mutex held: nothing steps or resets them meanwhile. For reading them (the
+  // in-process batch's copies for MuJoCo's Python bindings). Not from inside an engine callback;
+  // not while a detached step runs. Throws Error for a bad index.
+  void WithEnvironment(int env, const std::function<void(const mjModel*, const mjData*)>& fn);
 
  private:
   struct Job;
