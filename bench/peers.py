@@ -59,9 +59,36 @@ def action_bank(n, low, high, seed=0):
     return rng.uniform(low, high, size=(ACTION_BANK, n, len(low)))
 
 
+def cpu_seconds():
+    """CPU time (user + system) of this process's threads and its living child processes (an
+    AsyncVectorEnv's workers, a batched server): what a figure cost the machine, which a busy
+    machine changes less than the wall time. None without psutil (Debian's python3-psutil)."""
+    try:
+        import psutil
+    except ImportError:
+        return None
+    me = psutil.Process()
+    total = 0.0
+    for proc in [me] + me.children(recursive=True):
+        try:
+            t = proc.cpu_times()
+            total += t.user + t.system
+        except psutil.Error:
+            pass
+    return total
+
+
+def per_step_us(cpu0, cpu1, env_steps):
+    if cpu0 is None or cpu1 is None or env_steps <= 0:
+        return float("nan")
+    return (cpu1 - cpu0) / env_steps * 1e6
+
+
 def timed_loop(step, seconds, n):
-    """Calls step(k) for `seconds` of wall time; environment steps per second (n per call)."""
+    """Calls step(k) for `seconds` of wall time: (environment steps per second, CPU
+    microseconds per environment step), n environment steps per call."""
     calls = 0
+    cpu0 = cpu_seconds()
     t0 = time.perf_counter()
     end = t0 + seconds
     while True:
@@ -69,13 +96,16 @@ def timed_loop(step, seconds, n):
         calls += 1
         now = time.perf_counter()
         if now >= end:
-            return calls * n / (now - t0)
+            break
+    cpu1 = cpu_seconds()
+    return calls * n / (now - t0), per_step_us(cpu0, cpu1, calls * n)
 
 
 def measure(step, args, n):
-    """Warm-up (a fifth of --seconds), then --repeats rates."""
+    """Warm-up (a fifth of --seconds), then --repeats figures: {"rates": [...], "cpu": [...]}."""
     timed_loop(step, max(0.05, args.seconds / 5), n)
-    return [timed_loop(step, args.seconds, n) for _ in range(args.repeats)]
+    figures = [timed_loop(step, args.seconds, n) for _ in range(args.repeats)]
+    return {"rates": [f[0] for f in figures], "cpu": [f[1] for f in figures]}
 
 
 def gym_humanoid_xml():
@@ -117,9 +147,9 @@ def work_envpool(args, n):
         low, high = env.action_space.low, env.action_space.high
         bank = action_bank(n, low, high)
         ids = np.arange(n, dtype=np.int32)
-        rates = measure(lambda k: env.step(bank[k % ACTION_BANK], ids), args, n)
+        result = measure(lambda k: env.step(bank[k % ACTION_BANK], ids), args, n)
         env.close()
-    return {"rates": rates, "threads": args.threads,
+    return {**result, "threads": args.threads,
             "extra": {"envpool_version": envpool.__version__,
                       "envpool_mujoco": envpool_mujoco_version()}}
 
@@ -153,9 +183,9 @@ def work_gym(args, n, asynchronous):
     env.reset(seed=0)
     low, high = env.single_action_space.low, env.single_action_space.high
     bank = action_bank(n, low, high)
-    rates = measure(lambda k: env.step(bank[k % ACTION_BANK]), args, n)
+    result = measure(lambda k: env.step(bank[k % ACTION_BANK]), args, n)
     env.close()
-    return {"rates": rates, "threads": n if asynchronous else 1}
+    return {**result, "threads": n if asynchronous else 1}
 
 
 def urlab_task_fns(nq):
@@ -194,11 +224,11 @@ def work_urlab_inproc(args, n):
                                     max_episode_steps=MAX_EPISODE_STEPS,
                                     library=args.batch_library or None)
     try:
-        rates = run_urlab_vector(env, args, n)
+        result = run_urlab_vector(env, args, n)
         threads = env.unwrapped._backend.clients[0].threads
     finally:
         env.close()
-    return {"rates": rates, "threads": threads}
+    return {**result, "threads": threads}
 
 
 def work_urlab_server(args, n):
@@ -229,7 +259,7 @@ def work_urlab_server(args, n):
                                             terminated_fn=terminated_fn,
                                             max_episode_steps=MAX_EPISODE_STEPS)
             try:
-                rates = run_urlab_vector(env, args, n)
+                result = run_urlab_vector(env, args, n)
                 threads = int(env.unwrapped._backend.clients[0].info.get("threads", args.threads))
             finally:
                 env.close()
@@ -240,7 +270,7 @@ def work_urlab_server(args, n):
             except subprocess.TimeoutExpired:
                 server.kill()
                 server.wait()
-    return {"rates": rates, "threads": threads}
+    return {**result, "threads": threads}
 
 
 def work_physics(args, n):
@@ -284,39 +314,46 @@ def work_physics(args, n):
                 control = np.repeat(actions, fs, axis=1)  # each action held for fs steps
                 state = np.empty((n, k * fs, nstate))
                 sensordata = np.empty((n, k * fs, m.nsensordata))
+                cpu0 = cpu_seconds()
                 t0 = time.perf_counter()
                 ro.rollout(m, datas, init, control, state=state, sensordata=sensordata)
                 dt = time.perf_counter() - t0
-                return n * k / dt, state
+                return n * k / dt, per_step_us(cpu0, cpu_seconds(), n * k), state
 
             def run_urlab(actions):
                 k = actions.shape[1]
                 batch.reset(seeds=[i for i in range(n)])
                 own = 0.0
+                cpu0 = cpu_seconds()
                 t0 = time.perf_counter()
                 for j in range(k):
                     batch.send_step(actions[:, j])
                     own += batch._step_seconds
                 wall = time.perf_counter() - t0
+                cpu = per_step_us(cpu0, cpu_seconds(), n * k)
                 obs = batch.receive_step()["obs"]
-                return n * k / own, n * k / wall, obs
+                return n * k / own, n * k / wall, cpu, obs
 
-            # Calibration (and warm-up): env steps in --seconds at rollout's pace.
-            probe = rng.uniform(low, high, size=(n, 10, nu))
-            rate, _ = run_rollout(probe)
+            # Calibration (and warm-up): env steps in --seconds at rollout's pace, probed twice
+            # (the first steps, standing, are cheaper than the ones after the fall).
+            k = 10
+            for _ in range(2):
+                probe = rng.uniform(low, high, size=(n, k, nu))
+                rate, _, _ = run_rollout(probe)
+                k = max(10, int(rate * args.seconds / n / (4 if k == 10 else 1)))
             run_urlab(probe)
-            k = max(10, int(rate * args.seconds / n))
             log(f"physics N={n}: {k} env steps per trajectory ({k * fs} physics steps)")
             actions = rng.uniform(low, high, size=(n, k, nu))
             ours, ours_wall, theirs, ratios, ratios_wall = [], [], [], [], []
+            ours_cpu, theirs_cpu = [], []
             diff = None
             for r in range(args.repeats):
                 if r % 2 == 0:
-                    t_rate, state = run_rollout(actions)
-                    u_rate, u_wall, obs = run_urlab(actions)
+                    t_rate, t_cpu, state = run_rollout(actions)
+                    u_rate, u_wall, u_cpu, obs = run_urlab(actions)
                 else:
-                    u_rate, u_wall, obs = run_urlab(actions)
-                    t_rate, state = run_rollout(actions)
+                    u_rate, u_wall, u_cpu, obs = run_urlab(actions)
+                    t_rate, t_cpu, state = run_rollout(actions)
                 if diff is None:  # the same trajectories: URLab's last state against rollout's
                     last = state[:, -1, :]
                     diff = float(max(np.max(np.abs(obs[:, :nq] - last[:, 1:1 + nq])),
@@ -325,14 +362,17 @@ def work_physics(args, n):
                 ours.append(u_rate)
                 ours_wall.append(u_wall)
                 theirs.append(t_rate)
+                ours_cpu.append(u_cpu)
+                theirs_cpu.append(t_cpu)
                 ratios.append(u_rate / t_rate)
                 ratios_wall.append(u_wall / t_rate)
         threads = batch.threads
     finally:
         batch.close()
-    return {"rates": theirs, "threads": min(args.threads, n),
-            "extra_rows": {"urlab_physics": {"rates": ours, "threads": threads},
-                           "urlab_physics_wall": {"rates": ours_wall, "threads": threads}},
+    return {"rates": theirs, "cpu": theirs_cpu, "threads": min(args.threads, n),
+            "extra_rows": {"urlab_physics": {"rates": ours, "cpu": ours_cpu, "threads": threads},
+                           "urlab_physics_wall": {"rates": ours_wall, "cpu": ours_cpu,
+                                                  "threads": threads}},
             "extra": {"ratios": ratios, "ratios_wall": ratios_wall, "max_abs_diff": diff,
                       "env_steps": k}}
 
@@ -422,6 +462,12 @@ def main():
         f"{args.threads} threads, N = {envs}, {args.repeats} x {args.seconds} s per figure")
 
     results = {}  # (row, n) -> result
+
+    def cpu(row, n):
+        """Median CPU microseconds per environment step (None when unknown)."""
+        values = [c for c in results.get((row, n), {}).get("cpu", []) if math.isfinite(c)]
+        return statistics.median(values) if values else None
+
     failures = {}
     extras = {}
     for n in envs:
@@ -446,14 +492,16 @@ def main():
 
     order = ["envpool", "gym_sync", "gym_async", "rollout", "urlab_physics", "urlab_physics_wall",
              "urlab_inproc", "urlab_server"]
-    print(f"{'peer':<20} {'N':>4} {'threads':>7} {'env_steps/s':>12} {'min':>12} {'max':>12}")
+    print(f"{'peer':<20} {'N':>4} {'threads':>7} {'env_steps/s':>12} {'min':>12} {'max':>12} "
+          f"{'cpu_us/step':>12}")
     for row in order:
         for n in envs:
             if (row, n) not in results:
                 continue
             r = results[(row, n)]
             med, lo, hi = spread(r["rates"])
-            print(f"{row:<20} {n:>4} {r['threads']:>7} {med:>12.0f} {lo:>12.0f} {hi:>12.0f}")
+            print(f"{row:<20} {n:>4} {r['threads']:>7} {med:>12.0f} {lo:>12.0f} {hi:>12.0f} "
+                  f"{fmt_num(cpu(row, n)):>12}")
 
     kv = []
     kv.append(("mujoco", mujoco.__version__))
@@ -473,6 +521,7 @@ def main():
             if (row, n) in results:
                 kv.append((f"{row}_n{n}_env_steps_per_s",
                            fmt_num(spread(results[(row, n)]["rates"])[0])))
+                kv.append((f"{row}_n{n}_cpu_us_per_env_step", fmt_num(cpu(row, n))))
     for peer, reason in failures.items():
         kv.append((peer, f"unavailable reason={reason!r}"))
 
@@ -484,6 +533,14 @@ def main():
     ours = med("urlab_inproc", big)
     if med("envpool", big) is not None and ours is not None:
         kv.append(("ours_over_envpool", fmt_num(ours / med("envpool", big))))
+        # Not measured alternately: the spread of the ratio is that of the two figures.
+        o, e = results[("urlab_inproc", big)]["rates"], results[("envpool", big)]["rates"]
+        kv.append(("ours_over_envpool_min", fmt_num(min(o) / max(e))))
+        kv.append(("ours_over_envpool_max", fmt_num(max(o) / min(e))))
+        if cpu("envpool", big) and cpu("urlab_inproc", big):
+            # CPU time per environment step, EnvPool's over ours (above 1: ours costs less).
+            kv.append(("ours_over_envpool_cpu",
+                       fmt_num(cpu("envpool", big) / cpu("urlab_inproc", big))))
         if med("urlab_server", big) is not None:
             kv.append(("server_over_envpool",
                        fmt_num(med("urlab_server", big) / med("envpool", big))))
@@ -506,6 +563,9 @@ def main():
         kv.append((f"ours_over_rollout{suffix}_min", fmt_num(r_lo)))
         kv.append((f"ours_over_rollout{suffix}_max", fmt_num(r_hi)))
         kv.append((f"ours_over_rollout_wall{suffix}", fmt_num(w_med)))
+        if cpu("rollout", n) and cpu("urlab_physics", n):
+            kv.append((f"ours_over_rollout_cpu{suffix}",
+                       fmt_num(cpu("rollout", n) / cpu("urlab_physics", n))))
         kv.append((f"physics_max_abs_diff{suffix}", fmt_num(e["max_abs_diff"])))
     try:
         kv.append(("load_average_1min", f"{os.getloadavg()[0]:.2f}"))
