@@ -49,8 +49,8 @@ def main():
             kv[key] = value
             continue
         parts = line.split()
-        if len(parts) == 6 and parts[1].isdigit():
-            rows[(parts[0], int(parts[1]))] = [float(x) for x in parts[3:]]
+        if len(parts) == 7 and parts[1].isdigit():  # peer N threads median min max cpu
+            rows[(parts[0], int(parts[1]))] = [float(x) for x in parts[3:6]]
 
     def finite(key):
         try:
