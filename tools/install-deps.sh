@@ -19,6 +19,9 @@ PACKAGES=(
   python3-distributed python3-yaml
   # examples/python/learn_reach.py (PPO through the vector env; CI runs a short smoke of it)
   python3-torch
+  # `urlab bench peers`: EnvPool needs matplotlib (>= 3.5) and imageio needs pillow; Debian's
+  # keep pip from bringing a matplotlib that wants numpy 2 over Debian's numpy
+  python3-matplotlib python3-pil
   libglfw3-dev libimgui-dev libstb-dev libgl1-mesa-dri xvfb xauth ffmpeg
   libassimp-dev libembree-dev libbullet-extras-dev libbullet-dev
   # cameras: off-screen rendering (EGL surfaceless on Mesa, OSMesa fallback)
