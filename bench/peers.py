@@ -25,7 +25,9 @@ its reward; URLab returns qpos and qvel with a numpy reward over the batch (forw
 health, control cost).
 
 Prints one row per (peer, N): median, min and max of --repeats measurements of --seconds each,
-then key=value lines. Progress goes to stderr.
+and the median CPU time per environment step (of the peer's threads and processes, through
+psutil: a busy machine changes it less than the wall time), then key=value lines. Progress goes
+to stderr.
 """
 import argparse
 import json

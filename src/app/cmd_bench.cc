@@ -422,12 +422,16 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
       "height outside (1, 2), 1000 steps), reset noise 0.01. Each (peer, N) runs in its own "
       "Python process (bench/peers.py, the project's Python), --repeats measurements of "
       "--seconds each. Prints one row per (peer, N) with the median, min and max environment "
-      "steps per second, then key=value lines: versions, <row>_n<N>_env_steps_per_s, "
-      "ours_over_envpool (urlab_inproc over envpool at the largest N; when EnvPool cannot run, "
-      "envpool=unavailable reason=..., nearest_peer and ours_over_nearest instead), "
-      "server_over_envpool, ours_over_rollout (urlab_physics over rollout at the largest N, "
-      "median of the paired repeats, with _min, _max, _wall, and _n<N> for the other N), "
-      "physics_max_abs_diff (URLab's last state against rollout's on the same trajectories) and "
+      "steps per second and the CPU time per step (microseconds, of the peer's threads and "
+      "processes: psutil), then key=value lines: versions, <row>_n<N>_env_steps_per_s and "
+      "<row>_n<N>_cpu_us_per_env_step, ours_over_envpool (urlab_inproc over envpool at the "
+      "largest N, with _min and _max from the two spreads and _cpu, EnvPool's CPU per step over "
+      "ours; when EnvPool cannot run, envpool=unavailable reason=..., nearest_peer and "
+      "ours_over_nearest instead), server_over_envpool, ours_over_rollout (urlab_physics over "
+      "rollout at the largest N, median of the paired repeats, with _min, _max, _wall (Python's "
+      "wall time), _cpu (rollout's CPU per step over ours), and _n<N> for the other N), "
+      "physics_max_abs_diff (URLab's last state against rollout's "
+      "on the same trajectories) and "
       "load_average_1min. Progress goes to stderr.");
   static BenchPeersArgs peers_args;
   peers_args.python = PythonInterpreter();
