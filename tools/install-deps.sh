@@ -19,8 +19,10 @@ PACKAGES=(
   python3-distributed python3-yaml
   # examples/python/learn_reach.py (PPO through the vector env; CI runs a short smoke of it)
   python3-torch
-  # examples/python/sb3_ppo.py: stable-baselines3's own dependencies (its logger imports both)
-  python3-matplotlib python3-pandas
+  # examples/python/sb3_ppo.py: stable-baselines3's own dependencies (its logger imports
+  # matplotlib and pandas); `urlab bench peers`: EnvPool needs matplotlib and imageio pillow
+  # (Debian's keep pip from bringing a matplotlib that wants numpy 2 over Debian's numpy)
+  python3-matplotlib python3-pandas python3-pil
   libglfw3-dev libimgui-dev libstb-dev libgl1-mesa-dri xvfb xauth ffmpeg
   libassimp-dev libembree-dev libbullet-extras-dev libbullet-dev
   # cameras: off-screen rendering (EGL surfaceless on Mesa, OSMesa fallback)

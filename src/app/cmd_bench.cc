@@ -3,9 +3,14 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <iostream>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "app/commands.h"
 #include "app/python_env.h"
@@ -157,6 +162,57 @@ std::string BatchLibraryBesideThisProgram() {
     }
   }
   return "";
+}
+
+// bench peers: the options, passed to bench/peers.py.
+struct BenchPeersArgs {
+  std::string model;
+  std::vector<int> envs = {1, 16, 64};
+  int threads = 2;
+  double seconds = 2.0;
+  int repeats = 5;
+  int frame_skip = 5;
+  std::vector<std::string> skip;
+  std::string python;
+  std::string batch_library;
+  std::string python_client;
+};
+
+// Replaces this process with the Python benchmark (its output and exit status are the command's).
+int RunBenchPeers(const BenchPeersArgs& args) {
+  const std::string program = std::string(URLAB_SOURCE_DIR) + "/bench/peers.py";
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(program, ec)) {
+    std::cerr << "urlab: error: bench peers: no benchmark program at " << program << "\n";
+    return 1;
+  }
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  std::string envs;
+  for (int n : args.envs) envs += (envs.empty() ? "" : ",") + std::to_string(n);
+  std::string skip;
+  for (const std::string& s : args.skip) skip += (skip.empty() ? "" : ",") + s;
+  std::vector<std::string> argv_s = {args.python,       program,
+                                     "--envs",          envs,
+                                     "--threads",       std::to_string(args.threads),
+                                     "--seconds",       fmt::format("{}", args.seconds),
+                                     "--repeats",       std::to_string(args.repeats),
+                                     "--frame-skip",    std::to_string(args.frame_skip),
+                                     "--skip",          skip,
+                                     "--urlab",         ec ? std::string() : self.string(),
+                                     "--batch-library", args.batch_library,
+                                     "--client",        args.python_client};
+  if (!args.model.empty()) {
+    argv_s.push_back("--model");
+    argv_s.push_back(args.model);
+  }
+  std::vector<char*> argv;
+  for (std::string& a : argv_s) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::fflush(stdout);
+  ::execv(argv[0], argv.data());
+  std::cerr << "urlab: error: bench peers: cannot run " << argv_s[0] << ": " << std::strerror(errno)
+            << "\n";
+  return 1;
 }
 
 }  // namespace
@@ -349,6 +405,82 @@ void RegisterBenchCommand(CLI::App& app, int& exit_code) {
     std::fflush(stdout);
     exit_code = 0;
   });
+
+  CLI::App* peers = bench->add_subcommand(
+      "peers",
+      "Environment steps per second of URLab beside the tools a user would pick instead, on one "
+      "model file, timestep and frame skip (default: gymnasium's Humanoid, humanoid.xml, "
+      "frame skip 5): EnvPool's Humanoid-v5 (envpool, its thread pool of --threads), "
+      "gymnasium's Humanoid-v5 in SyncVectorEnv (gym_sync) and AsyncVectorEnv (gym_async, one "
+      "process per environment), URLab's in-process batch (urlab_inproc, "
+      "UrlabVectorEnv.in_process, "
+      "--threads) and batched server (urlab_server: urlab run MODEL --envs N --threads T and "
+      "the Python batch client), and physics alone (physics: mujoco.rollout with --threads "
+      "threads, row rollout, against URLab's batch step, rows urlab_physics (the library's own "
+      "step time) and urlab_physics_wall (Python's wall time), on the same trajectories, "
+      "alternating). Random actions in the ctrlranges; episodes end as Humanoid-v5's (torso "
+      "height outside (1, 2), 1000 steps), reset noise 0.01. Each (peer, N) runs in its own "
+      "Python process (bench/peers.py, the project's Python), --repeats measurements of "
+      "--seconds each. Prints one row per (peer, N) with the median, min and max environment "
+      "steps per second and the CPU time per step (microseconds, of the peer's threads and "
+      "processes: psutil), then key=value lines: versions, <row>_n<N>_env_steps_per_s and "
+      "<row>_n<N>_cpu_us_per_env_step, ours_over_envpool (urlab_inproc over envpool at the "
+      "largest N, with _min and _max from the two spreads and _cpu, EnvPool's CPU per step over "
+      "ours; when EnvPool cannot run, envpool=unavailable reason=..., nearest_peer and "
+      "ours_over_nearest instead), server_over_envpool, ours_over_rollout (urlab_physics over "
+      "rollout at the largest N, median of the paired repeats, with _min, _max, _wall (Python's "
+      "wall time), _cpu (rollout's CPU per step over ours), and _n<N> for the other N), "
+      "physics_max_abs_diff (URLab's last state against rollout's "
+      "on the same trajectories) and "
+      "load_average_1min. Progress goes to stderr.");
+  static BenchPeersArgs peers_args;
+  peers_args.python = PythonInterpreter();
+  peers_args.batch_library = BatchLibraryBesideThisProgram();
+  peers_args.python_client = PythonClientDir();
+  peers
+      ->add_option("MODEL", peers_args.model,
+                   "MJCF model every peer steps (default: gymnasium's humanoid.xml)")
+      ->check(CLI::ExistingFile);
+  peers->add_option("--envs", peers_args.envs, "environment counts, comma-separated")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  peers
+      ->add_option("--threads", peers_args.threads,
+                   "threads of the peers that take threads (EnvPool, mujoco.rollout, URLab)")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  peers->add_option("--seconds", peers_args.seconds, "seconds per measurement")
+      ->check(CLI::Range(0.01, 600.0))
+      ->capture_default_str();
+  peers->add_option("--repeats", peers_args.repeats, "measurements per (peer, N)")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  peers->add_option("--frame-skip", peers_args.frame_skip, "physics steps per environment step")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  peers
+      ->add_option("--skip", peers_args.skip,
+                   "peers to leave out, comma-separated: envpool, gym_sync, gym_async, "
+                   "urlab_inproc, urlab_server, physics")
+      ->delimiter(',')
+      ->check(CLI::IsMember(
+          {"envpool", "gym_sync", "gym_async", "urlab_inproc", "urlab_server", "physics"}));
+  peers
+      ->add_option("--python", peers_args.python,
+                   "the Python interpreter (default: $URLAB_PYTHON, else the checkout's .venv, "
+                   "else /usr/bin/python3)")
+      ->capture_default_str();
+  peers
+      ->add_option("--batch-library", peers_args.batch_library,
+                   "liburlab_batch.so (default: the one beside this program, or in its ../lib)")
+      ->capture_default_str();
+  peers
+      ->add_option("--python-client", peers_args.python_client,
+                   "the folder holding urlab_client (default: $URLAB_PYTHON_CLIENT, else this "
+                   "build's clients/python)")
+      ->capture_default_str();
+  peers->callback([&exit_code] { exit_code = RunBenchPeers(peers_args); });
 
   RegisterBenchBatchCommand(*bench, exit_code);
 }

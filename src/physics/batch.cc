@@ -238,14 +238,18 @@ void Batch::StepEnv(Env& e, const double* action, double* obs, std::uint8_t* don
 }
 
 void Batch::Step(std::span<const double> actions, std::span<double> observations,
-                 std::span<std::uint8_t> done, std::span<const std::uint8_t> skip) {
-  StepBegin(actions, observations, done, skip);
+                 std::span<std::uint8_t> done, std::span<const std::uint8_t> skip, int iterations) {
+  StepBegin(actions, observations, done, skip, iterations);
   StepEnd();
 }
 
 void Batch::StepBegin(std::span<const double> actions, std::span<double> observations,
-                      std::span<std::uint8_t> done, std::span<const std::uint8_t> skip) {
+                      std::span<std::uint8_t> done, std::span<const std::uint8_t> skip,
+                      int iterations) {
   if (pool_->started()) StepEnd();
+  if (iterations < 1) {
+    throw Error("batch: iterations must be at least 1 (got " + std::to_string(iterations) + ")");
+  }
   const std::size_t n = envs_.size();
   const std::size_t nu = static_cast<std::size_t>(action_size());
   const std::size_t row = static_cast<std::size_t>(observation_size());
@@ -271,6 +275,7 @@ void Batch::StepBegin(std::span<const double> actions, std::span<double> observa
   pass_.observations = observations;
   pass_.done = done;
   pass_.skip = skip;
+  pass_.iterations = iterations;
   const std::size_t parts = static_cast<std::size_t>(pool_->threads());
   for (std::size_t k = 0; k < parts; ++k) {
     shares_[k].next.store(k * n / parts, std::memory_order_relaxed);
@@ -298,8 +303,16 @@ void Batch::StepPart(int part) {
         if (obs) ObserveEnv(*envs_[i], obs);
         continue;
       }
-      StepEnv(*envs_[i], p.actions.data() + nu * i, obs,
-              p.done.empty() ? nullptr : p.done.data() + i);
+      // All of the call's iterations of this environment, one after another (its data stays in
+      // this core's caches); the observation after the last.
+      const double* action = p.actions.data() + nu * i;
+      std::uint8_t ended = 0;
+      for (int k = 0; k < p.iterations; ++k) {
+        std::uint8_t d = 0;
+        StepEnv(*envs_[i], action, k + 1 == p.iterations ? obs : nullptr, &d);
+        ended |= d;
+      }
+      if (!p.done.empty()) p.done[i] = ended;
     }
   }
 }

@@ -638,19 +638,18 @@ void BatchSubsystem::StepDetached(BatchStepJob& job) {
     const std::size_t n = static_cast<std::size_t>(options_.envs);
     out.obs.resize(n * static_cast<std::size_t>(observation_size()));
     out.done.assign(n, 0);
-    for (int k = 0; k < job.n; ++k) {
-      // The last iteration writes the observation rows (each stepping thread its own).
-      const bool last = k + 1 == job.n;
-      try {
-        others_->Step(job.actions, last ? std::span<double>(out.obs) : std::span<double>(),
-                      iteration_done_, job.reset);
-      } catch (const std::exception& e) {
-        // The environment whose iteration threw is latched (done) until it is reset.
-        spdlog::warn("batch: {}", e.what());
-        if (last) others_->Observe(out.obs);
-      }
-      for (std::size_t i = 0; i < n; ++i) out.done[i] |= iteration_done_[i];
+    // All n iterations in one pass: each environment's n steps run one after another on the
+    // thread that claimed it (its data stays in that core's caches; the threads meet once, not
+    // n times), and its last writes its observation row. No environment depends on another, so
+    // the bits are those of n passes of one iteration.
+    try {
+      others_->Step(job.actions, out.obs, iteration_done_, job.reset, job.n);
+    } catch (const std::exception& e) {
+      // The environment whose iteration threw is latched (done) until it is reset.
+      spdlog::warn("batch: {}", e.what());
+      others_->Observe(out.obs);
     }
+    for (std::size_t i = 0; i < n; ++i) out.done[i] = iteration_done_[i];
     out.reset = job.reset;
     out.time.resize(n);
     out.episode_steps.resize(n);

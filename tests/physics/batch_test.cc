@@ -127,6 +127,41 @@ TEST_F(BatchTest, AStepInTwoHalvesIsTheSameStepAndOverlapsTheCallersWork) {
   halves.Settle();
 }
 
+TEST_F(BatchTest, IterationsInOneCallAreThatManyCallsOfOne) {
+  // A frame skip in one call (each environment's iterations back to back on one thread) gives
+  // the bits of that many calls of one iteration: observations, done flags (any iteration's
+  // end), auto-resets mid-call (an episode limit of 7 against 5 iterations a call) and skipped
+  // environments included.
+  const Model model(LoadXmlFile(kHumanoidPath));
+  BatchOptions o;
+  o.envs = 6;
+  o.threads = 2;
+  o.reset_noise = 0.01;
+  o.seed = 3;
+  o.auto_reset = true;
+  o.max_episode_steps = 7;
+  Batch one(model, o), many(model, o);
+  const std::size_t row = static_cast<std::size_t>(one.observation_size());
+  std::vector<double> a(row * 6), b(row * 6);
+  std::vector<std::uint8_t> done_a(6), done_b(6), any(6);
+  std::vector<std::uint8_t> skip(6, 0);
+  for (int step = 0; step < 40; ++step) {
+    const std::vector<double> actions = Actions(one, step, true);
+    skip[static_cast<std::size_t>(step % 6)] = step % 4 == 0;  // now and then one sits out
+    std::fill(any.begin(), any.end(), 0);
+    for (int k = 0; k < 5; ++k) {
+      one.Step(actions, a, done_a, skip);
+      for (std::size_t i = 0; i < 6; ++i) any[i] |= done_a[i];
+    }
+    many.Step(actions, b, done_b, skip, 5);
+    ASSERT_TRUE(SameBits(a.data(), b.data(), a.size())) << "step " << step;
+    ASSERT_EQ(any, done_b) << "step " << step;
+    skip[static_cast<std::size_t>(step % 6)] = 0;
+  }
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(one.episode_steps(i), many.episode_steps(i));
+  EXPECT_THROW(many.Step(Actions(many, 0, true), b, done_b, {}, 0), Error);
+}
+
 TEST_F(BatchTest, SeedsDriveTheResetNoise) {
   const Model model(LoadXmlFile(kHumanoidPath));
   BatchOptions o;

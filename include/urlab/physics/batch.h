@@ -106,9 +106,15 @@ class Batch {
   // arrays of the wrong size (nothing is stepped then), and after the step for an environment
   // whose iteration threw (it is reset when auto-reset is on, paused otherwise). `skip`
   // (empty, or one flag per environment): environments not stepped this time (their done is 0,
-  // their observation the current one, their actions ignored).
+  // their observation the current one, their actions ignored). `iterations` > 1 advances each
+  // environment that many iterations with the same actions (a frame skip) before the next one
+  // is taken, so a thread keeps one environment's data in its caches for all of them and the
+  // threads meet once per call, not once per iteration; done is then 1 when the episode ended in
+  // any of them (an auto-reset environment goes on stepping from its reset), the observation the
+  // last one's. Each environment's bits are those of `iterations` calls of one iteration.
   void Step(std::span<const double> actions, std::span<double> observations,
-            std::span<std::uint8_t> done = {}, std::span<const std::uint8_t> skip = {});
+            std::span<std::uint8_t> done = {}, std::span<const std::uint8_t> skip = {},
+            int iterations = 1);
   // Step in two halves, for an owner with work of its own to overlap (an engine stepping its
   // own environment): StepBegin checks the arrays and starts the workers on the environments;
   // StepEnd steps with them on the caller until none is left and throws like Step. The arrays
@@ -116,7 +122,8 @@ class Batch {
   // after a StepBegin without its StepEnd finishes that step first (so the arrays must outlive
   // the batch, or Settle be called before they go).
   void StepBegin(std::span<const double> actions, std::span<double> observations,
-                 std::span<std::uint8_t> done = {}, std::span<const std::uint8_t> skip = {});
+                 std::span<std::uint8_t> done = {}, std::span<const std::uint8_t> skip = {},
+                 int iterations = 1);
   void StepEnd();
   // Finishes a step begun and not ended (its owner's work between the halves threw), dropping
   // its errors: call before touching the batch again.
@@ -156,6 +163,7 @@ class Batch {
     std::span<double> observations;
     std::span<std::uint8_t> done;
     std::span<const std::uint8_t> skip;
+    int iterations = 1;
   };
   // Each part's own contiguous share of the environments (part k: [k n / K, (k + 1) n / K)),
   // claimed from its front by its part first and by the others once theirs are done.
