@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "mujoco_test.h"
+#include "physics/test_models.h"
 #include "urlab/core/error.h"
 #include "urlab/physics/model.h"
 
@@ -17,44 +18,6 @@ namespace urlab {
 namespace {
 
 using physics::Model;
-
-// A motor-driven arm whose link is gravity-compensated, a ball on a rope with a dead-band
-// spring, a joint actuator force sensor, and a weld between two sites.
-constexpr const char* kXml = R"(<mujoco>
-  <option gravity="0 0 -9.81"/>
-  <worldbody>
-    <site name="anchor" pos="0 0 2"/>
-    <body name="arm" pos="1 0 1" gravcomp="%GRAVCOMP%">
-      <joint name="h" axis="0 1 0" damping="0.1"/>
-      <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.05" mass="1"/>
-    </body>
-    <body name="ball" pos="0 0 1">
-      <joint name="z" type="slide" axis="0 0 1"/>
-      <geom size="0.1" mass="2"/>
-      <site name="top" pos="0 0 0.1"/>
-    </body>
-    <body name="box" pos="-1 0 1">
-      <freejoint/>
-      <geom type="box" size="0.1 0.1 0.1" mass="0.5"/>
-      <site name="box_site" pos="0.1 0 0"/>
-    </body>
-    <site name="hook" pos="-0.85 0 1.05"/>
-  </worldbody>
-  <tendon>
-    <spatial name="rope" stiffness="200" springlength="0.8 0.95"><site site="anchor"/><site site="top"/></spatial>
-  </tendon>
-  <equality>
-    <weld name="hold" site1="box_site" site2="hook"/>
-  </equality>
-  <actuator>
-    <motor name="m" joint="h" gear="2"/>
-  </actuator>
-  <sensor>
-    <jointactuatorfrc name="h_force" joint="h"/>
-    <jointpos name="h_pos" joint="h"/>
-    <jointpos name="z_pos" joint="z"/>
-  </sensor>
-</mujoco>)";
 
 struct Trace {
   std::vector<double> qpos, qvel, sensordata;  // every step, one after the other
@@ -87,9 +50,7 @@ bool SameRun(const Trace& a, const Trace& b) {
 class OwnedModelTest : public testing::MujocoTest {
  protected:
   static Model Compile(double gravcomp = 1.0) {
-    std::string xml = kXml;
-    xml.replace(xml.find("%GRAVCOMP%"), 10, std::to_string(gravcomp));
-    return Model(physics::CompileXmlString(xml));
+    return Model(physics::CompileXmlString(testing::CompensatedArmXml(gravcomp)));
   }
   static constexpr int kSteps = 500;
 };

@@ -74,4 +74,48 @@ inline const char* kPendulumXml = R"(
 </mujoco>
 )";
 
+// A motor-driven arm whose link is gravity-compensated (body gravcomp `gravcomp`), a ball on a
+// rope with a dead-band spring, a joint actuator force sensor (the first sensor), and a weld
+// between two sites: what MuJoCo 2.2.2 lacked and MuJoCo 3 computes itself.
+inline std::string CompensatedArmXml(double gravcomp) {
+  std::string xml = R"(<mujoco>
+  <option gravity="0 0 -9.81"/>
+  <worldbody>
+    <site name="anchor" pos="0 0 2"/>
+    <body name="arm" pos="1 0 1" gravcomp="%GRAVCOMP%">
+      <joint name="h" axis="0 1 0" damping="0.1"/>
+      <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.05" mass="1"/>
+    </body>
+    <body name="ball" pos="0 0 1">
+      <joint name="z" type="slide" axis="0 0 1"/>
+      <geom size="0.1" mass="2"/>
+      <site name="top" pos="0 0 0.1"/>
+    </body>
+    <body name="box" pos="-1 0 1">
+      <freejoint/>
+      <geom type="box" size="0.1 0.1 0.1" mass="0.5"/>
+      <site name="box_site" pos="0.1 0 0"/>
+    </body>
+    <site name="hook" pos="-0.85 0 1.05"/>
+  </worldbody>
+  <tendon>
+    <spatial name="rope" stiffness="200" springlength="0.8 0.95"><site site="anchor"/><site site="top"/></spatial>
+  </tendon>
+  <equality>
+    <weld name="hold" site1="box_site" site2="hook"/>
+  </equality>
+  <actuator>
+    <motor name="m" joint="h" gear="2"/>
+  </actuator>
+  <sensor>
+    <jointactuatorfrc name="h_force" joint="h"/>
+    <jointpos name="h_pos" joint="h"/>
+    <jointpos name="z_pos" joint="z"/>
+  </sensor>
+</mujoco>)";
+  ;
+  xml.replace(xml.find("%GRAVCOMP%"), 10, std::to_string(gravcomp));
+  return xml;
+}
+
 }  // namespace urlab::testing

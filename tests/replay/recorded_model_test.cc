@@ -14,6 +14,7 @@
 #include <iterator>
 #include <string>
 
+#include "physics/test_models.h"
 #include "replay/format.h"
 #include "support/mujoco_test.h"
 #include "support/step_recording.h"
@@ -29,37 +30,8 @@ namespace {
 namespace fs = std::filesystem;
 using physics::PhysicsEngine;
 
-// An arm held up by gravity compensation, a ball hanging from a dead-band rope spring, and a
-// joint actuator force sensor (3.x constructs URLab once computed beside MuJoCo 2.2.2).
-constexpr const char* kModelXml = R"(<mujoco>
-  <option timestep="0.002"/>
-  <worldbody>
-    <site name="anchor" pos="0 0 2"/>
-    <body name="arm" pos="1 0 1" gravcomp="%GRAVCOMP%">
-      <joint name="h" axis="0 1 0" damping="0.1"/>
-      <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.05" mass="1"/>
-    </body>
-    <body name="ball" pos="0 0 1">
-      <joint name="z" type="slide" axis="0 0 1"/>
-      <geom size="0.1" mass="2"/>
-      <site name="top" pos="0 0 0.1"/>
-    </body>
-  </worldbody>
-  <tendon>
-    <spatial name="rope" stiffness="200" springlength="0.8 0.95"><site site="anchor"/><site site="top"/></spatial>
-  </tendon>
-  <actuator>
-    <motor name="m" joint="h" gear="2"/>
-  </actuator>
-  <sensor>
-    <jointactuatorfrc name="h_force" joint="h"/>
-  </sensor>
-</mujoco>)";
-
 physics::Model Compile(double gravcomp = 1.0) {
-  std::string xml = kModelXml;
-  xml.replace(xml.find("%GRAVCOMP%"), 10, std::to_string(gravcomp));
-  return physics::Model(physics::CompileXmlString(xml));
+  return physics::Model(physics::CompileXmlString(urlab::testing::CompensatedArmXml(gravcomp)));
 }
 
 class RecordedModelTest : public urlab::testing::MujocoTest {
