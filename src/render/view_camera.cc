@@ -33,6 +33,22 @@ int Find(const mjModel* m, mjtObj type, std::string name) {
   return id;
 }
 
+// The radius of body `id`'s subtree in the reference configuration: the farthest geom's reach
+// from the body's origin (body offsets summed down the tree, each geom's bounding sphere).
+double SubtreeRadius(const mjModel* m, int id) {
+  double radius = 0;
+  for (int g = 0; g < m->ngeom; ++g) {
+    mjtNum offset[3] = {m->geom_pos[3 * g], m->geom_pos[3 * g + 1], m->geom_pos[3 * g + 2]};
+    int b = m->geom_bodyid[g];
+    while (b > id) {
+      for (int k = 0; k < 3; ++k) offset[k] += m->body_pos[3 * b + k];
+      b = m->body_parentid[b];
+    }
+    if (b == id) radius = std::max(radius, mju_norm3(offset) + m->geom_rbound[g]);
+  }
+  return radius;
+}
+
 }  // namespace
 
 ViewCamera ParseViewCamera(const mjModel* m, const std::string& spec, const std::string& option) {
@@ -52,7 +68,10 @@ ViewCamera ParseViewCamera(const mjModel* m, const std::string& spec, const std:
     }
     out.view.type = mjCAMERA_TRACKING;
     out.view.trackbodyid = id;
-    out.view.distance = 0.6 * m->stat.extent;
+    // A chase view: the tracked body's whole subtree (a robot) a third of the frame's height.
+    const double radius = SubtreeRadius(m, id);
+    out.view.distance = radius > 0 ? 4 * radius : 0.6 * m->stat.extent;
+    out.view.elevation = -20;
     out.label = fmt::format("tracking body '{}'", mj_id2name(m, mjOBJ_BODY, id));
     return out;
   }
