@@ -29,7 +29,7 @@ void Excite(const mjModel* m, mjData* d, int steps) {
   }
 }
 
-bool SameBits(const mjtNum* a, const mjtNum* b, int n) {
+bool StateBitsEqual(const mjtNum* a, const mjtNum* b, int n) {
   return n == 0 || std::memcmp(a, b, sizeof(mjtNum) * static_cast<std::size_t>(n)) == 0;
 }
 
@@ -74,9 +74,9 @@ TEST_F(StateTest, RestoreReproducesContinuationBitForBit) {
     RestoreState(m.get(), target, snap);
     const PhysicsState b = Continue(m.get(), target, 1000);
     EXPECT_TRUE(a.BitwiseEquals(b)) << "fresh=" << fresh;
-    EXPECT_TRUE(SameBits(a_xpos.data(), target->xpos, 3 * m->nbody));
-    EXPECT_TRUE(SameBits(a_sensor.data(), target->sensordata, m->nsensordata));
-    EXPECT_TRUE(SameBits(a_energy, target->energy, 2));
+    EXPECT_TRUE(StateBitsEqual(a_xpos.data(), target->xpos, 3 * m->nbody));
+    EXPECT_TRUE(StateBitsEqual(a_sensor.data(), target->sensordata, m->nsensordata));
+    EXPECT_TRUE(StateBitsEqual(a_energy, target->energy, 2));
     EXPECT_EQ(a_ncon, target->ncon);
   }
   EXPECT_GT(a_ncon, 0) << "the test should exercise contacts";
