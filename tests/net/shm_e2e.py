@@ -180,6 +180,17 @@ def main():
 
     # 3. An offer never taken: removed by SIGINT; left by SIGKILL and reclaimed by the next server.
     proc, endpoints = start_urlab(URLAB, scene, "--files-dir", os.path.join(tmp, "files"))
+    # A signal ends the process at once until the run plays (its sockets are bound and serving a
+    # little earlier): offers made in that window are left for the next server to reclaim, as
+    # after SIGKILL. Wait for the run to play (under ThreadSanitizer the window is long).
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if not line:
+            fail("urlab exited before playing", proc)
+        if "playing " in line:
+            break
+    time.sleep(0.2)
     ctx = zmq.Context.instance()
     s = ctx.socket(zmq.REQ)
     s.setsockopt(zmq.LINGER, 0)
