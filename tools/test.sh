@@ -191,16 +191,21 @@ install_stage() {
   # assimp, Embree or a renderer (GL, EGL, OSMesa) may reach it.
   check_client_links "$example/urlab_client_only_example" "$BUILD_DIR/example_cpp_controller"
   "$prefix/bin/urlab" --version
-  # The in-process batch from Python, its library found beside the installed urlab (../lib).
-  PATH="$prefix/bin:$PATH" /usr/bin/python3 - <<'PY'
+  # The in-process batch from Python, its library found beside the installed urlab (../lib): the
+  # client is a copy outside the checkout, so the checkout's build folder is not looked in.
+  cp -r clients/python "$example/client"
+  PATH="$prefix/bin:$PATH" URLAB_CLIENT_COPY="$example/client" .venv/bin/python - <<'PY'
+import os
 import sys
-sys.path.insert(0, "clients/python")
+sys.path.insert(0, os.environ["URLAB_CLIENT_COPY"])
 import numpy as np
 from urlab_client import UrlabVectorEnv
 with UrlabVectorEnv.in_process("examples/scenes/humanoid_pd.yaml", 2) as envs:
     envs.reset(seed=0)
     obs, *_ = envs.step(np.zeros((2, 21)))
-    print("in-process batch from", envs.envs[0]._lib._name, obs["qpos"].shape)
+    library = envs.envs[0]._lib._name
+    print("in-process batch from", library, obs["qpos"].shape)
+    assert library.startswith(os.environ["PATH"].split(":")[0].rsplit("/", 1)[0]), library
 PY
   rm -rf "$prefix" "$example"
 }
