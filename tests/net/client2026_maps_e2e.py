@@ -21,12 +21,13 @@ import os
 import sys
 import tempfile
 
-import msgpack
 import zmq
 
 URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 from urlab_process import fail, start_announced  # noqa: E402
+import step_socket  # noqa: E402
+from step_socket import StepSocket  # noqa: E402
 
 CLIENT_VERSION = "urlab_bridge/2026.1.0"
 # The two robots of examples/scenes/unitree_style.yaml without hold_keyframe (which holds the
@@ -51,48 +52,16 @@ def check(ok, message):
         fail(message, PROC)
 
 
-class Refused(Exception):
-    def __init__(self, code, message):
-        super().__init__(f"{code}: {message}")
-        self.code, self.message = code, message
+def failed(message):
+    fail(message, PROC)
 
 
-class Connection:
-    """One REQ socket speaking msgpack, the session id in every request after hello."""
-
-    def __init__(self, endpoint, ctx):
-        self.sock = ctx.socket(zmq.REQ)
-        self.sock.setsockopt(zmq.LINGER, 0)
-        self.sock.setsockopt(zmq.RCVTIMEO, 30000)
-        self.sock.connect(endpoint)
-        self.session_id = None
-
-    def call(self, op, **fields):
-        request = {"op": op, **fields}
-        if self.session_id:
-            request["session_id"] = self.session_id
-        self.sock.send(msgpack.packb(request, use_bin_type=True))
-        reply = msgpack.unpackb(self.sock.recv(), raw=False)
-        if reply.get("op") == "error":
-            raise Refused(reply.get("code"), reply.get("message", ""))
-        return reply
-
-    def hello(self, **fields):
-        reply = self.call("hello", **fields)
-        self.session_id = reply["session_id"]
-        return reply
-
-    def close(self):
-        self.sock.close(0)
+def Connection(endpoint, ctx):  # noqa: N802 - a StepSocket as this test's clients use it
+    return StepSocket(endpoint, ctx, failed)
 
 
 def refused(code, fn, *args, **kwargs):
-    try:
-        fn(*args, **kwargs)
-    except Refused as e:
-        check(e.code == code, f"refused with {e.code} ({e.message}), want {code}")
-        return e
-    fail(f"accepted, want {code}", PROC)
+    return step_socket.refused(code, failed, fn, *args, **kwargs)
 
 
 class Robot:

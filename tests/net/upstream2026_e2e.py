@@ -31,6 +31,8 @@ import zmq
 URLAB, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 from urlab_process import fail, start_announced  # noqa: E402
+import step_socket  # noqa: E402
+from step_socket import StepSocket  # noqa: E402
 
 CLIENT_VERSION = "urlab_bridge/2026.1.0"
 NAMESPACES = {"scene", "sim", "runtime", "outliner", "debug", "viewport"}
@@ -42,51 +44,22 @@ def check(ok, message):
         fail(message, PROC)
 
 
-class Refused(Exception):
-    def __init__(self, code, message):
-        super().__init__(f"{code}: {message}")
-        self.code, self.message = code, message
+def failed(message):
+    fail(message, PROC)
 
 
-class Bridge:
-    """The 2026 client's side of the step socket: REQ, msgpack, session_id in every request."""
+class Bridge(StepSocket):
+    """The 2026 client's side of the step socket: its version in hello, every request numbered."""
 
     def __init__(self, endpoint, ctx):
-        self.sock = ctx.socket(zmq.REQ)
-        self.sock.setsockopt(zmq.LINGER, 0)
-        self.sock.setsockopt(zmq.RCVTIMEO, 30000)
-        self.sock.connect(endpoint)
-        self.session_id = None
-        self.seq = 0
-
-    def call(self, op, **fields):
-        self.seq += 1
-        request = {"op": op, "seq": self.seq, **fields}
-        if self.session_id:
-            request["session_id"] = self.session_id
-        self.sock.send(msgpack.packb(request, use_bin_type=True))
-        reply = msgpack.unpackb(self.sock.recv(), raw=False)
-        if reply.get("op") == "error":
-            raise Refused(reply.get("code"), reply.get("message", ""))
-        check(reply.get("seq") == self.seq, f"{op}: seq {reply.get('seq')} for {self.seq}")
-        return reply
+        super().__init__(endpoint, ctx, failed, number_requests=True)
 
     def hello(self, **fields):
-        reply = self.call("hello", client_version=CLIENT_VERSION, **fields)
-        self.session_id = reply["session_id"]
-        return reply
-
-    def close(self):
-        self.sock.close(0)
+        return super().hello(client_version=CLIENT_VERSION, **fields)
 
 
 def refused(code, fn, *args, **kwargs):
-    try:
-        fn(*args, **kwargs)
-    except Refused as e:
-        check(e.code == code, f"refused with {e.code} ({e.message}), want {code}")
-        return e
-    fail(f"accepted, want {code}", PROC)
+    return step_socket.refused(code, failed, fn, *args, **kwargs)
 
 
 def close(a, b, tol=1e-9):
