@@ -32,7 +32,7 @@ EPISODE = 5  # max_episode_steps: truncations at steps 4 and 10, resets at 5 and
 
 def server(scene, envs):
     proc, a = start_announced(URLAB, scene, "--no-cameras", "--max-speed", "--envs", str(envs),
-                              "--threads", "1", "--reset-noise", "0.05")
+                              "--threads", "1", "--reset-noise", "0.05", duration=86400)
     PROCS.append(proc)
     return a["endpoints"]["rpc"]
 

@@ -31,7 +31,7 @@ NOISE = "0.05"
 
 def server(scene, envs, *extra):
     proc, a = start_announced(URLAB, scene, "--no-cameras", "--max-speed", "--envs", str(envs),
-                              "--reset-noise", NOISE, *extra)
+                              "--reset-noise", NOISE, *extra, duration=86400)
     PROCS.append(proc)
     return a["endpoints"]["rpc"]
 

@@ -50,7 +50,8 @@ def main():
         f.write(f"seed: 2\narticulations:\n  - name: arm\n    mjcf: {model}\n"
                 "    latency:\n      observation: {delay_steps: 3}\n"
                 "randomize:\n  gravity:\n    z: {uniform: [-5, 5]}\n")
-    proc, announced = start_announced(URLAB, other, "--no-cameras", "--max-speed", "--envs", "2")
+    proc, announced = start_announced(URLAB, other, "--no-cameras", "--max-speed", "--envs", "2",
+                                      duration=86400)
     try:
         envs = UrlabVectorEnv.over_batch(announced["endpoints"]["rpc"])
         first, _ = envs.reset(seed=3)

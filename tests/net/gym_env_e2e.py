@@ -29,7 +29,9 @@ from urlab_process import PROCS, arm_scene, check, fail, start_announced, stop_a
 
 
 def server(scene, *extra):
-    proc, a = start_announced(URLAB, scene, *(extra or ("--no-cameras",)), "--max-speed")
+    # Live between the envs' leases at --max-speed: a day of simulated time, not 120 s.
+    proc, a = start_announced(URLAB, scene, *(extra or ("--no-cameras",)), "--max-speed",
+                              duration=86400)
     PROCS.append(proc)
     return proc, a["endpoints"]["rpc"]
 

@@ -114,9 +114,11 @@ def start_urlab(urlab, scene, *extra, timeout=30, duration=60):
     fail("no network line in urlab's log", proc)
 
 
-def start_announced(urlab, scene, *extra, timeout=60, announce=None):
-    """Runs `urlab run SCENE --ports auto --announce FILE --duration 120 EXTRA...`; returns
-    (process, announce dict) once the file appears (the system chose every port)."""
+def start_announced(urlab, scene, *extra, timeout=60, announce=None, duration=120):
+    """Runs `urlab run SCENE --ports auto --announce FILE --duration DURATION EXTRA...`; returns
+    (process, announce dict) once the file appears (the system chose every port). DURATION is
+    simulated seconds: a server left playing live with --max-speed goes through 120 of them in a
+    second or two, so a test that leaves one so between its uses gives a longer one."""
     import json
     import os
     import tempfile
@@ -125,7 +127,7 @@ def start_announced(urlab, scene, *extra, timeout=60, announce=None):
         os.close(fd)
         os.unlink(announce)
     proc = subprocess.Popen([urlab, "run", scene, "--ports", "auto", "--announce", announce,
-                             "--duration", "120", *extra],
+                             "--duration", str(duration), *extra],
                             stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
