@@ -167,6 +167,10 @@ void KeyframeController::Evaluate(double t) {
   set(poses_.back().positions, static_cast<int>(poses_.size()) - 1, false);
 }
 
+void KeyframeController::Restart() {
+  if (playing()) play_requested_.store(true, std::memory_order_release);
+}
+
 void KeyframeController::ComputeAndApply(const mjModel* m, mjData* d,
                                          std::span<const double> targets) {
   if (stop_requested_.exchange(false, std::memory_order_acq_rel)) {

@@ -24,7 +24,8 @@ struct Batch::Env {
   int index = 0;
   std::vector<std::pair<int, double>> qpos_offsets;  // the last draw's
   EnvLatency latency;
-  std::vector<double> observed;  // the observed row, when its observations are delayed
+  std::unique_ptr<ControlLaw> control;  // null: the actions are the controls
+  std::vector<double> observed;         // the observed row, when its observations are delayed
   std::mt19937_64 rng;
   std::uint64_t episode_steps = 0;
   bool diverged = false;  // since the last reset
@@ -82,6 +83,7 @@ Batch::Batch(const Model& model, BatchOptions options) : options_(options) {
         std::make_unique<Env>(options.randomize ? std::make_shared<Model>(model.Copy()) : model_));
     envs_.back()->index = i;
     if (options.latency) envs_.back()->latency.Configure(options.latency(i));
+    if (options.control) envs_.back()->control = options.control(i);
   }
   int threads = options.threads;
   if (threads == 0) threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
@@ -123,6 +125,7 @@ void Batch::ResetEnv(Env& e, std::optional<std::uint64_t> seed) {
                                           "batch reset"});
   e.core.SetPaused(false);  // clears an error latch
   e.core.ApplyPending();
+  if (e.control) e.control->Restart();
   RestartLatency(e);
   e.episode_steps = 0;
   e.diverged = false;
@@ -215,6 +218,7 @@ void Batch::StepEnv(Env& e, const double* action, double* obs, std::uint8_t* don
   mju_copy(d->ctrl, action, model()->nu);
   if (e.latency.controls_delayed()) e.latency.ApplyControl(action, d);
   try {
+    if (e.control) e.control->Apply(e.model->get(), d);  // the actions in ctrl: its targets
     e.core.Advance({.force_step = true, .honour_error_latch = false});
     if (e.latency.observations_delayed()) {
       ObserveTrue(e, e.observed.data());

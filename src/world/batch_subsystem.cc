@@ -11,6 +11,7 @@
 #include "urlab/core/error.h"
 #include "urlab/physics/latency.h"
 #include "urlab/world/session.h"
+#include "world/env_controls.h"
 #include "world/randomizer.h"
 
 namespace urlab::world {
@@ -112,6 +113,22 @@ void BatchSubsystem::BeginPlay(Session& session) {
     constexpr double kInf = std::numeric_limits<double>::infinity();
     action_low_.push_back(limited ? m->actuator_ctrlrange[2 * i] : -kInf);
     action_high_.push_back(limited ? m->actuator_ctrlrange[2 * i + 1] : kInf);
+  }
+  // The scene's controllers in every environment (the engine's environment's here; the batch
+  // asks for the others' below): the actions are their targets.
+  env_controls_.assign(static_cast<std::size_t>(options_.envs), nullptr);
+  if (EnvControls::Needed(session)) {
+    auto controls = std::make_unique<EnvControls>(session);
+    controls->TargetBounds(m, &action_low_, &action_high_);
+    if (!detached()) {
+      env_controls_[static_cast<std::size_t>(options_.engine_env)] = controls.get();
+      env0_controls_ = std::move(controls);
+    }
+    batch_options_.control = [this](int j) {
+      auto c = std::make_unique<EnvControls>(*session_);
+      env_controls_[static_cast<std::size_t>(Wire(j))] = c.get();
+      return c;
+    };
   }
   batch_options_.envs = detached() ? options_.envs : std::max(1, options_.envs - 1);
   batch_options_.threads = options_.threads;
@@ -247,9 +264,12 @@ void BatchSubsystem::Draw(int env, std::optional<std::uint64_t> seed, mjModel* m
   // is the run's seed + env until a reset gives a seed (batch_reset), which becomes the base.
   Stream& s = draws_[static_cast<std::size_t>(env)];
   if (seed) s = {*seed, 0};
-  // No controller runs on a batch's actions (raw controls): the PD gains stay as they are.
+  // The PD gains drawn go to this environment's own controllers (none: drawn, not written).
   const std::uint64_t draw_seed = Randomizer::ResetSeed(s.base, s.n++);
-  Randomizer::Applied applied = randomizer_->Apply(randomize_, draw_seed, m, false);
+  const EnvControls* controls = env_controls_[static_cast<std::size_t>(env)];
+  Randomizer::Applied applied = randomizer_->Apply(
+      randomize_, draw_seed, m,
+      [controls](std::size_t target) { return controls ? controls->pd(target) : nullptr; });
   draw->qpos_offsets = std::move(applied.qpos_offsets);
   // obs_noise: on the articulation's entries of the observation row, its stream derived from
   // the draw's seed and the articulation (as Session::ResetRandomized seeds it).
@@ -275,6 +295,7 @@ void BatchSubsystem::ResetEnv0(const mjModel* m, mjData* d, std::optional<std::u
   for (const auto& [adr, offset] : draw.qpos_offsets) d->qpos[adr] += offset;
   env0_steps_ = 0;
   env0_diverged_ = false;
+  if (env0_controls_) env0_controls_->Restart();
   RestartEnv0Latency(d);
 }
 
@@ -339,6 +360,7 @@ void BatchSubsystem::ApplyControls(const mjModel* m, mjData* d) {
   std::memcpy(d->ctrl, row, sizeof(double) * static_cast<std::size_t>(nu_));
   if (env0_restart_observation_) ObserveEnv0(m, d, /*stepped=*/false);  // the reset's tick 0
   if (env0_latency_.controls_delayed()) env0_latency_.ApplyControl(row, d);
+  if (env0_controls_) env0_controls_->Apply(m, d);  // as the batch's environments do theirs
   // The other environments start stepping on the workers while this thread steps the engine's;
   // PostStep joins them (StepOthers). In the window's last iteration the stepping threads also
   // write their observation rows (each from its own core's caches), for Gather.

@@ -7,8 +7,6 @@
 
 namespace urlab::world {
 
-std::atomic<Manager*> Manager::playing_{nullptr};
-
 Manager::Manager(ManagerOptions options) : options_(options) {}
 
 Manager::~Manager() { EndPlay(); }
@@ -39,12 +37,6 @@ Subsystem* Manager::FindSubsystem(std::string_view name) const {
 
 void Manager::BeginPlay(const SceneConfig& scene) {
   if (playing()) throw Error("Manager::BeginPlay: this manager is already playing");
-  Manager* expected = nullptr;
-  if (!playing_.compare_exchange_strong(expected, this)) {
-    throw Error(
-        "Manager::BeginPlay: only one manager per world: another Manager is already playing "
-        "(EndPlay it first)");
-  }
   try {
     session_ = Session::Create(scene, options_);
     physics::PhysicsEngine& engine = session_->engine();
@@ -92,8 +84,6 @@ void Manager::EndPlay() {
   listeners_.clear();
   event_log_.reset();
   session_.reset();
-  Manager* self = this;
-  playing_.compare_exchange_strong(self, nullptr);
 }
 
 void Manager::RunPhase(TickPhase phase) {

@@ -70,7 +70,8 @@ std::uint64_t Randomizer::ResetSeed(std::uint64_t seed, std::uint64_t n) {
 }
 
 Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64_t seed, mjModel* m,
-                                      bool controllers) const {
+                                      const PdOf& pd_of) const {
+  const auto pd = [&](std::size_t target) { return pd_of ? pd_of(target) : targets_[target].pd; };
   // The mass distribution before this reset (a previous draw's, or nominal).
   const bool inertial_was_drawn = !std::equal(mass_.begin(), mass_.end(), m->body_mass) ||
                                   !std::equal(inertia_.begin(), inertia_.end(), m->body_inertia) ||
@@ -85,10 +86,11 @@ Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64
   std::copy(gainprm_.begin(), gainprm_.end(), m->actuator_gainprm);
   std::copy(biasprm_.begin(), biasprm_.end(), m->actuator_biasprm);
   std::copy_n(gravity_, 3, m->opt.gravity);
-  for (const Target& t : targets_) {
-    if (!t.pd || !controllers) continue;
-    for (std::size_t i = 0; i < t.nominal_gains.size(); ++i) {
-      t.pd->SetGains(static_cast<int>(i), t.nominal_gains[i]);
+  for (std::size_t k = 0; k < targets_.size(); ++k) {
+    control::PdController* c = targets_[k].pd ? pd(k) : nullptr;
+    if (!c) continue;
+    for (std::size_t i = 0; i < targets_[k].nominal_gains.size(); ++i) {
+      c->SetGains(static_cast<int>(i), targets_[k].nominal_gains[i]);
     }
   }
 
@@ -103,7 +105,8 @@ Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64
     m->opt.gravity[k] = gravity_[k] + v;
     out.draws.gravity[kAxes[k]] = v;
   }
-  for (const Target& t : targets_) {
+  for (std::size_t ti = 0; ti < targets_.size(); ++ti) {
+    const Target& t = targets_[ti];
     const auto params = config.targets.find(t.name);
     if (params == config.targets.end()) continue;
     auto& drawn = out.draws.targets[t.name];
@@ -143,11 +146,12 @@ Randomizer::Applied Randomizer::Apply(const RandomizeConfig& config, std::uint64
           }
         }
       } else if (p.key == "kp" || p.key == "kv") {
-        for (std::size_t i = 0; controllers && i < t.nominal_gains.size(); ++i) {
-          control::PdGains g = t.pd->gains(static_cast<int>(i));
+        control::PdController* c = t.pd ? pd(ti) : nullptr;
+        for (std::size_t i = 0; c && i < t.nominal_gains.size(); ++i) {
+          control::PdGains g = c->gains(static_cast<int>(i));
           (p.key == "kp" ? g.kp : g.kv) =
               (p.key == "kp" ? t.nominal_gains[i].kp : t.nominal_gains[i].kv) * v;
-          t.pd->SetGains(static_cast<int>(i), g);
+          c->SetGains(static_cast<int>(i), g);
         }
       } else if (p.key == "obs_noise") {
         out.obs_noise.emplace_back(t.name, std::max(0.0, v));

@@ -10,6 +10,7 @@
 #include <mujoco/mujoco.h>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -50,10 +51,12 @@ class Randomizer {
   // z first, then the targets in their order, each in the parameter table's order) and writes
   // the draws into `m` and the controllers; when masses, inertias or armature changed, the
   // constants MuJoCo derives from them are recomputed (mj_setConst). Step mutex held.
-  // `controllers` false: the PD gains are drawn (the same stream) but neither written nor put
-  // back (a model copy whose simulation runs no controller: a batch's environment).
+  // `pd_of` (empty: each target's own, Target::pd) gives the PD controller a target's gains go
+  // to in the simulation `m` belongs to (a batch environment's own controllers); nullptr: the
+  // gains are drawn (the same stream) but neither written nor put back.
+  using PdOf = std::function<control::PdController*(std::size_t target)>;
   Applied Apply(const RandomizeConfig& config, std::uint64_t seed, mjModel* m,
-                bool controllers = true) const;
+                const PdOf& pd_of = {}) const;
 
  private:
   const Target* Find(const std::string& name) const;

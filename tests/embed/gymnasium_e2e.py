@@ -200,7 +200,7 @@ def wrappers():
 def closed_and_renamed():
     tmp = tempfile.mkdtemp(prefix="urlab_gym_")
     proc, a = start_announced(URLAB, arm_scene(tmp, "arm.yaml"), "--no-cameras", "--max-speed",
-                              "--envs", "2")
+                              "--envs", "2", duration=86400)
     PROCS.append(proc)
     rpc = a["endpoints"]["rpc"]
     with warnings.catch_warnings(record=True) as caught:

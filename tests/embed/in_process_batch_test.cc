@@ -189,15 +189,25 @@ TEST_F(InProcessBatchTest, BadOptionsAreNamedAsTheyAreHere) {
   EXPECT_EQ(message({.envs = 2}), "no error");
 }
 
-TEST_F(InProcessBatchTest, OneBatchPlaysAtATimeAndAMissingSceneIsNamed) {
+TEST_F(InProcessBatchTest, BatchesPlaySideBySideAndAMissingSceneIsNamed) {
   {
-    InProcessBatch b(Humanoid(), {.envs = 1});
-    try {
-      InProcessBatch again(Humanoid(), {.envs = 1});
-      FAIL() << "a second batch played";
-    } catch (const Error& e) {
-      EXPECT_THAT(e.what(), HasSubstr("play"));
+    // A training and an evaluation batch in one process: each steps its own environments, and
+    // the evaluation one runs the episode it runs alone.
+    std::vector<double> alone;
+    {
+      InProcessBatch eval(Humanoid(), {.envs = 1, .threads = 1, .reset_noise = 0.05});
+      for (const std::vector<double>& a : Actions(eval, 20, 5)) alone = eval.Step(a).obs;
     }
+    InProcessBatch train(Humanoid(), {.envs = 2, .threads = 1, .reset_noise = 0.05});
+    InProcessBatch eval(Humanoid(), {.envs = 1, .threads = 1, .reset_noise = 0.05});
+    const std::vector<std::vector<double>> train_actions = Actions(train, 20, 9);
+    std::vector<double> beside;
+    int s = 0;
+    for (const std::vector<double>& a : Actions(eval, 20, 5)) {
+      train.Step(train_actions[static_cast<std::size_t>(s++)]);
+      beside = eval.Step(a).obs;
+    }
+    EXPECT_EQ(beside, alone);
   }
   try {
     InProcessBatch missing("/no/such/scene.yaml", {.envs = 2});
@@ -205,7 +215,7 @@ TEST_F(InProcessBatchTest, OneBatchPlaysAtATimeAndAMissingSceneIsNamed) {
   } catch (const Error& e) {
     EXPECT_THAT(e.what(), HasSubstr("/no/such/scene.yaml"));
   }
-  InProcessBatch after(Humanoid(), {.envs = 1});  // the failed ones left nothing playing
+  InProcessBatch after(Humanoid(), {.envs = 1});  // the failed one left nothing behind
 }
 
 TEST_F(InProcessBatchTest, TheCInterfaceStepsAndReportsErrors) {

@@ -417,6 +417,41 @@ TEST_F(StepServerBatchTest, RandomizeDrawsAModelForEachEnvironmentAtEachReset) {
   EXPECT_NE(Rows(unseeded, 1), Rows(again, 1));
 }
 
+TEST_F(StepServerBatchTest, APdSceneTakesJointTargetsInEveryEnvironment) {
+  // The pendulum with a joint range under the scene's PD controller: the actions are targets.
+  std::string xml = kPendulumXml;
+  xml.replace(xml.find("damping=\"0.05\""), 14, "damping=\"0.05\" range=\"-2 1.5\"");
+  xml.replace(xml.find("<option"), 0, "<compiler angle=\"radian\"/>\n  ");
+  urlab::testing::WriteTextFile(dir_, "limited.xml", xml);
+  Play({.envs = 3, .threads = 2}, "direct",
+       "articulations:\n  - {name: pend, mjcf: limited.xml, controller: {type: pd, kp: 60, kv: "
+       "4}}\n");
+  Client c(ctx_, rpc());
+  c.Hello();
+  const Json info = c.Op("batch_info");
+  EXPECT_EQ(Unpack<double>(info["action_low"]), std::vector<double>{-2});  // the joint's range
+  EXPECT_EQ(Unpack<double>(info["action_high"]), std::vector<double>{1.5});
+  Json r;
+  for (int i = 0; i < 50; ++i) r = Step(c, {0.4, -0.6, 0.4}, {{"n_steps", 20}});
+  ASSERT_EQ(r["op"], "batch_step_ok") << r.dump();
+  const auto obs = Unpack<double>(r["obs"]);
+  // Environment 0 (the engine's, its controllers the batch's own) and 2 (the batch's) agree bit
+  // for bit; each pendulum holds near its target against gravity (a raw torque of 0.4 would
+  // have swung it round).
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(obs[k], obs[6 + k]);
+  EXPECT_NEAR(obs[0], 0.4, 0.05);
+  EXPECT_NEAR(obs[3], -0.6, 0.05);
+  EXPECT_NEAR(obs[1], 0.0, 1e-3);  // at rest
+  // A reset starts every environment's controllers afresh: the same episode again.
+  c.Op("batch_reset", {{"seed", 3}});
+  Json again;
+  for (int i = 0; i < 50; ++i) again = Step(c, {0.4, -0.6, 0.4}, {{"n_steps", 20}});
+  c.Op("batch_reset", {{"seed", 3}});
+  Json third;
+  for (int i = 0; i < 50; ++i) third = Step(c, {0.4, -0.6, 0.4}, {{"n_steps", 20}});
+  EXPECT_EQ(Unpack<double>(again["obs"]), Unpack<double>(third["obs"]));
+}
+
 TEST_F(StepServerBatchTest, OneEnvironmentIsTheEngineAlone) {
   Play({.envs = 1});
   Client c(ctx_, rpc());

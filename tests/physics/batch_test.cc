@@ -229,6 +229,53 @@ TEST_F(BatchTest, CustomResetStateSkipMaskAndResetBatchState) {
   EXPECT_THROW(batch.Step(actions, obs, done, bad), Error);
 }
 
+// A law that doubles the actions and counts its calls (per environment, from its own thread).
+class DoublingLaw : public ControlLaw {
+ public:
+  void Apply(const mjModel* m, mjData* d) override {
+    for (int u = 0; u < m->nu; ++u) d->ctrl[u] *= 2;
+    ++applied;
+  }
+  void Restart() override { ++restarted; }
+  int applied = 0, restarted = 0;
+};
+
+TEST_F(BatchTest, AControlLawTurnsEachEnvironmentsActionsIntoItsControls) {
+  const Model model(CompileXmlString(kArmXml));
+  std::vector<DoublingLaw*> laws;
+  BatchOptions o;
+  o.envs = 3;
+  o.threads = 2;
+  o.max_episode_steps = 7;
+  o.auto_reset = true;
+  o.control = [&](int) {
+    auto law = std::make_unique<DoublingLaw>();
+    laws.push_back(law.get());
+    return law;
+  };
+  Batch with_law(model, o);
+  ASSERT_EQ(laws.size(), 3u);
+  for (DoublingLaw* law : laws) EXPECT_EQ(law->restarted, 1);  // the first reset
+  BatchOptions plain = o;
+  plain.control = nullptr;
+  Batch without(model, plain);
+  const std::size_t row = static_cast<std::size_t>(with_law.observation_size());
+  std::vector<double> a(row * 3), b(row * 3);
+  for (int step = 0; step < 10; ++step) {
+    std::vector<double> actions = Actions(with_law, step, true), doubled = actions;
+    for (double& x : doubled) x *= 2;
+    with_law.Step(actions, a, {}, {}, 2);
+    without.Step(doubled, b, {}, {}, 2);
+    ASSERT_TRUE(SameBits(a.data(), b.data(), row * 3)) << "step " << step;
+  }
+  for (DoublingLaw* law : laws) {
+    EXPECT_EQ(law->applied, 20);   // before every physics step
+    EXPECT_EQ(law->restarted, 3);  // and again at each auto-reset (steps 7 and 14)
+  }
+  with_law.Reset(1, 5);
+  EXPECT_EQ(laws[1]->restarted, 4);
+}
+
 TEST_F(BatchTest, AutoResetStartsANewEpisodeAtTheStepLimit) {
   BatchOptions o;
   o.envs = 2;

@@ -11,11 +11,12 @@ BatchClient speaks the operations to one server; BatchBackend is UrlabVectorEnv'
 one or more batched servers (N servers x M environments): one request per server per step, sent
 to every server before the replies are gathered, with numpy arrays in and out and no loop over
 environments in Python; send()/recv() are the same steps asynchronously (one server's reply at
-a time, UrlabVectorEnv.send/recv). Actions are the model's controls (ctrl, actuator order)
-bounded by each actuator's ctrlrange; the observation is {"qpos", "qvel", "sensordata"} of the
+a time, UrlabVectorEnv.send/recv). Actions are in actuator order, what a client of the scene
+sends: every environment runs the scene's controllers, so they are joint targets under a PD,
+keyframe or gait controller and controls under none, bounded by their ranges; the observation is {"qpos", "qvel", "sensordata"} of the
 whole model, views on the reply's packed array (read-only; .copy() one to modify it). With a
 `task` (urlab_client.tasks: what gymnasium.make_vec gives) the actions are the task's (each in
--1..1, scaled to the ctrlrange) and so are the observation, reward and termination.
+-1..1, scaled to the action's range) and so are the observation, reward and termination.
 
 An episode the batch ended by itself is terminated when it diverged (NaN/Inf or MuJoCo's
 instability warnings: infos["diverged"]) and truncated when it reached the batch's own episode
@@ -234,7 +235,8 @@ class BatchBackend:
                        else first.info.get("actuators", []))
             low, high = first.action_low, first.action_high
             if not (np.all(np.isfinite(low)) and np.all(np.isfinite(high))):
-                raise ValueError(f"task {task.name}: every actuator needs a ctrlrange")
+                raise ValueError(f"task {task.name}: every action needs a range (a joint range "
+                                 "under a PD controller, else a ctrlrange)")
             self._ctrl_mid, self._ctrl_half = (high + low) / 2, (high - low) / 2
             self.single_action_space = spaces.Box(-1.0, 1.0, shape=(self.nu,), dtype=np.float32)
             self.single_observation_space = task.observation_space(sizes)
@@ -316,7 +318,7 @@ class BatchBackend:
         return self.task.observation(view, self._task_state(rows))
 
     def _controls(self, actions):
-        """The controls the server gets: a task's actions (-1..1) scaled to the ctrlranges."""
+        """The actions the server gets: a task's (-1..1) scaled to the actions' ranges."""
         if self.task is None:
             return actions
         return self._ctrl_mid + self._ctrl_half * np.clip(actions, -1.0, 1.0)

@@ -267,12 +267,19 @@ class ServerPool:
         return c
 
     def batch_vector_env(self, close_pool=True, reward_fn=None, terminated_fn=None,
-                         max_episode_steps=None, **options):
+                         max_episode_steps=None, task=None, **options):
         """A UrlabVectorEnv over every environment of every slot (start the pool with
         envs_per_server): environments k*M .. k*M+M-1 are slot k's. options: BatchClient's
-        (frame_skip, timeout, shared_memory, ...). A lost server's environments end truncated and
-        come back on its slot's replacement."""
+        (frame_skip, timeout, shared_memory, ...). task: a bundled task (its name, e.g.
+        "ArmReach", or a urlab_client.tasks.Task; the pool's scene must be the task's) gives the
+        actions, observation, reward and termination, as gymnasium.make_vec(id) does in process.
+        A lost server's environments end truncated and come back on its slot's replacement."""
         from urlab_client.batch import BatchBackend
+        if task is not None:
+            from urlab_client.tasks import task_of
+            task = task_of(task)
+            if options.get("frame_skip") is None:
+                options["frame_skip"] = task.frame_skip
         options.setdefault("timeout", 10.0)
         clients = []
         try:
@@ -289,7 +296,8 @@ class ServerPool:
                                      **options)
 
         backend = BatchBackend(clients, replace=replace, reward_fn=reward_fn,
-                               terminated_fn=terminated_fn, max_episode_steps=max_episode_steps)
+                               terminated_fn=terminated_fn, max_episode_steps=max_episode_steps,
+                               task=task)
         from urlab_client.vector import UrlabVectorEnv
         return UrlabVectorEnv(backend=backend, on_close=self.close if close_pool else None)
 

@@ -11,8 +11,9 @@ stepping threads while the call holds no GIL.
 
 It is `urlab run SCENE --envs N` without the network: the same resets, seeds, next-step
 autoreset, episode limit, latency and randomisation, so environment i with seed s runs the same
-episode as in a batched server. One in-process batch at a time per process (close() the first).
-The arrays a step returns are fresh (a rollout buffer may keep them).
+episode as in a batched server, and every environment runs the scene's controllers (a PD scene
+takes joint targets). Several in-process batches may be open in one process (a training and an
+evaluation env). The arrays a step returns are fresh (a rollout buffer may keep them).
 
 For MuJoCo's own Python package: `model` (a mujoco.MjModel) and `data(i)` (a mujoco.MjData of
 environment i now) are copies of the batch's (mj_copyModel, mj_copyData through the library:

@@ -104,7 +104,8 @@ class RolloutPool:
         self.n = int(n_workers) if n_workers is not None else len(live)
         if self.n > len(live):
             raise ValueError(f"{self.n} rollout workers for {len(live)} Dask workers (one "
-                             "in-process batch per worker process)")
+                             "in-process batch per worker process: its threads are that "
+                             "worker's cores)")
         self.workers = live[:self.n]  # each slot's worker
         self.lost = 0
         self.actors = [None] * self.n
@@ -120,7 +121,7 @@ class RolloutPool:
 
     def _start(self, k):
         """Starts slot k's rollout worker on a live worker hosting none (one in-process batch
-        per process): its own worker when it is alive, else another. Raises RuntimeError when
+        per worker process, so that batches do not share cores): its own worker when it is alive, else another. Raises RuntimeError when
         every live worker hosts one already (a dead worker not restarted yet)."""
         live = sorted(self.client.scheduler_info()["workers"])
         taken = {getattr(a, "_address", None) for a in self.actors if a is not None}

@@ -8,15 +8,15 @@
                               vectorization_mode="vector_entry_point")   # in this process
 
 A task is a scene of examples/scenes with what makes it learnable: actions in -1..1 (scaled to
-each actuator's ctrlrange: the model's raw controls, since the scene's controllers do not drive
-batched environments), a flat float32 observation with finite bounds, a reward and a
+each action's range: a joint target under the scene's PD or gait controller, which runs in every
+environment as it does for a client of `urlab run SCENE`), a flat float32 observation with finite bounds, a reward and a
 termination, all computed over the batch's own parts (qpos, qvel, sensordata of the whole
 model), vectorised over environments. Both ways run the same task on the same physics:
 `gymnasium.make(id)` starts `urlab run SCENE --envs 1` and drives its one environment through the
-batch operations (a server process, so any number of them can be open in a process, and
-gymnasium's sync and async vector envs work too); `gymnasium.make_vec(id, num_envs=N)` steps N
-environments in this process (UrlabVectorEnv.in_process: URLab's C library, one batch per
-process). make(id) reset with seed s runs the episode environment i of make_vec(id) reset with
+batch operations (a server process of its own, so gymnasium's sync and async vector envs work
+too); `gymnasium.make_vec(id, num_envs=N)` steps N environments in this process
+(UrlabVectorEnv.in_process: URLab's C library; several can be open at once, a training and an
+evaluation env). make(id) reset with seed s runs the episode environment i of make_vec(id) reset with
 seed s - i runs, bit for bit, for the same actions.
 
 - URLab/ArmReach-v0 (arm_reach.yaml): reward minus the tip's distance (m) to a target drawn

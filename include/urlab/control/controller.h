@@ -76,6 +76,9 @@ class Controller {
   // controller's own), or empty spans. Physics thread, right before ComputeAndApply; the spans
   // stay valid until ComputeAndApply returns. Controllers without gains ignore them.
   virtual void UseFrameGains(std::span<const double> /*kp*/, std::span<const double> /*kv*/) {}
+  // The simulation was reset: a controller with a clock or memory (a keyframe sequence, a gait)
+  // starts afresh at the next ComputeAndApply, as a new one would. Physics thread.
+  virtual void Restart() {}
   // True when targets are joint positions (PD, keyframe); false when they are raw controls.
   virtual bool TargetsArePositions() const { return false; }
 

@@ -106,6 +106,8 @@ class KeyframeController : public PdController {
 
   void Bind(const mjModel* m, std::span<const int> actuator_ids) override;
   void ComputeAndApply(const mjModel* m, mjData* d, std::span<const double> targets) override;
+  // A playing sequence starts again from the pose the reset left (as autoplay does).
+  void Restart() override;
 
   // Ease-in-out (smoothstep) of s in [0, 1].
   static double Ease(double s);

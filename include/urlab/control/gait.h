@@ -58,6 +58,8 @@ class GaitController : public PdController {
   // The twist to walk at (the articulation's; must outlive the controller's use).
   void SetTwistSource(const TwistController* twist) { twist_ = twist; }
   void ComputeAndApply(const mjModel* m, mjData* d, std::span<const double> targets) override;
+  // The gait starts a new cycle at the next step it walks (from the standing pose's feet).
+  void Restart() override { walking_.store(false, std::memory_order_release); }
 
   const GaitSettings& settings() const { return settings_; }
   int num_legs() const;

@@ -5,7 +5,9 @@
 // world::BatchSubsystem (environment 0 is the engine's own simulation), the same resets, seeds,
 // next-step auto-reset, episode limit, latency and randomisation, so environment i with seed s
 // runs the same episode here as in a batched server. A step runs on the caller's thread and
-// K-1 stepping workers (BatchSubsystem::StepHere); nothing else runs meanwhile.
+// K-1 stepping workers (BatchSubsystem::StepHere); nothing else runs meanwhile. Every
+// environment runs the scene's controllers: under a PD, keyframe or gait controller the actions
+// are joint targets (action_low/high their ranges), as a client of `urlab run SCENE` sends them.
 //
 // The C interface over it (urlab/embed/urlab_batch.h, liburlab_batch.so) is what the Python
 // client loads (urlab_client.inproc, UrlabVectorEnv.in_process).
@@ -13,8 +15,8 @@
 // Threading contract
 // - One owner thread at a time calls everything (construction, Step, Reset, destruction); the
 //   C interface serialises its callers with a lock of its own.
-// - At most one InProcessBatch (or other world::Manager) plays in a process at a time: a second
-//   one's construction throws Error.
+// - Several InProcessBatch objects may live in one process (a training and an evaluation
+//   batch), each with its own session, threads and engine; each has its own owner thread rule.
 // - Step's and Reset's result stays valid until the next Step, Reset or the destructor.
 #include <cstdint>
 #include <memory>
@@ -53,7 +55,8 @@ class InProcessBatch {
   int nv() const;
   int nsensordata() const;
   double timestep() const;
-  // Each actuator's control range (-inf / +inf when it has none), in actuator order.
+  // Each action's range, in actuator order: its controller's target range (the joint's range
+  // under a PD), else the actuator's ctrlrange; -inf / +inf when it has none.
   const std::vector<double>& action_low() const;
   const std::vector<double>& action_high() const;
   std::vector<std::string> actuator_names() const;

@@ -7,8 +7,8 @@
  * NULL). Arrays are row-major, environment after environment; doubles are the machine's.
  *
  * Threading: a handle's calls are serialised by a lock of the handle (calls from several threads
- * take turns). At most one handle is open in a process at a time. A step runs on the calling
- * thread and the batch's stepping workers.
+ * take turns). Several handles may be open in a process, each with its own threads. A step runs
+ * on the calling thread and the batch's stepping workers.
  */
 #ifndef URLAB_EMBED_URLAB_BATCH_H_
 #define URLAB_EMBED_URLAB_BATCH_H_
@@ -65,7 +65,8 @@ URLAB_BATCH_API urlab_batch* urlab_batch_open(const char* scene, const urlab_bat
 URLAB_BATCH_API void urlab_batch_close(urlab_batch* batch);
 
 URLAB_BATCH_API int urlab_batch_get_sizes(urlab_batch* batch, urlab_batch_sizes* sizes);
-/* Each actuator's control range (nu values each; -inf / +inf without one). */
+/* Each action's range (nu values each): its controller's target range (the joint's range under a
+ * PD controller), else the actuator's ctrlrange; -inf / +inf without one. */
 URLAB_BATCH_API int urlab_batch_action_bounds(urlab_batch* batch, double* low, double* high);
 /* The actuators' names, NUL-separated, into `names` (at most size bytes); the bytes needed. */
 URLAB_BATCH_API size_t urlab_batch_actuator_names(urlab_batch* batch, char* names, size_t size);

@@ -9,7 +9,8 @@
 // resets; model() is then the copy they were made from (sizes and options are the same in all).
 //
 // Packed layouts (row-major, environment after environment, doubles):
-// - actions: N x nu, in actuator order (written to ctrl before the environment's step);
+// - actions: N x nu, in actuator order (written to ctrl before the environment's step; with a
+//   control law (BatchOptions::control) they are its targets, and the law writes ctrl);
 // - observations: N x observation_size(), each row qpos (nq), qvel (nv), sensordata
 //   (nsensordata) as they are after the step (after the reset when it auto-reset), as observed
 //   through the environment's observation latency when it has one (BatchOptions::latency);
@@ -46,6 +47,19 @@ class WorkerPool;
 
 namespace urlab::physics {
 
+// What turns an environment's actions into its controls when they are not the controls
+// themselves (world: the scene's controllers, one set per environment, so a PD scene takes joint
+// targets). Apply runs before each step of its environment, on the thread stepping it: d->ctrl
+// holds the actions (after any control latency), in actuator order, and Apply writes the
+// controls over them. Restart: the environment was reset (a law with a clock or memory starts
+// afresh at the next Apply). Threading: one environment's law is called by one thread at a time.
+class ControlLaw {
+ public:
+  virtual ~ControlLaw() = default;
+  virtual void Apply(const mjModel* m, mjData* d) = 0;
+  virtual void Restart() {}
+};
+
 struct BatchOptions {
   int envs = 1;
   int threads = 0;  // 0: the machine's cores; at most envs
@@ -78,6 +92,10 @@ struct BatchOptions {
     std::vector<EnvLatency::Noise> noise;
   };
   std::function<void(int env, std::optional<std::uint64_t> seed, mjModel* m, Draw* draw)> randomize;
+  // Environment `env`'s control law (null, or a null law: the actions are the controls). Asked
+  // once per environment when the batch is made, before any reset (so `randomize` may reach the
+  // law it made).
+  std::function<std::unique_ptr<ControlLaw>(int env)> control;
 };
 
 // The state an environment resets to: options.reset_state (or the keyframe, or the default

@@ -12,13 +12,19 @@
 // A batch step (SubmitStep) is, for the engine, one lockstep window: an Inspect command arms the
 // job (the other environments' resets, the options environment 0 runs with), then a Step{n}
 // command. While that window runs, the apply-controls hook writes environment 0's actions over
-// what its controllers wrote (actions are raw controls, in actuator order), and a post-step hook
+// what the session's controllers wrote, and a post-step hook
 // steps the other environments once per iteration. When environment 0 resets in a batch step
 // (gymnasium's next-step autoreset: the step after an episode ended resets that environment and
 // ignores its action), its reset is a ResetCustom command (the recorder sees the discontinuity)
 // and the other environments step inside an Inspect command instead of a window. StepHere runs
 // the same window on the requesting thread (PhysicsEngine::StepSync) instead of the physics
 // thread's.
+//
+// Actions are in actuator order, what a client of the running scene sends: every environment
+// runs the scene's controllers of its own (EnvControls, built from the scene as the session
+// builds its own), so under a PD, keyframe or gait controller an action is a joint target (the
+// gait's twist stays detached: a PD on joint targets), under none the control itself.
+// action_low/high are the targets' ranges.
 //
 // Episodes end (done) when an environment diverges (NaN/Inf, MuJoCo's instability warnings) or
 // reaches max_episode_steps physics steps; with auto_reset the next batch step resets it.
@@ -57,7 +63,8 @@
 
 namespace urlab::world {
 
-class Randomizer;  // src/world/randomizer.h
+class Randomizer;   // src/world/randomizer.h
+class EnvControls;  // src/world/env_controls.h
 
 struct BatchSubsystemOptions {
   int envs = 1;
@@ -207,6 +214,11 @@ class BatchSubsystem : public Subsystem {
   int nu_ = 0, nq_ = 0, nv_ = 0, nsensordata_ = 0;
   std::vector<double> action_low_, action_high_;
   std::vector<std::uint64_t> callbacks_;
+  // The scene's controllers, one set per environment (none when every articulation passes its
+  // targets through): environment 0's here, the batch's own inside it; by environment, for the
+  // randomisation's PD gains (each touched only by the thread resetting or stepping it).
+  std::unique_ptr<EnvControls> env0_controls_;
+  std::vector<EnvControls*> env_controls_;
   // The articulations with a latency: their actuators, observation row entries and settings.
   struct LatencyTemplate {
     std::size_t index = 0;  // the articulation's index (its seed stream)

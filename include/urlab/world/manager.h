@@ -12,7 +12,9 @@
 //   the destructor, AddEventListener, frame() and BodyPose(). Subsystem hooks and event
 //   listeners run on the main thread, inside BeginPlay/Tick/EndPlay.
 // - Any thread, while playing: session() and what it offers under its own contract.
-// - At most one Manager plays at a time in a process: another one's BeginPlay throws Error.
+// - Several Managers may play in one process (a training and an evaluation batch): each has
+//   its own session, engine and thread; nothing of MuJoCo's process-wide state (its error
+//   handlers, the engine plugins: core/mujoco_handlers.h) belongs to one of them.
 // - A MuJoCo error while playing never ends the process: the engine pauses and reports it, and
 //   Tick delivers the report to the log, the subsystems and the listeners.
 #include <atomic>
@@ -97,8 +99,6 @@ class Manager {
   std::unique_ptr<EventLog> event_log_;
   std::vector<EventListener> listeners_;
   const physics::StateFrame* frame_ = nullptr;
-
-  static std::atomic<Manager*> playing_;
 };
 
 }  // namespace urlab::world
