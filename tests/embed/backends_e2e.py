@@ -18,7 +18,8 @@ Checked:
   gives the same observations, rewards and flags in process, on the batched server and on the
   Dask servers for the same seed and actions;
 - two in-process batches in one process (a training and an evaluation env, and a humanoid beside
-  them) step independently: the evaluation env's episode is the one it runs alone.
+  them) step independently: the evaluation env's episode is the one it runs alone;
+- a scene's keyframe sequence starts again with each episode of a batched environment.
 Usage: backends_e2e.py URLAB_BINARY SOURCE_DIR LIBRARY
 """
 import os
@@ -45,6 +46,7 @@ from urlab_process import PROCS, check, start_announced, stop_all  # noqa: E402
 
 SCENE = os.path.join(SOURCE, "examples", "scenes", "arm_reach.yaml")
 HUMANOID = os.path.join(SOURCE, "examples", "scenes", "humanoid_pd.yaml")
+SWING = os.path.join(SOURCE, "examples", "scenes", "two_arms_swing.yaml")
 FRAME_SKIP, STEPS = 10, 100  # 0.02 s per env step, 2 s
 TARGET = 0.5
 JOINT_RANGES = np.array([[-2.6, 2.6], [-2.4, 2.4]])  # servo_arm.xml's shoulder and elbow
@@ -181,6 +183,23 @@ def main():
         envs.close()
     print("three in-process batches in one process: the evaluation episode is the one it runs "
           "alone")
+
+    # A keyframe sequence (two_arms_swing.yaml's left arm, autoplay) starts again with each
+    # episode: seed 5's episode after seed 6's is the one a fresh batch runs from seed 5.
+    def episode(envs, seed):
+        envs.reset(seed=seed)
+        return np.array([envs.step(np.zeros((1, 4)))[0]["qpos"].copy() for _ in range(80)])
+
+    def swing():
+        return UrlabVectorEnv.in_process(SWING, 1, threads=1, frame_skip=10,
+                                         reset_noise_scale=0.05)
+    with swing() as fresh, swing() as used:
+        first = episode(fresh, 5)
+        other = episode(used, 6)
+        again = episode(used, 5)
+    check(np.array_equal(first, again) and not np.array_equal(first, other),
+          "a keyframe sequence does not restart with its episode")
+    check(np.ptp(first[:, 0, 0]) > 0.5, f"the left arm did not swing: {first[::20, 0, 0]}")
     print("backends_e2e: ok")
 
 
