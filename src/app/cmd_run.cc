@@ -69,6 +69,7 @@ struct RunArgs {
   bool no_auto_reset = false;
   int max_episode_steps = 0;
   double reset_noise = 0;
+  bool raw_actions = false;
   int record_env = 0;  // --record-env I: the environment the engine runs (recorded, shown)
   bool no_cameras = false;
   std::vector<std::string> video;  // --video CAM OUT: a camera's frames to MP4/WebM
@@ -245,6 +246,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
     batch_options.auto_reset = !args.no_auto_reset;
     batch_options.max_episode_steps = args.max_episode_steps;
     batch_options.reset_noise = args.reset_noise;
+    batch_options.raw_actions = args.raw_actions;
     batch_options.seed = scene.seed;  // environment i: the run's seed + i
     batch_options.engine_env = args.record_env;
     auto* batch = &static_cast<world::BatchSubsystem&>(
@@ -565,6 +567,11 @@ void AddRunOptions(CLI::App* cmd, RunArgs& args) {
                   "and free-joint positions and to every velocity, from each environment's own "
                   "generator (default 0)")
       ->check(CLI::Range(0.0, 1e6))
+      ->needs(envs);
+  cmd->add_flag("--raw-actions", args.raw_actions,
+                "with --envs: batch steps' actions are each actuator's control (ctrl) and the "
+                "scene's controllers do not run in the environments (default: every environment "
+                "runs the scene's controllers, so a PD scene takes joint targets)")
       ->needs(envs);
   cmd->add_flag("--allow-no-network", args.allow_no_network,
                 "go on without a socket that cannot bind (by default a run without a window "

@@ -95,6 +95,7 @@ urlab_batch* urlab_batch_open(const char* scene, const urlab_batch_options* opti
     o.auto_reset = options->auto_reset != 0;
     o.max_episode_steps = options->max_episode_steps;
     o.reset_noise = options->reset_noise;
+    o.raw_actions = options->raw_actions != 0;
     if (options->has_seed) o.seed = options->seed;
     auto h = std::make_unique<urlab_batch>();
     h->batch = std::make_unique<urlab::embed::InProcessBatch>(scene, o);

@@ -73,6 +73,7 @@ InProcessBatch::InProcessBatch(const std::string& scene, const InProcessOptions&
   batch_options.reset_noise = options.reset_noise;
   batch_options.seed = config.seed;  // environment i: the seed + i
   batch_options.detached = true;     // no topics, viewer or recorder follow an environment here
+  batch_options.raw_actions = options.raw_actions;
   playing_->batch = &static_cast<world::BatchSubsystem&>(
       playing_->manager.AddSubsystem(std::make_unique<world::BatchSubsystem>(batch_options)));
   playing_->manager.BeginPlay(config);

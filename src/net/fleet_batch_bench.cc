@@ -78,7 +78,7 @@ sys.path.insert(0, sys.argv[1])
 import numpy as np
 from urlab_client import UrlabVectorEnv
 library, steps, n_steps, scene = sys.argv[2], int(sys.argv[3]), int(sys.argv[5]), sys.argv[6]
-env = UrlabVectorEnv.in_process(scene, 64, threads=2, library=library)
+env = UrlabVectorEnv.in_process(scene, 64, threads=2, library=library, raw_actions=True)
 client = env.envs[0]
 )PY";
 
@@ -135,7 +135,8 @@ urlab, scene, steps = sys.argv[2], sys.argv[3], int(sys.argv[4])
 def run(workers):
     with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                       dashboard_address=None, silence_logs=40) as c, Client(c) as client:
-        pool = ServerPool(client, scene, workers, urlab=urlab, envs_per_server=16, threads=1)
+        pool = ServerPool(client, scene, workers, urlab=urlab, envs_per_server=16, threads=1,
+                          args=("--no-cameras", "--max-speed", "--raw-actions"))
         with pool.batch_vector_env() as envs:
             envs.reset(seed=0)
             a = np.zeros(envs.action_space.shape)
@@ -171,7 +172,8 @@ library, scene, steps, calls = sys.argv[2], sys.argv[3], int(sys.argv[4]), 4
 def run(workers):
     with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                       dashboard_address=None, silence_logs=40) as c, Client(c) as client:
-        with RolloutPool(client, scene, envs_per_worker=16, threads=1, library=library) as pool:
+        with RolloutPool(client, scene, envs_per_worker=16, threads=1, library=library,
+                         raw_actions=True) as pool:
             policy = lambda obs, nu=pool.nu: np.zeros((len(obs["qpos"]), nu))
             pool.run(policy, 20)
             done, stepping, cpu, t0 = 0, [0.0] * workers, [0.0] * workers, time.perf_counter()
@@ -246,6 +248,7 @@ class BatchServer {
                                            scene,
                                            "--envs",
                                            std::to_string(envs),
+                                           "--raw-actions",  // the bare loop's raw controls
                                            "--threads",
                                            std::to_string(threads),
                                            "--ports",

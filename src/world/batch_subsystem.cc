@@ -117,7 +117,7 @@ void BatchSubsystem::BeginPlay(Session& session) {
   // The scene's controllers in every environment (the engine's environment's here; the batch
   // asks for the others' below): the actions are their targets.
   env_controls_.assign(static_cast<std::size_t>(options_.envs), nullptr);
-  if (EnvControls::Needed(session)) {
+  if (!options_.raw_actions && EnvControls::Needed(session)) {
     auto controls = std::make_unique<EnvControls>(session);
     controls->TargetBounds(m, &action_low_, &action_high_);
     if (!detached()) {

@@ -14,6 +14,8 @@ Checked:
   target 0.5 rad on both joints for 2 s gives every environment of every back end the same
   trajectory, bit for bit, ending within 0.05 rad of the target (before the scene's controllers
   ran in batched environments, the in-process arm ended at [0.579, 1.671]: 0.5 as raw torque);
+- with raw_actions (`urlab run --raw-actions`) the actions are the controls, bounded by the
+  ctrlranges, in process and served alike;
 - the task URLab/ArmReach-v0 (-1..1 actions scaled to the targets' ranges, reset noise, seeds)
   gives the same observations, rewards and flags in process, on the batched server and on the
   Dask servers for the same seed and actions;
@@ -139,6 +141,22 @@ def main():
     check(np.all(np.abs(final - TARGET) < 0.05), f"the PD did not reach its targets: {final}")
     print(f"holding {TARGET} rad for 2 s: qpos {final} in every environment of "
           f"{', '.join(f'{k} ({len(v)})' for k, v in runs.items())}")
+
+    # --- raw_actions: the controls themselves, the scene's PD off (in process and served alike).
+    proc, announced = start_announced(URLAB, SCENE, "--no-cameras", "--max-speed", "--envs", "2",
+                                      "--raw-actions", duration=86400)
+    PROCS.append(proc)
+    with UrlabVectorEnv.in_process(SCENE, 2, threads=1, frame_skip=FRAME_SKIP,
+                                   raw_actions=True) as envs:
+        check(np.array_equal(envs.single_action_space.low, [-1, -1]), "raw bounds: ctrlrange")
+        raw_local = hold_batched(envs)
+    with UrlabVectorEnv.over_batch(announced["endpoints"]["rpc"], frame_skip=FRAME_SKIP) as envs:
+        raw_served = hold_batched(envs)
+    check(np.array_equal(raw_local, raw_served), "raw actions: in process and served differ")
+    check(np.abs(raw_local[0, -1] - reference[-1]).max() > 0.1,
+          f"raw controls 0.5 ended where the PD targets did: {raw_local[0, -1]}")
+    print(f"raw_actions: controls 0.5 for 2 s leave qpos {raw_local[0, -1]}, in process and "
+          "served alike")
 
     # --- The task: in process, on the batched server and on the Dask servers.
     served_proc, announced = start_announced(URLAB, SCENE, "--no-cameras", "--max-speed",

@@ -452,6 +452,27 @@ TEST_F(StepServerBatchTest, APdSceneTakesJointTargetsInEveryEnvironment) {
   EXPECT_EQ(Unpack<double>(again["obs"]), Unpack<double>(third["obs"]));
 }
 
+TEST_F(StepServerBatchTest, RawActionsAreTheControlsWithTheControllersOff) {
+  std::string xml = kPendulumXml;
+  xml.replace(xml.find("damping=\"0.05\""), 14, "damping=\"0.05\" range=\"-2 1.5\"");
+  xml.replace(xml.find("<option"), 0, "<compiler angle=\"radian\"/>\n  ");
+  urlab::testing::WriteTextFile(dir_, "limited.xml", xml);
+  Play({.envs = 2, .threads = 2, .raw_actions = true}, "direct",
+       "articulations:\n  - {name: pend, mjcf: limited.xml, controller: {type: pd, kp: 60, kv: "
+       "4}}\n");
+  Client c(ctx_, rpc());
+  c.Hello();
+  const Json info = c.Op("batch_info");
+  EXPECT_EQ(Unpack<double>(info["action_low"]), std::vector<double>{-5});  // the ctrlrange
+  EXPECT_EQ(Unpack<double>(info["action_high"]), std::vector<double>{5});
+  Json r;
+  for (int i = 0; i < 10; ++i) r = Step(c, {0.0, 0.0}, {{"n_steps", 20}});
+  const auto obs = Unpack<double>(r["obs"]);
+  // No PD holds them: both pendulums fall under gravity alike, far from any target.
+  EXPECT_EQ(obs[0], obs[3]);
+  EXPECT_GT(obs[0], 0.3);
+}
+
 TEST_F(StepServerBatchTest, OneEnvironmentIsTheEngineAlone) {
   Play({.envs = 1});
   Client c(ctx_, rpc());

@@ -36,7 +36,7 @@ import numpy as np
 
 from urlab_client.batch import BatchBackend, BatchCalls, renamed
 
-ABI = 2  # urlab/embed/urlab_batch.h's URLAB_BATCH_ABI
+ABI = 3  # urlab/embed/urlab_batch.h's URLAB_BATCH_ABI
 _F8 = np.dtype("<f8")
 _U4 = np.dtype("<u4")
 _NAME = "liburlab_batch.so"
@@ -65,7 +65,7 @@ class _Options(ctypes.Structure):
     _fields_ = [("envs", ctypes.c_int), ("threads", ctypes.c_int), ("auto_reset", ctypes.c_int),
                 ("max_episode_steps", ctypes.c_int), ("reset_noise", ctypes.c_double),
                 ("has_seed", ctypes.c_int), ("seed", ctypes.c_uint64),
-                ("log_level", ctypes.c_char_p)]
+                ("log_level", ctypes.c_char_p), ("raw_actions", ctypes.c_int)]
 
 
 class _Sizes(ctypes.Structure):
@@ -174,11 +174,13 @@ class InProcessBatch(BatchCalls):
     (UrlabVectorEnv's BatchBackend drives either): send_step() steps at once (the GIL released),
     receive_step_parts() returns the result. Calls from several threads take turns; close()
     waits for one under way. Errors in what it is given raise ValueError with
-    the library's message (naming the field, or the scene file and line)."""
+    the library's message (naming the field, or the scene file and line). raw_actions: the
+    actions are the controls and the scene's controllers stay off (`urlab run --raw-actions`);
+    by default every environment runs them (a PD scene takes joint targets)."""
 
     def __init__(self, scene, envs=1, threads=0, seed=None, max_episode_steps=0,
                  reset_noise_scale=None, auto_reset=True, frame_skip=None, library=None,
-                 log_level="warn", **deprecated):
+                 log_level="warn", raw_actions=False, **deprecated):
         deprecated.update(reset_noise_scale=reset_noise_scale, frame_skip=frame_skip)
         reset_noise = renamed(deprecated, "reset_noise", "reset_noise_scale", 0.0)
         frame_skip = renamed(deprecated, "n_steps", "frame_skip", 1)
@@ -201,7 +203,8 @@ class InProcessBatch(BatchCalls):
         self.transport = "in-process"
         self.frame_skip = frame_skip
         options = _Options(envs, threads, 1 if auto_reset else 0, max_episode_steps, reset_noise,
-                           seed is not None, seed or 0, log_level.encode())
+                           seed is not None, seed or 0, log_level.encode(),
+                           1 if raw_actions else 0)
         self._error = ctypes.create_string_buffer(4096)
         handle = self._lib.urlab_batch_open(os.fsencode(scene), ctypes.byref(options),
                                             self._error, len(self._error))
@@ -227,7 +230,7 @@ class InProcessBatch(BatchCalls):
                      "obs_size": self.obs_size, "timestep": self.timestep,
                      "actuators": self.actuators, "auto_reset": bool(auto_reset),
                      "max_episode_steps": int(max_episode_steps),
-                     "reset_noise": reset_noise}
+                     "reset_noise": reset_noise, "raw_actions": bool(raw_actions)}
         self._out = _Outputs()
         self._result = None
         self._step_seconds = 0.0
@@ -431,7 +434,7 @@ class InProcessBatch(BatchCalls):
 def in_process_backend(scene, num_envs, threads=0, seed=None, frame_skip=None, reward_fn=None,
                        terminated_fn=None, max_episode_steps=None, server_max_episode_steps=0,
                        reset_noise_scale=None, library=None, log_level="warn", task=None,
-                       **deprecated):
+                       raw_actions=False, **deprecated):
     """UrlabVectorEnv's batched backend over one InProcessBatch (UrlabVectorEnv.in_process)."""
     deprecated.update(frame_skip=frame_skip, reset_noise_scale=reset_noise_scale)
     frame_skip = renamed(deprecated, "n_steps", "frame_skip", None)
@@ -445,7 +448,7 @@ def in_process_backend(scene, num_envs, threads=0, seed=None, frame_skip=None, r
     batch = InProcessBatch(scene, envs=num_envs, threads=threads, seed=seed,
                            max_episode_steps=server_max_episode_steps,
                            reset_noise_scale=reset_noise_scale, frame_skip=frame_skip,
-                           library=library, log_level=log_level)
+                           library=library, log_level=log_level, raw_actions=raw_actions)
     try:
         return BatchBackend([batch], reward_fn=reward_fn, terminated_fn=terminated_fn,
                             max_episode_steps=max_episode_steps, task=task)

@@ -172,7 +172,9 @@ class UrlabVectorEnv(VectorEnv):
         cores); seed: environment i starts with seed + i (None: the scene's). options:
         frame_skip, reward_fn, terminated_fn, max_episode_steps (vector steps, truncation),
         server_max_episode_steps (physics steps, as `urlab run --max-episode-steps`),
-        reset_noise_scale, task (urlab_client.tasks), library, log_level. The old names
+        reset_noise_scale, task (urlab_client.tasks), library, log_level, raw_actions (the
+        actions are the controls, the scene's controllers off; by default every environment
+        runs them, so a PD scene takes joint targets). The old names
         n_steps and reset_noise still work, with a FutureWarning."""
         from urlab_client.inproc import in_process_backend
         backend = in_process_backend(scene, num_envs, threads=threads, seed=seed, **options)

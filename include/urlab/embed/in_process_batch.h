@@ -36,6 +36,7 @@ struct InProcessOptions {
   int max_episode_steps = 0;          // physics steps; 0: an episode ends only by divergence
   double reset_noise = 0;             // uniform noise at each reset (as --reset-noise)
   std::optional<std::uint64_t> seed;  // environment i starts with seed + i (none: the scene's)
+  bool raw_actions = false;  // the actions are the controls; the scene's controllers stay off
 };
 
 class InProcessBatch {

@@ -23,14 +23,14 @@ extern "C" {
 #define URLAB_BATCH_API __attribute__((visibility("default")))
 
 /* The interface's version: a caller checks it before anything else (2: copy_model, copy_data
- * and mujoco_version added). */
-#define URLAB_BATCH_ABI 2
+ * and mujoco_version added; 3: urlab_batch_options.raw_actions). */
+#define URLAB_BATCH_ABI 3
 URLAB_BATCH_API int urlab_batch_abi(void);
 
 typedef struct urlab_batch urlab_batch;
 
 /* What urlab_batch_open takes (urlab run's --envs, --threads, --no-auto-reset,
- * --max-episode-steps, --reset-noise, --seed). */
+ * --max-episode-steps, --reset-noise, --seed, --raw-actions). */
 typedef struct urlab_batch_options {
   int envs;              /* at least 1 */
   int threads;           /* stepping threads; 0: the machine's cores */
@@ -40,6 +40,8 @@ typedef struct urlab_batch_options {
   int has_seed;          /* nonzero: environment i starts with seed + i; 0: the scene's seed */
   uint64_t seed;
   const char* log_level; /* trace, debug, info, warn, error or off; NULL: warn */
+  int raw_actions;       /* nonzero: the actions are the controls (the scene's controllers off);
+                          * 0: every environment runs the scene's controllers on them */
 } urlab_batch_options;
 
 /* The sizes of an open batch. */

@@ -24,7 +24,8 @@
 // runs the scene's controllers of its own (EnvControls, built from the scene as the session
 // builds its own), so under a PD, keyframe or gait controller an action is a joint target (the
 // gait's twist stays detached: a PD on joint targets), under none the control itself.
-// action_low/high are the targets' ranges.
+// action_low/high are the targets' ranges. With options.raw_actions the actions are the controls
+// and no controller runs (bounds: the ctrlranges).
 //
 // Episodes end (done) when an environment diverges (NaN/Inf, MuJoCo's instability warnings) or
 // reaches max_episode_steps physics steps; with auto_reset the next batch step resets it.
@@ -81,6 +82,10 @@ struct BatchSubsystemOptions {
   // end with no topics, viewer or recorder to follow one (the in-process batch). engine_env is
   // ignored, and the episodes are the same as with one.
   bool detached = false;
+  // The actions are each actuator's control (ctrl) and the scene's controllers do not run in the
+  // environments (`urlab run --raw-actions`): for learning on torques in a scene written with a
+  // PD, and for benchmarks that compare the batch with a bare loop of raw controls.
+  bool raw_actions = false;
 };
 
 // The outputs every batch job fills (one entry or row per environment).
