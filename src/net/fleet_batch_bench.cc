@@ -52,7 +52,7 @@ sys.path.insert(0, sys.argv[1])
 import numpy as np
 from urlab_client import UrlabVectorEnv
 endpoint, steps, n_steps = sys.argv[2], int(sys.argv[3]), int(sys.argv[5])
-env = UrlabVectorEnv.over_batch(endpoint, n_steps=n_steps)
+env = UrlabVectorEnv.over_batch(endpoint, frame_skip=n_steps)
 client = env.envs[0].client
 )PY";
 constexpr const char* kBatchBody = R"PY(env.reset(seed=0)
