@@ -154,7 +154,8 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   world::ManagerOptions options;
   options.speed_percent = args.speed;
   options.as_fast_as_possible = args.max_speed;
-  options.start_paused = args.paused;
+  // A --video is frame-exact from the first state: play starts paused until its gate is set.
+  options.start_paused = args.paused || !args.video.empty();
   options.reset_on_divergence = args.reset_on_divergence;
   world::Manager manager(options);
   if (args.duration > 0) manager.AddSubsystem(std::make_unique<DurationLimit>(args.duration));
@@ -283,6 +284,8 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   std::unique_ptr<camera::CameraVideo> video;
   if (!args.video.empty()) {
     video = std::make_unique<camera::CameraVideo>(*cameras, args.video[0], args.video[1]);
+    video->Gate(manager.session().engine());
+    if (!args.paused) manager.session().engine().SetPaused(false);
   }
   SetImmediateExit(false);  // playing: a signal stops the loop, which ends cleanly
   // MuJoCo errors and divergences reach us as engine events (delivered inside Tick, on this
@@ -372,7 +375,8 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   }
   const int signal = StopSignal();
   // The physics thread stops first, so that the summary, the recording and the video all end at
-  // the same step.
+  // the same step (the video's gate opened first: the thread may be waiting for a frame).
+  if (video) video->OpenGate();
   manager.session().Stop();
   const std::uint64_t steps = engine.step_count() - first_steps;
   sim_time += static_cast<double>(engine.step_count() - last_steps) * engine.timestep();
@@ -718,7 +722,9 @@ void RegisterRecordCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--video", args.video,
                   "CAM OUT: also (or only) write camera CAM (articulation/camera, an MJCF camera) "
                   "to OUT (.mp4 H.264 or .webm VP9) through ffmpeg, at the camera's rate and size "
-                  "(the scene's cameras: section); if ffmpeg fails the command exits 1")
+                  "(the scene's cameras: section), frame-exact: frame k shows the state k/rate "
+                  "simulated seconds after the start (the simulation waits for a camera that is "
+                  "late, with --max-speed too); if ffmpeg fails the command exits 1")
       ->expected(2)
       ->check(OutputPath());
   AddRecordOptions(cmd, args);

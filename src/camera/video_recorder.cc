@@ -1,11 +1,14 @@
 #include "urlab/camera/video_recorder.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
 
 #include "render/video_writer.h"
 #include "urlab/camera/scene_settings.h"
 #include "urlab/core/error.h"
+#include "urlab/physics/engine.h"
 
 namespace urlab::camera {
 
@@ -48,9 +51,79 @@ CameraVideo::CameraVideo(world::CameraStreams& streams, const std::string& camer
       render::VideoInput::kBgraTopDown);
 }
 
-CameraVideo::~CameraVideo() = default;
+CameraVideo::~CameraVideo() { OpenGate(); }
+
+void CameraVideo::Gate(physics::PhysicsEngine& engine) {
+  const world::CameraStreamInfo& info = streams_.Streams()[index_];
+  const double rate = std::max(1L, std::lround(info.rate));
+  steps_per_frame_ = 1.0 / (rate * engine.timestep());
+  first_step_ = engine.step_count();
+  next_frame_ = 0;
+  engine_ = &engine;
+  callback_ = engine.AddPreStepCallback([this](const mjModel*, mjData*) { BeforeStep(); });
+}
+
+void CameraVideo::OpenGate() {
+  {
+    std::lock_guard<std::mutex> hold(mu_);
+    open_ = true;
+  }
+  drained_.notify_all();
+  if (engine_ && callback_) engine_->RemoveCallback(*callback_);
+  callback_.reset();
+}
+
+void CameraVideo::BeforeStep() {
+  {
+    std::lock_guard<std::mutex> hold(mu_);
+    if (open_) return;
+  }
+  // Only a state stepped from is in the video (a paused run, or one that ended there, is not:
+  // a 2 s video at 30 frames/s holds the 60 states at 0 .. 1.967 s).
+  if (engine_->paused()) return;
+  // The frames the state about to be stepped from stands for: frame k is due at step
+  // first + floor(k * steps_per_frame) (several when a step is longer than a frame).
+  const std::uint64_t step = engine_->step_count();
+  int due = 0;
+  while (first_step_ + static_cast<std::uint64_t>(std::floor(
+                           static_cast<double>(next_frame_) * steps_per_frame_ + 1e-9)) <=
+         step) {
+    ++next_frame_;
+    ++due;
+  }
+  if (due == 0) return;
+  world::CameraFrame f;
+  const auto give_up = [&](const char* why) {
+    std::lock_guard<std::mutex> hold(mu_);
+    open_ = true;
+    spdlog::warn("--video: {} (step {}); the run goes on without waiting for the camera", why,
+                 step);
+  };
+  if (!streams_.WaitForStep(index_, step, kMaxWait, f)) {
+    return give_up("the camera rendered no frame in 10 s");
+  }
+  std::unique_lock<std::mutex> hold(mu_);
+  for (int i = 0; i < due; ++i) queue_.push_back(f);
+  if (queue_.size() < kMaxQueued) return;
+  if (!drained_.wait_for(hold, kMaxWait, [&] { return open_ || queue_.size() < kMaxQueued / 2; })) {
+    hold.unlock();
+    give_up("the video writer took no frame in 10 s");
+  }
+}
 
 bool CameraVideo::Poll() {
+  if (engine_) {  // gated: the queued frames, in order
+    std::deque<world::CameraFrame> frames;
+    {
+      std::lock_guard<std::mutex> hold(mu_);
+      frames.swap(queue_);
+    }
+    drained_.notify_all();
+    for (const world::CameraFrame& f : frames) {
+      if (!writer_->Write(f.bytes->data())) return false;
+    }
+    return true;
+  }
   world::CameraFrame f;
   if (!streams_.Latest(index_, f) || f.frame_id == last_frame_) return true;
   last_frame_ = f.frame_id;

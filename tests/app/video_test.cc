@@ -49,6 +49,33 @@ TEST(RecordVideo, WritesTheCameraToAnMp4) {
   fs::remove_all(dir);
 }
 
+// Frame-exact however fast the run: 1 s at the camera's rate is that many frames, at full
+// speed too (the simulation waits for each frame's render; it used to keep a frame or two).
+TEST(RecordVideo, EveryFrameIsWrittenAtFullSpeed) {
+  const std::string dir = testing::MakeTempDir("video");
+  for (const char* speed : {"", " --max-speed"}) {
+    const std::string out = dir + "/wrist.mp4";
+    fs::remove(out);
+    std::string log;
+    ASSERT_EQ(testing::RunCommand(testing::UrlabBinary() + " record --ports auto " +
+                                      testing::TestData("cameras/two_cameras.yaml") +
+                                      " --no-network --duration 1 --video rig/wrist " + out + speed,
+                                  &log),
+              0)
+        << log;
+    EXPECT_NE(log.find("video: " + out + " frames=30\n"), std::string::npos) << speed << log;
+    std::string probe;
+    ASSERT_EQ(
+        testing::RunCommand(
+            "ffprobe -v error -count_frames -show_entries stream=nb_read_frames -of compact " + out,
+            &probe),
+        0)
+        << probe;
+    EXPECT_NE(probe.find("nb_read_frames=30"), std::string::npos) << speed << probe;
+  }
+  fs::remove_all(dir);
+}
+
 TEST(RecordVideo, BadCameraOrExtensionIsAClearError) {
   const std::string dir = testing::MakeTempDir("video_bad");
   std::string log;

@@ -1,11 +1,24 @@
 #pragma once
 // CameraVideo: writes one camera stream's frames to an MP4/WebM file through ffmpeg
-// (`urlab record --video CAM OUT.mp4`), taking each new frame the camera subsystem rendered.
+// (`urlab record --video CAM OUT.mp4`). Ungated, it takes each new frame the camera subsystem
+// rendered at its own pace (a late or fast simulation drops frames). Gated (Gate), it is
+// frame-exact: frame k shows the state n_k = floor(k / (rate * dt)) steps after the step the
+// gate began at (k / rate simulated seconds), the simulation waiting at that state until the
+// camera rendered it, however fast the run (--max-speed) or slow the renderer.
 //
-// Threading contract: one thread (the main thread's loop calls Poll); the streams it reads are
-// safe from any thread.
+// Threading contract
+// - Main thread: construction, Gate, OpenGate, Poll, Close, frames.
+// - Physics thread, with the step mutex held: the gate's pre-step callback. It asks the camera
+//   for the due state's frame (CameraStreams::WaitForStep, safe from any thread) and queues it;
+//   it waits while kMaxQueued frames are queued, until Poll drains them. Every wait is bounded
+//   (kMaxWait): after one expires, or after OpenGate, the simulation no longer waits (logged once).
+#include <chrono>
+#include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 
 #include "urlab/world/camera_streams.h"
@@ -13,6 +26,9 @@
 
 namespace urlab::render {
 class VideoWriter;
+}
+namespace urlab::physics {
+class PhysicsEngine;
 }
 
 namespace urlab::camera {
@@ -24,23 +40,44 @@ void RequestVideoCamera(world::SceneConfig& scene, const std::string& camera);
 
 class CameraVideo {
  public:
+  static constexpr std::chrono::seconds kMaxWait{10};
+  static constexpr std::size_t kMaxQueued = 64;
+
   // Starts ffmpeg on `path` for the rgb stream of `camera`; throws Error when the stream is not
   // streamed, the extension is not .mp4/.webm or ffmpeg cannot start.
   CameraVideo(world::CameraStreams& streams, const std::string& camera, const std::string& path);
   ~CameraVideo();
   CameraVideo(const CameraVideo&) = delete;
   CameraVideo& operator=(const CameraVideo&) = delete;
-  // Writes the newest frame when it is new; false once ffmpeg has failed.
+  // Frame-exact from the engine's current step on (call it while the engine is paused, before
+  // play begins, for a video from the first state).
+  void Gate(physics::PhysicsEngine& engine);
+  // The simulation stops waiting for frames (before stopping the physics thread). Idempotent.
+  void OpenGate();
+  // Writes the queued frames (gated) or the newest frame when it is new; false once ffmpeg has
+  // failed.
   bool Poll();
-  // Ends the file; ffmpeg's exit status (0: complete).
+  // Ends the file (after OpenGate when gated); ffmpeg's exit status (0: complete).
   int Close();
   int frames() const;
 
  private:
+  void BeforeStep();  // physics thread: the gate
+
   world::CameraStreams& streams_;
   std::size_t index_ = 0;
   std::uint64_t last_frame_ = 0;
   std::unique_ptr<render::VideoWriter> writer_;
+  // The gate (physics thread and main thread, under mu_).
+  physics::PhysicsEngine* engine_ = nullptr;
+  std::optional<std::uint64_t> callback_;
+  double steps_per_frame_ = 1;  // rate * dt inverted: physics steps between frames
+  std::uint64_t first_step_ = 0;
+  std::uint64_t next_frame_ = 0;  // k of the next frame due
+  std::mutex mu_;
+  std::condition_variable drained_;
+  std::deque<world::CameraFrame> queue_;
+  bool open_ = false;  // the simulation no longer waits
 };
 
 }  // namespace urlab::camera
