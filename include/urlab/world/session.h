@@ -6,7 +6,9 @@
 // it likes (everything stays valid; the physics thread stops when the Manager ends play).
 //
 // Threading contract
-// - Main thread: Create, Start, Stop, SyncHostPoses, SetHostDrivenPose/ClearHostDriven.
+// - Main thread: Create, Start, Stop, SyncHostPoses, SetHostDrivenPose/ClearHostDriven,
+//   EditModel and ReloadKeepingState (they replace scene().spec and compiled_options(), which
+//   only the main thread reads).
 // - Any thread: engine() and controls() (under their own contracts), the registry getters
 //   (immutable after Create), SetPaused, SetResetOnDivergence, ResetToInitialState,
 //   ResetArticulation, FireLauncher (a round-robin counter per launcher, atomic).
@@ -14,6 +16,7 @@
 //   d->mocap_pos/d->mocap_quat (a small mutex shared with SyncHostPoses, held for a copy).
 #include <array>
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -160,6 +163,27 @@ class Session : public std::enable_shared_from_this<Session> {
   // world/batch_subsystem.h).
   std::shared_ptr<const Randomizer> randomizer() const { return randomizer_; }
 
+  // ---- Editing the running model (main thread) ----
+  // Applies `edit` to a copy of the scene's spec and compiles it; when the result has the running
+  // model's structure (physics::InPlaceDifference: the same sizes, names, addresses and the
+  // values URLab bound once), its values are copied into the running model in place by one
+  // ReplaceModel command and the edited copy becomes the scene's spec. The state (mjData: qpos,
+  // qvel, act, ctrl, mocap, time, warm start, ...) is kept exactly. The options in effect stay
+  // unless the edit changed the spec's options. Throws Error saying why (the edit does not
+  // compile, changes the structure, or the scene randomises its model) with nothing changed.
+  // Returns the command's sequence number (engine().WaitForCommand).
+  std::uint64_t EditModel(const std::function<void(mjSpec*)>& edit);
+  // Reads the scene's files again (LoadSceneOrModel + the checks and build `urlab run` uses) and
+  // brings the new values into the running model as EditModel does, keeping the state. Not kept
+  // (nothing changed; the caller restarts the scene) when the scene file itself changed, a file
+  // fails to load, the structure changed or the scene randomises its model: `reason` says which.
+  struct Reload {
+    bool kept = false;
+    std::uint64_t seq = 0;  // the ReplaceModel command when kept
+    std::string reason;     // why not, when not kept
+  };
+  Reload ReloadKeepingState();
+
   // ---- Host-driven mocap bodies (main thread) ----
   // Marks a mocap body of an articulation as driven by the host and sets its world pose; from the
   // next SyncHostPoses on, the physics thread writes it into mocap_pos/mocap_quat before every
@@ -186,9 +210,14 @@ class Session : public std::enable_shared_from_this<Session> {
   std::uint64_t QueueInitialReset(bool full, std::vector<std::pair<int, double>> qpos_offsets = {});
   // Each articulation with an initial keyframe: its control and the keyframe's id.
   std::vector<std::pair<const control::ArticulationControl*, int>> InitialKeys() const;
+  // EditModel and ReloadKeepingState: `model` (compiled from `spec`) replaces the running
+  // model's values; `spec` becomes the scene's. Throws Error when the structure differs.
+  std::uint64_t ReplaceModel(std::shared_ptr<mjSpec> spec, physics::Model model,
+                             bool options_changed, std::string label);
 
   SessionOptions options_;
   SceneConfig config_;
+  std::string scene_text_;  // the scene file as read by Create ("" for a single MJCF file)
   CompiledScene compiled_;
   mjOption compiled_options_{};
   std::unique_ptr<control::ControlSystem> controls_;
