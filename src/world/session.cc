@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "urlab/control/gait.h"
 #include "urlab/core/files.h"
 #include "urlab/mjcf/spec.h"
 #include "urlab/world/controller_factory.h"
@@ -16,6 +17,28 @@
 namespace urlab::world {
 
 namespace {
+
+// The values a gait controller reads once, when it binds, of `bodies` and `geoms`.
+std::vector<mjtNum> GaitValues(const mjModel* m, const std::vector<int>& bodies,
+                               const std::vector<int>& geoms) {
+  std::vector<mjtNum> v;
+  const auto add = [&v](const mjtNum* at, int n) { v.insert(v.end(), at, at + n); };
+  for (int b : bodies) {
+    add(m->body_pos + 3 * b, 3);
+    add(m->body_quat + 4 * b, 4);
+    add(m->body_ipos + 3 * b, 3);
+    add(m->body_iquat + 4 * b, 4);
+    add(m->body_inertia + 3 * b, 3);
+    add(m->body_mass + b, 1);
+    add(m->body_subtreemass + b, 1);
+  }
+  for (int g : geoms) {
+    add(m->geom_pos + 3 * g, 3);
+    add(m->geom_quat + 4 * g, 4);
+    add(m->geom_size + 3 * g, 3);
+  }
+  return v;
+}
 
 // The state addresses an articulation's observations come from (its joints, actuators, sensors
 // and bodies).
@@ -107,6 +130,15 @@ void Session::Build(const SceneConfig& scene) {
     }
   });
   engine_->SetObservationDelay(observation_delay_);
+  for (const Articulation& a : articulations_) {
+    if (!dynamic_cast<const control::GaitController*>(a.control->controller())) continue;
+    GaitBound g;
+    g.articulation = a.name();
+    for (const physics::BodyView& b : a.bindings->bodies().all()) g.bodies.push_back(b.id);
+    for (const physics::GeomView& geom : a.bindings->geoms().all()) g.geoms.push_back(geom.id);
+    g.values = GaitValues(engine_->model(), g.bodies, g.geoms);
+    gait_bound_.push_back(std::move(g));
+  }
   BuildRandomizer();
   latency_.resize(articulations_.size());
   latency_seed_ = scene.seed;
@@ -504,6 +536,13 @@ std::uint64_t Session::ReplaceModel(std::shared_ptr<mjSpec> spec, physics::Model
   // thread, while the physics thread steps.
   const std::string difference = physics::InPlaceDifference(engine_->model(), model.get());
   if (!difference.empty()) throw Error("the structure changed: " + difference);
+  for (const GaitBound& g : gait_bound_) {
+    if (GaitValues(model.get(), g.bodies, g.geoms) != g.values) {
+      throw Error("articulation '" + g.articulation +
+                  "' walks with a gait controller, which took its bodies' masses and poses and "
+                  "its feet when the scene started, and they changed");
+    }
+  }
   const mjOption options = model->opt;
   physics::cmd::ReplaceModel c;
   c.model = std::make_shared<const physics::Model>(std::move(model));

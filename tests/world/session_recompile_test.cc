@@ -212,5 +212,38 @@ TEST_F(SessionRecompileTest, ReloadAfterTheSceneFileChangedFallsBack) {
   EXPECT_NE(r.reason.find("scene.yaml changed"), std::string::npos) << r.reason;
 }
 
+// The gait controller took the robot's masses and feet when it bound: a mass edit is refused, a
+// value it never read (a leg joint's damping) is taken.
+TEST_F(SessionRecompileTest, AGaitControlledRobotRefusesAMassEditButTakesADampingEdit) {
+  auto s = world::Session::Create(
+      world::LoadSceneFile(std::string(URLAB_SOURCE_DIR) + "/examples/scenes/quadruped_walk.yaml"));
+  s->engine().StepSync(50);
+  const Kept before = StateOf(*s);
+  const mjModel* m = s->engine().model();
+  try {
+    s->EditModel([&](mjSpec* spec) {
+      mjsElement* torso = mjs_findElement(spec, mjOBJ_GEOM, "dog_torso");
+      ASSERT_NE(torso, nullptr);
+      mjs_asGeom(torso)->mass = 12;
+    });
+    FAIL() << "a mass edit of a walking robot was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("gait controller"), std::string::npos) << e.what();
+  }
+  ExpectSameBits(StateOf(*s), before);
+
+  const int dof = m->jnt_dofadr[1];
+  const std::string joint = mj_id2name(m, mjOBJ_JOINT, 1);
+  const std::uint64_t seq = s->EditModel([&](mjSpec* spec) {
+    mjsJoint* j = mjs_asJoint(mjs_findElement(spec, mjOBJ_JOINT, joint.c_str()));
+    ASSERT_NE(j, nullptr);
+    j->damping[0] = 0.75;
+  });
+  EXPECT_TRUE(s->engine().WaitForCommand(seq, std::chrono::seconds(5)).ok());
+  s->engine().WithLockedData(
+      [&](mjModel* model, mjData*) { EXPECT_EQ(model->dof_damping[dof], 0.75); });
+  ExpectSameBits(StateOf(*s), before);
+}
+
 }  // namespace
 }  // namespace urlab

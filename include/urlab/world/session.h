@@ -218,6 +218,15 @@ class Session : public std::enable_shared_from_this<Session> {
   SessionOptions options_;
   SceneConfig config_;
   std::string scene_text_;  // the scene file as read by Create ("" for a single MJCF file)
+  // What a gait controller took from the model when it bound (control/gait.h: its bodies'
+  // masses, inertias and poses, its geoms' poses and sizes), per articulation walking with one:
+  // EditModel and ReloadKeepingState refuse a model where they differ. Immutable after Create.
+  struct GaitBound {
+    std::string articulation;
+    std::vector<int> bodies, geoms;
+    std::vector<mjtNum> values;
+  };
+  std::vector<GaitBound> gait_bound_;
   CompiledScene compiled_;
   mjOption compiled_options_{};
   std::unique_ptr<control::ControlSystem> controls_;
