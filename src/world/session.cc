@@ -549,9 +549,17 @@ std::uint64_t Session::ReplaceModel(std::shared_ptr<mjSpec> spec, physics::Model
   c.keep_options = !options_changed;
   c.label = std::move(label);
   const std::uint64_t seq = engine_->Submit(std::move(c));
-  compiled_.spec = std::move(spec);
+  {
+    std::lock_guard<std::mutex> lock(spec_mutex_);
+    compiled_.spec = std::move(spec);
+  }
   if (options_changed) compiled_options_ = options;
   return seq;
+}
+
+std::shared_ptr<const mjSpec> Session::spec() const {
+  std::lock_guard<std::mutex> lock(spec_mutex_);
+  return compiled_.spec;
 }
 
 std::uint64_t Session::EditModel(const std::function<void(mjSpec*)>& edit) {

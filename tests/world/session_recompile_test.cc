@@ -9,6 +9,7 @@
 #include "mujoco_test.h"
 #include "urlab/core/error.h"
 #include "urlab/physics/state.h"
+#include "urlab/world/scene.h"
 #include "urlab/world/scene_file.h"
 #include "urlab/world/session.h"
 
@@ -100,6 +101,9 @@ TEST_F(SessionRecompileTest, EditThroughTheSpecTakesEffectAndKeepsTheState) {
   const mjsElement* j = mjs_findElement(s->scene().spec.get(), mjOBJ_JOINT, "arm_hinge");
   ASSERT_NE(j, nullptr);
   EXPECT_DOUBLE_EQ(mjs_asJoint(const_cast<mjsElement*>(j))->damping[0], 4.0);
+  EXPECT_EQ(s->spec().get(), s->scene().spec.get());
+  const std::string xml = world::SceneXml(s->spec().get());
+  EXPECT_NE(xml.find("damping=\"4\""), std::string::npos) << xml;
 }
 
 TEST_F(SessionRecompileTest, SteppingAfterTheEditIsThePhysicsOfTheNewValue) {

@@ -7,9 +7,9 @@
 //
 // Threading contract
 // - Main thread: Create, Start, Stop, SyncHostPoses, SetHostDrivenPose/ClearHostDriven,
-//   EditModel and ReloadKeepingState (they replace scene().spec and compiled_options(), which
-//   only the main thread reads).
-// - Any thread: engine() and controls() (under their own contracts), the registry getters
+//   EditModel and ReloadKeepingState (they replace scene().spec, under a small mutex that spec()
+//   takes, and compiled_options(), which only the main thread reads).
+// - Any thread: engine() and controls() (under their own contracts), spec(), the registry getters
 //   (immutable after Create), SetPaused, SetResetOnDivergence, ResetToInitialState,
 //   ResetArticulation, FireLauncher (a round-robin counter per launcher, atomic).
 // - Physics thread: the session's pre-step callback copies the host-driven poses into
@@ -86,8 +86,13 @@ class Session : public std::enable_shared_from_this<Session> {
   physics::PhysicsEngine& engine() { return *engine_; }
   const physics::PhysicsEngine& engine() const { return *engine_; }
   control::ControlSystem& controls() { return *controls_; }
-  // The compiled scene (layouts, diagnostics, document); its model lives in engine().
+  // The compiled scene (layouts, diagnostics, document); its model lives in engine(). Its spec
+  // is replaced by EditModel and ReloadKeepingState: read it on the main thread, or use spec().
   const CompiledScene& scene() const { return compiled_; }
+  // The scene's root spec as it is now (the one that compiled the running model's values). Any
+  // thread; the spec itself is not changed once a session holds it (edits go to a copy that
+  // replaces it), so the caller may write it as MJCF while the session moves on.
+  std::shared_ptr<const mjSpec> spec() const;
   // The physics options as compiled from the scene (the engine's follow run-time changes).
   const mjOption& compiled_options() const { return compiled_options_; }
   const SceneConfig& scene_config() const { return config_; }
@@ -217,7 +222,8 @@ class Session : public std::enable_shared_from_this<Session> {
 
   SessionOptions options_;
   SceneConfig config_;
-  std::string scene_text_;  // the scene file as read by Create ("" for a single MJCF file)
+  std::string scene_text_;         // the scene file as read by Create ("" for a single MJCF file)
+  mutable std::mutex spec_mutex_;  // guards compiled_.spec (written by the main thread)
   // What a gait controller took from the model when it bound (control/gait.h: its bodies'
   // masses, inertias and poses, its geoms' poses and sizes), per articulation walking with one:
   // EditModel and ReloadKeepingState refuse a model where they differ. Immutable after Create.
