@@ -165,7 +165,8 @@ class ViewerCore : public InputHandler {
   // Ends play so that the host plays `path` (reload: the scene's own file).
   void RequestReload(std::string path);
   // Reload (Ctrl+L): the scene's files read again into the running model keeping the state
-  // (world::Session::ReloadKeepingState); when that cannot be, RequestReload("") (a restart).
+  // (world::Session::ReloadKeepingState); when that cannot be, or while a replay plays,
+  // RequestReload("") (a restart).
   void ReloadKeepingState();
   const std::string& reload_request() const { return reload_request_; }
   void OnDrop(const std::vector<std::string>& paths) override;

@@ -236,6 +236,10 @@ void ViewerCore::RequestReload(std::string path) {
 
 void ViewerCore::ReloadKeepingState() {
   const std::string& path = session_->scene_config().path;
+  if (replay_mode()) {  // a replay shows a recorded model: Reload opens the scene itself, as before
+    RequestReload("");
+    return;
+  }
   const world::Session::Reload r = session_->ReloadKeepingState();
   if (r.kept) {  // one line in the log and the panel
     SetStatus("reloaded " + path + " into the running simulation, state kept");
