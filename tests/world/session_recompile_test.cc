@@ -106,6 +106,23 @@ TEST_F(SessionRecompileTest, EditThroughTheSpecTakesEffectAndKeepsTheState) {
   EXPECT_NE(xml.find("damping=\"4\""), std::string::npos) << xml;
 }
 
+// The same through the physics thread: the command is applied there, between iterations.
+TEST_F(SessionRecompileTest, AnEditReachesARunningEngineThroughItsCommandQueue) {
+  auto s = Create();
+  s->engine().StepSync(100);
+  s->engine().SetPaused(true);
+  s->Start();
+  const Kept before = StateOf(*s);
+  const std::uint64_t seq = s->EditModel([](mjSpec* spec) { SetJointDamping(spec, 4.0); });
+  EXPECT_TRUE(s->engine().WaitForCommand(seq, std::chrono::seconds(10)).ok());
+  EXPECT_DOUBLE_EQ(Damping(*s), 4.0);
+  ExpectSameBits(StateOf(*s), before);  // paused: the time and the state stay where they were
+  s->engine().SetPaused(false);
+  s->engine().WaitForCommand(s->engine().Submit(physics::cmd::Step{10}), std::chrono::seconds(10));
+  EXPECT_GT(StateOf(*s).time, before.time);
+  s->Stop();
+}
+
 TEST_F(SessionRecompileTest, SteppingAfterTheEditIsThePhysicsOfTheNewValue) {
   auto edited = Create();
   auto unedited = Create();
