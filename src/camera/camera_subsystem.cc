@@ -83,6 +83,7 @@ struct CameraSubsystem::Impl {
   std::vector<int> geom_groups;
   std::shared_ptr<physics::StateSubscription> subscription;
   const mjModel* model = nullptr;
+  physics::PhysicsEngine* engine = nullptr;  // the session's (it outlives the render thread)
   render::RenderSettings settings;
   render::GlBackend backend = render::GlBackend::kAuto;
   int max_width = 1, max_height = 1;
@@ -124,8 +125,16 @@ struct CameraSubsystem::Impl {
   std::vector<zmq::socket_t> sockets;  // per stream (empty when not publishing)
   render::CameraImages images;
   std::uint64_t updated_frame = 0;
+  // The engine's model generation the renderer's values were asked for, the command copying
+  // them into model_staging (0: none pending) and that copy.
+  std::uint64_t model_generation = 0;
+  std::uint64_t model_copy = 0;
+  std::shared_ptr<physics::Model> model_staging;
 
   void Init(const CameraOptions& options);
+  // The running model's new values (an edit, a reload keeping the state) into the renderer,
+  // copied on the physics thread by a command (render thread).
+  void TakeNewModelValues();
   void Run();
   void RenderCamera(Camera& cam, const physics::StateFrame& frame, std::int64_t state_wall);
   // Delivers frames: to the topics and as the streams' latest.
@@ -332,10 +341,35 @@ void CameraSubsystem::Impl::Release(Camera& cam, std::uint64_t step) {
   }
 }
 
+void CameraSubsystem::Impl::TakeNewModelValues() {
+  if (const std::uint64_t g = engine->model_generation(); g != model_generation && !model_copy) {
+    model_generation = g;
+    if (!model_staging) {
+      model_staging = std::make_shared<physics::Model>(
+          physics::ModelPtr(mj_copyModel(nullptr, renderer->model())));
+      if (!*model_staging) throw Error("cameras: cannot copy the model");
+    }
+    model_copy = engine->Submit(
+        physics::cmd::Inspect{[staging = model_staging](const mjModel* m, const mjData*) {
+                                physics::CopyModelValuesInPlace(staging->get(), m);
+                              },
+                              "cameras: the model's new values"});
+  }
+  if (!model_copy || engine->last_applied_command() < model_copy) return;
+  model_copy = 0;
+  renderer->ReplaceModelValues(model_staging->get());
+  updated_frame = 0;  // positions again, from the new values
+}
+
 void CameraSubsystem::Impl::Run() {
   const auto start = Clock::now();
   for (auto& cam : cameras) cam.next_due = start;
   while (!stop.load(std::memory_order_acquire)) {
+    try {
+      TakeNewModelValues();
+    } catch (const std::exception& e) {
+      spdlog::error("cameras: {}", e.what());
+    }
     const auto now = Clock::now();
     // Which cameras are due: by their rate, or because a waiter asks for a newer step.
     std::vector<std::uint64_t> wanted(cameras.size(), 0);
@@ -417,6 +451,7 @@ void CameraSubsystem::BeginPlay(world::Session& session) {
     return;
   }
   d.model = session.engine().model();
+  d.engine = &session.engine();
   d.geom_groups = internal::GeomArticulations(session);
   d.settings = {options_.config.shadows, options_.config.reflections, options_.config.samples};
   d.backend = render::ParseGlBackend(options_.config.gl, "cameras.gl");

@@ -229,9 +229,85 @@ void AbsoluteAssetPaths(mjSpec* spec) {
     Absolute(spec, mjs_asSkin(e)->file, meshdir);
   }
   for (mjsElement* e = mjs_firstElement(spec, mjOBJ_TEXTURE); e; e = mjs_nextElement(spec, e)) {
-    // (A cube texture's six separate files stay as written: mjStringVec is MuJoCo's own
-    // std::vector, built against another C++ library than ours, and has no C accessor.)
     Absolute(spec, mjs_asTexture(e)->file, texturedir);
+  }
+}
+
+namespace {
+
+// The six separate files of a cube texture, as MuJoCo's parser orders them in
+// mjsTexture::cubefiles.
+constexpr const char* kCubeAttributes[6] = {"fileright", "fileleft",  "fileup",
+                                            "filedown",  "filefront", "fileback"};
+
+struct XmlTexture {
+  std::string name;
+  std::array<std::string, 6> cube;  // "" where not given
+};
+
+// Every <texture> of the MJCF file `path`, in the order MuJoCo's parser makes them (document
+// order, each <include> in its place, its file relative to the main file's folder).
+void CollectTextures(const std::string& main_folder, const std::string& file, int depth,
+                     std::vector<XmlTexture>* out) {
+  namespace fs = std::filesystem;
+  if (depth > 32) return;  // MuJoCo refuses an include cycle before we get here
+  tinyxml2::XMLDocument doc;
+  const std::string text = ReadInputFile(file, "model file");
+  if (doc.Parse(text.c_str(), text.size()) != tinyxml2::XML_SUCCESS) return;
+  const auto walk = [&](const auto& self, const tinyxml2::XMLElement* e) -> void {
+    const std::string tag = e->Name();
+    if (tag == "include" && e->Attribute("file")) {
+      CollectTextures(main_folder,
+                      (fs::path(main_folder) / e->Attribute("file")).lexically_normal().string(),
+                      depth + 1, out);
+      return;
+    }
+    if (tag == "texture") {
+      XmlTexture t;
+      if (const char* n = e->Attribute("name")) t.name = n;
+      for (int i = 0; i < 6; ++i) {
+        if (const char* v = e->Attribute(kCubeAttributes[i]))
+          t.cube[static_cast<std::size_t>(i)] = v;
+      }
+      out->push_back(std::move(t));
+    }
+    for (auto* c = e->FirstChildElement(); c; c = c->NextSiblingElement()) self(self, c);
+  };
+  if (doc.RootElement()) walk(walk, doc.RootElement());
+}
+
+}  // namespace
+
+void AbsoluteCubeFiles(mjSpec* spec, const std::string& path) {
+  namespace fs = std::filesystem;
+  // MuJoCo's C API sets the entries of a string vector (mjs_setInStringVec) but offers no way to
+  // read one before the spec is compiled, so the six names come from the file MuJoCo parsed.
+  std::vector<XmlTexture> xml;
+  const std::string main = fs::absolute(path).lexically_normal().string();
+  CollectTextures(fs::path(main).parent_path().string(), main, 0, &xml);
+  std::vector<mjsTexture*> textures;
+  for (mjsElement* e = mjs_firstElement(spec, mjOBJ_TEXTURE); e; e = mjs_nextElement(spec, e)) {
+    textures.push_back(mjs_asTexture(e));
+  }
+  const bool in_order = xml.size() == textures.size();
+  for (std::size_t k = 0; k < textures.size(); ++k) {
+    mjsTexture* t = textures[k];
+    const std::string name = SpecString(mjs_getName(t->element));
+    const XmlTexture* source = nullptr;
+    if (in_order && xml[k].name == name) {
+      source = &xml[k];
+    } else if (!name.empty()) {  // not in step with the file: a named texture is still found
+      for (const XmlTexture& x : xml) {
+        if (x.name == name) source = &x;
+      }
+    }
+    if (!source) continue;
+    for (int i = 0; i < 6; ++i) {
+      const std::string& f = source->cube[static_cast<std::size_t>(i)];
+      if (f.empty()) continue;
+      const std::string resolved = ResolveAssetPath(spec, f, spec->compiler.texturedir);
+      mjs_setInStringVec(t->cubefiles, i, resolved.c_str());  // always 6 entries
+    }
   }
 }
 
@@ -309,6 +385,13 @@ std::vector<std::string> ModelInputFiles(const std::string& path) {
         if (!SpecString(f).empty()) files.insert(SpecString(f));
       }
     }
+    std::vector<XmlTexture> textures;  // a cube texture's six files
+    CollectTextures(fs::path(main).parent_path().string(), main, 0, &textures);
+    for (const XmlTexture& t : textures) {
+      for (const std::string& f : t.cube) {
+        if (!f.empty()) files.insert(ResolveAssetPath(spec.get(), f, spec->compiler.texturedir));
+      }
+    }
   } catch (const Error&) {
   }
   return {files.begin(), files.end()};
@@ -356,6 +439,7 @@ SpecPtr ParseFile(const std::string& path) {
     throw InputError({path, LineOfMujocoMessage(message)}, TidyMujocoMessage(message));
   }
   AbsoluteAssetPaths(spec.get());
+  AbsoluteCubeFiles(spec.get(), path);
   RefuseAssetsThatAreNotFiles(spec.get(), path);
   return spec;
 }

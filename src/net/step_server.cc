@@ -848,7 +848,7 @@ StepServer::Outcome StepServer::Hello(Request& r) {
       it != r.body.end() && Bool(*it, "include_assets")) {
     if (!assets_) {
       try {
-        assets_ = FlattenAssets(world::SceneXml(session_.scene()));
+        assets_ = FlattenAssets(world::SceneXml(session_.spec().get()));
       } catch (const std::exception& e) {
         Fail("path_not_readable", std::string("include_assets: ") + e.what());
       }

@@ -17,7 +17,7 @@ std::string SceneXml(world::Session& session, const std::string& relative_to,
                      std::vector<std::string>* changed) {
   const physics::Model now = session.engine().CopyModel();  // the options in effect
   if (changed) *changed = ChangedOptions(session.compiled_options(), now->opt);
-  return world::SceneXml(session.scene(), &now->opt, relative_to);
+  return world::SceneXml(session.spec().get(), &now->opt, relative_to);
 }
 
 }  // namespace urlab::ops

@@ -27,6 +27,10 @@ struct CommandAccess {
   void DropOneShots() { core.one_shot_.clear(); }
   void SetPaused(bool paused) { core.SetPaused(paused); }
   void OptionsChanged() { core.timestep_.store(m->opt.timestep, std::memory_order_relaxed); }
+  void ModelReplaced() {
+    OptionsChanged();
+    core.model_generation_.fetch_add(1, std::memory_order_release);
+  }
 };
 
 namespace {
@@ -269,6 +273,26 @@ struct Kind<cmd::Inspect> {
   static std::uint32_t Apply(cmd::Inspect& c, CommandAccess& a) {
     c.fn(a.m, a.d);
     return kNoDiscontinuity;
+  }
+};
+
+template <>
+struct Kind<cmd::ReplaceModel> {
+  static constexpr const char* kName = "replace_model";
+  static void Validate(const cmd::ReplaceModel& c, const mjModel* m) {
+    if (!c.model || !*c.model) throw Error("ReplaceModel: no model");
+    const std::string difference = InPlaceDifference(m, c.model->get());
+    if (!difference.empty()) {
+      throw Error("ReplaceModel: the new model differs in structure (" + difference + ")");
+    }
+  }
+  static std::uint32_t Apply(cmd::ReplaceModel& c, CommandAccess& a) {
+    const mjOption in_effect = a.m->opt;
+    CopyModelValuesInPlace(a.m, c.model->get());
+    if (c.keep_options) a.m->opt = in_effect;
+    mj_forward(a.m, a.d);  // positions, inertias, sensors: from the new values, same state
+    a.ModelReplaced();
+    return kDiscontinuityOptions;  // the options may have changed with the rest
   }
 };
 

@@ -53,6 +53,10 @@ class CameraRenderer {
   void MakeContext();
   // Copies the frame's state into the renderer's mjData and recomputes positions.
   void Update(const physics::StateFrame& frame);
+  // Takes the values of `source` (a copy of the running model after a ReplaceModel command: the
+  // same structure), keeping the renderer's off-screen settings, and uploads textures, meshes
+  // and heightfields again when a context was made (it must be current). Update follows.
+  void ReplaceModelValues(const mjModel* source);
   // Per geom id, the group reported by segmentation (-1: none); default all -1.
   void SetGeomGroups(std::vector<int> group_of_geom);
   // Renders MJCF camera `camera` at width x height (at most the off-screen size) into `out`.

@@ -47,6 +47,17 @@ void SceneView::MakeContext(int shadow_size, int off_w, int off_h) {
   mjr_setBuffer(mjFB_WINDOW, &context_);
 }
 
+void SceneView::ReplaceModelValues(const mjModel* source) {
+  mjModel* m = model_.get();
+  const mjVisual vis = m->vis;  // shadow size, offscreen buffer: set by MakeContext
+  physics::CopyModelValuesInPlace(m, source);
+  m->vis = vis;
+  if (!has_context_) return;
+  for (int i = 0; i < m->ntex; ++i) mjr_uploadTexture(m, &context_, i);
+  for (int i = 0; i < m->nmesh; ++i) mjr_uploadMesh(m, &context_, i);
+  for (int i = 0; i < m->nhfield; ++i) mjr_uploadHField(m, &context_, i);
+}
+
 void SceneView::Update(const physics::StateFrame& f) {
   const mjModel* m = model_.get();
   mjData* d = data_.get();

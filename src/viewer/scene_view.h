@@ -24,6 +24,11 @@ class SceneView {
   // and an offscreen buffer of at least `off_w` x `off_h` pixels (for a render scale) are set
   // in the viewer's copy first. Called again, it makes a new context.
   void MakeContext(int shadow_size = 0, int off_w = 0, int off_h = 0);
+  // Takes the values of `source` (the running model after a ReplaceModel command: the same
+  // structure) into the viewer's copy, keeping the viewer's own visual settings, and uploads its
+  // textures, meshes and heightfields again when a context was made. `source` is not the
+  // engine's live model (a copy taken on the physics thread).
+  void ReplaceModelValues(const mjModel* source);
   // Copies the frame's state (time, qpos, qvel, act, ctrl, mocap poses, applied forces) into the
   // viewer's mjData and recomputes positions (kinematics, camera and light poses, tendons).
   void Update(const physics::StateFrame& frame);

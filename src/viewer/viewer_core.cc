@@ -402,7 +402,7 @@ void ViewerCore::Perform(Action action) {
       }
       break;
     case Action::kReload:
-      RequestReload("");
+      ReloadKeepingState();
       break;
     case Action::kLoadKey:
       LoadKey();
@@ -505,6 +505,31 @@ void ViewerCore::ApplyPerturbation() {
   }
 }
 
+bool ViewerCore::TakeNewModelValues() {
+  // The model's values changed (an edit, a reload keeping the state). They are copied on the
+  // physics thread by a command, not under WithLockedData here: the physics thread may be
+  // waiting for this thread to draw a video frame (frame_gate.h) with the step mutex held.
+  physics::PhysicsEngine& engine = session_->engine();
+  if (const std::uint64_t g = engine.model_generation(); g != model_generation_ && !model_copy_) {
+    model_generation_ = g;
+    if (!model_staging_) {
+      model_staging_ = std::make_shared<physics::Model>(
+          physics::ModelPtr(mj_copyModel(nullptr, view_->model())));
+      if (!*model_staging_) throw Error("viewer: cannot copy the model");
+    }
+    model_copy_ = engine.Submit(
+        physics::cmd::Inspect{[staging = model_staging_](const mjModel* m, const mjData*) {
+                                physics::CopyModelValuesInPlace(staging->get(), m);
+                              },
+                              "viewer: the model's new values"});
+  }
+  if (!model_copy_ || engine.last_applied_command() < model_copy_) return false;
+  model_copy_ = 0;
+  view_->ReplaceModelValues(model_staging_->get());
+  SeparateCoplanarPlanes(view_->model());
+  return true;
+}
+
 void ViewerCore::Present() {
   if (!window_) return;
   if (!lowered_) {
@@ -514,7 +539,8 @@ void ViewerCore::Present() {
     lowered_ = true;
     LowerRenderThreadPriority();
   }
-  if (state_->has_new() || !frame_) {
+  const bool refresh = TakeNewModelValues();
+  if (state_->has_new() || !frame_ || refresh) {
     frame_ = state_->Latest();
     if (frame_) view_->Update(*frame_);
   }

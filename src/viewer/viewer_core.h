@@ -164,10 +164,16 @@ class ViewerCore : public InputHandler {
   void SaveKey();
   // Ends play so that the host plays `path` (reload: the scene's own file).
   void RequestReload(std::string path);
+  // Reload (Ctrl+L): the scene's files read again into the running model keeping the state
+  // (world::Session::ReloadKeepingState); when that cannot be, or while a replay plays,
+  // RequestReload("") (a restart).
+  void ReloadKeepingState();
   const std::string& reload_request() const { return reload_request_; }
   void OnDrop(const std::vector<std::string>& paths) override;
 
  private:
+  // Present: the engine's model values into view_ once they changed; true when they were taken.
+  bool TakeNewModelValues();
   void BuildTables();
   void ApplyPerturbation();
   void TogglePossess();
@@ -216,6 +222,11 @@ class ViewerCore : public InputHandler {
   // Holds the physics thread for each video frame and the screenshot (null without either).
   std::shared_ptr<FrameGate> gate_;
   physics::PhysicsEngine::CallbackId gate_id_ = 0;
+  // The engine's model generation view_'s values were asked for, the command copying them into
+  // model_staging_ (0: none pending) and that copy (TakeNewModelValues).
+  std::uint64_t model_generation_ = 0;
+  std::uint64_t model_copy_ = 0;
+  std::shared_ptr<physics::Model> model_staging_;
   physics::StateFrame initial_frame_;  // the state before the first step, drawn until one comes
   std::vector<std::uint8_t> pixels_;   // scratch for read-backs
   bool keep_frame_ = false;            // ReadPixels: keep the frame being drawn in kept_

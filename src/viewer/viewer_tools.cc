@@ -234,6 +234,21 @@ void ViewerCore::RequestReload(std::string path) {
   reload_request_ = std::move(path);
 }
 
+void ViewerCore::ReloadKeepingState() {
+  const std::string& path = session_->scene_config().path;
+  if (replay_mode()) {  // a replay shows a recorded model: Reload opens the scene itself, as before
+    RequestReload("");
+    return;
+  }
+  const world::Session::Reload r = session_->ReloadKeepingState();
+  if (r.kept) {  // one line in the log and the panel
+    SetStatus("reloaded " + path + " into the running simulation, state kept");
+    return;
+  }
+  spdlog::info("viewer: reloading {} from the start; the state cannot be kept: {}", path, r.reason);
+  RequestReload("");
+}
+
 void ViewerCore::OnDrop(const std::vector<std::string>& paths) {
   if (paths.empty()) return;
   const std::string& p = paths.front();

@@ -146,13 +146,18 @@ bool IsConvertedPropPart(const CompiledScene& scene, int geom) {
 
 std::string SceneXml(const CompiledScene& scene, const mjOption* model_options,
                      const std::string& relative_to) {
+  return SceneXml(scene.spec.get(), model_options, relative_to);
+}
+
+std::string SceneXml(const mjSpec* spec, const mjOption* model_options,
+                     const std::string& relative_to) {
   std::string xml;
-  if (!model_options || std::memcmp(model_options, &scene.spec->option, sizeof(mjOption)) == 0) {
-    xml = mjcf::SaveXml(scene.spec.get());
+  if (!model_options || std::memcmp(model_options, &spec->option, sizeof(mjOption)) == 0) {
+    xml = mjcf::SaveXml(spec);
   } else {
     // MuJoCo writes a spec as last compiled: the options in effect go into a compiled copy,
     // every one of them written (marked authored).
-    const mjcf::SpecPtr copy(mj_copySpec(scene.spec.get()));
+    const mjcf::SpecPtr copy(mj_copySpec(spec));
     if (!copy) throw Error("MuJoCo could not copy the scene's spec");
     copy->option = *model_options;
     copy->authored.option = ~std::uint64_t{0};

@@ -6,6 +6,9 @@
 #include <cmath>
 #include <cstring>
 
+#include "urlab/control/gait.h"
+#include "urlab/core/files.h"
+#include "urlab/mjcf/spec.h"
 #include "urlab/world/controller_factory.h"
 #include "urlab/world/names.h"
 #include "urlab/world/scene_checks.h"
@@ -14,6 +17,28 @@
 namespace urlab::world {
 
 namespace {
+
+// The values a gait controller reads once, when it binds, of `bodies` and `geoms`.
+std::vector<mjtNum> GaitValues(const mjModel* m, const std::vector<int>& bodies,
+                               const std::vector<int>& geoms) {
+  std::vector<mjtNum> v;
+  const auto add = [&v](const mjtNum* at, int n) { v.insert(v.end(), at, at + n); };
+  for (int b : bodies) {
+    add(m->body_pos + 3 * b, 3);
+    add(m->body_quat + 4 * b, 4);
+    add(m->body_ipos + 3 * b, 3);
+    add(m->body_iquat + 4 * b, 4);
+    add(m->body_inertia + 3 * b, 3);
+    add(m->body_mass + b, 1);
+    add(m->body_subtreemass + b, 1);
+  }
+  for (int g : geoms) {
+    add(m->geom_pos + 3 * g, 3);
+    add(m->geom_quat + 4 * g, 4);
+    add(m->geom_size + 3 * g, 3);
+  }
+  return v;
+}
 
 // The state addresses an articulation's observations come from (its joints, actuators, sensors
 // and bodies).
@@ -53,6 +78,14 @@ Session::~Session() {
 
 void Session::Build(const SceneConfig& scene) {
   config_ = scene;
+  // What a reload compares: a scene file's settings beyond its models need a restart.
+  if (IsSceneFile(scene.path)) {
+    try {
+      scene_text_ = ReadInputFile(scene.path, "scene file");
+    } catch (const Error&) {
+      scene_text_.clear();  // a scene given in memory: a reload finds it changed
+    }
+  }
   // Composes and compiles, then every check `urlab validate` runs (world/scene_checks.h).
   compiled_ = BuildCheckedScene(scene);
   for (const auto& d : compiled_.diagnostics) spdlog::warn("{}: {}", d.where.str(), d.message);
@@ -97,6 +130,15 @@ void Session::Build(const SceneConfig& scene) {
     }
   });
   engine_->SetObservationDelay(observation_delay_);
+  for (const Articulation& a : articulations_) {
+    if (!dynamic_cast<const control::GaitController*>(a.control->controller())) continue;
+    GaitBound g;
+    g.articulation = a.name();
+    for (const physics::BodyView& b : a.bindings->bodies().all()) g.bodies.push_back(b.id);
+    for (const physics::GeomView& geom : a.bindings->geoms().all()) g.geoms.push_back(geom.id);
+    g.values = GaitValues(engine_->model(), g.bodies, g.geoms);
+    gait_bound_.push_back(std::move(g));
+  }
   BuildRandomizer();
   latency_.resize(articulations_.size());
   latency_seed_ = scene.seed;
@@ -469,6 +511,121 @@ Session::RandomizedReset Session::ResetRandomized(std::optional<std::uint64_t> s
 RandomDraws Session::last_draws() const {
   std::lock_guard<std::mutex> lock(randomize_mutex_);
   return last_draws_;
+}
+
+}  // namespace urlab::world
+
+// ---------------------------------------------------------------------------------------------
+// Editing the running model
+
+namespace urlab::world {
+
+namespace {
+
+// Why a scene whose model is randomised cannot take new values in place: the randomiser (and a
+// batch's environments) keep the nominal values they recorded when the scene started.
+constexpr const char* kRandomizes =
+    "the scene randomises its model (randomize:), whose nominal values were recorded when it "
+    "started";
+
+}  // namespace
+
+std::uint64_t Session::ReplaceModel(std::shared_ptr<mjSpec> spec, physics::Model model,
+                                    bool options_changed, std::string label) {
+  // Sizes, names and the bound values never change in a running model: read here, on the main
+  // thread, while the physics thread steps.
+  const std::string difference = physics::InPlaceDifference(engine_->model(), model.get());
+  if (!difference.empty()) throw Error("the structure changed: " + difference);
+  for (const GaitBound& g : gait_bound_) {
+    if (GaitValues(model.get(), g.bodies, g.geoms) != g.values) {
+      throw Error("articulation '" + g.articulation +
+                  "' walks with a gait controller, which took its bodies' masses and poses and "
+                  "its feet when the scene started, and they changed");
+    }
+  }
+  const mjOption options = model->opt;
+  physics::cmd::ReplaceModel c;
+  c.model = std::make_shared<const physics::Model>(std::move(model));
+  c.keep_options = !options_changed;
+  c.label = std::move(label);
+  const std::uint64_t seq = engine_->Submit(std::move(c));
+  {
+    std::lock_guard<std::mutex> lock(spec_mutex_);
+    compiled_.spec = std::move(spec);
+  }
+  if (options_changed) compiled_options_ = options;
+  return seq;
+}
+
+std::shared_ptr<const mjSpec> Session::spec() const {
+  std::lock_guard<std::mutex> lock(spec_mutex_);
+  return compiled_.spec;
+}
+
+std::uint64_t Session::EditModel(const std::function<void(mjSpec*)>& edit) {
+  if (!edit) throw Error("EditModel: empty edit function");
+  if (randomizes()) throw Error(std::string("EditModel: ") + kRandomizes);
+  // The edit goes to a copy: the scene's spec stays as it is unless the result can replace the
+  // running model.
+  std::shared_ptr<mjSpec> copy(mj_copySpec(compiled_.spec.get()), mjcf::SpecDeleter());
+  if (!copy) throw Error("EditModel: MuJoCo could not copy the scene's spec");
+  const mjOption before = copy->option;
+  edit(copy.get());
+  physics::ModelPtr compiled(mj_compile(copy.get(), nullptr));
+  if (!compiled) {
+    throw Error(std::string("EditModel: the edited scene does not compile: ") +
+                mjs_getError(copy.get()));
+  }
+  const bool options_changed = std::memcmp(&before, &copy->option, sizeof(mjOption)) != 0;
+  try {
+    return ReplaceModel(std::move(copy), physics::Model(std::move(compiled)), options_changed,
+                        "edit the model");
+  } catch (const Error& e) {
+    throw Error(std::string("EditModel: ") + e.what() +
+                "; the running model and its state are unchanged");
+  }
+}
+
+Session::Reload Session::ReloadKeepingState() {
+  Reload r;
+  if (randomizes()) {
+    r.reason = kRandomizes;
+    return r;
+  }
+  if (IsSceneFile(config_.path)) {
+    std::string text;
+    try {
+      text = ReadInputFile(config_.path, "scene file");
+    } catch (const Error& e) {
+      r.reason = e.what();
+      return r;
+    }
+    if (text != scene_text_) {
+      r.reason = "the scene file " + config_.path + " changed (its settings apply at a restart)";
+      return r;
+    }
+  }
+  CompiledScene fresh;
+  try {
+    // The same path `urlab run` builds a scene from: the files, then every check.
+    fresh = BuildCheckedScene(LoadSceneOrModel(config_.path));
+  } catch (const std::exception& e) {
+    r.reason = e.what();
+    return r;
+  }
+  for (const auto& d : fresh.diagnostics) spdlog::warn("{}: {}", d.where.str(), d.message);
+  const bool options_changed =
+      std::memcmp(&fresh.spec->option, &compiled_.spec->option, sizeof(mjOption)) != 0;
+  try {
+    r.seq =
+        ReplaceModel(fresh.spec, std::move(fresh.model), options_changed, "reload " + config_.path);
+  } catch (const Error& e) {
+    r.reason = e.what();
+    return r;
+  }
+  compiled_.diagnostics = std::move(fresh.diagnostics);
+  r.kept = true;
+  return r;
 }
 
 }  // namespace urlab::world

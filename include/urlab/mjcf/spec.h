@@ -41,6 +41,12 @@ std::string ResolveAssetPath(const mjSpec* spec, const std::string& file, const 
 // can be attached to another and saved anywhere. ParseFile does it.
 void AbsoluteAssetPaths(mjSpec* spec);
 
+// The six separate files of every cube texture (fileright ... fileback, mjsTexture::cubefiles)
+// of `spec`, parsed from the MJCF file `path`, made absolute as AbsoluteAssetPaths makes `file`
+// (the names are read from `path` and its includes: MuJoCo's C API cannot read a string vector
+// back before compiling). ParseFile does it.
+void AbsoluteCubeFiles(mjSpec* spec, const std::string& path);
+
 // Throws InputError (at `path`'s line that names it) for an asset file of `spec` that exists
 // but is not a regular file (a folder, a device, a FIFO: MuJoCo would block or read forever).
 // ParseFile does it, after AbsoluteAssetPaths.

@@ -1,9 +1,9 @@
 #pragma once
 // Commands for the physics thread and the queue that carries them. Every change another thread
 // asks of the simulation (resets, restores, state writes, mocap poses, one-shot forces, option
-// changes, pause) is one Command with a sequence number; the physics thread applies them in
-// submission order at the top of an iteration, and a caller can wait until its command has
-// taken effect.
+// changes, a replaced model, pause) is one Command with a sequence number; the physics thread
+// applies them in submission order at the top of an iteration, and a caller can wait until its
+// command has taken effect.
 //
 // Threading contract (CommandQueue)
 // - Any thread: Push (assigns the sequence number), Wait, last_applied, pending.
@@ -19,12 +19,14 @@
 #include <deque>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <variant>
 #include <vector>
 
+#include "urlab/physics/model.h"
 #include "urlab/physics/state.h"
 
 namespace urlab::physics {
@@ -77,6 +79,16 @@ struct SetOptions {
   std::function<void(mjOption&)> fn;
   std::string label;
 };
+// Copies the values of `model` (compiled from the scene's edited or re-read spec) into the
+// running model in place (CopyModelValuesInPlace, model.h), then mj_forward: mjData, the whole
+// state, is untouched. Refused at submission when `model` does not have the running model's
+// structure (InPlaceDifference). `keep_options`: the options in effect (run-time changes
+// included) stay instead of the new model's. `label` names it in logs.
+struct ReplaceModel {
+  std::shared_ptr<const Model> model;
+  bool keep_options = false;
+  std::string label;
+};
 // Pauses or resumes the loop, in order with the other commands.
 struct SetPaused {
   bool paused = true;
@@ -110,7 +122,7 @@ struct Step {
 using Command =
     std::variant<cmd::Reset, cmd::ResetKeyframe, cmd::ResetCustom, cmd::Restore, cmd::SetQpos,
                  cmd::SetQvel, cmd::SetMocap, cmd::ApplyForce, cmd::SetOptions, cmd::SetPaused,
-                 cmd::Step, cmd::Forward, cmd::SetState, cmd::Inspect>;
+                 cmd::Step, cmd::Forward, cmd::SetState, cmd::Inspect, cmd::ReplaceModel>;
 
 // Short name of a command's kind ("reset", "restore", "set_qpos", ...; declared with its
 // validation and application in src/physics/command_kinds.cc).

@@ -95,9 +95,9 @@ class PhysicsEngine {
   PhysicsEngine(const PhysicsEngine&) = delete;
   PhysicsEngine& operator=(const PhysicsEngine&) = delete;
 
-  // The model. Sizes and names never change; `opt` changes on the physics thread (SetOptions
-  // commands), so while the loop runs read it under WithLockedData, or use timestep(). Any
-  // thread.
+  // The model. Sizes, names and addresses never change; `opt` changes on the physics thread
+  // (SetOptions commands) and other values too (ReplaceModel commands), so while the loop runs
+  // read those under WithLockedData, or use timestep(). Any thread.
   const mjModel* model() const { return core_.model(); }
   // The model with its extensions (model.h): the same contract as model(); copy it with
   // CopyModel, or with owned_model().Copy() inside WithLockedData.
@@ -107,6 +107,9 @@ class PhysicsEngine {
   Model CopyModel();
   // The model's current timestep (follows SetOptions). Any thread.
   double timestep() const { return core_.timestep(); }
+  // Bumped by every applied ReplaceModel command (commands.h): a copy of the model taken before
+  // is stale (sizes and names still match). Any thread.
+  std::uint64_t model_generation() const { return core_.model_generation(); }
 
   // Runs `fn` with the step mutex held (blocks for at most one iteration). Any thread except from
   // inside a step callback.

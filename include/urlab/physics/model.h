@@ -83,6 +83,26 @@ class Model {
   ModelPtr model_;
 };
 
+// Replacing a running model's values in place (a scene edited through its spec, or read again
+// from its files; world::Session::EditModel, ReloadKeepingState). MuJoCo's mj_recompile frees and
+// reallocates the buffers of the model and data it is given, which would leave every view,
+// binding and controller address into them dangling; URLab instead compiles a new model and
+// copies its values into the running one, whose buffers (and so every address into them) and
+// mjData (the whole state) stay as they are.
+//
+// Why `fresh` cannot take `running`'s place ("" when it can), naming the first difference: a
+// size ("nbody 12 -> 13"), an element's name, or a value URLab resolved once when it bound the
+// scene (joint types, addresses and ranges, actuator transmissions, kinds, control ranges and
+// gears, a motor's gain, sensor addresses, parent bodies, mocap ids, keyframe poses). Reads only
+// what never changes in a running model (its sizes, names and those values), so it may run on
+// any thread while the model steps.
+std::string InPlaceDifference(const mjModel* running, const mjModel* fresh);
+
+// Copies into `dest` the options, visual settings, statistics, flags and every array of `src`
+// that differs (arrays that are equal are not written), keeping dest's buffer. Precondition:
+// InPlaceDifference(dest, src) is "". Thread: dest's owner, with its data not in use.
+void CopyModelValuesInPlace(mjModel* dest, const mjModel* src);
+
 // The version of the MuJoCo library actually loaded, e.g. "3.17.0".
 std::string MujocoVersion();
 

@@ -34,7 +34,7 @@ enum Discontinuity : std::uint32_t {
   kDiscontinuityReset = 1u << 0,     // full, keyframe or custom reset (also after divergence)
   kDiscontinuityRestore = 1u << 1,   // a PhysicsState was restored
   kDiscontinuitySetState = 1u << 2,  // qpos/qvel written by a command
-  kDiscontinuityOptions = 1u << 3,   // physics options changed
+  kDiscontinuityOptions = 1u << 3,   // physics options (or, by ReplaceModel, model values) changed
 };
 
 // Text for a set of Discontinuity flags ("reset|restore"), "" for none.

@@ -19,7 +19,8 @@
 //   serialises (PhysicsEngine under its step mutex; a batch gives each environment to one worker
 //   per step). Hooks, listeners and the event sink run on that thread, inside Advance.
 // - Any thread: commands() (the queue is its own hand-off), Validate, CancelStepsThrough,
-//   SetPaused/TogglePause/paused/error_latched, SetResetOnDivergence, step_count, timestep.
+//   SetPaused/TogglePause/paused/error_latched, SetResetOnDivergence, step_count, timestep,
+//   model_generation.
 #include <mujoco/mujoco.h>
 
 #include <array>
@@ -104,6 +105,11 @@ class StepCore {
   const mjData* data() const { return data_.get(); }
   // The model's current timestep (follows SetOptions commands). Any thread.
   double timestep() const { return timestep_.load(std::memory_order_relaxed); }
+  // How many times a ReplaceModel command changed the model's values (a copy of the model kept
+  // elsewhere, e.g. the viewer's, is stale when this moved on). Any thread.
+  std::uint64_t model_generation() const {
+    return model_generation_.load(std::memory_order_acquire);
+  }
 
   // ---- Hooks (not from inside Advance) ----
   CallbackId AddHook(HookKind kind, StepCallback fn);
@@ -236,6 +242,7 @@ class StepCore {
   std::atomic<bool> error_latched_{false};
   std::atomic<bool> reset_on_divergence_{false};
   std::atomic<double> timestep_{0};
+  std::atomic<std::uint64_t> model_generation_{0};
   std::atomic<std::uint64_t> step_count_{0};
   double sim_advanced_ = 0;
   std::uint64_t progress_steps_ = 0;

@@ -39,7 +39,9 @@ struct TerrainLayout {
 struct CompiledScene {
   physics::Model model;  // what MuJoCo compiled from `spec`
   // The root spec every articulation is attached to (MuJoCo's editable model of the scene): the
-  // scene's MJCF (mjcf::SaveXml) and recompiles come from it. Shared by copies of the scene.
+  // scene's MJCF (mjcf::SaveXml) and recompiles come from it. Shared by copies of the scene. A
+  // running session replaces it (Session::EditModel, ReloadKeepingState): other threads than the
+  // main thread take it through Session::spec().
   std::shared_ptr<mjSpec> spec;
   // The scene's articulations in order, then its props (their layouts follow the articulations').
   std::vector<mjcf::ArticulationLayout> articulations;
@@ -53,6 +55,9 @@ struct CompiledScene {
 // (`model_options`, e.g. changed at run time; nullptr: the spec's own). Asset paths are absolute
 // unless `relative_to` names the folder the text will be saved in.
 std::string SceneXml(const CompiledScene& scene, const mjOption* model_options = nullptr,
+                     const std::string& relative_to = {});
+// The same from the scene's spec (a running session's: world::Session::spec()).
+std::string SceneXml(const mjSpec* spec, const mjOption* model_options = nullptr,
                      const std::string& relative_to = {});
 
 // Composes and compiles a scene. Throws InputError / CompileError with the articulation, element

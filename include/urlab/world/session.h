@@ -6,14 +6,17 @@
 // it likes (everything stays valid; the physics thread stops when the Manager ends play).
 //
 // Threading contract
-// - Main thread: Create, Start, Stop, SyncHostPoses, SetHostDrivenPose/ClearHostDriven.
-// - Any thread: engine() and controls() (under their own contracts), the registry getters
+// - Main thread: Create, Start, Stop, SyncHostPoses, SetHostDrivenPose/ClearHostDriven,
+//   EditModel and ReloadKeepingState (they replace scene().spec, under a small mutex that spec()
+//   takes, and compiled_options(), which only the main thread reads).
+// - Any thread: engine() and controls() (under their own contracts), spec(), the registry getters
 //   (immutable after Create), SetPaused, SetResetOnDivergence, ResetToInitialState,
 //   ResetArticulation, FireLauncher (a round-robin counter per launcher, atomic).
 // - Physics thread: the session's pre-step callback copies the host-driven poses into
 //   d->mocap_pos/d->mocap_quat (a small mutex shared with SyncHostPoses, held for a copy).
 #include <array>
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -83,8 +86,13 @@ class Session : public std::enable_shared_from_this<Session> {
   physics::PhysicsEngine& engine() { return *engine_; }
   const physics::PhysicsEngine& engine() const { return *engine_; }
   control::ControlSystem& controls() { return *controls_; }
-  // The compiled scene (layouts, diagnostics, document); its model lives in engine().
+  // The compiled scene (layouts, diagnostics, document); its model lives in engine(). Its spec
+  // is replaced by EditModel and ReloadKeepingState: read it on the main thread, or use spec().
   const CompiledScene& scene() const { return compiled_; }
+  // The scene's root spec as it is now (the one that compiled the running model's values). Any
+  // thread; the spec itself is not changed once a session holds it (edits go to a copy that
+  // replaces it), so the caller may write it as MJCF while the session moves on.
+  std::shared_ptr<const mjSpec> spec() const;
   // The physics options as compiled from the scene (the engine's follow run-time changes).
   const mjOption& compiled_options() const { return compiled_options_; }
   const SceneConfig& scene_config() const { return config_; }
@@ -160,6 +168,27 @@ class Session : public std::enable_shared_from_this<Session> {
   // world/batch_subsystem.h).
   std::shared_ptr<const Randomizer> randomizer() const { return randomizer_; }
 
+  // ---- Editing the running model (main thread) ----
+  // Applies `edit` to a copy of the scene's spec and compiles it; when the result has the running
+  // model's structure (physics::InPlaceDifference: the same sizes, names, addresses and the
+  // values URLab bound once), its values are copied into the running model in place by one
+  // ReplaceModel command and the edited copy becomes the scene's spec. The state (mjData: qpos,
+  // qvel, act, ctrl, mocap, time, warm start, ...) is kept exactly. The options in effect stay
+  // unless the edit changed the spec's options. Throws Error saying why (the edit does not
+  // compile, changes the structure, or the scene randomises its model) with nothing changed.
+  // Returns the command's sequence number (engine().WaitForCommand).
+  std::uint64_t EditModel(const std::function<void(mjSpec*)>& edit);
+  // Reads the scene's files again (LoadSceneOrModel + the checks and build `urlab run` uses) and
+  // brings the new values into the running model as EditModel does, keeping the state. Not kept
+  // (nothing changed; the caller restarts the scene) when the scene file itself changed, a file
+  // fails to load, the structure changed or the scene randomises its model: `reason` says which.
+  struct Reload {
+    bool kept = false;
+    std::uint64_t seq = 0;  // the ReplaceModel command when kept
+    std::string reason;     // why not, when not kept
+  };
+  Reload ReloadKeepingState();
+
   // ---- Host-driven mocap bodies (main thread) ----
   // Marks a mocap body of an articulation as driven by the host and sets its world pose; from the
   // next SyncHostPoses on, the physics thread writes it into mocap_pos/mocap_quat before every
@@ -186,9 +215,24 @@ class Session : public std::enable_shared_from_this<Session> {
   std::uint64_t QueueInitialReset(bool full, std::vector<std::pair<int, double>> qpos_offsets = {});
   // Each articulation with an initial keyframe: its control and the keyframe's id.
   std::vector<std::pair<const control::ArticulationControl*, int>> InitialKeys() const;
+  // EditModel and ReloadKeepingState: `model` (compiled from `spec`) replaces the running
+  // model's values; `spec` becomes the scene's. Throws Error when the structure differs.
+  std::uint64_t ReplaceModel(std::shared_ptr<mjSpec> spec, physics::Model model,
+                             bool options_changed, std::string label);
 
   SessionOptions options_;
   SceneConfig config_;
+  std::string scene_text_;         // the scene file as read by Create ("" for a single MJCF file)
+  mutable std::mutex spec_mutex_;  // guards compiled_.spec (written by the main thread)
+  // What a gait controller took from the model when it bound (control/gait.h: its bodies'
+  // masses, inertias and poses, its geoms' poses and sizes), per articulation walking with one:
+  // EditModel and ReloadKeepingState refuse a model where they differ. Immutable after Create.
+  struct GaitBound {
+    std::string articulation;
+    std::vector<int> bodies, geoms;
+    std::vector<mjtNum> values;
+  };
+  std::vector<GaitBound> gait_bound_;
   CompiledScene compiled_;
   mjOption compiled_options_{};
   std::unique_ptr<control::ControlSystem> controls_;
