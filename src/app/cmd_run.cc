@@ -263,7 +263,13 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   }
   viewer::ViewerSubsystem* viewer_sub = nullptr;
   if (args.view) {
-    auto view = std::make_unique<viewer::ViewerSubsystem>(args.viewer);
+    viewer::ViewerOptions view_options = args.viewer;
+    if (args.envs > 1) {
+      view_options.reload_restarts_because =
+          "the run steps " + std::to_string(args.envs) +
+          " environments (--envs), whose batch keeps the model it began with";
+    }
+    auto view = std::make_unique<viewer::ViewerSubsystem>(view_options);
     view->SetManager(&manager);
     view->SetRecorder(recorder);  // the panel's Record (none without --record or the network)
     view->SetPlayback(playback);

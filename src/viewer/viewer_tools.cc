@@ -240,6 +240,12 @@ void ViewerCore::ReloadKeepingState() {
     RequestReload("");
     return;
   }
+  if (!options_.reload_restarts_because.empty()) {
+    spdlog::info("viewer: reloading {} from the start; the state cannot be kept: {}", path,
+                 options_.reload_restarts_because);
+    RequestReload("");
+    return;
+  }
   const world::Session::Reload r = session_->ReloadKeepingState();
   if (r.kept) {  // one line in the log and the panel
     SetStatus("reloaded " + path + " into the running simulation, state kept");

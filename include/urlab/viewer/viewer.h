@@ -59,6 +59,10 @@ struct ViewerOptions {
   // Folder for the files the viewer writes (save XML/MJB, print model/data); "" : the working
   // folder.
   std::string files_dir;
+  // Why Reload (Ctrl+L) may not bring the file's values into the running simulation keeping its
+  // state ("": it may; e.g. a run of several environments, whose batch keeps its own model):
+  // then it restarts the scene, saying this.
+  std::string reload_restarts_because;
 };
 
 // RGB pixels, rows top-down.
