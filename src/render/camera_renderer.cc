@@ -69,14 +69,8 @@ void CameraRenderer::MakeContext() {
 }
 
 void CameraRenderer::ReplaceModelValues(const mjModel* source) {
-  mjModel* m = model_.get();
-  const mjVisual vis = m->vis;  // the off-screen size and samples set at construction
-  physics::CopyModelValuesInPlace(m, source);
-  m->vis = vis;
-  if (!has_context_) return;
-  for (int i = 0; i < m->ntex; ++i) mjr_uploadTexture(m, &context_, i);
-  for (int i = 0; i < m->nmesh; ++i) mjr_uploadMesh(m, &context_, i);
-  for (int i = 0; i < m->nhfield; ++i) mjr_uploadHField(m, &context_, i);
+  // The off-screen size and samples set at construction stay.
+  render::ReplaceModelValues(model_.get(), source, has_context_ ? &context_ : nullptr);
 }
 
 void CameraRenderer::Update(const physics::StateFrame& frame) {

@@ -4,6 +4,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "urlab/physics/model.h"
+
 namespace urlab::render {
 
 namespace {
@@ -29,6 +31,16 @@ void CopyFrameToData(const mjModel* m, mjData* d, const physics::StateFrame& f) 
   mj_flex(m, d);  // the flexes' vertex positions, which a flex is drawn from
   mj_tendon(m, d);
   mj_transmission(m, d);
+}
+
+void ReplaceModelValues(mjModel* m, const mjModel* source, const mjrContext* context) {
+  const mjVisual vis = m->vis;
+  physics::CopyModelValuesInPlace(m, source);
+  m->vis = vis;
+  if (!context) return;
+  for (int i = 0; i < m->ntex; ++i) mjr_uploadTexture(m, context, i);
+  for (int i = 0; i < m->nmesh; ++i) mjr_uploadMesh(m, context, i);
+  for (int i = 0; i < m->nhfield; ++i) mjr_uploadHField(m, context, i);
 }
 
 }  // namespace urlab::render

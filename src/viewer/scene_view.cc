@@ -48,14 +48,8 @@ void SceneView::MakeContext(int shadow_size, int off_w, int off_h) {
 }
 
 void SceneView::ReplaceModelValues(const mjModel* source) {
-  mjModel* m = model_.get();
-  const mjVisual vis = m->vis;  // shadow size, offscreen buffer: set by MakeContext
-  physics::CopyModelValuesInPlace(m, source);
-  m->vis = vis;
-  if (!has_context_) return;
-  for (int i = 0; i < m->ntex; ++i) mjr_uploadTexture(m, &context_, i);
-  for (int i = 0; i < m->nmesh; ++i) mjr_uploadMesh(m, &context_, i);
-  for (int i = 0; i < m->nhfield; ++i) mjr_uploadHField(m, &context_, i);
+  // Shadow size and offscreen buffer, set by MakeContext, stay.
+  render::ReplaceModelValues(model_.get(), source, has_context_ ? &context_ : nullptr);
 }
 
 void SceneView::Update(const physics::StateFrame& f) {
