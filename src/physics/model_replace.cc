@@ -9,7 +9,7 @@ namespace urlab::physics {
 
 namespace {
 
-std::string NameOf(const mjModel* m, mjtObj type, int id) {
+std::string QuotedName(const mjModel* m, mjtObj type, int id) {
   const char* name = mj_id2name(m, type, id);
   return name && name[0] ? std::string("'") + name + "'" : "#" + std::to_string(id);
 }
@@ -21,8 +21,8 @@ std::string NameDifference(const mjModel* a, const mjModel* b, mjtObj type, cons
     const char* na = mj_id2name(a, type, i);
     const char* nb = mj_id2name(b, type, i);
     if (std::strcmp(na ? na : "", nb ? nb : "") != 0) {
-      return std::string(what) + " " + std::to_string(i) + " " + NameOf(a, type, i) + " is now " +
-             NameOf(b, type, i);
+      return std::string(what) + " " + std::to_string(i) + " " + QuotedName(a, type, i) +
+             " is now " + QuotedName(b, type, i);
     }
   }
   return {};
@@ -35,7 +35,7 @@ std::string RowDifference(const mjModel* a, const T* fa, const T* fb, int rows, 
   for (int i = 0; i < rows; ++i) {
     if (std::memcmp(fa + static_cast<std::size_t>(i) * cols,
                     fb + static_cast<std::size_t>(i) * cols, sizeof(T) * cols) != 0) {
-      return std::string(what) + " " + NameOf(a, type, i) + " " + field;
+      return std::string(what) + " " + QuotedName(a, type, i) + " " + field;
     }
   }
   return {};
@@ -145,7 +145,7 @@ std::string InPlaceDifference(const mjModel* a, const mjModel* b) {
                        a->actuator_biastype[i] == mjBIAS_NONE &&
                        a->actuator_dyntype[i] == mjDYN_NONE;
     if (motor && a->actuator_gainprm[mjNGAIN * i] != b->actuator_gainprm[mjNGAIN * i]) {
-      return "actuator " + NameOf(a, mjOBJ_ACTUATOR, i) + " gain (a motor's)";
+      return "actuator " + QuotedName(a, mjOBJ_ACTUATOR, i) + " gain (a motor's)";
     }
   }
   // Keyframe poses: hold, keyframe and gait controllers took theirs when the scene was bound.
