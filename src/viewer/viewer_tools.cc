@@ -18,6 +18,7 @@
 #include "urlab/mjcf/writer.h"
 #include "urlab/ops/scene_export.h"
 #include "urlab/ops/simulation.h"
+#include "urlab/replay/recorder.h"
 #include "viewer/viewer_core.h"
 
 namespace urlab::viewer::internal {
@@ -240,9 +241,15 @@ void ViewerCore::ReloadKeepingState() {
     RequestReload("");
     return;
   }
-  if (!options_.reload_restarts_because.empty()) {
+  std::string restart_because = options_.reload_restarts_because;
+  if (restart_because.empty() && recorder_ && recorder_->recorder() &&
+      recorder_->recorder()->active()) {
+    // Its file holds the model it began with: a replay would re-simulate the old values.
+    restart_because = "a recording is being written, whose model is the one it began with";
+  }
+  if (!restart_because.empty()) {
     spdlog::info("viewer: reloading {} from the start; the state cannot be kept: {}", path,
-                 options_.reload_restarts_because);
+                 restart_because);
     RequestReload("");
     return;
   }
