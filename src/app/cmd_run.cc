@@ -154,8 +154,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
   world::ManagerOptions options;
   options.speed_percent = args.speed;
   options.as_fast_as_possible = args.max_speed;
-  // A --video is frame-exact from the first state: play starts paused until its gate is set.
-  options.start_paused = args.paused || !args.video.empty();
+  options.start_paused = args.paused;
   options.reset_on_divergence = args.reset_on_divergence;
   world::Manager manager(options);
   if (args.duration > 0) manager.AddSubsystem(std::make_unique<DurationLimit>(args.duration));
@@ -214,6 +213,12 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
     auto sub = std::make_unique<camera::CameraSubsystem>(std::move(cam_options));
     cameras = sub.get();
     manager.AddSubsystem(std::move(sub));
+  }
+  // --video: frame-exact from the first state (its gate is set before the physics thread runs).
+  camera::CameraVideoSubsystem* video_sub = nullptr;
+  if (!args.video.empty()) {
+    video_sub = &static_cast<camera::CameraVideoSubsystem&>(manager.AddSubsystem(
+        std::make_unique<camera::CameraVideoSubsystem>(*cameras, args.video[0], args.video[1])));
   }
   net::NetworkSubsystem* network_sub = nullptr;
   net::NetworkOptions network_options;
@@ -287,12 +292,7 @@ int Run(const RunArgs& args, std::string* reopen = nullptr) {
         network_sub ? network_sub->endpoints() : net::NetworkSubsystem::Endpoints{}, cameras));
     spdlog::info("announced the endpoints in {}", args.announce);
   }
-  std::unique_ptr<camera::CameraVideo> video;
-  if (!args.video.empty()) {
-    video = std::make_unique<camera::CameraVideo>(*cameras, args.video[0], args.video[1]);
-    video->Gate(manager.session().engine());
-    if (!args.paused) manager.session().engine().SetPaused(false);
-  }
+  camera::CameraVideo* video = video_sub ? video_sub->video() : nullptr;
   SetImmediateExit(false);  // playing: a signal stops the loop, which ends cleanly
   // MuJoCo errors and divergences reach us as engine events (delivered inside Tick, on this
   // thread). With auto-reset the engine has reset after a divergence already; errors still come.

@@ -9,6 +9,7 @@
 #include "urlab/camera/scene_settings.h"
 #include "urlab/core/error.h"
 #include "urlab/physics/engine.h"
+#include "urlab/world/session.h"
 
 namespace urlab::camera {
 
@@ -78,9 +79,6 @@ void CameraVideo::BeforeStep() {
     std::lock_guard<std::mutex> hold(mu_);
     if (open_) return;
   }
-  // Only a state stepped from is in the video (a paused run, or one that ended there, is not:
-  // a 2 s video at 30 frames/s holds the 60 states at 0 .. 1.967 s).
-  if (engine_->paused()) return;
   // The frames the state about to be stepped from stands for: frame k is due at step
   // first + floor(k * steps_per_frame) (several when a step is longer than a frame).
   const std::uint64_t step = engine_->step_count();
@@ -103,6 +101,7 @@ void CameraVideo::BeforeStep() {
     return give_up("the camera rendered no frame in 10 s");
   }
   std::unique_lock<std::mutex> hold(mu_);
+  f.step = step;  // the state it shows (Poll writes it once the simulation stepped past it)
   for (int i = 0; i < due; ++i) queue_.push_back(f);
   if (queue_.size() < kMaxQueued) return;
   if (!drained_.wait_for(hold, kMaxWait, [&] { return open_ || queue_.size() < kMaxQueued / 2; })) {
@@ -112,11 +111,18 @@ void CameraVideo::BeforeStep() {
 }
 
 bool CameraVideo::Poll() {
-  if (engine_) {  // gated: the queued frames, in order
+  if (engine_) {
+    // Gated: the queued frames, in order, of the states the simulation has stepped from. The
+    // state it stands at is not in the video yet: when the run ends there, it never is (a 2 s
+    // video at 30 frames/s holds the 60 states at 0 .. 1.967 s, paused or lockstep alike).
+    const std::uint64_t now = engine_->step_count();
     std::deque<world::CameraFrame> frames;
     {
       std::lock_guard<std::mutex> hold(mu_);
-      frames.swap(queue_);
+      while (!queue_.empty() && queue_.front().step < now) {
+        frames.push_back(std::move(queue_.front()));
+        queue_.pop_front();
+      }
     }
     drained_.notify_all();
     for (const world::CameraFrame& f : frames) {
@@ -133,5 +139,18 @@ bool CameraVideo::Poll() {
 int CameraVideo::Close() { return writer_->Close(); }
 
 int CameraVideo::frames() const { return writer_->frames(); }
+
+CameraVideoSubsystem::CameraVideoSubsystem(world::CameraStreams& streams, std::string camera,
+                                           std::string path)
+    : streams_(streams), camera_(std::move(camera)), path_(std::move(path)) {}
+
+void CameraVideoSubsystem::BeginPlay(world::Session& session) {
+  video_ = std::make_unique<CameraVideo>(streams_, camera_, path_);
+  video_->Gate(session.engine());
+}
+
+void CameraVideoSubsystem::EndPlay(world::Session&) {
+  if (video_) video_->OpenGate();
+}
 
 }  // namespace urlab::camera

@@ -23,6 +23,7 @@
 
 #include "urlab/world/camera_streams.h"
 #include "urlab/world/scene_file.h"
+#include "urlab/world/subsystem.h"
 
 namespace urlab::render {
 class VideoWriter;
@@ -54,8 +55,8 @@ class CameraVideo {
   void Gate(physics::PhysicsEngine& engine);
   // The simulation stops waiting for frames (before stopping the physics thread). Idempotent.
   void OpenGate();
-  // Writes the queued frames (gated) or the newest frame when it is new; false once ffmpeg has
-  // failed.
+  // Writes the queued frames of the states the simulation has stepped from (gated), or the
+  // newest frame when it is new; false once ffmpeg has failed.
   bool Poll();
   // Ends the file (after OpenGate when gated); ffmpeg's exit status (0: complete).
   int Close();
@@ -78,6 +79,23 @@ class CameraVideo {
   std::condition_variable drained_;
   std::deque<world::CameraFrame> queue_;
   bool open_ = false;  // the simulation no longer waits
+};
+
+// The video as a subsystem (added after the camera subsystem): BeginPlay starts it and sets its
+// gate before the physics thread runs, so the video holds every state from the first; EndPlay
+// opens the gate before the thread stops. The host polls and closes video() itself.
+class CameraVideoSubsystem : public world::Subsystem {
+ public:
+  CameraVideoSubsystem(world::CameraStreams& streams, std::string camera, std::string path);
+  std::string_view name() const override { return "video"; }
+  void BeginPlay(world::Session& session) override;
+  void EndPlay(world::Session& session) override;
+  CameraVideo* video() const { return video_.get(); }  // null before BeginPlay
+
+ private:
+  world::CameraStreams& streams_;
+  std::string camera_, path_;
+  std::unique_ptr<CameraVideo> video_;
 };
 
 }  // namespace urlab::camera
