@@ -41,18 +41,10 @@ from gymnasium.vector import AutoresetMode  # noqa: E402
 import urlab_client  # noqa: E402
 from urlab_client import UrlabVectorEnv  # noqa: E402
 from urlab_client.tasks import TASKS  # noqa: E402
-from urlab_process import PROCS, arm_scene, check, start_announced, stop_all  # noqa: E402
+from urlab_process import (PROCS, arm_scene, check, raises, start_announced,  # noqa: E402
+                           stop_all)
 
 IDS = sorted(i for i in gymnasium.registry if i.startswith("URLab/"))
-
-
-def raises(kind, text, fn):
-    try:
-        fn()
-    except kind as e:
-        check(text in str(e), f"expected {text!r} in {e!r}")
-        return
-    check(False, f"no {kind.__name__} ({text!r})")
 
 
 def checked():

@@ -26,19 +26,10 @@ sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
 sys.path.insert(0, os.path.join(SOURCE, "tests", "support"))
 from urlab_client import UrlabVectorEnv  # noqa: E402
 from urlab_client.inproc import InProcessBatch  # noqa: E402
-from urlab_process import PROCS, check, start_announced, stop_all  # noqa: E402
+from urlab_process import PROCS, check, raises, start_announced, stop_all  # noqa: E402
 
 SCENE = os.path.join(SOURCE, "examples", "scenes", "humanoid_pd.yaml")
 ENVS, STEPS, LIMIT = 4, 25, 10
-
-
-def raises(kind, text, fn):
-    try:
-        fn()
-    except kind as e:
-        check(text in str(e), f"expected {text!r} in {e!r}")
-        return
-    check(False, f"no {kind.__name__} ({text!r})")
 
 
 def run(envs, actions):

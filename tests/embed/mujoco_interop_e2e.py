@@ -31,18 +31,9 @@ import mujoco  # noqa: E402
 
 import urlab_client  # noqa: E402,F401
 from urlab_client import UrlabEnv, UrlabVectorEnv  # noqa: E402
-from urlab_process import PROCS, check, start_announced, stop_all  # noqa: E402
+from urlab_process import PROCS, check, raises, start_announced, stop_all  # noqa: E402
 
 SCENE = os.path.join(SOURCE, "examples", "scenes", "arm_reach.yaml")
-
-
-def raises(kind, text, fn):
-    try:
-        fn()
-    except kind as e:
-        check(text in str(e), f"expected {text!r} in {e!r}")
-        return
-    check(False, f"no {kind.__name__} ({text!r})")
 
 
 def in_process():

@@ -72,6 +72,16 @@ def check(cond, message):
         fail(message)
 
 
+def raises(kind, text, fn):
+    """Fails the test (check) unless fn() raises `kind` with `text` in its message."""
+    try:
+        fn()
+    except kind as e:
+        check(text in str(e), f"expected {text!r} in {e!r}")
+        return
+    check(False, f"no {kind.__name__} ({text!r})")
+
+
 def stop_all():
     """Terminates every server in PROCS and waits for it (a test's end)."""
     for p in PROCS:
