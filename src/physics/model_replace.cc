@@ -51,13 +51,18 @@ std::string InPlaceDifference(const mjModel* a, const mjModel* b) {
     return std::strcmp(name, "nnames") == 0 || std::strcmp(name, "nnames_map") == 0 ||
            std::strcmp(name, "npaths") == 0 || std::strcmp(name, "nbuffer") == 0;
   };
+  // The first size of the text ones (`text`) or of the others that differs, as "nbody 3 -> 4".
+  const auto size_difference = [&](bool text) -> std::string {
 #define X(name)                                                                                \
-  if (!text_size(#name) && a->name != b->name) {                                               \
+  if (text_size(#name) == text && a->name != b->name) {                                        \
     return std::string(#name " ") + std::to_string(static_cast<long long>(a->name)) + " -> " + \
            std::to_string(static_cast<long long>(b->name));                                    \
   }
-  MJMODEL_SIZES
+    MJMODEL_SIZES
 #undef X
+    return {};
+  };
+  if (std::string d = size_difference(false); !d.empty()) return d;
   // Names: every element is bound, published and counted by its name.
   if (a->nnames != b->nnames ||
       std::memcmp(a->names, b->names, static_cast<std::size_t>(a->nnames)) != 0) {
@@ -89,13 +94,7 @@ std::string InPlaceDifference(const mjModel* a, const mjModel* b) {
     }
     return "element names differ";
   }
-#define X(name)                                                                                \
-  if (text_size(#name) && a->name != b->name) {                                                \
-    return std::string(#name " ") + std::to_string(static_cast<long long>(a->name)) + " -> " + \
-           std::to_string(static_cast<long long>(b->name));                                    \
-  }
-  MJMODEL_SIZES
-#undef X
+  if (std::string d = size_difference(true); !d.empty()) return d;
   // What URLab resolved once when it bound the scene (views, bindings, controllers, layouts).
   const int nbody = static_cast<int>(a->nbody), njnt = static_cast<int>(a->njnt);
   const int nu = static_cast<int>(a->nu), nsensor = static_cast<int>(a->nsensor);
