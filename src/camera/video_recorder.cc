@@ -40,29 +40,23 @@ void RequestVideoCamera(world::SceneConfig& scene, const std::string& camera) {
 }
 
 CameraVideo::CameraVideo(world::CameraStreams& streams, const std::string& camera,
-                         const std::string& path)
-    : streams_(streams) {
+                         const std::string& path, physics::PhysicsEngine& engine)
+    : streams_(streams), engine_(engine) {
   const auto slash = camera.find('/');
   const int index = streams.Find(camera.substr(0, slash), camera.substr(slash + 1));
   if (index < 0) throw Error("--video: camera '" + camera + "' does not render");
   index_ = static_cast<std::size_t>(index);
   const world::CameraStreamInfo& info = streams.Streams()[index_];
-  writer_ = std::make_unique<render::VideoWriter>(
-      path, info.width, info.height, std::max(1, static_cast<int>(std::lround(info.rate))),
-      render::VideoInput::kBgraTopDown);
+  const int rate = std::max(1, static_cast<int>(std::lround(info.rate)));
+  writer_ = std::make_unique<render::VideoWriter>(path, info.width, info.height, rate,
+                                                  render::VideoInput::kBgraTopDown);
+  // The gate: frame k at step first_step_ + floor(k * steps_per_frame_).
+  steps_per_frame_ = 1.0 / (rate * engine.timestep());
+  first_step_ = engine.step_count();
+  callback_ = engine.AddPreStepCallback([this](const mjModel*, mjData*) { BeforeStep(); });
 }
 
 CameraVideo::~CameraVideo() { OpenGate(); }
-
-void CameraVideo::Gate(physics::PhysicsEngine& engine) {
-  const world::CameraStreamInfo& info = streams_.Streams()[index_];
-  const double rate = std::max(1L, std::lround(info.rate));
-  steps_per_frame_ = 1.0 / (rate * engine.timestep());
-  first_step_ = engine.step_count();
-  next_frame_ = 0;
-  engine_ = &engine;
-  callback_ = engine.AddPreStepCallback([this](const mjModel*, mjData*) { BeforeStep(); });
-}
 
 void CameraVideo::OpenGate() {
   {
@@ -70,7 +64,7 @@ void CameraVideo::OpenGate() {
     open_ = true;
   }
   drained_.notify_all();
-  if (engine_ && callback_) engine_->RemoveCallback(*callback_);
+  if (callback_) engine_.RemoveCallback(*callback_);
   callback_.reset();
 }
 
@@ -81,7 +75,7 @@ void CameraVideo::BeforeStep() {
   }
   // The frames the state about to be stepped from stands for: frame k is due at step
   // first + floor(k * steps_per_frame) (several when a step is longer than a frame).
-  const std::uint64_t step = engine_->step_count();
+  const std::uint64_t step = engine_.step_count();
   int due = 0;
   while (first_step_ + static_cast<std::uint64_t>(std::floor(
                            static_cast<double>(next_frame_) * steps_per_frame_ + 1e-9)) <=
@@ -111,29 +105,23 @@ void CameraVideo::BeforeStep() {
 }
 
 bool CameraVideo::Poll() {
-  if (engine_) {
-    // Gated: the queued frames, in order, of the states the simulation has stepped from. The
-    // state it stands at is not in the video yet: when the run ends there, it never is (a 2 s
-    // video at 30 frames/s holds the 60 states at 0 .. 1.967 s, paused or lockstep alike).
-    const std::uint64_t now = engine_->step_count();
-    std::deque<world::CameraFrame> frames;
-    {
-      std::lock_guard<std::mutex> hold(mu_);
-      while (!queue_.empty() && queue_.front().step < now) {
-        frames.push_back(std::move(queue_.front()));
-        queue_.pop_front();
-      }
+  // The queued frames, in order, of the states the simulation has stepped from. The state it
+  // stands at is not in the video yet: when the run ends there, it never is (a 2 s video at 30
+  // frames/s holds the 60 states at 0 .. 1.967 s, paused or lockstep alike).
+  const std::uint64_t now = engine_.step_count();
+  std::deque<world::CameraFrame> frames;
+  {
+    std::lock_guard<std::mutex> hold(mu_);
+    while (!queue_.empty() && queue_.front().step < now) {
+      frames.push_back(std::move(queue_.front()));
+      queue_.pop_front();
     }
-    drained_.notify_all();
-    for (const world::CameraFrame& f : frames) {
-      if (!writer_->Write(f.bytes->data())) return false;
-    }
-    return true;
   }
-  world::CameraFrame f;
-  if (!streams_.Latest(index_, f) || f.frame_id == last_frame_) return true;
-  last_frame_ = f.frame_id;
-  return writer_->Write(f.bytes->data());
+  drained_.notify_all();
+  for (const world::CameraFrame& f : frames) {
+    if (!writer_->Write(f.bytes->data())) return false;
+  }
+  return true;
 }
 
 int CameraVideo::Close() { return writer_->Close(); }
@@ -145,8 +133,7 @@ CameraVideoSubsystem::CameraVideoSubsystem(world::CameraStreams& streams, std::s
     : streams_(streams), camera_(std::move(camera)), path_(std::move(path)) {}
 
 void CameraVideoSubsystem::BeginPlay(world::Session& session) {
-  video_ = std::make_unique<CameraVideo>(streams_, camera_, path_);
-  video_->Gate(session.engine());
+  video_ = std::make_unique<CameraVideo>(streams_, camera_, path_, session.engine());
 }
 
 void CameraVideoSubsystem::EndPlay(world::Session&) {

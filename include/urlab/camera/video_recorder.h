@@ -1,13 +1,12 @@
 #pragma once
 // CameraVideo: writes one camera stream's frames to an MP4/WebM file through ffmpeg
-// (`urlab record --video CAM OUT.mp4`). Ungated, it takes each new frame the camera subsystem
-// rendered at its own pace (a late or fast simulation drops frames). Gated (Gate), it is
-// frame-exact: frame k shows the state n_k = floor(k / (rate * dt)) steps after the step the
-// gate began at (k / rate simulated seconds), the simulation waiting at that state until the
-// camera rendered it, however fast the run (--max-speed) or slow the renderer.
+// (`urlab record --video CAM OUT.mp4`), frame-exact: frame k shows the state
+// n_k = floor(k / (rate * dt)) steps after the step the video began at (k / rate simulated
+// seconds), the simulation waiting at that state until the camera rendered it, however fast the
+// run (--max-speed) or slow the renderer, in lockstep too.
 //
 // Threading contract
-// - Main thread: construction, Gate, OpenGate, Poll, Close, frames.
+// - Main thread: construction, OpenGate, Poll, Close, frames.
 // - Physics thread, with the step mutex held: the gate's pre-step callback. It asks the camera
 //   for the due state's frame (CameraStreams::WaitForStep, safe from any thread) and queues it;
 //   it waits while kMaxQueued frames are queued, until Poll drains them. Every wait is bounded
@@ -44,21 +43,21 @@ class CameraVideo {
   static constexpr std::chrono::seconds kMaxWait{10};
   static constexpr std::size_t kMaxQueued = 64;
 
-  // Starts ffmpeg on `path` for the rgb stream of `camera`; throws Error when the stream is not
-  // streamed, the extension is not .mp4/.webm or ffmpeg cannot start.
-  CameraVideo(world::CameraStreams& streams, const std::string& camera, const std::string& path);
+  // Starts ffmpeg on `path` for the rgb stream of `camera` and sets the gate on `engine`: the
+  // video begins at its current step (make it while the engine is paused, before play begins,
+  // for a video from the first state). Throws Error when the stream is not streamed, the
+  // extension is not .mp4/.webm or ffmpeg cannot start.
+  CameraVideo(world::CameraStreams& streams, const std::string& camera, const std::string& path,
+              physics::PhysicsEngine& engine);
   ~CameraVideo();
   CameraVideo(const CameraVideo&) = delete;
   CameraVideo& operator=(const CameraVideo&) = delete;
-  // Frame-exact from the engine's current step on (call it while the engine is paused, before
-  // play begins, for a video from the first state).
-  void Gate(physics::PhysicsEngine& engine);
   // The simulation stops waiting for frames (before stopping the physics thread). Idempotent.
   void OpenGate();
-  // Writes the queued frames of the states the simulation has stepped from (gated), or the
-  // newest frame when it is new; false once ffmpeg has failed.
+  // Writes the queued frames of the states the simulation has stepped from; false once ffmpeg
+  // has failed.
   bool Poll();
-  // Ends the file (after OpenGate when gated); ffmpeg's exit status (0: complete).
+  // Ends the file (after OpenGate); ffmpeg's exit status (0: complete).
   int Close();
   int frames() const;
 
@@ -67,10 +66,9 @@ class CameraVideo {
 
   world::CameraStreams& streams_;
   std::size_t index_ = 0;
-  std::uint64_t last_frame_ = 0;
   std::unique_ptr<render::VideoWriter> writer_;
   // The gate (physics thread and main thread, under mu_).
-  physics::PhysicsEngine* engine_ = nullptr;
+  physics::PhysicsEngine& engine_;
   std::optional<std::uint64_t> callback_;
   double steps_per_frame_ = 1;  // rate * dt inverted: physics steps between frames
   std::uint64_t first_step_ = 0;
@@ -81,8 +79,8 @@ class CameraVideo {
   bool open_ = false;  // the simulation no longer waits
 };
 
-// The video as a subsystem (added after the camera subsystem): BeginPlay starts it and sets its
-// gate before the physics thread runs, so the video holds every state from the first; EndPlay
+// The video as a subsystem (added after the camera subsystem): BeginPlay starts it, gate set,
+// before the physics thread runs, so the video holds every state from the first; EndPlay
 // opens the gate before the thread stops. The host polls and closes video() itself.
 class CameraVideoSubsystem : public world::Subsystem {
  public:
