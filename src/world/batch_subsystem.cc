@@ -119,7 +119,7 @@ void BatchSubsystem::BeginPlay(Session& session) {
   env_controls_.assign(static_cast<std::size_t>(options_.envs), nullptr);
   if (!options_.raw_actions && EnvControls::Needed(session)) {
     auto controls = std::make_unique<EnvControls>(session);
-    controls->TargetBounds(m, &action_low_, &action_high_);
+    controls->TargetBounds(&action_low_, &action_high_);  // over the ctrlranges above
     if (!detached()) {
       env_controls_[static_cast<std::size_t>(options_.engine_env)] = controls.get();
       env0_controls_ = std::move(controls);

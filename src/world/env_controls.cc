@@ -25,16 +25,8 @@ bool EnvControls::Needed(const Session& session) {
   return false;
 }
 
-void EnvControls::TargetBounds(const mjModel* m, std::vector<double>* low,
-                               std::vector<double>* high) const {
+void EnvControls::TargetBounds(std::vector<double>* low, std::vector<double>* high) const {
   constexpr double kInf = std::numeric_limits<double>::infinity();
-  low->assign(static_cast<std::size_t>(m->nu), -kInf);
-  high->assign(static_cast<std::size_t>(m->nu), kInf);
-  for (int u = 0; u < m->nu; ++u) {
-    if (!m->actuator_ctrllimited[u]) continue;
-    (*low)[static_cast<std::size_t>(u)] = m->actuator_ctrlrange[2 * u];
-    (*high)[static_cast<std::size_t>(u)] = m->actuator_ctrlrange[2 * u + 1];
-  }
   for (const auto& c : controls_) {
     const control::Controller& controller = *c->controller();
     const bool positions = controller.TargetsArePositions();

@@ -35,10 +35,10 @@ class EnvControls : public physics::ControlLaw {
   // needs no control law otherwise: the actions are the controls).
   static bool Needed(const Session& session);
 
-  // The actions' bounds, actuator order: each articulation's actuators take the range of their
-  // controller's targets (control::ActuatorBinding::TargetRange: the joint's range under a PD),
-  // the others their ctrlrange; -inf / +inf where there is none.
-  void TargetBounds(const mjModel* m, std::vector<double>* low, std::vector<double>* high) const;
+  // The actions' bounds, actuator order (`low` and `high` hold the ctrlranges, nu each): each
+  // actuator a controller binds takes the range of its targets instead
+  // (control::ActuatorBinding::TargetRange: the joint's range under a PD; -inf / +inf without).
+  void TargetBounds(std::vector<double>* low, std::vector<double>* high) const;
 
   void Apply(const mjModel* m, mjData* d) override;
   void Restart() override;
