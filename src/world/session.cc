@@ -513,12 +513,8 @@ RandomDraws Session::last_draws() const {
   return last_draws_;
 }
 
-}  // namespace urlab::world
-
 // ---------------------------------------------------------------------------------------------
 // Editing the running model
-
-namespace urlab::world {
 
 namespace {
 
