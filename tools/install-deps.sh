@@ -45,6 +45,12 @@ VENV=.venv
 REQ=tools/requirements.txt
 NODEPS=tools/requirements-nodeps.txt  # after REQ, with --no-deps (the reason is in the file)
 STAMP="$VENV/.urlab-requirements.sha256"
+# Every requirement is an exact version (name==X.Y.Z), so every machine installs the same build.
+PINNED='^[A-Za-z0-9._-]+==[^=<>!~*,; ]+$'
+if UNPINNED=$(grep -hvE '^[[:space:]]*(#|$)' "$REQ" "$NODEPS" | grep -vE "$PINNED"); then
+  echo "install-deps: requirements without an exact version (name==version): $UNPINNED" >&2
+  exit 1
+fi
 WANT=$(cat "$REQ" "$NODEPS" | sha256sum | cut -d' ' -f1)
 if [ ! -x "$VENV/bin/python" ]; then
   /usr/bin/python3 -m venv --system-site-packages "$VENV"
